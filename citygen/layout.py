@@ -1,0 +1,209 @@
+"""FacadeLayout: the one representation every ruleset kind produces and every consumer reads.
+
+A layout is a face-local rectangle ``width x height`` (metres, origin bottom-left, x right, y up) holding a tree
+of :class:`Region`. Terminal regions (no children) carry the semantic ``label`` that geometry, previews and the
+inverse tools use. Within one ``layer`` the terminal regions partition the rectangle exactly (checked by
+:func:`check_partition`). Layer-stack layouts carry one subtree per layer; other kinds use ``layer=None``.
+
+The JSON form (``schema_version`` 1) is documented in ``docs/layout-json.md``.
+"""
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from citygen.errors import LayoutError
+
+SCHEMA_VERSION = 1
+
+#: Labels with a meaning to geometry and validators. Plugins may use others; they render as wall.
+LABELS = ("wall", "window", "door", "balcony", "sill", "cornice", "pillar", "shop", "blind", "deco", "molding",
+          "roof", "ledge", "frame", "glass")
+
+#: Labels of openings and attachments that belong to one floor and must not straddle a floor line.
+FLOOR_BOUND_LABELS = frozenset({"window", "door", "balcony", "sill", "blind", "shop"})
+
+
+@dataclass(frozen=True)
+class Region:
+    """An axis-aligned rectangle of a layout.
+
+    ``depth`` is the offset along the face normal in metres (negative = recessed). ``label is None`` on a
+    terminal means a transparent region that produces no geometry (used by layer stacks).
+    """
+
+    x: float
+    y: float
+    w: float
+    h: float
+    symbol: str
+    label: str | None = None
+    depth: float = 0.0
+    material: str | None = None
+    asset: str | None = None
+    layer: str | None = None
+    children: tuple[Region, ...] = ()
+
+    @property
+    def is_terminal(self) -> bool:
+        return not self.children
+
+    def terminals(self) -> Iterator[Region]:
+        """Terminal regions below (or equal to) this one, depth-first, left-to-right as stored."""
+        stack = [self]
+        while stack:
+            region = stack.pop()
+            if region.children:
+                stack.extend(reversed(region.children))
+            else:
+                yield region
+
+    def translated(self, dx: float, dy: float) -> Region:
+        return replace(self, x=self.x + dx, y=self.y + dy,
+                       children=tuple(c.translated(dx, dy) for c in self.children))
+
+    def to_json(self) -> dict[str, Any]:
+        data: dict[str, Any] = {"x": self.x, "y": self.y, "w": self.w, "h": self.h, "symbol": self.symbol}
+        if self.label is not None:
+            data["label"] = self.label
+        if self.depth:
+            data["depth"] = self.depth
+        for key in ("material", "asset", "layer"):
+            value = getattr(self, key)
+            if value is not None:
+                data[key] = value
+        if self.children:
+            data["children"] = [c.to_json() for c in self.children]
+        return data
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], path: str = "root") -> Region:
+        try:
+            return cls(x=float(data["x"]), y=float(data["y"]), w=float(data["w"]), h=float(data["h"]),
+                       symbol=str(data.get("symbol", data.get("label") or "Region")),
+                       label=data.get("label"), depth=float(data.get("depth", 0.0)),
+                       material=data.get("material"), asset=data.get("asset"), layer=data.get("layer"),
+                       children=tuple(cls.from_json(c, f"{path}.children[{i}]")
+                                      for i, c in enumerate(data.get("children", ()))))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise LayoutError(f"region {path} is malformed ({exc!r})",
+                              hint="each region needs numeric x, y, w, h and a symbol") from exc
+
+
+@dataclass(frozen=True)
+class FacadeLayout:
+    """A facade layout: the rectangle ``width x height`` and the region tree under ``root``."""
+
+    width: float
+    height: float
+    root: Region
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def terminals(self) -> list[Region]:
+        return list(self.root.terminals())
+
+    def labels(self) -> list[str | None]:
+        return [r.label for r in self.root.terminals()]
+
+    def terminal_array(self) -> np.ndarray:
+        """Terminal rectangles as an ``(n, 4)`` float array of ``x, y, w, h``."""
+        rects = [(r.x, r.y, r.w, r.h) for r in self.root.terminals()]
+        return np.asarray(rects, dtype=float).reshape(-1, 4)
+
+    def count(self, label: str) -> int:
+        return sum(1 for r in self.root.terminals() if r.label == label)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"schema_version": SCHEMA_VERSION, "width": self.width, "height": self.height,
+                "meta": dict(self.meta), "root": self.root.to_json()}
+
+    def dumps(self) -> str:
+        return json.dumps(self.to_json(), indent=1, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], source: str = "<layout>") -> FacadeLayout:
+        version = data.get("schema_version")
+        if version != SCHEMA_VERSION:
+            raise LayoutError(f"unsupported schema_version {version!r}", where=source,
+                              hint=f"this citygen reads layout JSON schema_version {SCHEMA_VERSION}")
+        try:
+            width, height = float(data["width"]), float(data["height"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise LayoutError("layout needs numeric width and height", where=source) from exc
+        return cls(width=width, height=height, root=Region.from_json(data["root"]), meta=dict(data.get("meta", {})))
+
+    @classmethod
+    def loads(cls, text: str, source: str = "<layout>") -> FacadeLayout:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise LayoutError(f"not JSON: {exc.msg}", where=f"{source}:{exc.lineno}:{exc.colno}") from exc
+        return cls.from_json(data, source)
+
+
+def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
+    """Problems with the partition contract; an empty list means the layout is valid.
+
+    Per layer, terminal regions must have non-negative sizes, lie inside the rectangle, not overlap, and cover it
+    (area sum equals the rectangle's area). ``tol`` is relative to the facade's larger side.
+    """
+    problems: list[str] = []
+    scale = max(layout.width, layout.height, 1e-9)
+    eps = tol * scale
+    by_layer: dict[str | None, list[Region]] = {}
+    for region in layout.root.terminals():
+        by_layer.setdefault(region.layer, []).append(region)
+    for layer, regions in by_layer.items():
+        rects = np.array([(r.x, r.y, r.w, r.h) for r in regions], dtype=float)
+        name = f"layer {layer!r}" if layer is not None else "layout"
+        if not np.all(np.isfinite(rects)):
+            problems.append(f"{name}: non-finite coordinates")
+            continue
+        bad = np.flatnonzero((rects[:, 2] < -eps) | (rects[:, 3] < -eps))
+        problems += [f"{name}: region {regions[i].symbol} has negative size {rects[i, 2:]}" for i in bad[:5]]
+        x0, y0 = rects[:, 0], rects[:, 1]
+        x1, y1 = x0 + rects[:, 2], y0 + rects[:, 3]
+        outside = np.flatnonzero((x0 < -eps) | (y0 < -eps) | (x1 > layout.width + eps) | (y1 > layout.height + eps))
+        problems += [f"{name}: region {regions[i].symbol} at {rects[i]} leaves the rectangle" for i in outside[:5]]
+        area = float(np.sum(np.clip(rects[:, 2], 0, None) * np.clip(rects[:, 3], 0, None)))
+        if abs(area - layout.width * layout.height) > eps * scale * max(len(regions), 1):
+            problems.append(f"{name}: regions cover {area:.6g} m2 of {layout.width * layout.height:.6g} m2")
+        problems += _overlaps(name, regions, x0, y0, x1, y1, eps)
+    return problems
+
+
+def _overlaps(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, x1: np.ndarray, y1: np.ndarray,
+              eps: float) -> list[str]:
+    """Pairs of regions whose interiors overlap by more than ``eps`` (sweep over x, vectorised per region)."""
+    order = np.argsort(x0, kind="stable")
+    problems: list[str] = []
+    for k, i in enumerate(order):
+        rest = order[k + 1:]
+        rest = rest[x0[rest] < x1[i] - eps]
+        if rest.size == 0:
+            continue
+        hit = rest[(np.minimum(x1[i], x1[rest]) - np.maximum(x0[i], x0[rest]) > eps)
+                   & (np.minimum(y1[i], y1[rest]) - np.maximum(y0[i], y0[rest]) > eps)]
+        for j in hit[:3]:
+            problems.append(f"{name}: regions {regions[i].symbol} and {regions[j].symbol} overlap")
+        if len(problems) > 10:
+            break
+    return problems
+
+
+def require_partition(layout: FacadeLayout, where: str = "<layout>", plugin: str | None = None) -> FacadeLayout:
+    """Return ``layout`` or raise :class:`LayoutError` listing its partition problems."""
+    problems = check_partition(layout)
+    if problems:
+        raise LayoutError("; ".join(problems[:5]), where=where, plugin=plugin,
+                          hint="a ruleset kind must emit terminal regions that tile the face exactly")
+    return layout
+
+
+def leaf(x: float, y: float, w: float, h: float, symbol: str, label: str | None, **kw: Any) -> Region:
+    """Shorthand for a terminal region."""
+    return Region(x=x, y=y, w=w, h=h, symbol=symbol, label=label, **kw)
