@@ -1,0 +1,63 @@
+"""Footprints: building outlines in a local metric frame, as importers hand them to the pipeline."""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from shapely.geometry import MultiPolygon, Polygon
+
+
+@dataclass(frozen=True)
+class GeoReference:
+    """How the local frame maps to the source CRS: local (0, 0) is ``origin`` in ``crs``.
+
+    For geographic input (lon/lat) the importer projects to a transverse Mercator frame centred on the data;
+    ``proj`` holds that projection's PROJ string so the mapping can be inverted exactly.
+    """
+
+    crs: str
+    origin: tuple[float, float]
+    proj: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"crs": self.crs, "origin": list(self.origin), "proj": self.proj}
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """One building's outline and attributes.
+
+    ``polygon`` is valid, oriented (exterior counter-clockwise, holes clockwise) and in metres in the local frame.
+    ``height`` is the wall height in metres and ``height_source`` says where it came from
+    (``"height"``, ``"measuredHeight"``, ``"building:levels"``, ``"default"``, ...). ``levels`` is the number of
+    above-ground floors when known from the data, else ``None``; ``base`` is the ground elevation.
+    """
+
+    id: str
+    polygon: Polygon | MultiPolygon
+    height: float
+    height_source: str
+    levels: int | None = None
+    base: float = 0.0
+    attributes: Mapping[str, Any] = field(default_factory=dict)
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class Skipped:
+    """A feature that could not become a building: its id, where it was, and why (with what to do)."""
+
+    id: str
+    reason: str
+    where: str = ""
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """What an importer read: the good footprints, the skipped features, warnings, and the frame's reference."""
+
+    footprints: tuple[Footprint, ...]
+    skipped: tuple[Skipped, ...] = ()
+    warnings: tuple[str, ...] = ()
+    georef: GeoReference | None = None
