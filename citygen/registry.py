@@ -20,7 +20,10 @@ from citygen import hookspecs
 from citygen.errors import PluginError
 
 if TYPE_CHECKING:
-    from citygen.footprints import Footprint, ImportResult
+    from shapely.geometry import MultiPolygon, Polygon
+
+    from citygen.footprints import ImportResult
+    from citygen.geometry.building import MeshData
     from citygen.layout import FacadeLayout
     from citygen.request import FacadeRequest
 
@@ -65,13 +68,14 @@ class FootprintImporter(ABC):
 
 
 class RoofBuilder(ABC):
-    """Builds the roof of a mass from its top outline."""
+    """Builds the roof of a mass from its cleaned outline."""
 
     id: str
+    description: str = ""
 
     @abstractmethod
-    def build(self, footprint: Footprint, base_height: float) -> Any:
-        """Roof geometry (vertices, faces) for ``footprint`` sitting at ``base_height``."""
+    def build(self, outline: Polygon | MultiPolygon, top: float) -> MeshData:
+        """Roof mesh for ``outline`` (local frame) whose walls end at height ``top``."""
 
 
 class Command(ABC):

@@ -1,0 +1,142 @@
+"""The ``citygen`` command line: generate, validate, plugins, facade, plus sub-commands plugins register."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from citygen import __version__
+from citygen.errors import CitygenError
+from citygen.layout import check_partition
+from citygen.pipeline import generate_city, terminal_progress
+from citygen.registry import Registry, default_registry
+from citygen.request import FacadeRequest, check_request
+from citygen.scene import load_scene
+from citygen.usd.validate import validate_stage
+
+
+def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
+    scene = load_scene(args.scene)
+    report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=args.jobs,
+                           registry=registry, progress=None if args.quiet else terminal_progress)
+    print(report.summary())
+    return 1 if args.strict and (report.skipped or report.warnings) else 0
+
+
+def _cmd_validate(args: argparse.Namespace, registry: Registry) -> int:
+    status = 0
+    for stage in args.stages:
+        findings = validate_stage(stage)
+        errors = [f for f in findings if f.severity == "error"]
+        for f in findings:
+            if f.severity == "error" or args.verbose:
+                print(f"{stage}: {f.severity}: {f.where}: {f.message}")
+        print(f"{stage}: {'ok' if not errors else f'{len(errors)} errors'} "
+              f"({len(findings) - len(errors)} warnings/infos)")
+        status = status or (1 if errors else 0)
+    return status
+
+
+def _cmd_plugins(args: argparse.Namespace, registry: Registry) -> int:
+    tables = (("ruleset kinds", registry.ruleset_kinds, "ruleset_kinds"),
+              ("footprint importers", registry.importers, "importers"),
+              ("roof builders", registry.roof_builders, "roof_builders"),
+              ("commands", registry.commands, "commands"))
+    for title, table, attr in tables:
+        print(f"{title}:")
+        for key, item in sorted(table.items()):
+            origin = registry.origins[(attr, key)]
+            extra = f" {' '.join(item.suffixes)}" if getattr(item, "suffixes", None) else ""
+            desc = getattr(item, "description", "") or getattr(item, "help", "")
+            print(f"  {key:<14}{extra:<22} {desc}  [{origin.plugin} from {origin.distribution}]")
+    for name, problem in registry.broken:
+        print(f"broken plugin {name}: {problem}")
+    return 0
+
+
+def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
+    path = Path(args.ruleset)
+    kind = registry.ruleset_kind(args.kind) if args.kind else registry.kind_for_path(path)
+    ruleset = kind.load(path)
+    width, height = args.size
+    request = FacadeRequest.preview(width, height, floor_height=args.floor_height, ground_height=args.ground_height,
+                                    entrance=not args.no_entrance, seed=args.seed)
+    layout = kind.generate(ruleset, request)
+    problems = check_partition(layout) + check_request(layout, request)
+    if args.explain:
+        print(kind.explain(ruleset, request))
+    if args.json:
+        print(layout.dumps())
+    if args.png:
+        render = getattr(kind, "render_png", None)
+        if render is not None:
+            render(ruleset, request, layout, args.png)
+        else:
+            from citygen.preview import save_png
+            save_png(layout, args.png, lines=[("y", y) for y in request.floor_lines[1:-1]])
+        print(f"wrote {args.png}", file=sys.stderr)
+    if not (args.json or args.png or args.explain):
+        counts: dict[str, int] = {}
+        for r in layout.root.terminals():
+            counts[r.label or "(transparent)"] = counts.get(r.label or "(transparent)", 0) + 1
+        print(f"{path.name} [{kind.id}] {width} x {height} m: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    for p in problems:
+        print(f"constraint: {p}", file=sys.stderr)
+    return 1 if problems else 0
+
+
+def build_parser(registry: Registry) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="citygen", description="Procedural cities from footprints, as USD.")
+    parser.add_argument("--version", action="version", version=f"citygen {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    g = sub.add_parser("generate", help="generate a scene's city and write its USD stage")
+    g.add_argument("scene", help="scene TOML file")
+    g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
+    g.add_argument("--seed", type=int, help="override the scene seed")
+    g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped or warned")
+    g.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g.set_defaults(run=_cmd_generate)
+    v = sub.add_parser("validate", help="run UsdValidation and mesh topology checks on stages")
+    v.add_argument("stages", nargs="+")
+    v.add_argument("-v", "--verbose", action="store_true", help="also print warnings")
+    v.set_defaults(run=_cmd_validate)
+    p = sub.add_parser("plugins", help="list loaded plugins and what they register")
+    p.set_defaults(run=_cmd_plugins)
+    f = sub.add_parser("facade", help="preview one facade of a ruleset")
+    f.add_argument("ruleset")
+    f.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+    f.add_argument("--kind", help="ruleset kind (default: from the file suffix)")
+    f.add_argument("--json", action="store_true", help="print the FacadeLayout JSON")
+    f.add_argument("--png", help="write a PNG drawing of the layout")
+    f.add_argument("--explain", action="store_true", help="print how the layout was derived")
+    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--floor-height", type=float, default=3.2)
+    f.add_argument("--ground-height", type=float, default=None)
+    f.add_argument("--no-entrance", action="store_true", help="preview a face without the building's door")
+    f.set_defaults(run=_cmd_facade)
+    for name, command in sorted(registry.commands.items()):
+        c = sub.add_parser(name, help=command.help)
+        command.configure(c)
+        c.set_defaults(run=lambda a, r, command=command: command.run(a, r))
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        registry = default_registry()
+    except CitygenError as exc:
+        print(f"citygen: {exc}", file=sys.stderr)
+        return 2
+    args = build_parser(registry).parse_args(argv)
+    try:
+        return int(args.run(args, registry) or 0)
+    except CitygenError as exc:
+        print(f"citygen: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

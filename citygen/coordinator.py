@@ -1,0 +1,99 @@
+"""The building coordinator: what the faces of one building share, decided before any facade is generated.
+
+* **Floor lines** -- one set of floor heights per building; every face's request carries it, so windows of
+  adjacent faces sit at the same heights.
+* **Entrance** -- exactly one door per building, on the widest street-facing face (else the widest facade face).
+* **Corners** -- a wall strip at each corner, the same width on both faces meeting there, so openings of two faces
+  never collide at a corner and corners meet with equal margins.
+
+Party walls (faces against a neighbouring building) and faces narrower than ``min_face_width`` get no facade.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from citygen.footprints import Footprint
+from citygen.mass import Mass
+from citygen.request import FaceContext, FacadeRequest
+from citygen.scene import Defaults
+
+
+@dataclass(frozen=True)
+class BuildingPlan:
+    """The coordinator's decisions for one building and the facade requests that carry them."""
+
+    building_id: str
+    levels: int
+    floor_lines: tuple[float, ...]
+    entrance_face: int | None
+    requests: tuple[FacadeRequest, ...]
+    plain_faces: tuple[int, ...]
+
+
+def plan_floor_lines(height: float, levels: int | None, defaults: Defaults) -> tuple[float, ...]:
+    """Floor boundaries from 0 to ``height``: the data's level count when known, else the default floor height.
+
+    A taller ground floor (``ground_floor_height``) is used when the building has at least three floors and the
+    upper floors stay at least 2.4 m high; everything always ends exactly at ``height``.
+    """
+    if levels is None or levels < 1:
+        levels = round(height / defaults.floor_height)
+    levels = max(1, min(levels, int(height // 2.4)))
+    if levels == 1:
+        return (0.0, float(height))
+    typical = height / levels
+    ground = min(defaults.ground_floor_height, 1.3 * typical)
+    if levels >= 3 and ground > typical and (height - ground) / (levels - 1) >= 2.4:
+        step = (height - ground) / (levels - 1)
+        return (0.0, *(float(ground + i * step) for i in range(levels - 1)), float(height))
+    return tuple(float(v) for v in np.linspace(0.0, height, levels + 1))
+
+
+def plan_building(footprint: Footprint, mass: Mass, party: np.ndarray, defaults: Defaults,
+                  seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
+    """Decide floor lines, entrance face and corner strips; build one request per facade face."""
+    floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults)
+    faces = mass.faces
+    widths = np.array([f.width for f in faces])
+    facade = (~party) & (widths >= defaults.min_face_width)
+    street = facade & np.array([not f.is_courtyard for f in faces])
+    door_candidates = np.flatnonzero(street & (widths >= 1.5))
+    if door_candidates.size == 0:
+        door_candidates = np.flatnonzero(facade & (widths >= 1.5))
+    entrance = int(door_candidates[np.argmax(widths[door_candidates])]) if door_candidates.size else None
+    corner = _corner_strips(mass, widths, facade, defaults.corner_width)
+    attrs = dict(attributes if attributes is not None else footprint.attributes)
+    requests = []
+    for face in faces:
+        if not facade[face.index]:
+            continue
+        context = FaceContext(building_id=footprint.id, face_index=face.index, levels=len(floor_lines) - 1,
+                              street_facing=bool(street[face.index]), corner_angles=face.corner_angles,
+                              neighbours=face.neighbours, is_courtyard=face.is_courtyard, attributes=attrs)
+        requests.append(FacadeRequest(width=face.width, height=face.height, floor_lines=floor_lines,
+                                      entrance=face.index == entrance,
+                                      corner_widths=(float(corner[face.index, 0]), float(corner[face.index, 1])),
+                                      context=context, seed=(seed, footprint.id, face.index)))
+    return BuildingPlan(building_id=footprint.id, levels=len(floor_lines) - 1, floor_lines=floor_lines,
+                        entrance_face=entrance, requests=tuple(requests),
+                        plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)))
+
+
+def _corner_strips(mass: Mass, widths: np.ndarray, facade: np.ndarray, corner_width: float) -> np.ndarray:
+    """``(n, 2)`` strip widths (left, right) per face; both faces at a corner get the same width.
+
+    The strip at a vertex is ``min(corner_width, 15% of each facade face meeting there)``; next to a plain face
+    (party wall, sliver) the strip is kept so openings stay clear of the neighbour.
+    """
+    strips = np.zeros((len(mass.faces), 2))
+    limit = np.where(facade, 0.15 * widths, np.inf)
+    for face in mass.faces:
+        left_nb = face.neighbours[0]
+        at_start = min(corner_width, limit[face.index], limit[left_nb])
+        strips[face.index, 0] = at_start
+        strips[left_nb, 1] = at_start
+    return strips

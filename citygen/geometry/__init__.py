@@ -1,0 +1,1 @@
+"""Geometry: terminal regions of facade layouts turned into meshes and instances."""

@@ -1,0 +1,173 @@
+"""Masses and faces: a footprint extruded to its wall height and split into planar wall faces.
+
+Every ring edge (exterior and courtyard holes) becomes a :class:`Face` with a frame: ``origin`` at its bottom-left
+corner seen from outside, ``u`` along the wall left to right, ``v`` up, ``normal`` outward. Rings are cleaned
+first so the faces are the walls a person would name: nearly collinear edges merge into one face, and edges
+shorter than the tolerance are absorbed into their neighbours instead of becoming 2 cm facades.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
+from shapely.geometry.polygon import orient
+
+from citygen.footprints import Footprint
+
+
+@dataclass(frozen=True)
+class Face:
+    """One planar wall rectangle of a mass, in the scene's local frame (z up)."""
+
+    index: int
+    ring: int
+    origin: tuple[float, float, float]
+    u: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    width: float
+    height: float
+    corner_angles: tuple[float, float]
+    neighbours: tuple[int, int]
+    is_courtyard: bool
+
+    @property
+    def v(self) -> tuple[float, float, float]:
+        return (0.0, 0.0, 1.0)
+
+    def matrix(self) -> np.ndarray:
+        """4x4 row-vector transform from face-local ``(x, y, depth)`` to the scene frame."""
+        m = np.eye(4)
+        m[0, :3], m[1, :3], m[2, :3], m[3, :3] = self.u, self.v, self.normal, self.origin
+        return m
+
+    def midpoint(self, offset: float = 0.0) -> np.ndarray:
+        o, u, n = np.asarray(self.origin), np.asarray(self.u), np.asarray(self.normal)
+        return (o + u * self.width / 2 + n * offset)[:2]
+
+
+@dataclass(frozen=True)
+class Mass:
+    """A building's volume: the cleaned outline extruded from ``base`` by ``height``, and its wall faces."""
+
+    outline: Polygon | MultiPolygon
+    base: float
+    height: float
+    faces: tuple[Face, ...]
+
+
+def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.ndarray:
+    """Remove near-collinear vertices (deviation < ``collinear_tol``) and collapse edges < ``min_edge``.
+
+    ``coords`` is an ``(n, 2)`` open ring. Returns the cleaned open ring (may have < 3 points if the ring
+    degenerates; callers keep the original ring then).
+    """
+    pts = np.asarray(coords, dtype=float)
+    keep = np.r_[True, np.any(np.abs(np.diff(pts, axis=0)) > 1e-9, axis=1)]
+    pts = pts[keep]
+    if len(pts) > 1 and np.allclose(pts[0], pts[-1]):
+        pts = pts[:-1]
+    while len(pts) > 3:
+        prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
+        chord = nxt - prev
+        length = np.hypot(chord[:, 0], chord[:, 1])
+        cross = np.abs(chord[:, 0] * (pts[:, 1] - prev[:, 1]) - chord[:, 1] * (pts[:, 0] - prev[:, 0]))
+        deviation = np.where(length > 1e-12, cross / np.maximum(length, 1e-12), 0.0)
+        i = int(np.argmin(deviation))
+        if deviation[i] < collinear_tol:
+            pts = np.delete(pts, i, axis=0)
+            continue
+        edges = np.roll(pts, -1, axis=0) - pts
+        elen = np.hypot(edges[:, 0], edges[:, 1])
+        j = int(np.argmin(elen))
+        if elen[j] >= min_edge:
+            break
+        k = (j + 1) % len(pts)
+        pts[j] = (pts[j] + pts[k]) / 2
+        pts = np.delete(pts, k, axis=0)
+    return pts
+
+
+def _clean_polygon(poly: Polygon, collinear_tol: float, min_edge: float) -> Polygon:
+    rings = [clean_ring(np.asarray(r.coords)[:, :2], collinear_tol, min_edge)
+             for r in (poly.exterior, *poly.interiors)]
+    if len(rings[0]) < 3:
+        return poly
+    candidate = Polygon(rings[0], [r for r in rings[1:] if len(r) >= 3])
+    if not candidate.is_valid or candidate.area < 0.5 * poly.area:
+        return poly
+    return orient(candidate, sign=1.0)
+
+
+def clean_outline(polygon: Polygon | MultiPolygon, collinear_tol: float = 0.1,
+                  min_edge: float = 0.8) -> Polygon | MultiPolygon:
+    """The outline walls are built from: every part cleaned, oriented (exterior CCW, holes CW)."""
+    parts = list(polygon.geoms) if isinstance(polygon, MultiPolygon) else [polygon]
+    cleaned = [_clean_polygon(orient(p, sign=1.0), collinear_tol, min_edge) for p in parts]
+    return MultiPolygon(cleaned) if len(cleaned) > 1 else cleaned[0]
+
+
+def _ring_faces(coords: np.ndarray, ring: int, first_index: int, base: float, height: float,
+                is_courtyard: bool) -> list[Face]:
+    pts = np.asarray(coords, dtype=float)[:-1, :2]
+    n = len(pts)
+    d = np.roll(pts, -1, axis=0) - pts
+    width = np.hypot(d[:, 0], d[:, 1])
+    u = d / width[:, None]
+    turn = np.degrees(np.arctan2(np.roll(u, 1, axis=0)[:, 0] * u[:, 1] - np.roll(u, 1, axis=0)[:, 1] * u[:, 0],
+                                 np.sum(np.roll(u, 1, axis=0) * u, axis=1)))
+    interior = 180.0 - turn  # interior angle of the building at the start vertex of each edge
+    faces = []
+    for i in range(n):
+        faces.append(Face(index=first_index + i, ring=ring,
+                          origin=(float(pts[i, 0]), float(pts[i, 1]), float(base)),
+                          u=(float(u[i, 0]), float(u[i, 1]), 0.0),
+                          normal=(float(u[i, 1]), float(-u[i, 0]), 0.0),
+                          width=float(width[i]), height=float(height),
+                          corner_angles=(float(interior[i]), float(interior[(i + 1) % n])),
+                          neighbours=(first_index + (i - 1) % n, first_index + (i + 1) % n),
+                          is_courtyard=is_courtyard))
+    return faces
+
+
+def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float = 0.8) -> Mass:
+    """Extrude ``footprint`` to its height; faces for every exterior and courtyard edge."""
+    outline = clean_outline(footprint.polygon, collinear_tol, min_edge)
+    faces: list[Face] = []
+    ring = 0
+    for part in (outline.geoms if isinstance(outline, MultiPolygon) else [outline]):
+        for k, r in enumerate((part.exterior, *part.interiors)):
+            faces += _ring_faces(np.asarray(r.coords), ring, len(faces), footprint.base, footprint.height, k > 0)
+            ring += 1
+    return Mass(outline=outline, base=footprint.base, height=footprint.height, faces=tuple(faces))
+
+
+def party_walls(masses: list[Mass], offset: float = 0.3, share: float = 0.5) -> list[np.ndarray]:
+    """Per mass, a boolean array marking faces that stand against another building (shared walls).
+
+    A face is a party wall when most of the points sampled just outside it (``offset`` metres along the normal
+    at 10%, 30%, 50%, 70%, 90% of its width) fall inside another building's outline.
+    """
+    outlines = [m.outline for m in masses]
+    tree = shapely.STRtree(outlines)
+    fractions = np.array([0.1, 0.3, 0.5, 0.7, 0.9])
+    owner, samples = [], []
+    for mi, mass in enumerate(masses):
+        for face in mass.faces:
+            o, u, n = np.asarray(face.origin[:2]), np.asarray(face.u[:2]), np.asarray(face.normal[:2])
+            samples.append(o + np.outer(fractions * face.width, u) + n * offset)
+            owner.append(mi)
+    if not samples:
+        return [np.zeros(0, bool) for _ in masses]
+    pts = np.concatenate(samples)
+    point_owner = np.repeat(np.asarray(owner), len(fractions))
+    hit_pt, hit_poly = tree.query(shapely.points(pts), predicate="within")
+    inside = np.zeros(len(pts), bool)
+    inside[hit_pt[hit_poly != point_owner[hit_pt]]] = True
+    per_face = inside.reshape(-1, len(fractions)).mean(axis=1) >= share
+    result, start = [], 0
+    for mass in masses:
+        result.append(per_face[start:start + len(mass.faces)])
+        start += len(mass.faces)
+    return result

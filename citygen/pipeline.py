@@ -1,0 +1,233 @@
+"""The city pipeline: scene -> footprints -> masses -> faces -> coordinator -> facades -> geometry -> USD.
+
+One bad building never aborts the city: any error while building it is caught, reported with the building id and
+reason, and the rest is written. ``jobs > 1`` generates buildings in worker processes; results are collected in
+input order, so the stage is byte-identical whatever the job count.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from citygen.coordinator import plan_building
+from citygen.entrance import enforce_entrance
+from citygen.errors import CitygenError
+from citygen.footprints import Footprint, Skipped
+from citygen.geometry.building import build_geometry
+from citygen.layout import FacadeLayout, check_partition
+from citygen.mass import Mass, build_mass, party_walls
+from citygen.registry import Registry, default_registry
+from citygen.request import FacadeRequest, check_request
+from citygen.rng import derive_rng
+from citygen.scene import Assignment, Scene
+from citygen.usd.materials import WALL_PALETTE
+from citygen.usd.writer import BuildingRecord, StageStats, prim_name, write_stage
+
+
+@dataclass
+class Report:
+    """What a run did: counts, skipped buildings with reasons, warnings, timings and the stage's figures."""
+
+    written: int = 0
+    skipped: list[Skipped] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+    stats: StageStats | None = None
+
+    def summary(self) -> str:
+        lines = [f"written {self.written} buildings, skipped {len(self.skipped)}, warnings {len(self.warnings)}"]
+        lines += [f"  skipped {s.id}: {s.reason}" + (f" ({s.where})" if s.where else "") for s in self.skipped]
+        shown = self.warnings[:20]
+        lines += [f"  warning: {w}" for w in shown]
+        if len(self.warnings) > len(shown):
+            lines.append(f"  ... and {len(self.warnings) - len(shown)} more warnings")
+        if self.stats:
+            s = self.stats
+            lines.append(f"stage {s.path.name}: {s.bytes / 1e6:.1f} MB, {s.prims} prims, {s.meshes} meshes, "
+                         f"{s.polygons} polygons, {s.instances} instances of {s.prototypes} prototypes")
+        lines.append("time " + ", ".join(f"{k} {v:.2f}s" for k, v in self.timings.items()))
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class _BuildingOutcome:
+    record: BuildingRecord | None
+    skipped: Skipped | None
+    warnings: tuple[str, ...]
+
+
+class _Builder:
+    """Builds one building at a time; holds the registry and a ruleset cache (one per worker process)."""
+
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None) -> None:
+        self.scene, self.seed = scene, seed
+        self.registry = registry or default_registry()
+        self.rulesets: dict[tuple[str, Path], Any] = {}
+        self.roof = self.registry.roof_builders.get("flat")
+
+    def ruleset(self, assignment: Assignment, path: Path):
+        kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
+                else self.registry.kind_for_path(path))
+        key = (kind.id, path)
+        if key not in self.rulesets:
+            self.rulesets[key] = kind.load(path)
+        return kind, self.rulesets[key]
+
+    def choose(self, footprint: Footprint, mass: Mass, scope: str) -> tuple[Assignment, Path] | None:
+        attrs = {**footprint.attributes, "levels": footprint.levels, "height": footprint.height,
+                 "area": mass.outline.area}
+        for a in self.scene.assignments:
+            if a.faces in ("all", scope) and a.matches(attrs):
+                pick = derive_rng(self.seed, footprint.id, "ruleset", scope).integers(len(a.rulesets))
+                return a, a.rulesets[int(pick)]
+        return None
+
+    def build(self, footprint: Footprint, mass: Mass, party: np.ndarray, name: str) -> _BuildingOutcome:
+        warnings: list[str] = []
+        try:
+            plan = plan_building(footprint, mass, party, self.scene.defaults, self.seed)
+            layouts: dict[int, FacadeLayout] = {}
+            used: list[str] = []
+            for scope, courtyard in (("street", False), ("courtyard", True)):
+                requests = [r for r in plan.requests if r.context.is_courtyard == courtyard]
+                if not requests:
+                    continue
+                choice = self.choose(footprint, mass, scope)
+                if choice is None:
+                    warnings.append(f"{footprint.id}: no [[assign]] matches its {scope} faces; plain walls")
+                    continue
+                assignment, path = choice
+                kind, ruleset = self.ruleset(assignment, path)
+                used.append(f"{kind.id}:{path.name}")
+                for request, layout in zip(requests, kind.generate_building(ruleset, requests)):
+                    layouts[request.context.face_index] = self._checked(layout, request, kind.id, warnings)
+            palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
+            wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
+            faces = [(f, layouts.get(f.index)) for f in mass.faces]
+            roof = self.roof.build(mass.outline, mass.base + mass.height) if self.roof else None
+            geometry = build_geometry(mass, faces, wall, roof)
+        except CitygenError as exc:
+            return _BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
+        except Exception as exc:  # a plugin bug must skip one building, not the city
+            reason = f"internal error {type(exc).__name__}: {exc}"
+            return _BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
+        attributes = {"sourceId": footprint.id, "height": float(footprint.height),
+                      "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
+                      "ruleset": ", ".join(used) or "none", "seed": self.seed,
+                      "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
+        c = mass.outline.centroid
+        tile = (math.floor(c.x / self.scene.output.tile_size), math.floor(c.y / self.scene.output.tile_size))
+        return _BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+
+    @staticmethod
+    def _checked(layout: FacadeLayout, request: FacadeRequest, kind_id: str, warnings: list[str]) -> FacadeLayout:
+        where = f"{request.context.building_id} face {request.context.face_index}"
+        problems = check_partition(layout)
+        if problems:
+            raise CitygenError(f"{where}: layout is not a partition: {problems[0]}", plugin=kind_id,
+                               hint="this is a bug in the ruleset kind; please report it with the ruleset")
+        layout, note = enforce_entrance(layout, request)
+        if note:
+            warnings.append(f"{where}: {note}")
+        warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
+        return layout
+
+
+_WORKER: _Builder | None = None
+
+
+def _init_worker(scene: Scene, seed: int) -> None:
+    global _WORKER
+    _WORKER = _Builder(scene, seed)
+
+
+def _work(args: tuple[Footprint, Mass, np.ndarray, str]) -> _BuildingOutcome:
+    assert _WORKER is not None
+    return _WORKER.build(*args)
+
+
+def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = None, jobs: int = 1,
+                  registry: Registry | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> Report:
+    """Generate the scene's city and write its stage; never raises for one bad building."""
+    registry = registry or default_registry()
+    seed = scene.seed if seed is None else seed
+    out = out or scene.output.path
+    report = Report()
+    t0 = time.perf_counter()
+    options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
+               **scene.footprint_options}
+    importer = registry.importer_for(scene.footprints, options.pop("format", None))
+    imported = importer.read(scene.footprints, options)
+    report.skipped += imported.skipped
+    report.warnings += imported.warnings
+    t1 = time.perf_counter()
+    footprints, masses = [], []
+    for fp in imported.footprints:
+        try:
+            masses.append(build_mass(fp))
+            footprints.append(fp)
+        except Exception as exc:
+            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
+    party = party_walls(masses)
+    taken: set[str] = set()
+    names = [prim_name(fp.id, taken) for fp in footprints]
+    work = list(zip(footprints, masses, party, names))
+    t2 = time.perf_counter()
+    outcomes = _run(work, scene, seed, jobs, registry, progress)
+    records = []
+    for outcome in outcomes:
+        report.warnings += outcome.warnings
+        if outcome.record is not None:
+            records.append(outcome.record)
+        else:
+            report.skipped.append(outcome.skipped)
+    t3 = time.perf_counter()
+    georef = imported.georef.to_dict() if imported.georef else {}
+    layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
+    report.stats = write_stage(out, sorted(records, key=lambda r: (r.tile, r.name)), up_axis=scene.output.up_axis,
+                               layer_data=layer_data)
+    report.written = len(records)
+    report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2,
+                      "usd": time.perf_counter() - t3, "total": time.perf_counter() - t0}
+    return report
+
+
+def _run(work: Sequence[tuple[Footprint, Mass, np.ndarray, str]], scene: Scene, seed: int, jobs: int,
+         registry: Registry, progress: Callable[[int, int], None] | None) -> list[_BuildingOutcome]:
+    total = len(work)
+    if jobs <= 1 or total < 2 * jobs:
+        builder = _Builder(scene, seed, registry)
+        outcomes = []
+        for k, item in enumerate(work):
+            outcomes.append(builder.build(*item))
+            if progress:
+                progress(k + 1, total)
+        return outcomes
+    outcomes = []
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed)) as pool:
+        for k, outcome in enumerate(pool.map(_work, work, chunksize=max(1, total // (8 * jobs)))):
+            outcomes.append(outcome)
+            if progress:
+                progress(k + 1, total)
+    return outcomes
+
+
+def terminal_progress(done: int, total: int) -> None:
+    """A one-line progress bar on stderr (only when it is a terminal)."""
+    if not sys.stderr.isatty():
+        return
+    width = 30
+    filled = int(width * done / max(total, 1))
+    sys.stderr.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} buildings")
+    if done == total:
+        sys.stderr.write("\n")
+    sys.stderr.flush()

@@ -1,0 +1,214 @@
+"""Scene files (TOML): where footprints come from, defaults, ruleset assignment, seed and output.
+
+See ``docs/scene.md`` for the format. Paths inside a scene are relative to the scene file. Parsing is strict:
+unknown keys and wrong types are errors naming ``file:line`` and the valid choices.
+"""
+from __future__ import annotations
+
+import operator
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from citygen.errors import SceneError, SourceLocation
+
+UP_AXES = ("Z", "Y")
+FACE_SCOPES = ("all", "street", "courtyard")
+
+
+@dataclass(frozen=True)
+class Defaults:
+    """Building defaults applied where the data says nothing."""
+
+    floor_height: float = 3.2
+    ground_floor_height: float = 4.0
+    default_height: float = 10.0
+    corner_width: float = 0.4
+    min_face_width: float = 0.8
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One test of an assignment rule: an attribute compared to a value (or one of several values)."""
+
+    key: str
+    op: str
+    values: tuple[Any, ...]
+
+    def holds(self, attrs: Mapping[str, Any]) -> bool:
+        value = attrs.get(self.key)
+        if value is None:
+            return False
+        if self.op == "in":
+            return str(value) in {str(v) for v in self.values}
+        try:
+            return bool(_OPS[self.op](float(value), float(self.values[0])))
+        except (TypeError, ValueError):
+            return False
+
+
+_OPS = {">=": operator.ge, "<=": operator.le, ">": operator.gt, "<": operator.lt, "==": operator.eq,
+        "!=": operator.ne}
+_COMPARISON = re.compile(r"^\s*(>=|<=|==|!=|>|<)\s*(-?\d+(?:\.\d*)?)\s*$")
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """``[[assign]]``: buildings matching every condition get one of ``rulesets`` (chosen per building)."""
+
+    rulesets: tuple[Path, ...]
+    conditions: tuple[Condition, ...] = ()
+    faces: str = "all"
+    kind: str | None = None
+    line: int | None = None
+
+    def matches(self, attrs: Mapping[str, Any]) -> bool:
+        return all(c.holds(attrs) for c in self.conditions)
+
+
+@dataclass(frozen=True)
+class Output:
+    path: Path
+    up_axis: str = "Z"
+    tile_size: float = 250.0
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A parsed scene file."""
+
+    path: Path
+    name: str
+    seed: int
+    footprints: Path
+    footprint_options: Mapping[str, Any]
+    defaults: Defaults
+    assignments: tuple[Assignment, ...]
+    output: Output
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+
+
+def _line_of(text: str, key: str, start: int = 0) -> int | None:
+    match = re.compile(rf"^\s*\"?{re.escape(key)}\"?\s*=", re.M).search(text, start)
+    return text.count("\n", 0, match.start()) + 1 if match else None
+
+
+class _Reader:
+    """Checks one table of the scene, reporting problems with file:line."""
+
+    def __init__(self, path: Path, text: str) -> None:
+        self.path, self.text = path, text
+
+    def fail(self, message: str, key: str | None = None, hint: str | None = None, line: int | None = None) -> None:
+        if line is None and key is not None:
+            line = _line_of(self.text, key)
+        raise SceneError(message, where=SourceLocation(str(self.path), line), hint=hint)
+
+    def table(self, data: Mapping[str, Any], name: str, allowed: set[str]) -> Mapping[str, Any]:
+        value = data.get(name, {})
+        if not isinstance(value, Mapping):
+            self.fail(f"[{name}] must be a table", name)
+        unknown = sorted(set(value) - allowed)
+        if unknown:
+            self.fail(f"unknown key {unknown[0]!r} in [{name}]", unknown[0], hint=f"valid keys: {', '.join(sorted(allowed))}")
+        return value
+
+    def number(self, table: Mapping[str, Any], key: str, default: float, positive: bool = True) -> float:
+        value = table.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and value <= 0):
+            self.fail(f"{key} must be a {'positive ' if positive else ''}number, got {value!r}", key)
+        return float(value)
+
+    def path_of(self, value: Any, key: str) -> Path:
+        if not isinstance(value, str) or not value:
+            self.fail(f"{key} must be a path string, got {value!r}", key)
+        return (self.path.parent / value).resolve()
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Parse and check a scene file; raise :class:`SceneError` with file:line on any problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SceneError(f"cannot read scene: {exc.strerror}", where=str(path)) from exc
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        match = re.search(r"line (\d+), column (\d+)", str(exc))
+        loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
+        raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
+    r = _Reader(path, text)
+    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
+    if unknown:
+        r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",
+               line=_line_of(text, unknown[0]) or 1)
+    meta = r.table(data, "scene", {"name", "seed", "description"})
+    seed = meta.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        r.fail(f"seed must be a non-negative integer, got {seed!r}", "seed")
+    fp = data.get("footprints")
+    if not isinstance(fp, Mapping) or "path" not in fp:
+        r.fail("[footprints] with a path is required", hint='e.g. [footprints] path = "data/city.geojson"', line=1)
+    fp_options = {k: v for k, v in fp.items() if k != "path"}
+    d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
+    defaults = Defaults(**{k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__})
+    out = r.table(data, "output", {"path", "up_axis", "tile_size"})
+    up_axis = str(out.get("up_axis", "Z")).upper()
+    if up_axis not in UP_AXES:
+        r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
+    output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
+                    tile_size=r.number(out, "tile_size", 250.0))
+    return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
+                 footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
+                 assignments=_assignments(r, data.get("assign", [])), output=output,
+                 metadata={"description": meta.get("description", "")})
+
+
+def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
+    if not isinstance(items, list) or not items:
+        r.fail("at least one [[assign]] table with a ruleset is required", "assign", line=1)
+    result = []
+    search_from = 0
+    for index, item in enumerate(items):
+        header = r.text.find("[[assign]]", search_from)
+        line = r.text.count("\n", 0, header) + 1 if header >= 0 else None
+        search_from = header + 1 if header >= 0 else search_from
+        unknown = sorted(set(item) - {"ruleset", "when", "faces", "kind"})
+        if unknown:
+            r.fail(f"unknown key {unknown[0]!r} in [[assign]] #{index + 1}", line=line,
+                   hint="valid keys: ruleset, when, faces, kind")
+        rulesets = item.get("ruleset")
+        names = [rulesets] if isinstance(rulesets, str) else rulesets
+        if not names or not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            r.fail(f"[[assign]] #{index + 1} needs ruleset = \"path\" or a list of paths", line=line)
+        paths = tuple((r.path.parent / n).resolve() for n in names)
+        for p in paths:
+            if not p.exists():
+                r.fail(f"ruleset {p.name} does not exist ({p})", line=line, hint="paths are relative to the scene file")
+        faces = item.get("faces", "all")
+        if faces not in FACE_SCOPES:
+            r.fail(f"faces must be one of {', '.join(FACE_SCOPES)}, got {faces!r}", line=line)
+        result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), line),
+                                 faces=faces, kind=item.get("kind"), line=line))
+    return tuple(result)
+
+
+def _conditions(r: _Reader, when: Any, line: int | None) -> tuple[Condition, ...]:
+    if not isinstance(when, Mapping):
+        r.fail("when must be a table of attribute = value", line=line)
+    conditions = []
+    for key, value in when.items():
+        if isinstance(value, list):
+            conditions.append(Condition(key, "in", tuple(value)))
+        elif isinstance(value, str) and (m := _COMPARISON.match(value)):
+            conditions.append(Condition(key, m[1], (float(m[2]),)))
+        elif isinstance(value, (str, int, float)) and not isinstance(value, bool):
+            conditions.append(Condition(key, "in", (value,)))
+        else:
+            r.fail(f"condition {key} = {value!r} is not understood", line=line,
+                   hint='use a value, a list of values, or a comparison string like ">= 5"')
+    return tuple(conditions)

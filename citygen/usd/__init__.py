@@ -1,0 +1,1 @@
+"""USD output: stage authoring (Sdf level, for speed), materials, validation."""

@@ -1,0 +1,43 @@
+"""Stage validation: every registered ``pxr.UsdValidation`` validator plus mesh topology checks."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from pxr import Usd, UsdGeom, UsdValidation
+
+
+@dataclass(frozen=True)
+class Finding:
+    severity: str
+    where: str
+    message: str
+
+
+def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
+    """All findings for a stage; errors have ``severity == "error"``.
+
+    Runs ``UsdValidation`` with all validators, then ``UsdGeom.Mesh.ValidateTopology`` on every mesh
+    (including instance prototypes).
+    """
+    stage = stage_or_path if isinstance(stage_or_path, Usd.Stage) else Usd.Stage.Open(str(stage_or_path))
+    if stage is None:
+        return [Finding("error", str(stage_or_path), "cannot open stage")]
+    findings = []
+    context = UsdValidation.ValidationContext(UsdValidation.ValidationRegistry().GetOrLoadAllValidators())
+    for error in context.Validate(stage):
+        kind = error.GetType()
+        severity = {UsdValidation.ValidationErrorType.Error: "error",
+                    UsdValidation.ValidationErrorType.Warn: "warning"}.get(kind, "info")
+        sites = ", ".join(str(s.GetPrim().GetPath()) if s.IsPrim() else str(s.GetLayer().identifier)
+                          for s in error.GetSites()) or "stage"
+        findings.append(Finding(severity, sites, f"{error.GetValidator().GetMetadata().name}: {error.GetMessage()}"))
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)):
+        if prim.IsA(UsdGeom.Mesh):
+            mesh = UsdGeom.Mesh(prim)
+            ok, reason = UsdGeom.Mesh.ValidateTopology(mesh.GetFaceVertexIndicesAttr().Get(),
+                                                       mesh.GetFaceVertexCountsAttr().Get(),
+                                                       len(mesh.GetPointsAttr().Get()))
+            if not ok:
+                findings.append(Finding("error", str(prim.GetPath()), f"mesh topology: {reason}"))
+    return findings

@@ -1,0 +1,1 @@
+"""First-party roof builders for citygen."""
