@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from pxr import Usd, UsdGeom, UsdValidation
+from pxr import Tf, Usd, UsdGeom, UsdValidation
 
 
 @dataclass(frozen=True)
@@ -20,9 +20,13 @@ def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
     Runs ``UsdValidation`` with all validators, then ``UsdGeom.Mesh.ValidateTopology`` on every mesh
     (including instance prototypes).
     """
-    stage = stage_or_path if isinstance(stage_or_path, Usd.Stage) else Usd.Stage.Open(str(stage_or_path))
-    if stage is None:
-        return [Finding("error", str(stage_or_path), "cannot open stage")]
+    if isinstance(stage_or_path, Usd.Stage):
+        stage = stage_or_path
+    else:
+        try:
+            stage = Usd.Stage.Open(str(stage_or_path))
+        except Tf.ErrorException as exc:
+            return [Finding("error", str(stage_or_path), f"cannot open stage: {str(exc).strip().splitlines()[0]}")]
     findings = []
     context = UsdValidation.ValidationContext(UsdValidation.ValidationRegistry().GetOrLoadAllValidators())
     for error in context.Validate(stage):

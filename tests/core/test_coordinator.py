@@ -1,0 +1,48 @@
+import numpy as np
+from hypothesis import given, settings, strategies as st
+from shapely.geometry import Polygon
+
+from citygen.coordinator import plan_building, plan_floor_lines
+from citygen.footprints import Footprint
+from citygen.mass import build_mass
+from citygen.scene import Defaults
+
+
+def test_floor_lines_use_levels_from_data_and_a_taller_ground_floor():
+    lines = plan_floor_lines(18.0, 5, Defaults(ground_floor_height=4.2))
+    assert len(lines) == 6 and lines[0] == 0.0 and lines[-1] == 18.0
+    heights = np.diff(lines)
+    assert heights[0] > heights[1] and np.allclose(heights[1:], heights[1])
+
+
+@given(st.floats(0.5, 200.0), st.one_of(st.none(), st.integers(1, 60)))
+def test_floor_lines_always_cover_the_wall(height, levels):
+    lines = np.array(plan_floor_lines(height, levels, Defaults()))
+    assert lines[0] == 0.0 and abs(lines[-1] - height) < 1e-9
+    assert np.all(np.diff(lines) > 0)
+    assert len(lines) == 2 or np.all(np.diff(lines) >= 2.4 - 1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(4, 60), st.floats(4, 60), st.floats(3, 60), st.integers(0, 10_000))
+def test_plan_agrees_across_faces(w, d, h, seed):
+    foot = Footprint(id="b", polygon=Polygon([(0, 0), (w, 0), (w, d), (0, d)]), height=h, height_source="height")
+    mass = build_mass(foot)
+    plan = plan_building(foot, mass, np.zeros(len(mass.faces), bool), Defaults(), seed)
+    assert {r.floor_lines for r in plan.requests} == {plan.floor_lines}
+    assert sum(r.entrance for r in plan.requests) == 1
+    entrance = next(r for r in plan.requests if r.entrance)
+    assert entrance.width == max(r.width for r in plan.requests)
+    by_face = {r.context.face_index: r for r in plan.requests}
+    for r in plan.requests:  # both faces at a corner reserve the same strip
+        right_neighbour = by_face[r.context.neighbours[1]]
+        assert r.corner_widths[1] == right_neighbour.corner_widths[0]
+
+
+def test_party_walls_get_no_request_and_no_door():
+    foot = Footprint(id="b", polygon=Polygon([(0, 0), (30, 0), (30, 8), (0, 8)]), height=9, height_source="height")
+    mass = build_mass(foot)
+    party = np.array([True, False, False, False])  # the long south wall is shared
+    plan = plan_building(foot, mass, party, Defaults(), 1)
+    assert 0 in plan.plain_faces and all(r.context.face_index != 0 for r in plan.requests)
+    assert plan.entrance_face == 2

@@ -1,0 +1,60 @@
+import json
+
+import pytest
+from hypothesis import given, strategies as st
+
+from citygen.errors import LayoutError
+from citygen.layout import FacadeLayout, Region, check_partition, require_partition
+
+
+def two_by_one(**override):
+    a = Region(0, 0, 2, 3, "A", "wall")
+    b = Region(2, 0, 2, 3, "B", "window", depth=-0.2, material="glass", asset="a.usda")
+    b = Region(**{**b.__dict__, **override})
+    return FacadeLayout(4, 3, Region(0, 0, 4, 3, "F", children=(a, b)))
+
+
+def test_valid_partition_has_no_problems():
+    assert check_partition(two_by_one()) == []
+
+
+@pytest.mark.parametrize("override, word", [
+    ({"x": 1.5}, "overlap"), ({"w": 1.5}, "cover"), ({"x": 2.5}, "leaves"), ({"w": -2.0}, "negative"),
+    ({"x": float("nan")}, "non-finite")])
+def test_partition_problems_are_named(override, word):
+    problems = check_partition(two_by_one(**override))
+    assert any(word in p for p in problems), problems
+
+
+def test_require_partition_raises_layout_error():
+    with pytest.raises(LayoutError, match="overlap"):
+        require_partition(two_by_one(x=1.5), where="test.json")
+
+
+def test_json_round_trip_and_defaults_omitted():
+    layout = two_by_one()
+    data = json.loads(layout.dumps())
+    assert data["schema_version"] == 1
+    assert "depth" not in data["root"]["children"][0]
+    assert FacadeLayout.loads(layout.dumps()) == layout
+
+
+def test_wrong_schema_version_is_rejected():
+    with pytest.raises(LayoutError, match="schema_version"):
+        FacadeLayout.loads('{"schema_version": 99, "width": 1, "height": 1, "root": {}}', "x.json")
+
+
+def test_json_syntax_error_names_line_and_column():
+    with pytest.raises(LayoutError, match=r"x.json:2:"):
+        FacadeLayout.loads('{\n  "width": ,}', "x.json")
+
+
+@given(st.lists(st.floats(0.1, 5), min_size=1, max_size=8), st.floats(0.5, 10))
+def test_layers_partition_independently(widths, h):
+    x, cells = 0.0, []
+    for w in widths:
+        cells.append(Region(x, 0, w, h, "C", "wall", layer="back"))
+        x += w
+    front = Region(0, 0, x, h, "Sky", None, layer="front")
+    layout = FacadeLayout(x, h, Region(0, 0, x, h, "F", children=(*cells, front)))
+    assert check_partition(layout) == []

@@ -1,0 +1,57 @@
+import numpy as np
+import pytest
+from shapely.geometry import Polygon
+
+from citygen.footprints import Footprint
+from citygen.mass import build_mass, clean_ring, party_walls
+
+
+def fp(coords, holes=(), height=10.0, id="b"):
+    return Footprint(id=id, polygon=Polygon(coords, holes), height=height, height_source="height")
+
+
+def test_rectangle_faces_have_outward_frames():
+    mass = build_mass(fp([(0, 0), (10, 0), (10, 4), (0, 4)]))
+    assert [round(f.width, 6) for f in mass.faces] == [10, 4, 10, 4]
+    south = mass.faces[0]
+    assert south.origin == (0.0, 0.0, 0.0) and south.u == (1.0, 0.0, 0.0)
+    assert south.normal == (0.0, -1.0, 0.0)  # outward from a CCW ring
+    assert all(f.corner_angles == pytest.approx((90.0, 90.0)) for f in mass.faces)
+    # u x v == normal: a right-handed frame
+    for f in mass.faces:
+        assert np.allclose(np.cross(f.u, f.v), f.normal)
+
+
+def test_clockwise_input_is_oriented():
+    mass = build_mass(fp([(0, 0), (0, 4), (10, 4), (10, 0)]))
+    centroid = np.array([5.0, 2.0])
+    for f in mass.faces:
+        assert np.dot(f.midpoint(0.0) - centroid, f.normal[:2]) > 0
+
+
+def test_courtyard_faces_point_into_the_courtyard():
+    mass = build_mass(fp([(0, 0), (30, 0), (30, 30), (0, 30)], [[(10, 10), (20, 10), (20, 20), (10, 20)]]))
+    court = [f for f in mass.faces if f.is_courtyard]
+    assert len(court) == 4
+    for f in court:
+        assert np.dot(np.array([15.0, 15.0]) - f.midpoint(0.0), f.normal[:2]) > 0
+
+
+def test_nearly_collinear_edges_merge_and_short_edges_are_absorbed():
+    coords = [(0, 0), (8, 0.03), (16, 0), (16, 10), (8.05, 10), (8, 10.1), (0, 10)]
+    mass = build_mass(fp(coords))
+    assert len(mass.faces) == 4
+    assert min(f.width for f in mass.faces) > 9
+
+
+def test_clean_ring_keeps_real_corners():
+    ring = np.array([(0, 0), (5, 0), (5, 5), (3, 5), (3, 3), (0, 3)], float)
+    assert len(clean_ring(ring, 0.1, 0.8)) == 6
+
+
+def test_party_walls_detected_between_touching_buildings():
+    a = build_mass(fp([(0, 0), (10, 0), (10, 10), (0, 10)], id="a"))
+    b = build_mass(fp([(10, 0), (20, 0), (20, 10), (10, 10)], id="b"))
+    pa, pb = party_walls([a, b])
+    assert pa.tolist() == [False, True, False, False]
+    assert pb.tolist() == [False, False, False, True]

@@ -1,0 +1,63 @@
+import pytest
+
+from citygen.errors import SceneError
+from citygen.scene import load_scene
+
+BASE = '''[scene]
+name = "t"
+seed = 1
+
+[footprints]
+path = "city.geojson"
+default_height = 9
+
+[defaults]
+floor_height = 3.0
+
+[[assign]]
+when = { building = ["church", "cathedral"] }
+ruleset = "a.grammar"
+
+[[assign]]
+when = { levels = ">= 5" }
+ruleset = ["a.grammar", "b.grammar"]
+
+[[assign]]
+ruleset = "b.grammar"
+'''
+
+
+def write(tmp_path, text):
+    for name in ("a.grammar", "b.grammar"):
+        (tmp_path / name).write_text("")
+    (tmp_path / "s.toml").write_text(text)
+    return tmp_path / "s.toml"
+
+
+def test_scene_parses_and_matches(tmp_path):
+    scene = load_scene(write(tmp_path, BASE))
+    assert scene.seed == 1 and scene.defaults.floor_height == 3.0
+    assert scene.footprint_options == {"default_height": 9}
+    church, tall, other = scene.assignments
+    assert church.matches({"building": "church"}) and not church.matches({"building": "yes"})
+    assert tall.matches({"levels": 7}) and not tall.matches({"levels": 3}) and not tall.matches({"levels": None})
+    assert len(tall.rulesets) == 2 and other.matches({})
+
+
+@pytest.mark.parametrize("edit, message, line", [
+    (("seed = 1", "seed = -4"), "seed must be", 3),
+    (("floor_height = 3.0", "floor_height = 0"), "floor_height must be a positive number", 10),
+    (("[defaults]", "[defaults]\nfloorheight = 3"), "unknown key 'floorheight'", 10),
+    (('ruleset = "b.grammar"\n', 'ruleset = "missing.grammar"\n'), "missing.grammar does not exist", 20),
+    (("seed = 1", "seed = = 1"), "not valid TOML", 3),
+])
+def test_scene_errors_name_file_and_line(tmp_path, edit, message, line):
+    path = write(tmp_path, BASE.replace(*edit))
+    with pytest.raises(SceneError, match=message) as info:
+        load_scene(path)
+    assert f"s.toml:{line}" in str(info.value)
+
+
+def test_missing_footprints_table(tmp_path):
+    with pytest.raises(SceneError, match=r"\[footprints\]"):
+        load_scene(write(tmp_path, '[scene]\nseed = 1\n[[assign]]\nruleset = "a.grammar"\n'))

@@ -1,0 +1,90 @@
+import pytest
+from pxr import Kind, Usd, UsdGeom, UsdSemantics
+
+from citygen.cli import main
+from citygen.pipeline import generate_city
+from citygen.scene import load_scene
+from citygen.usd.validate import validate_stage
+
+
+def generate(scene_path, registry, out, **kw):
+    return generate_city(load_scene(scene_path), registry=registry, out=out, **kw)
+
+
+def errors(path):
+    return [f for f in validate_stage(path) if f.severity == "error"]
+
+
+@pytest.mark.parametrize("suffix", [".usda", ".usdc", ".usdz"])
+def test_every_format_validates(small_scene, test_registry, tmp_path, suffix):
+    out = tmp_path / f"city{suffix}"
+    generate(small_scene, test_registry, out)
+    assert errors(out) == []
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".city")], "temporary file left behind"
+
+
+def test_same_seed_same_bytes_and_jobs_do_not_matter(small_scene, test_registry, tmp_path):
+    a, b, c = tmp_path / "a.usda", tmp_path / "b.usda", tmp_path / "c.usda"
+    generate(small_scene, test_registry, a)
+    generate(small_scene, test_registry, b)
+    generate(small_scene, test_registry, c, seed=99)
+    assert a.read_bytes() == b.read_bytes()
+    assert a.read_bytes() != c.read_bytes()
+
+
+def test_stage_structure(small_scene, test_registry, tmp_path):
+    out = tmp_path / "city.usda"
+    report = generate(small_scene, test_registry, out)
+    stage = Usd.Stage.Open(str(out))
+    assert stage.GetDefaultPrim().GetPath() == "/World"
+    assert UsdGeom.GetStageMetersPerUnit(stage) == 1.0 and UsdGeom.GetStageUpAxis(stage) == "Z"
+    world = stage.GetPrimAtPath("/World")
+    assert Usd.ModelAPI(world).GetKind() == Kind.Tokens.assembly
+    buildings = [p for p in stage.Traverse() if Usd.ModelAPI(p).GetKind() == Kind.Tokens.component]
+    assert sorted(p.GetName() for p in buildings) == ["way_1", "way_2", "way_3"]
+    b = stage.GetPrimAtPath(buildings[0].GetPath())
+    for attr in ("sourceId", "height", "heightSource", "levels", "ruleset", "seed"):
+        assert b.GetAttribute(f"citygen:{attr}").HasAuthoredValue()
+    assert Usd.ModelAPI(b.GetParent()).GetKind() == Kind.Tokens.group
+    instancers = [p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)]
+    assert sum(len(UsdGeom.PointInstancer(p).GetProtoIndicesAttr().Get()) for p in instancers) == report.stats.instances
+    labels = {tuple(UsdSemantics.LabelsAPI(p, "class").GetLabelsAttr().Get())
+              for p in stage.Traverse(Usd.PrimAllPrimsPredicate) if p.HasAPI(UsdSemantics.LabelsAPI)}
+    assert {("window",), ("door",), ("wall",), ("roof",)} <= labels
+    assert stage.GetRootLayer().customLayerData["citygen"]["seed"] == 3
+
+
+def test_one_door_per_building(small_scene, test_registry, tmp_path):
+    out = tmp_path / "city.usda"
+    generate(small_scene, test_registry, out)
+    stage = Usd.Stage.Open(str(out))
+    for inst in (p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)):
+        pi = UsdGeom.PointInstancer(inst)
+        protos = pi.GetPrototypesRel().GetTargets()
+        names = [str(stage.GetPrimAtPath(t).GetMetadata("references").GetAddedOrExplicitItems()[0].primPath)
+                 for t in protos]
+        doors = sum(1 for i in pi.GetProtoIndicesAttr().Get() if "/door_" in names[i])
+        assert doors == 1, inst.GetPath()
+
+
+def test_up_axis_y(small_scene, test_registry, tmp_path):
+    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nup_axis = "Y"')
+    small_scene.write_text(text)
+    report = generate(small_scene, test_registry, None)
+    stage = Usd.Stage.Open(str(report.stats.path))
+    assert UsdGeom.GetStageUpAxis(stage) == "Y"
+    assert errors(report.stats.path) == []
+
+
+def test_validate_cli_exit_codes(small_scene, test_registry, tmp_path, capsys):
+    out = tmp_path / "city.usda"
+    generate(small_scene, test_registry, out)
+    assert main(["validate", str(out)]) == 0
+    broken = tmp_path / "broken.usda"
+    broken.write_text('#usda 1.0\ndef Mesh "M"\n{\n int[] faceVertexCounts = [4]\n int[] faceVertexIndices = [0, 1, 2, 9]\n'
+                      ' point3f[] points = [(0,0,0), (1,0,0), (1,1,0), (0,1,0)]\n}\n')
+    assert main(["validate", str(broken)]) == 1
+    assert "topology" in capsys.readouterr().out
+    (tmp_path / "garbage.usda").write_text("#usda 1.0\ndef {")
+    assert main(["validate", str(tmp_path / "garbage.usda")]) == 1
+    assert "cannot open stage" in capsys.readouterr().out
