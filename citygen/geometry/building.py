@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
-from citygen.geometry.quads import box_quads, to_world, weld
+from citygen.geometry.quads import box_quads, merge_rects, to_world, weld
 from citygen.layout import FacadeLayout
 from citygen.mass import Face, Mass
 
@@ -115,7 +115,9 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         panel = ~instanced
         for label, material in sorted({(str(a), str(b)) for a, b in zip(labels[panel], materials[panel])}):
             sel = panel & (labels == label) & (materials == material)
-            quads.setdefault((label, material), []).append(to_world(box_quads(rects[sel], depth[sel]), m))
+            for d in np.unique(depth[sel]):
+                flat = merge_rects(rects[sel & (depth == d)])
+                quads.setdefault((label, material), []).append(to_world(box_quads(flat, np.full(len(flat), d)), m))
         behind = instanced & ~np.isin(labels, list(OPENINGS))
         if behind.any():
             quads.setdefault(("wall", wall_material), []).append(

@@ -48,17 +48,48 @@ def box_quads(rects: np.ndarray, depth: np.ndarray, front: bool = True, sides: b
     return np.concatenate(parts) if parts else np.zeros((0, 4, 3))
 
 
+def merge_rects(rects: np.ndarray, eps: float = 1e-6) -> np.ndarray:
+    """Fewer rectangles covering the same area: runs touching along x merge, then runs touching along y.
+
+    ``rects`` is ``(n, 4)`` of ``x0, y0, x1, y1`` (a set of disjoint rectangles of one material and depth).
+    Wall pieces between the windows of a floor collapse into strips, which is most of a facade mesh's polygons.
+    """
+    rects = np.asarray(rects, dtype=float).reshape(-1, 4)
+    for lo, hi, a, b in ((0, 2, 1, 3), (1, 3, 0, 2)):  # merge along x within rows, then along y within columns
+        if len(rects) < 2:
+            break
+        order = np.lexsort((rects[:, lo], rects[:, b], rects[:, a]))
+        r = rects[order]
+        joined = ((np.abs(r[1:, a] - r[:-1, a]) < eps) & (np.abs(r[1:, b] - r[:-1, b]) < eps)
+                  & (np.abs(r[1:, lo] - r[:-1, hi]) < eps))
+        starts = np.flatnonzero(np.r_[True, ~joined])
+        merged = r[starts].copy()
+        merged[:, hi] = np.maximum.reduceat(r[:, hi], starts)
+        rects = merged
+    return rects
+
+
 def to_world(quads: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     """Apply a 4x4 row-vector transform to ``(..., 3)`` points."""
     return quads @ matrix[:3, :3] + matrix[3, :3]
 
 
-def weld(quads: np.ndarray, decimals: int = 4) -> tuple[np.ndarray, np.ndarray]:
+def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Shared vertices for ``(m, 4, 3)`` quads: ``(points (k, 3) float32, indices (m*4,) int32)``.
 
-    Vertices closer than ``10**-decimals`` metres merge, so adjacent wall pieces share their corners.
+    Vertices within ``10**-decimals`` metres merge, so adjacent wall pieces share their corners. Coordinates are
+    snapped to that grid relative to the quads' minimum corner and packed into one int64 key per vertex (21 bits
+    per axis: extents up to 2 km at 1 mm), which keeps the unique step a 1-D sort.
     """
     flat = quads.reshape(-1, 3)
-    key = np.round(flat, decimals)
-    points, inverse = np.unique(key, axis=0, return_inverse=True)
+    if not len(flat):
+        return np.zeros((0, 3), np.float32), np.zeros(0, np.int32)
+    step = 10.0 ** -decimals
+    origin = flat.min(axis=0)
+    grid = np.rint((flat - origin) / step).astype(np.int64)
+    if grid.max() >= 1 << 21:
+        raise ValueError(f"weld: extent {grid.max() * step:.0f} m exceeds the 21-bit key range")
+    key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
+    uniq, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    points = origin + grid[first] * step
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)

@@ -140,6 +140,19 @@ def _value(value: Any):
     return T.String, str(value)
 
 
+def _dictionary(data: Mapping[str, Any]) -> dict[str, Any]:
+    """Layer metadata values USD can store: nested dicts, scalars, strings, and numeric lists as double arrays."""
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        if isinstance(value, Mapping):
+            out[key] = _dictionary(value)
+        elif isinstance(value, (list, tuple)):
+            out[key] = Vt.DoubleArray([float(v) for v in value])
+        else:
+            out[key] = value
+    return out
+
+
 def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axis: str = "Z",
                 layer_data: Mapping[str, Any] | None = None) -> StageStats:
     """Author the city and write it to ``path`` atomically (temporary file + rename)."""
@@ -154,7 +167,7 @@ def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axi
         layer.defaultPrim = "World"
         layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
         layer.pseudoRoot.SetInfo("upAxis", up_axis)
-        layer.customLayerData = {"citygen": dict(layer_data or {})}
+        layer.customLayerData = {"citygen": _dictionary(layer_data or {})}
         world = author.prim(layer, "World", "Xform")
         world.SetInfo("kind", "assembly")
         if up_axis == "Y":
