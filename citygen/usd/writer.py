@@ -26,9 +26,9 @@ import numpy as np
 from pxr import Gf, Sdf, Tf, Usd, UsdUtils, Vt
 
 from citygen.errors import ExportError
-from citygen.geometry.building import BuildingGeometry, MeshData
+from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
+from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey, build_prototype
-from citygen.geometry.quads import weld
 from citygen.usd.materials import look
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
@@ -184,16 +184,23 @@ def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axi
                 materials[name] = author.material(looks, prim_name(name, material_names))
             return materials[name]
 
-        def prototype(key: ProtoKey) -> Sdf.Path:
+        def prototype(key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
             if key not in prototypes:
                 proto = author.prim(protos_root, Tf.MakeValidIdentifier(key.name), "Xform")
                 author.api(proto, "SemanticsLabelsAPI:class")
                 author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([key.label]), uniform=True)
-                for part in build_prototype(key):
-                    if len(part.quads):
-                        points, indices = weld(part.quads)
-                        author.mesh(proto, part.name, MeshData(points, np.full(len(part.quads), 4, np.int32), indices),
-                                    material(part.material), None)
+                if isinstance(key, ModuleKey):
+                    module = modules[key]
+                    names: set[str] = set()
+                    for (label, mat), mesh in module.meshes.items():
+                        author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, material(mat), label)
+                    if len(module.elements.proto_indices):
+                        _instancer(author, proto, module.elements, lambda k: prototype(k, modules))
+                else:
+                    for part in build_prototype(key):
+                        if len(part.quads):
+                            author.mesh(proto, part.name, MeshData.from_quads(part.quads), material(part.material),
+                                        None)
                 prototypes[key] = proto.path
             return prototypes[key]
 
@@ -232,20 +239,25 @@ def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecor
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances
     if len(inst.proto_indices):
-        pi = author.prim(prim, "Elements", "PointInstancer")
-        holder = author.prim(pi, "Prototypes", "Scope")
-        targets = []
-        for k, key in enumerate(inst.protos):
-            ref = author.prim(holder, f"p{k}", "Xform")
-            ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototype(key)))
-            targets.append(ref.path)
-        author.rel(pi, "prototypes", targets)
-        author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
-        author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(inst.positions.astype(np.float32)))
-        author.attr(pi, "orientations", T.QuathArray, Vt.QuathArray.FromNumpy(inst.orientations.astype(np.float16)))
-        author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
+        _instancer(author, prim, inst, lambda key: prototype(key, geo.modules))
         counts["instances"] += len(inst.proto_indices)
     counts["buildings"] += 1
+
+
+def _instancer(author: _Author, parent: Sdf.PrimSpec, inst: Instances, prototype) -> None:
+    """A PointInstancer ``Elements`` under ``parent`` whose prototypes reference the shared ``/Prototypes``."""
+    pi = author.prim(parent, "Elements", "PointInstancer")
+    holder = author.prim(pi, "Prototypes", "Scope")
+    targets = []
+    for k, key in enumerate(inst.protos):
+        ref = author.prim(holder, f"p{k}", "Xform")
+        ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototype(key)))
+        targets.append(ref.path)
+    author.rel(pi, "prototypes", targets)
+    author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
+    author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(inst.positions.astype(np.float32)))
+    author.attr(pi, "orientations", T.QuathArray, Vt.QuathArray.FromNumpy(inst.orientations.astype(np.float16)))
+    author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
 
 
 def _finish(layer: Sdf.Layer, path: Path) -> int:

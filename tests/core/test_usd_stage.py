@@ -7,6 +7,19 @@ from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
 
 
+def element_labels(stage, instancer):
+    """Semantic labels of every element an instancer places, modules flattened (nested instancers)."""
+    pi = UsdGeom.PointInstancer(instancer)
+    protos = [stage.GetPrimAtPath(t) for t in pi.GetPrototypesRel().GetTargets()]
+    labels = []
+    for i in pi.GetProtoIndicesAttr().Get():
+        proto = protos[i]
+        label = UsdSemantics.LabelsAPI(proto, "class").GetLabelsAttr().Get()[0]
+        nested = proto.GetChild("Elements")
+        labels += element_labels(stage, nested) if label == "module" and nested else [label]
+    return labels
+
+
 def generate(scene_path, registry, out, **kw):
     return generate_city(load_scene(scene_path), registry=registry, out=out, **kw)
 
@@ -46,8 +59,9 @@ def test_stage_structure(small_scene, test_registry, tmp_path):
     for attr in ("sourceId", "height", "heightSource", "levels", "ruleset", "seed"):
         assert b.GetAttribute(f"citygen:{attr}").HasAuthoredValue()
     assert Usd.ModelAPI(b.GetParent()).GetKind() == Kind.Tokens.group
-    instancers = [p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)]
+    instancers = [b.GetChild("Elements") for b in buildings]
     assert sum(len(UsdGeom.PointInstancer(p).GetProtoIndicesAttr().Get()) for p in instancers) == report.stats.instances
+    assert {"window", "door"} <= set(element_labels(stage, instancers[0]))
     labels = {tuple(UsdSemantics.LabelsAPI(p, "class").GetLabelsAttr().Get())
               for p in stage.Traverse(Usd.PrimAllPrimsPredicate) if p.HasAPI(UsdSemantics.LabelsAPI)}
     assert {("window",), ("door",), ("wall",), ("roof",)} <= labels
@@ -58,13 +72,9 @@ def test_one_door_per_building(small_scene, test_registry, tmp_path):
     out = tmp_path / "city.usda"
     generate(small_scene, test_registry, out)
     stage = Usd.Stage.Open(str(out))
-    for inst in (p for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)):
-        pi = UsdGeom.PointInstancer(inst)
-        protos = pi.GetPrototypesRel().GetTargets()
-        names = [str(stage.GetPrimAtPath(t).GetMetadata("references").GetAddedOrExplicitItems()[0].primPath)
-                 for t in protos]
-        doors = sum(1 for i in pi.GetProtoIndicesAttr().Get() if "/door_" in names[i])
-        assert doors == 1, inst.GetPath()
+    buildings = [p for p in stage.Traverse() if Usd.ModelAPI(p).GetKind() == Kind.Tokens.component]
+    for b in buildings:
+        assert element_labels(stage, b.GetChild("Elements")).count("door") == 1, b.GetPath()
 
 
 def test_up_axis_y(small_scene, test_registry, tmp_path):
