@@ -1,0 +1,162 @@
+"""CityJSON footprints: Building / BuildingPart objects, footprint from the ground of their solid.
+
+The footprint is the 2D union of the solid's ground surfaces (near-horizontal, facing down); a solid without
+them (3dfier LoD1 output leaves the bottom open) falls back to the union of all its faces projected to the
+plane. Base = lowest z of the geometry; height = highest minus lowest z (``cityjson_height = "geometry"``), or
+from the attributes (``measuredHeight``, ``storeysAboveGround``) with ``cityjson_height = "attribute"``.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from citygen.errors import FootprintError
+from citygen.footprints import ImportResult, Skipped
+from shapely.geometry import Polygon
+
+from citygen_footprints.assemble import RawFeature, assemble
+from citygen_footprints.frame import parse_crs
+from citygen_footprints.heights import Height, resolve_height
+from citygen_footprints.options import ImportOptions
+from citygen_footprints.repair import FeatureProblem
+
+BUILDING_TYPES = ("Building", "BuildingPart")
+SOLIDS = ("Solid", "MultiSolid", "CompositeSolid")
+SURFACES = ("MultiSurface", "CompositeSurface")
+#: |normal z| above this makes a surface horizontal (about 8 degrees)
+HORIZONTAL = 0.99
+
+
+def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
+    try:
+        vertices = np.asarray(doc.get("vertices", []), dtype=float)
+    except (TypeError, ValueError):
+        raise FootprintError("CityJSON vertices are not all [x, y, z] numbers", where=str(path)) from None
+    if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 3):
+        raise FootprintError(f"CityJSON vertices have shape {vertices.shape}, expected (n, 3)", where=str(path))
+    transform = doc.get("transform")
+    if isinstance(transform, Mapping):
+        vertices = vertices * np.asarray(transform.get("scale", [1, 1, 1]), dtype=float) \
+            + np.asarray(transform.get("translate", [0, 0, 0]), dtype=float)
+    return vertices.reshape(-1, 3)
+
+
+def _rank(geometry: Mapping[str, Any]) -> tuple[int, float]:
+    """Sort key: solids before surfaces, LoD 1 first, then ascending LoD, LoD 0 last."""
+    try:
+        lod = float(geometry.get("lod", 9))
+    except (TypeError, ValueError):
+        lod = 9.0
+    return (0 if geometry.get("type") in SOLIDS else 1, lod if lod >= 1 else 99.0)
+
+
+def _surfaces(geometry: Mapping[str, Any]) -> list[list[list[int]]]:
+    """Every surface (a list of rings of vertex indices) of the exterior shells of a geometry."""
+    kind, boundaries = geometry.get("type"), geometry.get("boundaries") or []
+    if kind == "Solid":
+        return list(boundaries[0]) if boundaries else []
+    if kind in ("MultiSolid", "CompositeSolid"):
+        return [surface for solid in boundaries if solid for surface in solid[0]]
+    return list(boundaries)
+
+
+def _newell_z(ring: np.ndarray) -> tuple[float, float]:
+    """Unit normal z of a 3D ring (Newell's method) and its length (twice the area)."""
+    nxt = np.roll(ring, -1, axis=0)
+    n = np.array([np.sum((ring[:, 1] - nxt[:, 1]) * (ring[:, 2] + nxt[:, 2])),
+                  np.sum((ring[:, 2] - nxt[:, 2]) * (ring[:, 0] + nxt[:, 0])),
+                  np.sum((ring[:, 0] - nxt[:, 0]) * (ring[:, 1] + nxt[:, 1]))])
+    length = float(np.linalg.norm(n))
+    return (n[2] / length if length else 0.0), length
+
+
+def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[shapely.Geometry, float, float, bool]:
+    """(2D footprint, min z, max z, had ground surfaces) of one CityJSON geometry; FeatureProblem if none."""
+    ground, projected, used = [], [], []
+    is_solid = geometry.get("type") in SOLIDS
+    for surface in _surfaces(geometry):
+        try:
+            rings = [vertices[np.asarray(ring, dtype=int)] for ring in surface if len(ring) >= 3]
+        except (IndexError, ValueError, TypeError):
+            raise FeatureProblem("a surface refers to a vertex index that does not exist "
+                                 "-- the CityJSON file is corrupt; re-export it") from None
+        if not rings:
+            continue
+        used.extend(rings)
+        polygon = Polygon(rings[0][:, :2], [r[:, :2] for r in rings[1:]])
+        if not polygon.is_valid:
+            polygon = shapely.make_valid(polygon)
+        if polygon.area <= 1e-9:
+            continue
+        projected.append(polygon)
+        nz, _ = _newell_z(rings[0])
+        if (nz < -HORIZONTAL) if is_solid else (abs(nz) > HORIZONTAL):
+            ground.append(polygon)
+    if not projected:
+        raise FeatureProblem("the geometry has no surface with a footprint area -- check its boundaries")
+    z = np.concatenate(used)[:, 2]
+    return shapely.union_all(ground or projected), float(z.min()), float(z.max()), bool(ground)
+
+
+def _parts(geometry: shapely.Geometry) -> tuple[list[np.ndarray], ...]:
+    polygons = [g for g in getattr(geometry, "geoms", [geometry]) if isinstance(g, Polygon) and not g.is_empty]
+    return tuple([np.asarray(p.exterior.coords)] + [np.asarray(h.coords) for h in p.interiors] for p in polygons)
+
+
+def _height(attributes: Mapping[str, Any], label: str, zmin: float, zmax: float, options: ImportOptions) -> Height:
+    from_attributes = resolve_height(attributes, label, options.heights)
+    extent = zmax - zmin
+    if options.cityjson_height == "geometry" and 0 < extent <= options.max_height:
+        return Height(extent, "geometry", from_attributes.levels)
+    if from_attributes.source == "default" and 0 < extent <= options.max_height:
+        return Height(extent, "geometry", None, 0.0, from_attributes.warnings, from_attributes.rejected)
+    return from_attributes
+
+
+def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
+                    warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints of the Building and BuildingPart objects of a decoded CityJSON document."""
+    objects = doc.get("CityObjects")
+    if not isinstance(objects, Mapping):
+        raise FootprintError("CityJSON file without a CityObjects object", where=str(path),
+                             hint="is this a CityJSON file? (type must be CityJSON with CityObjects)")
+    vertices = _vertices(doc, path)
+    declared = (doc.get("metadata") or {}).get("referenceSystem")
+    crs_text = options.crs or declared
+    crs = parse_crs(crs_text, str(path)) if crs_text else None
+    notes = list(warnings)
+    if crs is None:
+        notes.append(f"{path}: no referenceSystem in metadata; coordinates kept as unknown metric units "
+                     "-- set crs in the scene to geo-reference them")
+    raws, skipped, open_bottom = [], [], 0
+    for index, (oid, obj) in enumerate(objects.items()):
+        if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
+            continue
+        where = f"{path.name} CityObjects[{oid!r}]"
+        geometries = sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
+                             and g.get("type") in SOLIDS + SURFACES), key=_rank)
+        if not geometries:
+            if not obj.get("children"):
+                skipped.append(Skipped(oid, "no Solid or MultiSurface geometry -- give the building a LoD1 solid "
+                                       "or a LoD0 footprint surface", where))
+            continue
+        attributes = dict(obj.get("attributes") or {})
+        attributes["cityjson:type"] = obj["type"]
+        for parent in obj.get("parents") or []:
+            attributes.setdefault("cityjson:parent", parent)
+        try:
+            footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
+        except FeatureProblem as problem:
+            skipped.append(Skipped(oid, str(problem), where))
+            continue
+        open_bottom += not had_ground
+        label = f"{oid} ({where})"
+        raws.append(RawFeature(oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
+                               height=_height(attributes, label, zmin, zmax, options), base=zmin))
+    if open_bottom:
+        notes.append(f"{path.name}: {open_bottom} solid(s) have no ground surface; their footprint is the union "
+                     "of their faces projected to the ground plane")
+    return assemble(raws, skipped, notes, crs, options, path)
