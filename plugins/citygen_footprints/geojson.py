@@ -105,7 +105,7 @@ def import_geojson(doc: Any, path: Path, options: ImportOptions, lines: list[int
     skipped: list[Skipped] = []
     for index, feature in enumerate(features):
         line = f":{lines[index]}" if lines and index < len(lines) else ""
-        where = f"{path.name}{line} (feature {index})"
+        where = f"{path.name}{line}, feature {index}"
         if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
             skipped.append(Skipped(f"feature/{index}", "not a GeoJSON Feature object -- each element of "
                                    "features must be {\"type\": \"Feature\", \"geometry\": ..., ...}", where))

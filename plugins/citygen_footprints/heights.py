@@ -42,14 +42,16 @@ def _plain(value: object, what: str) -> float | str:
     if isinstance(value, bool) or value is None:
         raise ValueError(f"expected a {what}, got {value!r}")
     if isinstance(value, int | float):
-        if not math.isfinite(value):
-            raise ValueError(f"{what} is not finite")
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"{what} {value!r} is {'negative' if value < 0 else 'not finite'}")
         return float(value)
     if not isinstance(value, str):
         raise ValueError(f"expected a {what}, got {type(value).__name__}")
     text = _APPROX.sub("", value.strip().lower()).rstrip("+").strip()
     if not text:
         raise ValueError(f"empty {what}")
+    if text.startswith("-"):
+        raise ValueError(f"negative {what}")
     return text
 
 
@@ -190,9 +192,12 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
             reject(tag, f"{top:g} m is not a plausible building height, must be in (0, {settings.max_height:g}]")
             continue
         return _with_offset(top, tag, total, offsets, warnings, rejected)
-    if levels is not None:
-        source = level_tag + ("+roof:levels" if roof_levels else "")
-        return _with_offset(total * settings.floor_height, source, total, offsets, warnings, rejected)
+    if total is not None:
+        top = total * settings.floor_height
+        if top <= settings.max_height:
+            source = level_tag + ("+roof:levels" if roof_levels else "")
+            return _with_offset(top, source, total, offsets, warnings, rejected)
+        reject(level_tag, f"{total:g} levels of {settings.floor_height:g} m exceed {settings.max_height:g} m")
     return Height(settings.default_height, "default", None, offset, tuple(warnings), tuple(rejected))
 
 
