@@ -63,42 +63,46 @@ def _surfaces(geometry: Mapping[str, Any]) -> list[list[list[int]]]:
     return list(boundaries)
 
 
-def _newell_z(ring: np.ndarray) -> tuple[float, float]:
-    """Unit normal z of a 3D ring (Newell's method) and its length (twice the area)."""
-    nxt = np.roll(ring, -1, axis=0)
-    n = np.array([np.sum((ring[:, 1] - nxt[:, 1]) * (ring[:, 2] + nxt[:, 2])),
-                  np.sum((ring[:, 2] - nxt[:, 2]) * (ring[:, 0] + nxt[:, 0])),
-                  np.sum((ring[:, 0] - nxt[:, 0]) * (ring[:, 1] + nxt[:, 1]))])
-    length = float(np.linalg.norm(n))
-    return (n[2] / length if length else 0.0), length
+def _newell(rings: list[np.ndarray]) -> np.ndarray:
+    """Newell normals ``(n, 3)`` of 3D rings (not closed): length = twice the area, z = twice the xy area."""
+    points = np.concatenate(rings)
+    sizes = np.array([len(r) for r in rings])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    nxt = np.arange(len(points)) + 1
+    nxt[starts + sizes - 1] = starts
+    a, b = points, points[nxt]
+    terms = np.column_stack([(a[:, 1] - b[:, 1]) * (a[:, 2] + b[:, 2]),
+                             (a[:, 2] - b[:, 2]) * (a[:, 0] + b[:, 0]),
+                             (a[:, 0] - b[:, 0]) * (a[:, 1] + b[:, 1])])
+    return np.add.reduceat(terms, starts, axis=0)
 
 
 def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[shapely.Geometry, float, float, bool]:
     """(2D footprint, min z, max z, had ground surfaces) of one CityJSON geometry; FeatureProblem if none."""
-    ground, projected, used = [], [], []
-    is_solid = geometry.get("type") in SOLIDS
-    for surface in _surfaces(geometry):
-        try:
-            rings = [vertices[np.asarray(ring, dtype=int)] for ring in surface if len(ring) >= 3]
-        except (IndexError, ValueError, TypeError):
-            raise FeatureProblem("a surface refers to a vertex index that does not exist "
-                                 "-- the CityJSON file is corrupt; re-export it") from None
-        if not rings:
-            continue
-        used.extend(rings)
-        polygon = Polygon(rings[0][:, :2], [r[:, :2] for r in rings[1:]])
-        if not polygon.is_valid:
-            polygon = shapely.make_valid(polygon)
-        if polygon.area <= 1e-9:
-            continue
-        projected.append(polygon)
-        nz, _ = _newell_z(rings[0])
-        if (nz < -HORIZONTAL) if is_solid else (abs(nz) > HORIZONTAL):
-            ground.append(polygon)
-    if not projected:
+    try:
+        surfaces = [[vertices[np.asarray(ring, dtype=np.intp)] for ring in surface if len(ring) >= 3]
+                    for surface in _surfaces(geometry)]
+    except (IndexError, ValueError, TypeError):
+        raise FeatureProblem("a surface refers to a vertex index that does not exist "
+                             "-- the CityJSON file is corrupt; re-export it") from None
+    surfaces = [s for s in surfaces if s]
+    if not surfaces:
+        raise FeatureProblem("the geometry has no surfaces -- check its boundaries")
+    normals = _newell([s[0] for s in surfaces])
+    length = np.linalg.norm(normals, axis=1)
+    nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
+    flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²
+    if not flat.any():
         raise FeatureProblem("the geometry has no surface with a footprint area -- check its boundaries")
-    z = np.concatenate(used)[:, 2]
-    return shapely.union_all(ground or projected), float(z.min()), float(z.max()), bool(ground)
+    is_down = (nz < -HORIZONTAL) if geometry.get("type") in SOLIDS else (np.abs(nz) > HORIZONTAL)
+    polygons = np.array([Polygon(s[0][:, :2], [r[:, :2] for r in s[1:]]) if flat[i] else None
+                         for i, s in enumerate(surfaces)], dtype=object)
+    invalid = flat & ~shapely.is_valid(polygons)
+    polygons[invalid] = shapely.make_valid(polygons[invalid])
+    ground = flat & is_down
+    z = np.concatenate([r[:, 2] for s in surfaces for r in s])
+    chosen = polygons[ground] if ground.any() else polygons[flat]
+    return shapely.union_all(chosen), float(z.min()), float(z.max()), bool(ground.any())
 
 
 def _parts(geometry: shapely.Geometry) -> tuple[list[np.ndarray], ...]:
