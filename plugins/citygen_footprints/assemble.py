@@ -23,8 +23,9 @@ from citygen_footprints.repair import FeatureProblem, Part, build_polygon
 
 @dataclass(frozen=True)
 class RawFeature:
-    """One feature as read from the file, before projection and repair."""
+    """One feature as read from the file (``index`` = its position there), before projection and repair."""
 
+    index: int
     id: str
     where: str
     source: str
@@ -65,33 +66,38 @@ def _project(features: Sequence[RawFeature], frame) -> list[tuple[Part, ...]]:
     return [tuple([next(pieces) for _ in part] for part in f.parts) for f in features]
 
 
-def assemble(features: Sequence[RawFeature], skipped: Sequence[Skipped], warnings: Sequence[str],
+def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skipped]], warnings: Sequence[str],
              crs: CRS | None, options: ImportOptions, path: Path) -> ImportResult:
-    """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort."""
+    """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort.
+
+    ``skipped`` holds (feature index, Skipped) of features the reader already rejected; the result lists all
+    skipped features in file order.
+    """
     features, id_warnings = unique_ids(features)
     out_warnings = list(warnings) + id_warnings
     points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
     frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
     out_skipped = list(skipped)
     footprints = []
-    for feature, parts in zip(features, _project(features, frame)):
+    for feature, parts in zip(features, _project(features, frame), strict=True):
         label = f"{feature.id} ({feature.where})"
         out_warnings.extend(f"{label}: {w}" for w in feature.warnings)
         try:
             polygon, notes = build_polygon(parts, options.min_area, options.part_area, options.repair_min_area_ratio)
         except FeatureProblem as problem:
-            out_skipped.append(Skipped(feature.id, str(problem), feature.where))
+            out_skipped.append((feature.index, Skipped(feature.id, str(problem), feature.where)))
             continue
         out_warnings.extend(f"{label}: {w}" for w in notes)
         height = feature.height or resolve_height(feature.attributes, label, options.heights)
         out_warnings.extend(height.warnings)
         if height.rejected and options.bad_height == "skip":
-            out_skipped.append(Skipped(feature.id, f"unusable height data ({', '.join(height.rejected)}) -- fix "
-                                       "the tags, or set bad_height = \"fallback\" to use the next height source",
-                                       feature.where))
+            reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
+                      "bad_height = \"fallback\" to use the next height source")
+            out_skipped.append((feature.index, Skipped(feature.id, reason, feature.where)))
             continue
         footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
                                     height_source=height.source, levels=height.levels,
                                     base=feature.base + height.base_offset, attributes=dict(feature.attributes),
                                     source=feature.source))
-    return ImportResult(tuple(footprints), tuple(out_skipped), tuple(out_warnings), frame.georef)
+    ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
+    return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)

@@ -144,8 +144,8 @@ def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
                              and g.get("type") in SOLIDS + SURFACES), key=_rank)
         if not geometries:
             if not obj.get("children"):
-                skipped.append(Skipped(oid, "no Solid or MultiSurface geometry -- give the building a LoD1 solid "
-                                       "or a LoD0 footprint surface", where))
+                reason = "no Solid or MultiSurface geometry -- give it a LoD1 solid or a LoD0 footprint surface"
+                skipped.append((index, Skipped(oid, reason, where)))
             continue
         attributes = dict(obj.get("attributes") or {})
         attributes["cityjson:type"] = obj["type"]
@@ -154,11 +154,11 @@ def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
         try:
             footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
         except FeatureProblem as problem:
-            skipped.append(Skipped(oid, str(problem), where))
+            skipped.append((index, Skipped(oid, str(problem), where)))
             continue
         open_bottom += not had_ground
         label = f"{oid} ({where})"
-        raws.append(RawFeature(oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
+        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))
     if open_bottom:
         notes.append(f"{path.name}: {open_bottom} solid(s) have no ground surface; their footprint is the union "

@@ -102,21 +102,21 @@ def import_geojson(doc: Any, path: Path, options: ImportOptions, lines: list[int
     features = features_of(doc, path)
     crs, crs_warnings = choose_crs(doc, options, str(path))
     raws: list[RawFeature] = []
-    skipped: list[Skipped] = []
+    skipped: list[tuple[int, Skipped]] = []
     for index, feature in enumerate(features):
         line = f":{lines[index]}" if lines and index < len(lines) else ""
         where = f"{path.name}{line}, feature {index}"
         if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
-            skipped.append(Skipped(f"feature/{index}", "not a GeoJSON Feature object -- each element of "
-                                   "features must be {\"type\": \"Feature\", \"geometry\": ..., ...}", where))
+            skipped.append((index, Skipped(f"feature/{index}", "not a GeoJSON Feature object -- each element of "
+                                           "features must be {\"type\": \"Feature\", \"geometry\": ...}", where)))
             continue
         properties = feature.get("properties") if isinstance(feature.get("properties"), Mapping) else {}
         fid = feature_id(feature, properties, index, options.id_property)
         try:
             cleaned = clean_rings(_geometry_polygons(feature.get("geometry")))
         except FeatureProblem as problem:
-            skipped.append(Skipped(fid, str(problem), where))
+            skipped.append((index, Skipped(fid, str(problem), where)))
             continue
-        raws.append(RawFeature(fid, where, f"{path.name}#{index}", attributes_of(properties), cleaned.parts,
+        raws.append(RawFeature(index, fid, where, f"{path.name}#{index}", attributes_of(properties), cleaned.parts,
                                cleaned.warnings))
     return assemble(raws, skipped, [*warnings, *crs_warnings], crs, options, path)

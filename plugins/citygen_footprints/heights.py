@@ -79,7 +79,7 @@ def _roman(text: str) -> int:
     if not text or not _ROMAN.fullmatch(text):
         raise ValueError("not a level count (expected e.g. '4', '3.5', '4;5', 'IV')")
     total = 0
-    for here, after in zip(text, text[1:] + " "):
+    for here, after in zip(text, text[1:] + " ", strict=True):
         v = _ROMAN_VALUES[here]
         total += -v if _ROMAN_VALUES.get(after, 0) > v else v
     return total

@@ -30,7 +30,8 @@ def test_good_features_come_through(bad):
     assert [f.id for f in bad.footprints] == [
         "way/1", "way/2", "way/3", "way/4", "way/9", "way/11", "way/12", "way/14", "way/14#2", "way/16", "way/17",
         "way/18", "way/19", "way/20", "way/21", "way/23"]
-    assert len(bad.skipped) == 9
+    assert [s.id for s in bad.skipped] == ["way/5", "way/6", "way/7", "way/8", "way/10", "way/13", "way/15",
+                                           "way/22", "feature/24"]  # file order
     hole = _footprint(bad, "way/2")
     assert len(hole.polygon.interiors) == 1 and hole.polygon.area == pytest.approx(400 - 25, rel=0.01)
     multi = _footprint(bad, "way/3")
@@ -159,3 +160,40 @@ def test_empty_collection_imports_nothing(tmp_path):
     path = write_json(tmp_path / "empty.geojson", {"type": "FeatureCollection", "features": []})
     result = read_footprints(path, {})
     assert result.footprints == () and result.skipped == ()
+
+
+def _one(tmp_path, geometry):
+    doc = {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"@id": "way/1"}, "geometry": geometry}]}
+    return read_footprints(write_json(tmp_path / "one.geojson", doc), {"origin": [24.94, 60.17]})
+
+
+def _sq(x, y, size):
+    d = 1e-4 / 5.55  # about a metre of longitude at lat 60; latitude degrees are twice as long
+    x0, y0, s = 24.94 + x * d, 60.17 + y * d / 2, size * d
+    return [[x0, y0], [x0 + s, y0], [x0 + s, y0 + s / 2], [x0, y0 + s / 2], [x0, y0]]
+
+
+def test_overlapping_multipolygon_parts_are_merged(tmp_path):
+    result = _one(tmp_path, {"type": "MultiPolygon", "coordinates": [[_sq(0, 0, 10)], [_sq(5, 0, 10)]]})
+    polygon = result.footprints[0].polygon
+    assert polygon.geom_type == "Polygon" and polygon.area == pytest.approx(150, rel=0.01)
+
+
+def test_degenerate_multipolygon_part_is_dropped_with_a_warning(tmp_path):
+    line = [_sq(20, 0, 10)[0], _sq(20, 0, 10)[1], _sq(20, 0, 10)[0]]
+    result = _one(tmp_path, {"type": "MultiPolygon", "coordinates": [[_sq(0, 0, 10)], [line]]})
+    assert result.footprints[0].polygon.geom_type == "Polygon"
+    assert "part 1 exterior ring has only 2 distinct point(s), not an area; dropped the part" in result.warnings[0]
+
+
+@pytest.mark.parametrize("coordinates, words", [
+    ([[["a", "b"], [1, 2], [2, 2], ["a", "b"]]], "malformed position"),
+    ([[[24.94], [24.95], [24.96], [24.94]]], "fewer than 2 numbers"),
+    ([[[True, 60.1], [24.95, 60.1], [24.95, 60.2], [True, 60.1]]], "malformed position"),
+    ([[]], "exterior ring is empty"),
+    ([5], "exterior ring is empty or not a list"),
+])
+def test_malformed_coordinates_are_skipped(tmp_path, coordinates, words):
+    result = _one(tmp_path, {"type": "Polygon", "coordinates": coordinates})
+    assert result.footprints == () and words in result.skipped[0].reason
