@@ -120,6 +120,27 @@ def _height(attributes: Mapping[str, Any], label: str, zmin: float, zmax: float,
     return from_attributes
 
 
+def _geometries(obj: Any) -> list[Mapping[str, Any]]:
+    """The object's usable geometries, best first (see :func:`_rank`)."""
+    if not isinstance(obj, Mapping):
+        return []
+    return sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
+                   and g.get("type") in SOLIDS + SURFACES), key=_rank)
+
+
+def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str, Any]:
+    """The object's attributes, its type and parent, and (for parts) the attributes of its parent."""
+    attributes = dict(obj.get("attributes") or {})
+    attributes["cityjson:type"] = obj["type"]
+    for parent_id in obj.get("parents") or []:
+        attributes.setdefault("cityjson:parent", parent_id)
+        parent = objects.get(parent_id)
+        if isinstance(parent, Mapping):
+            for key, value in (parent.get("attributes") or {}).items():
+                attributes.setdefault(key, value)
+    return attributes
+
+
 def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
                     warnings: tuple[str, ...] = ()) -> ImportResult:
     """Footprints of the Building and BuildingPart objects of a decoded CityJSON document."""
@@ -140,23 +161,20 @@ def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
         if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
             continue
         where = f"{path.name} CityObjects[{oid!r}]"
-        geometries = sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
-                             and g.get("type") in SOLIDS + SURFACES), key=_rank)
+        if any(_geometries(objects.get(child)) for child in obj.get("children") or []):
+            continue  # represented by its parts, which inherit its attributes
+        geometries = _geometries(obj)
         if not geometries:
-            if not obj.get("children"):
-                reason = "no Solid or MultiSurface geometry -- give it a LoD1 solid or a LoD0 footprint surface"
-                skipped.append((index, Skipped(oid, reason, where)))
+            reason = "no Solid or MultiSurface geometry -- give it a LoD1 solid or a LoD0 footprint surface"
+            skipped.append((index, Skipped(oid, reason, where)))
             continue
-        attributes = dict(obj.get("attributes") or {})
-        attributes["cityjson:type"] = obj["type"]
-        for parent in obj.get("parents") or []:
-            attributes.setdefault("cityjson:parent", parent)
         try:
             footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
         except FeatureProblem as problem:
             skipped.append((index, Skipped(oid, str(problem), where)))
             continue
         open_bottom += not had_ground
+        attributes = _attributes(obj, objects)
         label = f"{oid} ({where})"
         raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))

@@ -85,7 +85,8 @@ def test_parts_children_and_odd_objects(tmp_path):
     v2, _ = _box(20, 0, 5, 0, 6)
     flat = [[30, 0, 0], [40, 0, 0], [40, 10, 0], [30, 10, 0]]
     objects = {
-        "parent": {"type": "Building", "children": ["part"]},
+        "parent": {"type": "Building", "children": ["part"], "attributes": {"yearOfConstruction": 1900},
+                   "geometry": [{"type": "MultiSurface", "lod": "0", "boundaries": [[[0, 1, 2, 3]]]}]},
         "part": {"type": "BuildingPart", "parents": ["parent"], "geometry": [_solid(faces)]},
         "lod0": {"type": "Building", "attributes": {"measuredHeight": 4.5},
                  "geometry": [{"type": "MultiSurface", "lod": "0", "boundaries": [[[16, 17, 18, 19]]]}]},
@@ -98,7 +99,8 @@ def test_parts_children_and_odd_objects(tmp_path):
     result = read_footprints(write_json(tmp_path / "mixed.json", _doc(objects, v1 + v2 + flat)), {})
     got = {f.id: f for f in result.footprints}
     assert set(got) == {"part", "lod0", "two_lods"}
-    assert got["part"].attributes["cityjson:parent"] == "parent"
+    assert got["part"].attributes["cityjson:parent"] == "parent"  # the parent is represented by its part
+    assert got["part"].attributes["yearOfConstruction"] == 1900
     assert (got["lod0"].height, got["lod0"].height_source) == (4.5, "measuredHeight")
     assert got["two_lods"].polygon.area == pytest.approx(25.0)  # the LoD1 solid wins over the LoD0 surface
     skipped = {s.id: s.reason for s in result.skipped}
