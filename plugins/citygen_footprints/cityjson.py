@@ -15,10 +15,12 @@ import numpy as np
 import shapely
 from citygen.errors import FootprintError
 from citygen.footprints import ImportResult, Skipped
+from pyproj import CRS
 from shapely.geometry import Polygon
 
 from citygen_footprints.assemble import RawFeature, assemble
 from citygen_footprints.frame import parse_crs
+from citygen_footprints.jsonload import read_lines
 from citygen_footprints.heights import Height, resolve_height
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem
@@ -141,26 +143,28 @@ def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str,
     return attributes
 
 
-def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
-                    warnings: tuple[str, ...] = ()) -> ImportResult:
-    """Footprints of the Building and BuildingPart objects of a decoded CityJSON document."""
-    objects = doc.get("CityObjects")
-    if not isinstance(objects, Mapping):
-        raise FootprintError("CityJSON file without a CityObjects object", where=str(path),
-                             hint="is this a CityJSON file? (type must be CityJSON with CityObjects)")
-    vertices = _vertices(doc, path)
+def _crs(doc: Mapping[str, Any], path: Path, options: ImportOptions, notes: list[str]) -> CRS | None:
     declared = (doc.get("metadata") or {}).get("referenceSystem")
     crs_text = options.crs or declared
-    crs = parse_crs(crs_text, str(path)) if crs_text else None
-    notes = list(warnings)
-    if crs is None:
+    if not crs_text:
         notes.append(f"{path}: no referenceSystem in metadata; coordinates kept as unknown metric units "
                      "-- set crs in the scene to geo-reference them")
+        return None
+    return parse_crs(crs_text, str(path))
+
+
+Collected = tuple[list[RawFeature], list[tuple[int, Skipped]], int]
+
+
+def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Path, options: ImportOptions,
+                      start: int = 0, line: int | None = None) -> Collected:
+    """RawFeatures and skips of the buildings among ``objects``, and how many solids had no ground surface."""
     raws, skipped, open_bottom = [], [], 0
-    for index, (oid, obj) in enumerate(objects.items()):
+    at = f"{path.name}:{line}" if line else path.name
+    for offset, (oid, obj) in enumerate(objects.items()):
         if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
             continue
-        where = f"{path.name} CityObjects[{oid!r}]"
+        index, where = start + offset, f"{at} CityObjects[{oid!r}]"
         if any(_geometries(objects.get(child)) for child in obj.get("children") or []):
             continue  # represented by its parts, which inherit its attributes
         geometries = _geometries(obj)
@@ -178,7 +182,47 @@ def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
         label = f"{oid} ({where})"
         raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))
-    if open_bottom:
-        notes.append(f"{path.name}: {open_bottom} solid(s) have no ground surface; their footprint is the union "
-                     "of their faces projected to the ground plane")
-    return assemble(raws, skipped, notes, crs, options, path)
+    return raws, skipped, open_bottom
+
+
+def _open_bottom_note(path: Path, count: int) -> list[str]:
+    return [f"{path.name}: {count} solid(s) have no ground surface; their footprint is the union of their faces "
+            "projected to the ground plane"] if count else []
+
+
+def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
+                    warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints of the Building and BuildingPart objects of a decoded CityJSON document."""
+    objects = doc.get("CityObjects")
+    if not isinstance(objects, Mapping):
+        raise FootprintError("CityJSON file without a CityObjects object", where=str(path),
+                             hint="is this a CityJSON file? (type must be CityJSON with CityObjects)")
+    notes = list(warnings)
+    crs = _crs(doc, path, options, notes)
+    raws, skipped, open_bottom = collect_buildings(objects, _vertices(doc, path), path, options)
+    return assemble(raws, skipped, notes + _open_bottom_note(path, open_bottom), crs, options, path)
+
+
+def import_cityjson_seq(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints from CityJSON Text Sequences (``.city.jsonl``): a CityJSON header line, then one
+    CityJSONFeature per line with its own vertices (quantised with the header's transform)."""
+    lines = read_lines(path)
+    if not lines or not isinstance(lines[0][1], Mapping) or lines[0][1].get("type") != "CityJSON":
+        raise FootprintError("a CityJSONSeq file must start with a CityJSON header line", where=f"{path}:1",
+                             hint="the first line holds type, version, transform and metadata")
+    header = lines[0][1]
+    notes = list(warnings)
+    crs = _crs(header, path, options, notes)
+    raws, skipped, open_bottom, start = [], [], 0, 0
+    for number, feature in lines[1:]:
+        if not isinstance(feature, Mapping) or not isinstance(feature.get("CityObjects"), Mapping):
+            notes.append(f"{path.name}:{number}: not a CityJSONFeature (no CityObjects); line ignored")
+            continue
+        vertices = _vertices({"vertices": feature.get("vertices", []), "transform": header.get("transform")},
+                             path)
+        more = collect_buildings(feature["CityObjects"], vertices, path, options, start, number)
+        raws += more[0]
+        skipped += more[1]
+        open_bottom += more[2]
+        start += len(feature["CityObjects"])
+    return assemble(raws, skipped, notes + _open_bottom_note(path, open_bottom), crs, options, path)

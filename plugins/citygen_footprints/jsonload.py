@@ -69,19 +69,37 @@ def _scan_object(text: str, array_key: str) -> tuple[dict[str, Any], list[int]]:
     return doc, starts
 
 
-def load_json(path: Path, array_key: str = "features") -> tuple[Any, list[int]]:
-    """The decoded document and the 1-based line of each element of its ``array_key`` array (if any).
-
-    Raises FootprintError naming ``file:line:column`` for unreadable files and JSON syntax errors.
-    """
+def _read_text(path: Path) -> str:
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        return path.read_text(encoding="utf-8-sig")
     except OSError as exc:
         raise FootprintError(f"cannot read footprint file: {exc.strerror or exc}", where=str(path),
                              hint="check the [footprints] path in the scene") from None
     except UnicodeDecodeError as exc:
         raise FootprintError(f"not UTF-8 text (byte {exc.start})", where=str(path),
                              hint="GeoJSON and CityJSON files are UTF-8 JSON") from None
+
+
+def read_lines(path: Path) -> list[tuple[int, Any]]:
+    """(1-based line number, decoded value) of every non-blank line of a JSON Lines file."""
+    out = []
+    for number, line in enumerate(_read_text(path).splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            out.append((number, json.loads(line)))
+        except json.JSONDecodeError as exc:
+            raise FootprintError(f"not valid JSON: {exc.msg}", where=SourceLocation(str(path), number, exc.colno),
+                                 hint="each line of a JSON Lines file must be one JSON value") from None
+    return out
+
+
+def load_json(path: Path, array_key: str = "features") -> tuple[Any, list[int]]:
+    """The decoded document and the 1-based line of each element of its ``array_key`` array (if any).
+
+    Raises FootprintError naming ``file:line:column`` for unreadable files and JSON syntax errors.
+    """
+    text = _read_text(path)
     try:
         if text.lstrip().startswith("{"):
             doc, starts = _scan_object(text, array_key)

@@ -10,16 +10,18 @@ from citygen.footprints import ImportResult
 from citygen.hookspecs import hookimpl
 from citygen.registry import FootprintImporter
 
-from citygen_footprints.cityjson import import_cityjson
+from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
 from citygen_footprints.geojson import import_geojson
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
 
 
 def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
-    """Read a GeoJSON or CityJSON file, dispatching on its top-level ``type`` rather than its suffix."""
+    """Read a GeoJSON, CityJSON or CityJSONSeq (``.jsonl``) file; JSON files dispatch on their top-level ``type``."""
     path = Path(path)
     parsed, warnings = parse_options(options)
+    if path.name.lower().endswith(".jsonl"):
+        return import_cityjson_seq(path, parsed, warnings)
     doc, lines = load_json(path)
     if isinstance(doc, Mapping) and doc.get("type") == "CityJSON":
         return import_cityjson(doc, path, parsed, warnings)
@@ -41,8 +43,8 @@ class GeoJSONImporter(FootprintImporter):
 
 class CityJSONImporter(FootprintImporter):
     id = "cityjson"
-    suffixes = (".city.json", ".cityjson")
-    description = "CityJSON Building/BuildingPart objects: ground of the solid, height from the geometry"
+    suffixes = (".city.json", ".cityjson", ".city.jsonl")
+    description = "CityJSON (and CityJSONSeq .jsonl) buildings: ground of the solid, height from the geometry"
 
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
         return read_footprints(path, options)

@@ -1,8 +1,12 @@
 """CityJSON import: the shipped Delft buildings, ground-surface footprints, heights, odd objects."""
 from __future__ import annotations
 
+import json
+
 import pytest
 import shapely
+
+from citygen.errors import FootprintError
 
 from citygen_footprints.plugin import read_footprints
 
@@ -121,3 +125,40 @@ def test_wrong_reference_system_is_a_clear_error(tmp_path):
     doc = _doc({"b": {"type": "Building", "geometry": [_solid(faces)]}}, v, crs="EPSG:3067")
     with pytest.raises(Exception, match="outside the area of use of EPSG:3067"):
         read_footprints(write_json(tmp_path / "wrong.city.json", doc), {})
+
+
+def _as_sequence(doc, path):
+    """Write a CityJSON document as CityJSONSeq: a header line, then one CityJSONFeature per building."""
+    header = {k: v for k, v in doc.items() if k not in ("CityObjects", "vertices")}
+    lines = [json.dumps({**header, "CityObjects": {}, "vertices": []})]
+    for oid, obj in doc["CityObjects"].items():
+        used = {}
+
+        def remap(b, used=used):
+            return [remap(x) for x in b] if isinstance(b, list) else used.setdefault(b, len(used))
+        geometry = [{**g, "boundaries": remap(g["boundaries"])} for g in obj["geometry"]]
+        vertices = [doc["vertices"][i] for i in sorted(used, key=used.get)]
+        lines.append(json.dumps({"type": "CityJSONFeature", "id": oid, "vertices": vertices,
+                                 "CityObjects": {oid: {**obj, "geometry": geometry}}}))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_cityjson_seq_gives_the_same_buildings(tmp_path, delft):
+    path = _as_sequence(json.loads(DELFT.read_text()), tmp_path / "delft.city.jsonl")
+    seq = read_footprints(path, {})
+    assert seq.georef == delft.georef
+    assert [(f.id, round(f.polygon.area, 6), f.height) for f in seq.footprints] == [
+        (f.id, round(f.polygon.area, 6), f.height) for f in delft.footprints]
+    assert seq.footprints[0].source == "delft.city.jsonl#0"
+
+
+def test_cityjson_seq_errors_name_the_line(tmp_path):
+    path = tmp_path / "bad.city.jsonl"
+    path.write_text('{"type": "CityJSON", "version": "2.0", "transform": {"scale": [1, 1, 1], "translate": [0, 0, 0]}}'
+                    '\n{"type": "CityJSONFeature", oops}\n')
+    with pytest.raises(FootprintError, match=r"bad.city.jsonl:2:29: not valid JSON"):
+        read_footprints(path, {})
+    path.write_text('{"type": "CityJSONFeature"}\n')
+    with pytest.raises(FootprintError, match="must start with a CityJSON header"):
+        read_footprints(path, {})

@@ -21,7 +21,7 @@ def test_importers_are_registered(registry):
 
 @pytest.mark.parametrize("name, importer", [
     ("city.geojson", "geojson"), ("city.json", "geojson"), ("delft.city.json", "cityjson"),
-    ("delft.cityjson", "cityjson"), ("CITY.GEOJSON", "geojson"),
+    ("delft.cityjson", "cityjson"), ("CITY.GEOJSON", "geojson"), ("tile.city.jsonl", "cityjson"),
 ])
 def test_importer_for_suffix(registry, name, importer):
     assert registry.importer_for(Path(name)).id == importer
