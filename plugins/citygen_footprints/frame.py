@@ -113,31 +113,32 @@ def make_frame(crs: CRS | None, points: np.ndarray, origin: tuple[float, float] 
     Raises FootprintError when the coordinates cannot be in ``crs`` (and ``check`` is on).
     """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    if origin is None:
-        centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(2)
-    else:
+    if origin is not None:
         centre = np.asarray(origin, dtype=float)
+    elif len(points):  # the bbox centre, rounded to whole units (metres, or 1e-7 degrees below)
+        centre = (points.min(axis=0) + points.max(axis=0)) / 2
+        centre = centre.round(7) if crs is not None and _horizontal(crs).is_geographic else centre.round()
+    else:
+        centre = np.zeros(2)
+    x0, y0 = float(centre[0]), float(centre[1])
     if crs is None:
-        centre = np.round(centre)
-        return LocalFrame(GeoReference("", (float(centre[0]), float(centre[1]))), None, tuple(centre))
+        return LocalFrame(GeoReference("", (x0, y0)), None, (x0, y0))
+    horizontal = _horizontal(crs)
     if check and len(points):
-        if _horizontal(crs).is_geographic:
+        if horizontal.is_geographic:
             _check_geographic(points, crs.to_string(), where)
         else:
             _check_projected(crs, points, where)
     if _is_metric_projected(crs):
-        centre = np.round(centre)
-        return LocalFrame(GeoReference(crs.to_string(), (float(centre[0]), float(centre[1]))), None,
-                          (float(centre[0]), float(centre[1])))
-    if _horizontal(crs).is_geographic:
-        lon, lat = (float(v) for v in np.round(centre, 7))
-    else:
-        to_geo = Transformer.from_crs(_horizontal(crs), _horizontal(crs).geodetic_crs, always_xy=True)
-        lon, lat = (round(float(v), 7) for v in to_geo.transform(*centre))
+        return LocalFrame(GeoReference(crs.to_string(), (x0, y0)), None, (x0, y0))
+    if horizontal.is_geographic:
+        lon, lat = x0, y0
+    else:  # projected in feet or other units: a tmerc around the centre's lon/lat
+        to_geo = Transformer.from_crs(horizontal, horizontal.geodetic_crs, always_xy=True)
+        lon, lat = (round(float(v), 7) for v in to_geo.transform(x0, y0))
     proj = _tmerc_proj(crs, lon, lat)
-    forward = Transformer.from_crs(_horizontal(crs), CRS.from_proj4(proj), always_xy=True)
-    source_origin = (lon, lat) if _horizontal(crs).is_geographic else (float(centre[0]), float(centre[1]))
-    return LocalFrame(GeoReference(crs.to_string(), source_origin, proj), forward)
+    forward = Transformer.from_crs(horizontal, CRS.from_proj4(proj), always_xy=True)
+    return LocalFrame(GeoReference(crs.to_string(), (x0, y0), proj), forward)
 
 
 def frame_from_georef(georef: GeoReference) -> LocalFrame:

@@ -232,3 +232,11 @@ def test_unknown_crs_is_a_clear_error(tmp_path):
     path = write_json(tmp_path / "h.geojson", _collection(_square(24.94, 60.17, 0.0002)))
     with pytest.raises(FootprintError, match="unknown CRS 'EPSG:99999'"):
         read_footprints(path, {"crs": "EPSG:99999"})
+
+
+def test_fixed_origin_is_not_rounded(tmp_path):
+    # regression: a given metric origin was rounded to whole metres like the computed bbox centre
+    path = write_json(tmp_path / "tm35.geojson", _collection(_square(), "EPSG:3067"))
+    result = read_footprints(path, {"origin": [385001.5, 6672002.25]})
+    assert result.georef.origin == (385001.5, 6672002.25)
+    assert result.footprints[0].polygon.bounds == (-1.5, -2.25, 8.5, 7.75)
