@@ -20,8 +20,8 @@ from shapely.geometry import Polygon
 
 from citygen_footprints.assemble import RawFeature, assemble
 from citygen_footprints.frame import parse_crs
-from citygen_footprints.jsonload import read_lines
 from citygen_footprints.heights import Height, resolve_height
+from citygen_footprints.jsonload import read_lines
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem
 
@@ -90,6 +90,8 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     surfaces = [s for s in surfaces if s]
     if not surfaces:
         raise FeatureProblem("the geometry has no surfaces -- check its boundaries")
+    if not all(np.isfinite(r).all() for s in surfaces for r in s):
+        raise FeatureProblem("a vertex is NaN or infinite -- fix the vertices in the source data")
     normals = _newell([s[0] for s in surfaces])
     length = np.linalg.norm(normals, axis=1)
     nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)

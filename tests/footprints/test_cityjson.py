@@ -98,9 +98,12 @@ def test_parts_children_and_odd_objects(tmp_path):
             {"type": "MultiSurface", "lod": "0", "boundaries": [[[16, 17, 18, 19]]]}, _solid(faces, 8)]},
         "nothing": {"type": "Building"},
         "broken": {"type": "Building", "geometry": [_solid([[[0, 1, 999]]])]},
+        "nan": {"type": "Building", "geometry": [_solid([[[0, 1, 20]]])]},
         "road": {"type": "Road", "geometry": [_solid(faces)]},
     }
-    result = read_footprints(write_json(tmp_path / "mixed.json", _doc(objects, v1 + v2 + flat)), {})
+    doc = _doc(objects, v1 + v2 + flat)
+    doc["vertices"].append([float("nan"), 0, 0])  # vertex 20
+    result = read_footprints(write_json(tmp_path / "mixed.json", doc), {})
     got = {f.id: f for f in result.footprints}
     assert set(got) == {"part", "lod0", "two_lods"}
     assert got["part"].attributes["cityjson:parent"] == "parent"  # the parent is represented by its part
@@ -108,8 +111,9 @@ def test_parts_children_and_odd_objects(tmp_path):
     assert (got["lod0"].height, got["lod0"].height_source) == (4.5, "measuredHeight")
     assert got["two_lods"].polygon.area == pytest.approx(25.0)  # the LoD1 solid wins over the LoD0 surface
     skipped = {s.id: s.reason for s in result.skipped}
-    assert set(skipped) == {"nothing", "broken"}
+    assert set(skipped) == {"nothing", "broken", "nan"}
     assert "no Solid or MultiSurface" in skipped["nothing"] and "vertex index" in skipped["broken"]
+    assert "NaN" in skipped["nan"]
 
 
 def test_missing_reference_system_warns(tmp_path):
