@@ -7,6 +7,7 @@ shift is involved. Projected metric input is only translated. Either way local (
 """
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 
@@ -45,10 +46,15 @@ class LocalFrame:
         return xy + np.asarray(self.offset)
 
 
+@functools.lru_cache(maxsize=64)
+def _crs_from_text(text: str) -> CRS:
+    return CRS.from_user_input(text)
+
+
 def parse_crs(text: str, where: str) -> CRS:
     """A pyproj CRS from a user string (``EPSG:3067``, a URN or URL, WKT, PROJ); FootprintError if unknown."""
     try:
-        return CRS.from_user_input(text)
+        return _crs_from_text(text)
     except CRSError as exc:
         raise FootprintError(f"unknown CRS {text!r}: {exc}", where=where,
                              hint='give crs as e.g. "EPSG:3067" or "OGC:CRS84"') from None
