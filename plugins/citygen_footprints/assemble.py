@@ -1,0 +1,103 @@
+"""From raw features in source coordinates to an ImportResult: ids, local frame, repair, heights.
+
+Both importers reduce their format to :class:`RawFeature` records (rings in the source CRS, attributes,
+optionally a height known from 3D geometry) and hand them to :func:`assemble`, so ids, projection, repair and
+height rules are the same for every format.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from citygen.footprints import Footprint, ImportResult, Skipped
+from pyproj import CRS
+
+from citygen_footprints.frame import make_frame
+from citygen_footprints.heights import Height, resolve_height
+from citygen_footprints.options import ImportOptions
+from citygen_footprints.repair import FeatureProblem, Part, build_polygon
+
+
+@dataclass(frozen=True)
+class RawFeature:
+    """One feature as read from the file (``index`` = its position there), before projection and repair."""
+
+    index: int
+    id: str
+    where: str
+    source: str
+    attributes: Mapping[str, Any]
+    parts: tuple[Part, ...]
+    warnings: tuple[str, ...] = ()
+    height: Height | None = None
+    base: float = 0.0
+
+
+def unique_ids(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[str]]:
+    """Suffix repeated ids in file order (``way/1``, ``way/1#2``, ...) so every footprint id is unique."""
+    taken = {f.id for f in features}
+    seen: set[str] = set()
+    out, warnings = [], []
+    for f in features:
+        if f.id in seen:
+            n = 2
+            while f"{f.id}#{n}" in taken:
+                n += 1
+            new = f"{f.id}#{n}"
+            taken.add(new)
+            warnings.append(f"{f.id} ({f.where}): duplicate id, renamed to {new} -- make ids unique in the source "
+                            "or set id_property to a unique property")
+            f = replace(f, id=new)
+        seen.add(f.id)
+        out.append(f)
+    return out, warnings
+
+
+def _project(features: Sequence[RawFeature], frame) -> list[tuple[Part, ...]]:
+    rings = [ring for f in features for part in f.parts for ring in part]
+    if not rings:
+        return []
+    local = frame.to_local(np.concatenate(rings))
+    bounds = np.cumsum([len(r) for r in rings])[:-1]
+    pieces = iter(np.split(local, bounds))
+    return [tuple([next(pieces) for _ in part] for part in f.parts) for f in features]
+
+
+def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skipped]], warnings: Sequence[str],
+             crs: CRS | None, options: ImportOptions, path: Path) -> ImportResult:
+    """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort.
+
+    ``skipped`` holds (feature index, Skipped) of features the reader already rejected; the result lists all
+    skipped features in file order.
+    """
+    features, id_warnings = unique_ids(features)
+    out_warnings = list(warnings) + id_warnings
+    points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
+    frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
+    out_skipped = list(skipped)
+    footprints = []
+    for feature, parts in zip(features, _project(features, frame), strict=True):
+        label = f"{feature.id} ({feature.where})"
+        out_warnings.extend(f"{label}: {w}" for w in feature.warnings)
+        try:
+            polygon, notes = build_polygon(parts, options.min_area, options.part_area, options.repair_min_area_ratio)
+        except FeatureProblem as problem:
+            out_skipped.append((feature.index, Skipped(feature.id, str(problem), feature.where)))
+            continue
+        out_warnings.extend(f"{label}: {w}" for w in notes)
+        height = feature.height or resolve_height(feature.attributes, label, options.heights)
+        out_warnings.extend(height.warnings)
+        if height.rejected and options.bad_height == "skip":
+            reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
+                      "bad_height = \"fallback\" to use the next height source")
+            out_skipped.append((feature.index, Skipped(feature.id, reason, feature.where)))
+            continue
+        footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
+                                    height_source=height.source, levels=height.levels,
+                                    base=feature.base + height.base_offset, attributes=dict(feature.attributes),
+                                    source=feature.source))
+    ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
+    return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)

@@ -1,0 +1,230 @@
+"""CityJSON footprints: Building / BuildingPart objects, footprint from the ground of their solid.
+
+The footprint is the 2D union of the solid's ground surfaces (near-horizontal, facing down); a solid without
+them (3dfier LoD1 output leaves the bottom open) falls back to the union of all its faces projected to the
+plane. Base = lowest z of the geometry; height = highest minus lowest z (``cityjson_height = "geometry"``), or
+from the attributes (``measuredHeight``, ``storeysAboveGround``) with ``cityjson_height = "attribute"``.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from citygen.errors import FootprintError
+from citygen.footprints import ImportResult, Skipped
+from pyproj import CRS
+from shapely.geometry import Polygon
+
+from citygen_footprints.assemble import RawFeature, assemble
+from citygen_footprints.frame import parse_crs
+from citygen_footprints.heights import Height, resolve_height
+from citygen_footprints.jsonload import read_lines
+from citygen_footprints.options import ImportOptions
+from citygen_footprints.repair import FeatureProblem
+
+BUILDING_TYPES = ("Building", "BuildingPart")
+SOLIDS = ("Solid", "MultiSolid", "CompositeSolid")
+SURFACES = ("MultiSurface", "CompositeSurface")
+#: |normal z| above this makes a surface horizontal (about 8 degrees)
+HORIZONTAL = 0.99
+
+
+def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
+    try:
+        vertices = np.asarray(doc.get("vertices", []), dtype=float)
+    except (TypeError, ValueError):
+        raise FootprintError("CityJSON vertices are not all [x, y, z] numbers", where=str(path)) from None
+    if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 3):
+        raise FootprintError(f"CityJSON vertices have shape {vertices.shape}, expected (n, 3)", where=str(path))
+    transform = doc.get("transform")
+    if isinstance(transform, Mapping):
+        vertices = vertices * np.asarray(transform.get("scale", [1, 1, 1]), dtype=float) \
+            + np.asarray(transform.get("translate", [0, 0, 0]), dtype=float)
+    return vertices.reshape(-1, 3)
+
+
+def _rank(geometry: Mapping[str, Any]) -> tuple[int, float]:
+    """Sort key: solids before surfaces, LoD 1 first, then ascending LoD, LoD 0 last."""
+    try:
+        lod = float(geometry.get("lod", 9))
+    except (TypeError, ValueError):
+        lod = 9.0
+    return (0 if geometry.get("type") in SOLIDS else 1, lod if lod >= 1 else 99.0)
+
+
+def _surfaces(geometry: Mapping[str, Any]) -> list[list[list[int]]]:
+    """Every surface (a list of rings of vertex indices) of the exterior shells of a geometry."""
+    kind, boundaries = geometry.get("type"), geometry.get("boundaries") or []
+    if kind == "Solid":
+        return list(boundaries[0]) if boundaries else []
+    if kind in ("MultiSolid", "CompositeSolid"):
+        return [surface for solid in boundaries if solid for surface in solid[0]]
+    return list(boundaries)
+
+
+def _newell(rings: list[np.ndarray]) -> np.ndarray:
+    """Newell normals ``(n, 3)`` of 3D rings (not closed): length = twice the area, z = twice the xy area."""
+    points = np.concatenate(rings)
+    sizes = np.array([len(r) for r in rings])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    nxt = np.arange(len(points)) + 1
+    nxt[starts + sizes - 1] = starts
+    a, b = points, points[nxt]
+    terms = np.column_stack([(a[:, 1] - b[:, 1]) * (a[:, 2] + b[:, 2]),
+                             (a[:, 2] - b[:, 2]) * (a[:, 0] + b[:, 0]),
+                             (a[:, 0] - b[:, 0]) * (a[:, 1] + b[:, 1])])
+    return np.add.reduceat(terms, starts, axis=0)
+
+
+def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[shapely.Geometry, float, float, bool]:
+    """(2D footprint, min z, max z, had ground surfaces) of one CityJSON geometry; FeatureProblem if none."""
+    try:
+        surfaces = [[vertices[np.asarray(ring, dtype=np.intp)] for ring in surface if len(ring) >= 3]
+                    for surface in _surfaces(geometry)]
+    except (IndexError, ValueError, TypeError):
+        raise FeatureProblem("a surface refers to a vertex index that does not exist "
+                             "-- the CityJSON file is corrupt; re-export it") from None
+    surfaces = [s for s in surfaces if s]
+    if not surfaces:
+        raise FeatureProblem("the geometry has no surfaces -- check its boundaries")
+    if not all(np.isfinite(r).all() for s in surfaces for r in s):
+        raise FeatureProblem("a vertex is NaN or infinite -- fix the vertices in the source data")
+    normals = _newell([s[0] for s in surfaces])
+    length = np.linalg.norm(normals, axis=1)
+    nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
+    flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²
+    if not flat.any():
+        raise FeatureProblem("the geometry has no surface with a footprint area -- check its boundaries")
+    is_down = (nz < -HORIZONTAL) if geometry.get("type") in SOLIDS else (np.abs(nz) > HORIZONTAL)
+    polygons = np.array([Polygon(s[0][:, :2], [r[:, :2] for r in s[1:]]) if flat[i] else None
+                         for i, s in enumerate(surfaces)], dtype=object)
+    invalid = flat & ~shapely.is_valid(polygons)
+    polygons[invalid] = shapely.make_valid(polygons[invalid])
+    ground = flat & is_down
+    z = np.concatenate([r[:, 2] for s in surfaces for r in s])
+    chosen = polygons[ground] if ground.any() else polygons[flat]
+    return shapely.union_all(chosen), float(z.min()), float(z.max()), bool(ground.any())
+
+
+def _parts(geometry: shapely.Geometry) -> tuple[list[np.ndarray], ...]:
+    polygons = [g for g in getattr(geometry, "geoms", [geometry]) if isinstance(g, Polygon) and not g.is_empty]
+    return tuple([np.asarray(p.exterior.coords)] + [np.asarray(h.coords) for h in p.interiors] for p in polygons)
+
+
+def _height(attributes: Mapping[str, Any], label: str, zmin: float, zmax: float, options: ImportOptions) -> Height:
+    from_attributes = resolve_height(attributes, label, options.heights)
+    extent = zmax - zmin
+    if options.cityjson_height == "geometry" and 0 < extent <= options.max_height:
+        return Height(extent, "geometry", from_attributes.levels)
+    if from_attributes.source == "default" and 0 < extent <= options.max_height:
+        return Height(extent, "geometry", None, 0.0, from_attributes.warnings, from_attributes.rejected)
+    return from_attributes
+
+
+def _geometries(obj: Any) -> list[Mapping[str, Any]]:
+    """The object's usable geometries, best first (see :func:`_rank`)."""
+    if not isinstance(obj, Mapping):
+        return []
+    return sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
+                   and g.get("type") in SOLIDS + SURFACES), key=_rank)
+
+
+def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str, Any]:
+    """The object's attributes, its type and parent, and (for parts) the attributes of its parent."""
+    attributes = dict(obj.get("attributes") or {})
+    attributes["cityjson:type"] = obj["type"]
+    for parent_id in obj.get("parents") or []:
+        attributes.setdefault("cityjson:parent", parent_id)
+        parent = objects.get(parent_id)
+        if isinstance(parent, Mapping):
+            for key, value in (parent.get("attributes") or {}).items():
+                attributes.setdefault(key, value)
+    return attributes
+
+
+def _crs(doc: Mapping[str, Any], path: Path, options: ImportOptions, notes: list[str]) -> CRS | None:
+    declared = (doc.get("metadata") or {}).get("referenceSystem")
+    crs_text = options.crs or declared
+    if not crs_text:
+        notes.append(f"{path}: no referenceSystem in metadata; coordinates kept as unknown metric units "
+                     "-- set crs in the scene to geo-reference them")
+        return None
+    return parse_crs(crs_text, str(path))
+
+
+Collected = tuple[list[RawFeature], list[tuple[int, Skipped]], int]
+
+
+def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Path, options: ImportOptions,
+                      start: int = 0, line: int | None = None) -> Collected:
+    """RawFeatures and skips of the buildings among ``objects``, and how many solids had no ground surface."""
+    raws, skipped, open_bottom = [], [], 0
+    at = f"{path.name}:{line}" if line else path.name
+    for offset, (oid, obj) in enumerate(objects.items()):
+        if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
+            continue
+        index, where = start + offset, f"{at} CityObjects[{oid!r}]"
+        if any(_geometries(objects.get(child)) for child in obj.get("children") or []):
+            continue  # represented by its parts, which inherit its attributes
+        geometries = _geometries(obj)
+        if not geometries:
+            reason = "no Solid or MultiSurface geometry -- give it a LoD1 solid or a LoD0 footprint surface"
+            skipped.append((index, Skipped(oid, reason, where)))
+            continue
+        try:
+            footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
+        except FeatureProblem as problem:
+            skipped.append((index, Skipped(oid, str(problem), where)))
+            continue
+        open_bottom += not had_ground
+        attributes = _attributes(obj, objects)
+        label = f"{oid} ({where})"
+        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
+                               height=_height(attributes, label, zmin, zmax, options), base=zmin))
+    return raws, skipped, open_bottom
+
+
+def _open_bottom_note(path: Path, count: int) -> list[str]:
+    return [f"{path.name}: {count} solid(s) have no ground surface; their footprint is the union of their faces "
+            "projected to the ground plane"] if count else []
+
+
+def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
+                    warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints of the Building and BuildingPart objects of a decoded CityJSON document."""
+    objects = doc.get("CityObjects")
+    if not isinstance(objects, Mapping):
+        raise FootprintError("CityJSON file without a CityObjects object", where=str(path),
+                             hint="is this a CityJSON file? (type must be CityJSON with CityObjects)")
+    notes = list(warnings)
+    crs = _crs(doc, path, options, notes)
+    raws, skipped, open_bottom = collect_buildings(objects, _vertices(doc, path), path, options)
+    return assemble(raws, skipped, notes + _open_bottom_note(path, open_bottom), crs, options, path)
+
+
+def import_cityjson_seq(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints from CityJSON Text Sequences (``.city.jsonl``): a CityJSON header line, then one
+    CityJSONFeature per line with its own vertices (quantised with the header's transform)."""
+    lines = read_lines(path)
+    if not lines or not isinstance(lines[0][1], Mapping) or lines[0][1].get("type") != "CityJSON":
+        raise FootprintError("a CityJSONSeq file must start with a CityJSON header line", where=f"{path}:1",
+                             hint="the first line holds type, version, transform and metadata")
+    header = lines[0][1]
+    notes = list(warnings)
+    crs = _crs(header, path, options, notes)
+    raws, skipped, open_bottom, start = [], [], 0, 0
+    for number, feature in lines[1:]:
+        if not isinstance(feature, Mapping) or not isinstance(feature.get("CityObjects"), Mapping):
+            notes.append(f"{path.name}:{number}: not a CityJSONFeature (no CityObjects); line ignored")
+            continue
+        vertices = _vertices({"vertices": feature.get("vertices", []), "transform": header.get("transform")},
+                             path)
+        more = collect_buildings(feature["CityObjects"], vertices, path, options, start, number)
+        raws += more[0]
+        skipped += more[1]
+        open_bottom += more[2]
+        start += len(feature["CityObjects"])
+    return assemble(raws, skipped, notes + _open_bottom_note(path, open_bottom), crs, options, path)

@@ -1,0 +1,56 @@
+"""Registers the GeoJSON and CityJSON footprint importers with citygen."""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from citygen.errors import FootprintError
+from citygen.footprints import ImportResult
+from citygen.hookspecs import hookimpl
+from citygen.registry import FootprintImporter
+
+from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
+from citygen_footprints.geojson import import_geojson
+from citygen_footprints.jsonload import load_json
+from citygen_footprints.options import parse_options
+
+
+def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
+    """Read a GeoJSON, CityJSON or CityJSONSeq (``.jsonl``) file; JSON files dispatch on their top-level ``type``."""
+    path = Path(path)
+    parsed, warnings = parse_options(options)
+    if path.name.lower().endswith(".jsonl"):
+        return import_cityjson_seq(path, parsed, warnings)
+    doc, lines = load_json(path)
+    if isinstance(doc, Mapping) and doc.get("type") == "CityJSON":
+        return import_cityjson(doc, path, parsed, warnings)
+    if isinstance(doc, Mapping) and doc.get("type") in ("FeatureCollection", "Feature", "Polygon", "MultiPolygon"):
+        return import_geojson(doc, path, parsed, lines, warnings)
+    kind = doc.get("type") if isinstance(doc, Mapping) else type(doc).__name__
+    raise FootprintError(f"neither GeoJSON nor CityJSON (top-level type is {kind!r})", where=str(path),
+                         hint="give a GeoJSON FeatureCollection of (Multi)Polygons or a CityJSON file")
+
+
+class GeoJSONImporter(FootprintImporter):
+    id = "geojson"
+    suffixes = (".geojson", ".json")
+    description = "GeoJSON Polygon/MultiPolygon buildings (lon/lat or projected), OSM height tags"
+
+    def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
+        return read_footprints(path, options)
+
+
+class CityJSONImporter(FootprintImporter):
+    id = "cityjson"
+    suffixes = (".city.json", ".cityjson", ".city.jsonl")
+    description = "CityJSON (and CityJSONSeq .jsonl) buildings: ground of the solid, height from the geometry"
+
+    def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
+        return read_footprints(path, options)
+
+
+@hookimpl
+def citygen_footprint_importers() -> list[FootprintImporter]:
+    # CityJSON first: the registry picks the first importer whose suffix matches, and .city.json ends in .json
+    return [CityJSONImporter(), GeoJSONImporter()]
