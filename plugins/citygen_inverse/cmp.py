@@ -288,7 +288,7 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     _decompose(grid, 0, grid.shape[0], 0, grid.shape[1], rects, pinwheels)
     rows = _count_rows([(b.y0, b.y1) for b in parts if b.name in _ROW_LABELS])
     scale = width / fw if width else floor_height * max(rows, 1) / fh
-    X, Y = xl * scale, yl * scale
+    X, Y = np.round(xl * scale, 4), np.round(yl * scale, 4)  # 0.1 mm: equal sizes stay equal as decimals
     terminals = []
     for r0, r1, c0, c1, ident in rects:
         label = CMP_TO_LABEL[parts[ident].name] if ident >= 0 else "wall"
