@@ -4,9 +4,9 @@ from __future__ import annotations
 from citygen.hookspecs import hookimpl
 from citygen.registry import Command
 
-from citygen_inverse.commands import LayoutCommand
+from citygen_inverse.commands import GrammarCommand, LayoutCommand
 
 
 @hookimpl
 def citygen_commands() -> list[Command]:
-    return [LayoutCommand()]
+    return [LayoutCommand(), GrammarCommand()]
