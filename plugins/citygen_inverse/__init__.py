@@ -1,0 +1,1 @@
+"""Inverse procedural modelling (wu2014): CMP facade import and split-grammar extraction."""

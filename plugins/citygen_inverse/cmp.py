@@ -1,0 +1,323 @@
+"""Import a CMP facade annotation (Tylecek & Sara 2013) as an exact FacadeLayout partition.
+
+The CMP ``*.xml`` files are a single line of ``<object>`` elements without a root element; every object is an
+axis-aligned box normalised to 0..1 of the photo, y measured from the top, and the boxes overlap (drawn in the
+z-order of ``label_names.txt``). The import (documented in ``docs/inverse.md``):
+
+1. boxes are converted to pixels (photo size from the label map PNG) with y up, clipped to the facade box
+   (label ``facade``; the union when there are several, the bounding box of all objects when there is none);
+2. box edges are snapped: per axis, coordinates closer than ``snap`` of the facade size are clustered to their
+   mean (facade edges stay fixed); boxes that collapse to zero size are dropped and counted;
+3. regularisation (wu2014 §3.3): boxes of one label whose widths (heights) differ by less than ``regularize``
+   of the facade size are made exactly equal by a QP that moves the snapped lines as little as possible;
+4. boxes are painted on the grid of snapped lines in z-order; uncovered cells are wall;
+5. the painted grid is cut recursively at every line no object crosses (y first, then x); a block that no line
+   separates (a pinwheel, wu2014 §6.3) is cut into maximal rectangles and is explained by the extractor's
+   ``grid`` rule. Objects whose visible part is not a rectangle (partly covered) become several terminals.
+
+The scale is ``--width`` metres for the facade, or ``--floor-height`` metres times the number of rows of windows,
+doors and shops (default 3 m per such row).
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from citygen.errors import LayoutError, ParseError, SourceLocation
+from citygen.layout import FacadeLayout, Region, check_partition
+from citygen.qp import solve_eq_qp
+
+#: CMP label names -> citygen labels (``facade`` and ``background`` inside the facade are wall).
+CMP_TO_LABEL = {"background": "wall", "facade": "wall", "window": "window", "door": "door", "cornice": "cornice",
+                "sill": "sill", "balcony": "balcony", "blind": "blind", "deco": "deco", "molding": "molding",
+                "pillar": "pillar", "shop": "shop"}
+#: Depth offsets (m along the outward normal) given to imported terminals.
+LABEL_DEPTH = {"window": -0.25, "door": -0.3, "shop": -0.2, "sill": 0.08, "cornice": 0.3, "balcony": 0.6,
+               "molding": 0.1, "pillar": 0.15, "deco": 0.05, "blind": 0.02}
+#: The CMP label table (id, name, z-order), used when no ``label_names.txt`` is found next to the XML.
+DEFAULT_LABELS = {1: ("background", 1), 2: ("facade", 2), 3: ("window", 10), 4: ("door", 5), 5: ("cornice", 11),
+                  6: ("sill", 3), 7: ("balcony", 4), 8: ("blind", 6), 9: ("deco", 8), 10: ("molding", 7),
+                  11: ("pillar", 12), 12: ("shop", 9)}
+_ROW_LABELS = ("window", "door", "shop")
+
+
+@dataclass(frozen=True)
+class CmpBox:
+    """One annotated object in pixels, y up: ``x0 < x1``, ``y0 < y1``; ``order`` is its position in the file."""
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    name: str
+    z: int
+    order: int
+
+
+def read_label_table(path: Path) -> dict[int, tuple[str, int]]:
+    """``label_names.txt``: lines ``id name z_order`` -> {id: (name, z)}."""
+    table = {}
+    for lineno, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = line.split()
+        if len(parts) != 3 or not parts[0].isdigit() or not parts[2].lstrip("-").isdigit():
+            raise ParseError("expected 'id name z_order'", where=SourceLocation(str(path), lineno, 1))
+        table[int(parts[0])] = (parts[1], int(parts[2]))
+    return table
+
+
+def _find_labels(xml_path: Path) -> dict[int, tuple[str, int]]:
+    for folder in (xml_path.parent, xml_path.parent.parent):
+        candidate = folder / "label_names.txt"
+        if candidate.is_file():
+            return read_label_table(candidate)
+    return DEFAULT_LABELS
+
+
+def parse_cmp_xml(text: str, source: str, labels: dict[int, tuple[str, int]]) -> list[tuple[float, ...]]:
+    """Objects as ``(x0, x1, y0, y1, label_id, order)`` in normalised coordinates (y from the top)."""
+    try:
+        root = ET.fromstring("<annotation>" + text + "</annotation>")
+    except ET.ParseError as exc:
+        line, col = exc.position
+        raise ParseError(f"malformed CMP annotation ({exc.msg if hasattr(exc, 'msg') else exc})",
+                         where=SourceLocation(source, line, max(col - len("<annotation>") * (line == 1), 1)),
+                         hint="expected <object><points><x>..</x><x>..</x><y>..</y><y>..</y></points>"
+                              "<label>ID</label>...</object> elements") from None
+    objects = []
+    for order, obj in enumerate(root.iter("object")):
+        try:
+            xs = [float(e.text) for e in obj.find("points").findall("x")]
+            ys = [float(e.text) for e in obj.find("points").findall("y")]
+            label = int(obj.findtext("label"))
+        except (AttributeError, TypeError, ValueError):
+            raise ParseError(f"object {order} needs numeric <points> x, x, y, y and a <label>",
+                             where=SourceLocation(source)) from None
+        if len(xs) != 2 or len(ys) != 2:
+            raise ParseError(f"object {order} has {len(xs)} x and {len(ys)} y values, expected 2 and 2",
+                             where=SourceLocation(source))
+        if label not in labels:
+            raise LayoutError(f"object {order} has label {label}, unknown to the label table", where=source,
+                              hint=f"known label ids: {sorted(labels)}")
+        objects.append((min(xs), max(xs), min(ys), max(ys), label, order))
+    if not objects:
+        raise LayoutError("the annotation has no objects", where=source)
+    return objects
+
+
+def _cluster(values: np.ndarray, tol: float, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """1-D clustering: sorted distinct centres and, for every value, the index of its centre."""
+    order = np.argsort(values, kind="stable")
+    sorted_v = values[order]
+    ids = np.empty(values.size, dtype=int)
+    start, k = -np.inf, -1
+    for i, v in enumerate(sorted_v):  # a cluster spans at most ``tol`` (no chaining through dense edges)
+        if v - start > tol:
+            start, k = v, k + 1
+        ids[i] = k
+    centres = np.array([sorted_v[ids == k].mean() for k in range(ids[-1] + 1)])
+    centres[np.abs(centres - lo) <= tol] = lo
+    centres[np.abs(centres - hi) <= tol] = hi
+    centres, ids = np.unique(centres, return_inverse=True)[0], np.unique(centres, return_inverse=True)[1][ids]
+    index = np.empty(values.size, dtype=int)
+    index[order] = ids
+    return centres, index
+
+
+def _regularize(lines: np.ndarray, pairs: np.ndarray, names: list[str], tol: float, min_gap: float
+                ) -> tuple[np.ndarray, str]:
+    """QP moving ``lines`` (ends fixed) so boxes of one label with sizes within ``tol`` get equal sizes.
+
+    Equal-size constraints are added one at a time, closest pairs first; one that would collapse or reorder
+    lines (gaps below ``min_gap``) is left out, so the result always keeps the snapped order.
+    """
+    n = lines.size
+    sizes = lines[pairs[:, 1]] - lines[pairs[:, 0]]
+    candidates: dict[tuple[int, int, int, int], float] = {}
+    for name in sorted(set(names)):
+        members = np.flatnonzero(np.array([m == name for m in names]))
+        if members.size < 2:
+            continue
+        _, group = _cluster(sizes[members], tol, -np.inf, np.inf)
+        for g in np.unique(group):
+            distinct = sorted({tuple(pairs[m]) for m in members[group == g]})
+            for a, b in zip(distinct, distinct[1:]):
+                gap = abs((lines[a[1]] - lines[a[0]]) - (lines[b[1]] - lines[b[0]]))
+                if 0 < gap <= 0.15 * min(lines[a[1]] - lines[a[0]], lines[b[1]] - lines[b[0]]):
+                    candidates[(*a, *b)] = gap
+    if not candidates:
+        return lines, "nothing to regularise"
+    P, q = np.eye(n), -lines
+    anchor = np.zeros((2, n))
+    anchor[0, 0] = anchor[1, -1] = 1
+    accepted: list[np.ndarray] = [anchor[0], anchor[1]]
+    best, rejected = lines, 0
+    for (a0, a1, b0, b1), _ in sorted(candidates.items(), key=lambda kv: kv[1]):
+        row = np.zeros(n)
+        row[[a1, b0]] += 1
+        row[[a0, b1]] -= 1
+        A = np.vstack([*accepted, row])
+        b = np.zeros(len(A))
+        b[0], b[1] = lines[0], lines[-1]
+        result = solve_eq_qp(P, q, A, b)
+        if result.success and np.all(np.diff(result.x) >= min_gap):
+            accepted.append(row)
+            best = result.x
+        else:
+            rejected += 1
+    return best, f"{len(accepted) - 2} equal-size constraints, {rejected} rejected"
+
+
+def _decompose(grid: np.ndarray, r0: int, r1: int, c0: int, c1: int, out: list, pinwheels: list) -> None:
+    """Guillotine decomposition of ``grid[r0:r1, c0:c1]`` (instance id per cell, -1 = wall) into rectangles."""
+    block = grid[r0:r1, c0:c1]
+    if np.all(block == block[0, 0]):
+        out.append((r0, r1, c0, c1, int(block[0, 0])))
+        return
+    for axis in (0, 1):
+        a, b = (block[1:], block[:-1]) if axis == 0 else (block[:, 1:], block[:, :-1])
+        crossed = np.any((a == b) & (a >= 0), axis=1 - axis)
+        cuts = np.flatnonzero(~crossed) + 1
+        if cuts.size:
+            bounds = [0, *cuts.tolist(), block.shape[axis]]
+            for s, e in zip(bounds, bounds[1:]):
+                if axis == 0:
+                    _decompose(grid, r0 + s, r0 + e, c0, c1, out, pinwheels)
+                else:
+                    _decompose(grid, r0, r1, c0 + s, c0 + e, out, pinwheels)
+            return
+    pinwheels.append((r0, r1, c0, c1))
+    done = np.zeros(block.shape, dtype=bool)
+    for r in range(block.shape[0]):
+        for c in range(block.shape[1]):
+            if done[r, c]:
+                continue
+            ident = block[r, c]
+            c_end = c
+            while c_end < block.shape[1] and block[r, c_end] == ident and not done[r, c_end]:
+                c_end += 1
+            r_end = r + 1
+            while r_end < block.shape[0] and np.all(block[r_end, c:c_end] == ident) and not done[r_end, c:c_end].any():
+                r_end += 1
+            done[r:r_end, c:c_end] = True
+            out.append((r0 + r, r0 + r_end, c0 + c, c0 + c_end, int(ident)))
+
+
+def _image_size(png: Path | None) -> tuple[int, int] | None:
+    if png is None or not png.is_file():
+        return None
+    from PIL import Image
+    with Image.open(png) as image:
+        return image.size
+
+
+def _png_agreement(png: Path, layout: FacadeLayout, box_px: tuple[float, float, float, float],
+                   labels: dict[int, tuple[str, int]]) -> float:
+    """Fraction of label-map pixels inside the facade box whose label equals the layout's label there."""
+    from PIL import Image
+    with Image.open(png) as image:
+        ids = np.asarray(image)
+    fx0, fy0, fx1, fy1 = box_px
+    H = ids.shape[0]
+    rows = slice(int(round(H - fy1)), int(round(H - fy0)))
+    cols = slice(int(round(fx0)), int(round(fx1)))
+    crop = ids[rows, cols]
+    lut = np.array([CMP_TO_LABEL.get(labels.get(i, ("?", 0))[0], "?") for i in range(int(ids.max()) + 1)])
+    expected = lut[crop]
+    got = np.full(crop.shape, "wall", dtype=expected.dtype)
+    sx, sy = crop.shape[1] / layout.width, crop.shape[0] / layout.height
+    for t in layout.terminals():
+        c0, c1 = int(round(t.x * sx)), int(round((t.x + t.w) * sx))
+        r1, r0 = crop.shape[0] - int(round(t.y * sy)), crop.shape[0] - int(round((t.y + t.h) * sy))
+        got[r0:r1, c0:c1] = t.label
+    return float(np.mean(got == expected)) if got.size else 0.0
+
+
+def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: float | None = None,
+               floor_height: float = 3.0, snap: float = 0.004, regularize: float = 0.02,
+               labels_path: str | Path | None = None) -> FacadeLayout:
+    """Read a CMP annotation as a FacadeLayout in metres whose terminals partition the facade exactly."""
+    xml_path = Path(xml_path)
+    labels = read_label_table(Path(labels_path)) if labels_path else _find_labels(xml_path)
+    objects = parse_cmp_xml(xml_path.read_text(), str(xml_path), labels)
+    png_path = Path(png) if png else xml_path.with_suffix(".png")
+    size = _image_size(png_path)
+    if png and size is None:
+        raise LayoutError("label map not found", where=str(png))
+    W, H = size if size else (1000, 1000)
+    # the <x> values run down the photo and the <y> values across it (checked against every label map)
+    boxes = [CmpBox(v0 * W, (1 - u1) * H, v1 * W, (1 - u0) * H, labels[lab][0], labels[lab][1], order)
+             for u0, u1, v0, v1, lab, order in objects]
+    facades = [b for b in boxes if b.name == "facade"]
+    frame = facades or boxes
+    fx0, fy0 = min(b.x0 for b in frame), min(b.y0 for b in frame)
+    fx1, fy1 = max(b.x1 for b in frame), max(b.y1 for b in frame)
+    if fx1 - fx0 <= 0 or fy1 - fy0 <= 0:
+        raise LayoutError("the facade box has zero size", where=str(xml_path))
+    fw, fh = fx1 - fx0, fy1 - fy0
+    parts = [b for b in boxes if b.name not in ("facade", "background")]
+    clipped = np.array([(max(b.x0, fx0) - fx0, max(b.y0, fy0) - fy0, min(b.x1, fx1) - fx0, min(b.y1, fy1) - fy0)
+                        for b in parts]).reshape(-1, 4)
+    keep = (clipped[:, 2] - clipped[:, 0] > snap * fw) & (clipped[:, 3] - clipped[:, 1] > snap * fh)
+    dropped = int((~keep).sum())
+    parts = [p for p, k in zip(parts, keep) if k]
+    clipped = clipped[keep]
+    xs = np.concatenate([[0.0, fw], clipped[:, 0], clipped[:, 2]])
+    ys = np.concatenate([[0.0, fh], clipped[:, 1], clipped[:, 3]])
+    xl, xi = _cluster(xs, snap * fw, 0.0, fw)
+    yl, yi = _cluster(ys, snap * fh, 0.0, fh)
+    m = len(parts)
+    xp = np.stack([xi[2:2 + m], xi[2 + m:]], axis=1)
+    yp = np.stack([yi[2:2 + m], yi[2 + m:]], axis=1)
+    alive = (xp[:, 0] < xp[:, 1]) & (yp[:, 0] < yp[:, 1])
+    dropped += int((~alive).sum())
+    parts = [p for p, a in zip(parts, alive) if a]
+    xp, yp = xp[alive], yp[alive]
+    names = [p.name for p in parts]
+    xl, x_status = _regularize(xl, xp, names, regularize * fw, 0.25 * snap * fw)
+    yl, y_status = _regularize(yl, yp, names, regularize * fh, 0.25 * snap * fh)
+    grid = np.full((yl.size - 1, xl.size - 1), -1, dtype=np.int64)
+    for k in sorted(range(len(parts)), key=lambda k: (parts[k].z, parts[k].order)):
+        grid[yp[k, 0]:yp[k, 1], xp[k, 0]:xp[k, 1]] = k
+    rects: list[tuple[int, int, int, int, int]] = []
+    pinwheels: list[tuple[int, int, int, int]] = []
+    _decompose(grid, 0, grid.shape[0], 0, grid.shape[1], rects, pinwheels)
+    rows = _count_rows([(b.y0, b.y1) for b in parts if b.name in _ROW_LABELS])
+    scale = width / fw if width else floor_height * max(rows, 1) / fh
+    X, Y = np.round(xl * scale, 4), np.round(yl * scale, 4)  # 0.1 mm: equal sizes stay equal as decimals
+    terminals = []
+    for r0, r1, c0, c1, ident in rects:
+        label = CMP_TO_LABEL[parts[ident].name] if ident >= 0 else "wall"
+        terminals.append(Region(x=float(X[c0]), y=float(Y[r0]), w=float(X[c1] - X[c0]), h=float(Y[r1] - Y[r0]),
+                                symbol=label.capitalize(), label=label, depth=LABEL_DEPTH.get(label, 0.0)))
+    meta = {"source": xml_path.name, "importer": "cmp", "metres_per_pixel": scale,
+            "scale_from": f"width {width} m" if width else f"{max(rows, 1)} rows x {floor_height} m",
+            "image_size": [W, H] if size else None, "objects": len(objects), "dropped_boxes": dropped,
+            "regularization": {"x": x_status, "y": y_status}, "pinwheel_blocks": len(pinwheels),
+            "citation": "R. Tylecek, R. Sara. Spatial Pattern Templates for Recognition of Objects with Regular "
+                        "Structure. Proc. GCPR 2013."}
+    root = Region(x=0.0, y=0.0, w=float(X[-1]), h=float(Y[-1]), symbol="Facade", children=tuple(terminals))
+    layout = FacadeLayout(width=float(X[-1]), height=float(Y[-1]), root=root, meta=meta)
+    problems = check_partition(layout)
+    if problems:
+        raise LayoutError("import did not give a partition: " + "; ".join(problems[:3]), where=str(xml_path))
+    if size:
+        meta["label_map_agreement"] = round(_png_agreement(png_path, layout, (fx0, fy0, fx1, fy1), labels), 4)
+    return layout
+
+
+def _count_rows(intervals: list[tuple[float, float]]) -> int:
+    """Number of groups of vertically overlapping intervals (rows of openings)."""
+    rows, end = 0, -np.inf
+    for y0, y1 in sorted(intervals):
+        if y0 >= end:
+            rows += 1
+            end = y1
+        else:
+            end = max(end, y1)
+    return rows
+

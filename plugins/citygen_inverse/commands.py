@@ -1,0 +1,101 @@
+"""CLI: ``citygen layout import-cmp`` and ``citygen grammar extract|cost``."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from citygen.errors import CitygenError
+from citygen.registry import Command, Registry
+
+
+def write_text(path: str | None, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (stdout when ``path`` is None or -)."""
+    if path in (None, "-"):
+        sys.stdout.write(text)
+        return
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=target.parent or ".", prefix=f".{target.name}.")
+    with os.fdopen(fd, "w") as handle:
+        handle.write(text)
+    os.replace(tmp, target)
+
+
+class LayoutCommand(Command):
+    name = "layout"
+    help = "layout tools: import annotated facades as FacadeLayout JSON"
+
+    def configure(self, parser: argparse.ArgumentParser) -> None:
+        sub = parser.add_subparsers(dest="layout_command", required=True)
+        cmp = sub.add_parser("import-cmp", help="CMP facade annotation (XML) -> layout JSON")
+        cmp.add_argument("xml", help="CMP annotation file (*.xml)")
+        cmp.add_argument("--png", help="label map of the photo (default: the .png beside the XML)")
+        scale = cmp.add_mutually_exclusive_group()
+        scale.add_argument("--width", type=float, help="facade width in metres")
+        scale.add_argument("--floor-height", type=float, default=3.0,
+                           help="metres per row of windows/doors/shops (default 3.0)")
+        cmp.add_argument("-o", "--output", help="output JSON file (default stdout)")
+
+    def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        from citygen_inverse.cmp import import_cmp
+        try:
+            layout = import_cmp(args.xml, png=args.png, width=args.width, floor_height=args.floor_height)
+        except (CitygenError, OSError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        write_text(args.output, layout.dumps() + "\n")
+        meta = layout.meta
+        print(f"{args.xml}: {len(layout.terminals())} terminals, {layout.width:.2f} x {layout.height:.2f} m "
+              f"({meta['scale_from']}), {meta['pinwheel_blocks']} pinwheel blocks", file=sys.stderr)
+        return 0
+
+
+class GrammarCommand(Command):
+    name = "grammar"
+    help = "extract a split grammar from a layout (wu2014) or score a grammar file"
+
+    def configure(self, parser: argparse.ArgumentParser) -> None:
+        sub = parser.add_subparsers(dest="grammar_command", required=True)
+        ext = sub.add_parser("extract", help="layout JSON -> grammar in citygen's DSL")
+        ext.add_argument("layouts", nargs="+", help="layout JSON file(s); several give one joint grammar")
+        ext.add_argument("--method", choices=("greedy", "is", "adp"), default="adp")
+        ext.add_argument("--iterations", type=int, default=2000)
+        ext.add_argument("--seed", type=int, default=0)
+        ext.add_argument("--split-cost", type=float, default=0.1)
+        ext.add_argument("--repeat-cost", type=float, default=0.5)
+        ext.add_argument("--size-independent", action="store_true",
+                         help="relative sizes, filling repeats and floors (wu2014 §5)")
+        ext.add_argument("-o", "--output", help="grammar file (default stdout)")
+        cost = sub.add_parser("cost", help="wu2014 Eq. 1-2 cost of a grammar file")
+        cost.add_argument("grammar")
+        cost.add_argument("--split-cost", type=float, default=0.1)
+        cost.add_argument("--repeat-cost", type=float, default=0.5)
+
+    def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        try:
+            return self._extract(args) if args.grammar_command == "extract" else self._cost(args)
+        except (CitygenError, OSError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+
+    def _extract(self, args: argparse.Namespace) -> int:
+        from citygen.layout import FacadeLayout
+        from citygen_inverse.actions import CostModel
+        from citygen_inverse.extract import extract_grammar
+        layouts = [FacadeLayout.loads(Path(p).read_text(), p) for p in args.layouts]
+        result = extract_grammar(layouts, args.method, args.iterations, args.seed,
+                                 CostModel(split=args.split_cost, repeat=args.repeat_cost))
+        write_text(args.output, result.size_independent if args.size_independent else result.text)
+        print(f"cost {result.cost:.2f}  rules {result.rules}  terminals {result.terminals}  "
+              f"time {result.seconds:.3f} s  ({result.method}, {result.iterations} iterations)", file=sys.stderr)
+        return 0
+
+    def _cost(self, args: argparse.Namespace) -> int:
+        import citygen_split
+        grammar = citygen_split.load(Path(args.grammar))
+        cost = citygen_split.grammar_cost(grammar, args.split_cost, args.repeat_cost)
+        rules = sum(1 for r in grammar.rules if type(r.body).__name__ != "Terminal")
+        print(f"cost {cost:.2f}  rules {rules}")
+        return 0

@@ -1,0 +1,214 @@
+"""The split grammar's abstract syntax tree: immutable frozen dataclasses.
+
+Source locations are kept for error messages but excluded from equality, so ``parse(format_grammar(g)) == g``.
+Names follow wu2014 §3.1: a rule ``sym -> op alpha`` maps a non-terminal symbol to an operation and a sequence
+of successor symbols.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Literal, Union
+
+from citygen.errors import SourceLocation
+
+Axis = Literal["x", "y"]
+SizeKind = Literal["abs", "rel", "float"]
+
+
+@dataclass(frozen=True)
+class Size:
+    """A split size: ``abs`` metres, ``rel`` weight (``'w``) or ``float`` approximate metres (``~m``)."""
+
+    kind: SizeKind
+    value: float
+
+
+@dataclass(frozen=True)
+class Item:
+    """One successor of a split: its size and symbol."""
+
+    size: Size
+    symbol: str
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)
+
+
+# ---- expressions -------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Const:
+    value: float | bool | str
+
+
+@dataclass(frozen=True)
+class Var:
+    name: str
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Attr:
+    """``attr("key")``: a footprint attribute as a string ("" when missing)."""
+
+    key: str
+
+
+@dataclass(frozen=True)
+class Unary:
+    op: Literal["-", "not"]
+    operand: Expr
+
+
+@dataclass(frozen=True)
+class Binary:
+    op: str
+    left: Expr
+    right: Expr
+
+
+Expr = Union[Const, Var, Attr, Unary, Binary]
+
+
+# ---- rule bodies --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Split:
+    axis: Axis
+    items: tuple[Item, ...]
+
+
+@dataclass(frozen=True)
+class Repeat:
+    axis: Axis
+    items: tuple[Item, ...]
+
+
+@dataclass(frozen=True)
+class RepeatABA:
+    """``A B A ... A`` with one more A than B (wu2014 §4.7)."""
+
+    axis: Axis
+    a: Item
+    b: Item
+
+
+@dataclass(frozen=True)
+class SymSplit:
+    """Mirrored split: items ``s1 .. sk`` give ``s1 .. sk-1 sk sk-1 .. s1`` (wu2014 §4.7)."""
+
+    axis: Axis
+    items: tuple[Item, ...]
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Split in x and y at once (wu2014 §4.7 gridsplit). ``cells`` are rows bottom first; ``<`` and ``v``
+    continue the cell to the left / below."""
+
+    cols: tuple[Size, ...]
+    rows: tuple[Size, ...]
+    cells: tuple[tuple[str, ...], ...]
+
+    @cached_property
+    def regions(self) -> tuple[tuple[str, int, int, int, int], ...]:
+        """Merged regions as ``(symbol, col0, row0, col1, row1)`` (end-exclusive), bottom row first."""
+        from citygen_split.gridspans import merge_cells
+        return merge_cells(self.cells)
+
+
+@dataclass(frozen=True)
+class FloorItem:
+    """A ``floors`` selector: floor index (negative counts from the top) or ``None`` for ``*``."""
+
+    floor: int | None
+    symbol: str
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Floors:
+    items: tuple[FloorItem, ...]
+
+
+@dataclass(frozen=True)
+class Terminal:
+    label: str | None
+    depth: float = 0.0
+    material: str | None = None
+    asset: str | None = None
+
+
+@dataclass(frozen=True)
+class Rename:
+    symbol: str
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)
+
+
+SimpleBody = Union[Split, Repeat, RepeatABA, SymSplit, Grid, Floors, Terminal, Rename]
+
+
+@dataclass(frozen=True)
+class Case:
+    """Conditional rule: first branch whose condition holds, else ``otherwise`` (may be None)."""
+
+    branches: tuple[tuple[Expr, SimpleBody], ...]
+    otherwise: SimpleBody | None
+
+
+@dataclass(frozen=True)
+class Choice:
+    """Stochastic rule: ``(percent, body)`` alternatives; ``otherwise`` takes the rest. ``each`` draws per
+    region instead of once per symbol per face."""
+
+    alternatives: tuple[tuple[float, SimpleBody], ...]
+    otherwise: SimpleBody | None
+    each: bool = False
+
+
+Body = Union[SimpleBody, Case, Choice]
+
+
+@dataclass(frozen=True)
+class Rule:
+    symbol: str
+    body: Body
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Grammar:
+    """A parsed grammar. ``start`` is the axiom; ``source`` the file it came from (not compared)."""
+
+    rules: tuple[Rule, ...]
+    start: str
+    size: tuple[float, float] | None = None
+    name: str | None = None
+    source: str = field(default="<string>", compare=False)
+
+    @cached_property
+    def table(self) -> dict[str, Rule]:
+        return {rule.symbol: rule for rule in self.rules}
+
+    def rule(self, symbol: str) -> Rule:
+        return self.table[symbol]
+
+
+def successors(body: Body) -> list[tuple[str, SourceLocation | None]]:
+    """Symbols a body refers to, with where they are written."""
+    if isinstance(body, (Split, Repeat, SymSplit)):
+        return [(i.symbol, i.loc) for i in body.items]
+    if isinstance(body, RepeatABA):
+        return [(body.a.symbol, body.a.loc), (body.b.symbol, body.b.loc)]
+    if isinstance(body, Floors):
+        return [(i.symbol, i.loc) for i in body.items]
+    if isinstance(body, Grid):
+        return [(s, None) for row in body.cells for s in row if s not in ("<", "v")]
+    if isinstance(body, Rename):
+        return [(body.symbol, body.loc)]
+    if isinstance(body, Case):
+        alts = [b for _, b in body.branches] + ([body.otherwise] if body.otherwise else [])
+        return [s for b in alts for s in successors(b)]
+    if isinstance(body, Choice):
+        alts = [b for _, b in body.alternatives] + ([body.otherwise] if body.otherwise else [])
+        return [s for b in alts for s in successors(b)]
+    return []

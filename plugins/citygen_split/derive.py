@@ -1,0 +1,240 @@
+"""Derivation: apply a grammar to a facade request and produce the FacadeLayout region tree.
+
+Non-terminal symbols become inner regions with their children; terminal rules become labelled leaves. Every
+split places its last item exactly at the parent's edge, so the leaves partition the face for any size.
+"""
+from __future__ import annotations
+
+import os
+from bisect import bisect_right
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from citygen.errors import RulesetError
+from citygen.layout import FacadeLayout, Region
+from citygen.request import FacadeRequest
+from citygen_split.ast import (
+    Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
+    Terminal,
+)
+from citygen_split.expr import evaluate
+from citygen_split.sizes import aba_count, place, preferred_length, repeat_count, resolve
+
+PLUGIN_ID = "split"
+#: Deepest derivation allowed (a rule that splits into itself without shrinking hits this).
+MAX_DEPTH = 200
+#: Most regions one facade may produce.
+MAX_REGIONS = 500_000
+
+
+def derive(grammar: Grammar, request: FacadeRequest) -> FacadeLayout:
+    """The layout of ``grammar`` on ``request``'s face (see docs/grammar.md for the semantics)."""
+    return _Derivation(grammar, request).run()
+
+
+def explain(grammar: Grammar, request: FacadeRequest) -> str:
+    """The derivation tree as indented text: symbol, size, position and the rule applied."""
+    derivation = _Derivation(grammar, request, trace=True)
+    derivation.run()
+    return "\n".join(derivation.trace)
+
+
+class _Derivation:
+    def __init__(self, grammar: Grammar, request: FacadeRequest, trace: bool = False) -> None:
+        if not (request.width > 0 and request.height > 0):
+            raise RulesetError(f"facade size {request.width} x {request.height} is not positive", plugin=PLUGIN_ID)
+        self.grammar = grammar
+        self.table = grammar.table
+        self.request = request
+        ctx = request.context
+        self.face: dict[str, Any] = {
+            "face_width": float(request.width), "face_height": float(request.height),
+            "floor_count": request.floor_count, "entrance": bool(request.entrance),
+            "street": bool(ctx.street_facing), "courtyard": bool(ctx.is_courtyard), "levels": ctx.levels,
+        }
+        self.attributes = ctx.attributes
+        self.base = None if grammar.source.startswith("<") else Path(grammar.source).parent
+        self.corners = _corner_widths(request)
+        self.once: dict[str, int] = {}
+        self.streams: dict[str, np.random.Generator] = {}
+        self.count = 0
+        self.trace: list[str] = []
+        self.tracing = trace
+
+    def run(self) -> FacadeLayout:
+        r = self.request
+        root = self.region(self.grammar.start, 0.0, 0.0, float(r.width), float(r.height), 0, 0, ())
+        return FacadeLayout(width=float(r.width), height=float(r.height), root=root,
+                            meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
+
+    # ---- one region -----------------------------------------------------------------------------------------
+    def region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
+               chain: tuple[str, ...]) -> Region:
+        self.count += 1
+        rule = self.table.get(symbol)
+        if depth > MAX_DEPTH or self.count > MAX_REGIONS:
+            limit = f"deeper than {MAX_DEPTH} levels" if depth > MAX_DEPTH else f"more than {MAX_REGIONS} regions"
+            raise RulesetError(f"derivation of rule {symbol} went {limit}", plugin=PLUGIN_ID,
+                               where=rule.loc if rule else self.grammar.source,
+                               hint="a rule probably splits into itself without its region getting smaller")
+        if rule is None:  # the built-in Corner strip
+            self.note(depth, symbol, x, y, w, h, "corner strip, wall")
+            return Region(x, y, w, h, symbol, label="wall")
+        body, how = self.select(rule, w, h, floor)
+        if self.tracing:
+            self.note(depth, symbol, x, y, w, h, how)
+        if isinstance(body, Terminal):
+            return Region(x, y, w, h, symbol, label=body.label, depth=body.depth, material=body.material,
+                          asset=self.asset(body.asset))
+        if isinstance(body, Rename):
+            if body.symbol in chain or body.symbol == symbol:
+                cycle = " --> ".join((*chain, symbol, body.symbol))
+                raise RulesetError(f"rename cycle {cycle}", where=rule.loc, plugin=PLUGIN_ID,
+                                   hint="one of these rules must split or end in a terminal")
+            child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
+            return Region(x, y, w, h, symbol, children=(child,))
+        children = self.children(body, x, y, w, h, floor, depth + 1)
+        return Region(x, y, w, h, symbol, children=tuple(children))
+
+    def note(self, depth: int, symbol: str, x: float, y: float, w: float, h: float, how: str) -> None:
+        if self.tracing:
+            self.trace.append(f"{'  ' * depth}{symbol} {w:.3f} x {h:.3f} at ({x:.3f}, {y:.3f}): {how}")
+
+    def asset(self, path: str | None) -> str | None:
+        if path is None or self.base is None or os.path.isabs(path):
+            return path
+        return os.path.normpath(self.base / path)
+
+    # ---- choosing the body ----------------------------------------------------------------------------------
+    def select(self, rule: Rule, w: float, h: float, floor: int) -> tuple[SimpleBody, str]:
+        body = rule.body
+        if isinstance(body, Case):
+            env = {**self.face, "width": w, "height": h, "floor": floor}
+            for k, (cond, branch) in enumerate(body.branches):
+                if evaluate(cond, env, self.attributes, rule.symbol):
+                    return branch, f"case {k + 1}: {_describe(branch)}"
+            if body.otherwise is not None:
+                return body.otherwise, f"else: {_describe(body.otherwise)}"
+            return Terminal("wall"), "no case holds and no else: wall"
+        if isinstance(body, Choice):
+            k = self.draw(rule.symbol, body)
+            n = len(body.alternatives)
+            chosen = body.alternatives[k][1] if k < n else body.otherwise
+            assert chosen is not None
+            label = f"{body.alternatives[k][0]:g}%" if k < n else "else"
+            return chosen, f"{'each ' if body.each else ''}choice {label}: {_describe(chosen)}"
+        return body, _describe(body)
+
+    def draw(self, symbol: str, body: Choice) -> int:
+        """Index of the alternative (len(alternatives) = else): once per symbol per face, or per region."""
+        if not body.each and symbol in self.once:
+            return self.once[symbol]
+        stream = self.streams.get(symbol)
+        if stream is None:
+            stream = self.streams[symbol] = self.request.rng(PLUGIN_ID, symbol)
+        u = 100.0 * float(stream.random())
+        total = 0.0
+        k = 0 if body.otherwise is None else len(body.alternatives)
+        for i, (percent, _) in enumerate(body.alternatives):
+            total += percent
+            if u < total:
+                k = i
+                break
+        if not body.each:
+            self.once[symbol] = k
+        return k
+
+    # ---- operations -----------------------------------------------------------------------------------------
+    def children(self, body: SimpleBody, x: float, y: float, w: float, h: float, floor: int,
+                 depth: int) -> list[Region]:
+        if isinstance(body, Grid):
+            return self.grid(body, x, y, w, h, floor, depth)
+        if isinstance(body, Floors):
+            return self.floors(body, x, y, w, h, depth)
+        axis = body.axis  # type: ignore[union-attr]
+        length = w if axis == "x" else h
+        start = x if axis == "x" else y
+        if isinstance(body, Repeat):
+            sizes = [i.size for i in body.items]
+            n = repeat_count(preferred_length(sizes), length)
+            extents = resolve(sizes, length / n) * n
+            items: Sequence[Item] = body.items * n
+        elif isinstance(body, RepeatABA):
+            n = aba_count(preferred_length([body.a.size]), preferred_length([body.b.size]), length)
+            items = [body.a, body.b] * n + [body.a]
+            extents = resolve([i.size for i in items], length)
+        elif isinstance(body, SymSplit):
+            items = [*body.items, *reversed(body.items[:-1])]
+            extents = resolve([i.size for i in items], length)
+        else:
+            assert isinstance(body, Split)
+            items = body.items
+            extents = resolve([i.size for i in items], length)
+        out = []
+        for item, (pos, extent) in zip(items, place(extents, start, length)):
+            if extent > 0:
+                if axis == "x":
+                    out.append(self.region(item.symbol, pos, y, extent, h, floor, depth, ()))
+                else:
+                    out.append(self.region(item.symbol, x, pos, w, extent, floor, depth, ()))
+        return out
+
+    def grid(self, body: Grid, x: float, y: float, w: float, h: float, floor: int, depth: int) -> list[Region]:
+        xs = [pos for pos, _ in place(resolve(body.cols, w), x, w)] + [x + w]
+        ys = [pos for pos, _ in place(resolve(body.rows, h), y, h)] + [y + h]
+        out = []
+        for symbol, c0, r0, c1, r1 in body.regions:
+            rw, rh = xs[c1] - xs[c0], ys[r1] - ys[r0]
+            if rw > 0 and rh > 0:
+                out.append(self.region(symbol, xs[c0], ys[r0], rw, rh, floor, depth, ()))
+        return out
+
+    def floors(self, body: Floors, x: float, y: float, w: float, h: float, depth: int) -> list[Region]:
+        lines = self.request.floor_lines
+        count = max(len(lines) - 1, 1)
+        top = y + h
+        cuts = [y, *(line for line in lines[1:-1] if y < line < top), top]
+        face_w = float(self.request.width)
+        cl, cr = self.corners
+        left = min(max(cl - x, 0.0), w)
+        right = min(max(x + w - (face_w - cr), 0.0), w - left)
+        out = []
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            if hi - lo <= 0:
+                continue
+            k = min(max(bisect_right(lines, lo) - 1, 0), count - 1)
+            symbol = next(i.symbol for i in body.items
+                          if i.floor is None or i.floor == k or (i.floor < 0 and i.floor + count == k))
+            if left > 0:
+                out.append(self.region("Corner", x, lo, left, hi - lo, k, depth, ()))
+            middle = (x + w - right if right > 0 else x + w) - (x + left)
+            if middle > 0:
+                out.append(self.region(symbol, x + left, lo, middle, hi - lo, k, depth, ()))
+            if right > 0:
+                out.append(self.region("Corner", x + w - right, lo, right, hi - lo, k, depth, ()))
+        return out
+
+
+def _corner_widths(request: FacadeRequest) -> tuple[float, float]:
+    """The request's corner strips; if they leave no room, scaled to half the face (documented fallback)."""
+    left, right = (max(float(c), 0.0) for c in request.corner_widths)
+    if left + right >= request.width:
+        scale = 0.5 * request.width / (left + right)
+        return left * scale, right * scale
+    return left, right
+
+
+def _describe(body: SimpleBody) -> str:
+    if isinstance(body, Terminal):
+        return f"terminal {body.label or 'none'}"
+    if isinstance(body, Rename):
+        return f"rename to {body.symbol}"
+    if isinstance(body, Grid):
+        return f"grid {len(body.cols)} x {len(body.rows)}"
+    if isinstance(body, Floors):
+        return "floors"
+    name = {Split: "split", Repeat: "repeat", RepeatABA: "repeatABA", SymSplit: "symsplit"}[type(body)]
+    return f"{name}({body.axis})"

@@ -1,0 +1,57 @@
+"""Size resolution: absolute, relative and floating sizes of a split turned into exact extents.
+
+The rules are normative in docs/grammar.md ("Sizes"). Extents are placed so that every item starts where the
+previous ends and the last ends exactly at the parent's edge; zero-size items are dropped by the caller.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from citygen_split.ast import Size
+
+
+def resolve(sizes: Sequence[Size], length: float) -> list[float]:
+    """Extents of ``sizes`` filling ``length`` (never negative)."""
+    fixed_abs = sum(s.value for s in sizes if s.kind == "abs")
+    floating = sum(s.value for s in sizes if s.kind == "float")
+    relative = sum(s.value for s in sizes if s.kind == "rel")
+    if relative > 0:
+        fixed = fixed_abs + floating
+        if fixed <= length:
+            share = (length - fixed) / relative
+            return [s.value * share if s.kind == "rel" else s.value for s in sizes]
+        scale = length / fixed
+        return [0.0 if s.kind == "rel" else s.value * scale for s in sizes]
+    if floating > 0 and fixed_abs <= length:
+        share = (length - fixed_abs) / floating
+        return [s.value * share if s.kind == "float" else s.value for s in sizes]
+    scale = length / fixed_abs if fixed_abs > 0 else 0.0
+    return [s.value * scale if s.kind == "abs" else 0.0 for s in sizes]
+
+
+def place(extents: Sequence[float], start: float, length: float) -> list[tuple[float, float]]:
+    """``(offset, extent)`` per item: cumulative offsets from ``start``, the last item ending at ``start + length``."""
+    end = start + length
+    placed = []
+    pos = start
+    last = len(extents) - 1
+    for i, extent in enumerate(extents):
+        stop = end if i == last else min(pos + max(extent, 0.0), end)
+        placed.append((pos, max(stop - pos, 0.0)))
+        pos = stop
+    return placed
+
+
+def preferred_length(sizes: Sequence[Size]) -> float:
+    """The length a tile of ``sizes`` would like: every size in metres (relative weights count as metres)."""
+    return sum(s.value for s in sizes)
+
+
+def repeat_count(tile: float, length: float) -> int:
+    """``n = max(1, round(L / T))`` tiles for a repeat."""
+    return max(1, round(length / tile))
+
+
+def aba_count(a: float, b: float, length: float) -> int:
+    """Number of B items of ``repeatABA``: ``max(0, round((L - a) / (a + b)))``."""
+    return max(0, round((length - a) / (a + b)))

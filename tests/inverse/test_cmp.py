@@ -1,0 +1,63 @@
+import argparse
+from pathlib import Path
+
+import pytest
+
+from citygen.errors import LayoutError, ParseError
+from citygen.layout import FacadeLayout, check_partition
+from citygen_inverse.cmp import import_cmp
+from citygen_inverse.commands import GrammarCommand, LayoutCommand
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "inverse"
+
+
+def test_import_is_an_exact_partition_in_metres():
+    layout = import_cmp(DATA / "cmp_b0005.xml", width=12.0)
+    assert check_partition(layout) == []
+    assert layout.width == pytest.approx(12.0, abs=1e-3)
+    assert {"window", "wall", "balcony"} <= set(layout.labels())
+    assert layout.meta["label_map_agreement"] > 0.85  # the <x>/<y> swap (SOURCE.txt) is handled
+    assert "equal-size constraints" in layout.meta["regularization"]["x"]
+
+
+def test_floor_height_scale():
+    a = import_cmp(DATA / "cmp_b0009.xml", floor_height=3.0)
+    b = import_cmp(DATA / "cmp_b0009.xml", floor_height=4.0)
+    assert b.height == pytest.approx(a.height * 4 / 3, rel=1e-3)
+
+
+def test_regularised_windows_share_sizes():
+    layout = import_cmp(DATA / "cmp_b0012.xml")
+    sizes = {(round(t.w, 4), round(t.h, 4)) for t in layout.terminals() if t.label == "window"}
+    assert len(sizes) < layout.count("window")
+
+
+def test_malformed_xml_names_the_position(tmp_path):
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<object><points><x>0.1</x></points>")
+    with pytest.raises(ParseError, match="bad.xml:1"):
+        import_cmp(bad)
+
+
+def test_unknown_label_is_an_error(tmp_path):
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<object><points><x>0</x><x>1</x><y>0</y><y>1</y></points><label>42</label></object>")
+    with pytest.raises(LayoutError, match="label 42"):
+        import_cmp(bad, labels_path=DATA / "label_names.txt")
+
+
+def test_cli_import_extract_cost(tmp_path, capsys):
+    out = tmp_path / "layout.json"
+    parser = argparse.ArgumentParser()
+    LayoutCommand().configure(parser)
+    assert LayoutCommand().run(parser.parse_args(["import-cmp", str(DATA / "cmp_b0009.xml"), "-o", str(out)]),
+                               None) == 0
+    assert check_partition(FacadeLayout.loads(out.read_text())) == []
+    grammar = tmp_path / "g.grammar"
+    parser = argparse.ArgumentParser()
+    GrammarCommand().configure(parser)
+    args = parser.parse_args(["extract", str(out), "--method", "adp", "--iterations", "20", "-o", str(grammar)])
+    assert GrammarCommand().run(args, None) == 0
+    assert "cost" in capsys.readouterr().err
+    assert GrammarCommand().run(parser.parse_args(["cost", str(grammar)]), None) == 0
+    assert capsys.readouterr().out.startswith("cost ")

@@ -1,0 +1,118 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import citygen_split
+from citygen.errors import LayoutError
+from citygen.layout import FacadeLayout, Region, check_partition
+from citygen.request import FacadeRequest
+from citygen_inverse.actions import CostModel
+from citygen_inverse.cmp import import_cmp
+from citygen_inverse.extract import extract_grammar
+
+from .helpers import assert_reproduces, random_layout
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "inverse"
+FIXTURES = sorted(DATA.glob("*.xml"))
+
+
+def regular_facade(floors=5, bays=6) -> FacadeLayout:
+    """Ground wall band, then floors of wall | window | wall bays (a lattice like wu2014 Fig. 5)."""
+    ts, W, H = [], bays * 3.0, floors * 3.0 + 1
+    ts.append(Region(0, 0, W, 1, "W", "wall"))
+    for f in range(floors):
+        y = 1 + 3 * f
+        ts += [Region(0, y, W, 1, "W", "wall"), Region(0, y + 2.5, W, 0.5, "W", "wall")]
+        for c in range(bays):
+            x = 3 * c
+            ts += [Region(x, y + 1, 1, 1.5, "W", "wall"), Region(x + 1, y + 1, 1, 1.5, "N", "window"),
+                   Region(x + 2, y + 1, 1, 1.5, "W", "wall")]
+    return FacadeLayout(W, H, Region(0, 0, W, H, "Facade", children=tuple(ts)))
+
+
+def test_paper_rule_costs():
+    """wu2014 §3.2: F1 -> split{A|B|A} costs 3.1, F2 -> repeat{A|B} costs 2.5 (through the split grammar's cost)."""
+    g = citygen_split.parse("F1 --> split(x) { 1: A | 2: B | 1: A }\nF2 --> repeat(x) { 1: A | 2: B }\n"
+                            "A --> terminal(wall)\nB --> terminal(window)\n", "t")
+    assert citygen_split.grammar_cost(g) == pytest.approx(5.6)
+
+
+def test_regular_facade_gets_repeats_and_small_cost():
+    layout = regular_facade()
+    result = extract_grammar(layout, "adp", 200, seed=0)
+    assert_reproduces(result.text, layout)
+    assert "repeat(" in result.text
+    assert result.cost < 15  # 101 terminals explained by a handful of rules
+    assert citygen_split.grammar_cost(citygen_split.parse(result.text, "t")) == pytest.approx(result.cost)
+
+
+def test_adp_never_worse_than_greedy_and_is_deterministic():
+    layout = random_layout(np.random.default_rng(3))
+    greedy = extract_grammar(layout, "greedy")
+    adp = extract_grammar(layout, "adp", 100, seed=5)
+    assert adp.cost <= greedy.cost + 1e-9
+    assert extract_grammar(layout, "adp", 100, seed=5).text == adp.text
+    assert extract_grammar(layout, "is", 50, seed=5).cost <= greedy.cost + 1e-9
+
+
+def test_size_independent_grammar_fills_other_sizes_with_floors():
+    layout = regular_facade()
+    result = extract_grammar(layout, "adp", 200, seed=0)
+    assert "floors {" in result.size_independent
+    grammar = citygen_split.parse(result.size_independent, "t")
+    for w, h in [(25.0, 13.0), (7.0, 22.0), (2.0, 3.0)]:
+        out = citygen_split.derive(grammar, FacadeRequest.preview(w, h))
+        assert check_partition(out) == []
+        assert out.width == pytest.approx(w) and out.height == pytest.approx(h)
+
+
+def test_joint_extraction_shares_rules():
+    a, b = regular_facade(5, 6), regular_facade(3, 4)
+    joint = extract_grammar([a, b], "adp", 200, seed=0)
+    single = extract_grammar(a, "adp", 200, seed=0).cost + extract_grammar(b, "adp", 200, seed=0).cost
+    assert joint.cost < single
+    grammar = citygen_split.parse(joint.text, "t")
+    assert {r.symbol for r in grammar.rules} >= {"Facade", "Facade1", "Facade2"}
+
+
+@pytest.mark.parametrize("xml", FIXTURES, ids=lambda p: p.stem)
+def test_cmp_facades_round_trip(xml):
+    layout = import_cmp(xml)
+    for method, n in (("greedy", 1), ("adp", 30)):
+        result = extract_grammar(layout, method, n, seed=1)
+        assert_reproduces(result.text, layout)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000))
+def test_random_layouts_round_trip(seed):
+    layout = random_layout(np.random.default_rng(seed))
+    assert check_partition(layout) == []
+    result = extract_grammar(layout, "adp", 20, seed=seed)
+    assert_reproduces(result.text, layout)
+
+
+def test_pinwheel_goes_through_grid():
+    ts = [Region(0, 0, 2, 1, "T", "wall"), Region(2, 0, 1, 2, "T", "window"), Region(1, 2, 2, 1, "T", "sill"),
+          Region(0, 1, 1, 2, "T", "door"), Region(1, 1, 1, 1, "T", "wall")]
+    layout = FacadeLayout(3, 3, Region(0, 0, 3, 3, "Facade", children=tuple(ts)))
+    result = extract_grammar(layout, "greedy")
+    assert "grid {" in result.text
+    assert_reproduces(result.text, layout)
+
+
+def test_bad_layouts_are_rejected():
+    overlap = FacadeLayout(2, 1, Region(0, 0, 2, 1, "F", children=(Region(0, 0, 1.5, 1, "A", "wall"),
+                                                                      Region(1, 0, 1, 1, "B", "window"))))
+    with pytest.raises(LayoutError, match="not a partition"):
+        extract_grammar(overlap, "greedy")
+    with pytest.raises(ValueError, match="method"):
+        extract_grammar(regular_facade(1, 1), "nope")
+
+
+def test_cost_model_is_configurable():
+    layout = regular_facade()
+    cheap = extract_grammar(layout, "greedy", model=CostModel(split=0.0, repeat=0.0))
+    assert cheap.cost < extract_grammar(layout, "greedy").cost
