@@ -260,3 +260,21 @@ def test_layout_meets_request_for_door_grammar():
     g = grammar("X --> floors { 0: G | *: A }\nG --> case entrance: split(x) { '1: Wall | 1: Door | '1: Wall }\n else: Wall")
     r = request(5, 6, (0.0, 3.0, 6.0), entrance=True, corner_widths=(0.5, 0.5))
     assert check_request(derive(g, r), r) == []
+
+
+def test_reused_subtrees_equal_a_full_derivation():
+    from citygen_split.derive import _Derivation
+    from .conftest import RULESETS
+    for path in RULESETS:
+        g = load(path)
+        r = request(37.3, 21.1, (0.0, 4.2, 7.6, 11.0, 14.4, 17.8, 21.1), entrance=True, corner_widths=(0.3, 0.6),
+                    seed=(5,))
+        full = _Derivation(g, r, trace=True).run()  # tracing derives every region
+        fast = derive(g, r)
+        assert leaves(fast) == leaves(full) and fast.labels() == full.labels()
+
+
+def test_place_keeps_equal_tiles_bit_identical():
+    g = grammar("X --> repeat(x) { 0.7: A | '1: B }")
+    widths = {t.w for t in derive(g, request(23.9, 3)).terminals()[:-2]}
+    assert len(widths) == 2
