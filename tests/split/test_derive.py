@@ -137,6 +137,9 @@ def test_corner_strips_wider_than_face_are_scaled_to_half():
 
 # ---- conditions ------------------------------------------------------------------------------------------------
 
+LEVELS = "building:levels"
+
+
 def conditional(cond: str):
     return grammar(f"X --> case {cond}: Window\n else: Wall")
 
@@ -152,9 +155,9 @@ def conditional(cond: str):
     ("courtyard", {"context": FaceContext("b", 0, 4, is_courtyard=True)}, "window"),
     ("levels == 4 and floor == 0 and floor_count == 1", {"context": FaceContext("b", 0, 4)}, "window"),
     ('attr("building") == "church"', {"context": FaceContext("b", 0, 1, attributes={"building": "church"})}, "window"),
-    ('attr("building:levels") >= 5', {"context": FaceContext("b", 0, 1, attributes={"building:levels": "6"})}, "window"),
-    ('attr("building:levels") >= 5', {"context": FaceContext("b", 0, 1, attributes={"building:levels": "x"})}, "wall"),
-    ('attr("building:levels") != 5', {"context": FaceContext("b", 0, 1, attributes={"building:levels": "x"})}, "window"),
+    ('attr("building:levels") >= 5', {"context": FaceContext("b", 0, 1, attributes={LEVELS: "6"})}, "window"),
+    ('attr("building:levels") >= 5', {"context": FaceContext("b", 0, 1, attributes={LEVELS: "x"})}, "wall"),
+    ('attr("building:levels") != 5', {"context": FaceContext("b", 0, 1, attributes={LEVELS: "x"})}, "window"),
     ('attr("missing") == ""', {}, "window"),
     ("(width + 0.5) * 2 / 4 == 1.5 and -width < 0 and 2 - 1 - 1 == 0", {}, "window"),
 ])
@@ -246,8 +249,11 @@ def test_non_positive_facade_is_an_error():
 
 # ---- explain -----------------------------------------------------------------------------------------------
 
+DOOR = "X --> floors { 0: G | *: A }\nG --> case entrance: split(x) { '1: Wall | 1: Door | '1: Wall }\n else: Wall"
+
+
 def test_explain_lists_the_tree_with_sizes_and_choices():
-    g = grammar("X --> floors { 0: G | *: A }\nG --> case entrance: split(x) { '1: Wall | 1: Door | '1: Wall }\n else: Wall")
+    g = grammar(DOOR)
     text = explain(g, request(5, 6, (0.0, 3.0, 6.0), entrance=True, corner_widths=(0.5, 0.5)))
     lines = text.splitlines()
     assert lines[0] == "X 5.000 x 6.000 at (0.000, 0.000): floors"
@@ -257,7 +263,7 @@ def test_explain_lists_the_tree_with_sizes_and_choices():
 
 
 def test_layout_meets_request_for_door_grammar():
-    g = grammar("X --> floors { 0: G | *: A }\nG --> case entrance: split(x) { '1: Wall | 1: Door | '1: Wall }\n else: Wall")
+    g = grammar(DOOR)
     r = request(5, 6, (0.0, 3.0, 6.0), entrance=True, corner_widths=(0.5, 0.5))
     assert check_request(derive(g, r), r) == []
 

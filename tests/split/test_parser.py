@@ -30,13 +30,15 @@ def test_each_operator():
     assert body("repeat(x) { ~3: A | 1: B }") == Repeat("x", (Item(Size("float", 3), "A"), Item(Size("abs", 1), "B")))
     assert body("repeatABA(y) { 1: A | 2: B }") == RepeatABA("y", Item(Size("abs", 1), "A"), Item(Size("abs", 2), "B"))
     assert body("symsplit(x) { 1: A | 2: B }") == SymSplit("x", (Item(Size("abs", 1), "A"), Item(Size("abs", 2), "B")))
-    assert body("floors { 0: A | -1: B | *: C }") == Floors((FloorItem(0, "A"), FloorItem(-1, "B"), FloorItem(None, "C")))
+    assert body("floors { 0: A | -1: B | *: C }") == Floors(
+        (FloorItem(0, "A"), FloorItem(-1, "B"), FloorItem(None, "C")))
     assert body("A") == Rename("A")
 
 
 def test_grid_cells_and_spans():
     grid = body("grid { cols: 1 | '2 ; rows: 0.5 | ~3 ; A < / B C }")
-    assert grid == Grid((Size("abs", 1), Size("rel", 2)), (Size("abs", 0.5), Size("float", 3)), (("A", "<"), ("B", "C")))
+    assert grid == Grid((Size("abs", 1), Size("rel", 2)), (Size("abs", 0.5), Size("float", 3)),
+                        (("A", "<"), ("B", "C")))
     assert grid.regions == (("A", 0, 0, 2, 1), ("B", 0, 1, 1, 2), ("C", 1, 1, 2, 2))
     vertical = body("grid { cols: 1 | 1 ; rows: 1 | 1 ; A B / v C }")
     assert vertical.regions == (("A", 0, 0, 1, 2), ("B", 1, 0, 2, 1), ("C", 1, 1, 2, 2))
@@ -103,7 +105,8 @@ ERRORS = [
     ("@foo\nA --> terminal(wall)", "bad.grammar:1:1", "unknown pragma @foo"),
     ("@start A\n@start A\nA --> terminal(wall)", "bad.grammar:2:1", "duplicate pragma @start"),
     ("# nothing", "bad.grammar:1:10", "the grammar has no rules"),
-    ("A --> terminal(wall)\n\nA --> terminal(door)", "bad.grammar:3:1", "duplicate rule for A (first defined at line 1)"),
+    ("A --> terminal(wall)\n\nA --> terminal(door)", "bad.grammar:3:1",
+     "duplicate rule for A (first defined at line 1)"),
     ("A --> split(x) { 1: B | 2: Missing }\nB --> terminal(wall)", "bad.grammar:1:28", "undefined symbol Missing"),
     ("@start Nope\nA --> terminal(wall)", "bad.grammar:1:8", "undefined start symbol Nope"),
     ("A --> B\nB --> C\nC --> A", "bad.grammar:1:1", "rename cycle A --> B --> C --> A"),
@@ -117,8 +120,10 @@ ERRORS = [
     ("A --> floors { 1.5: B | *: B }\nB --> terminal(wall)", "bad.grammar:1:16", "must be a whole number"),
     ("A --> grid { cols: 1 | 1 ; rows: 1 ; B }\nB --> terminal(wall)", "bad.grammar:1:38",
      "grid row 1 has 1 cells, expected 2"),
-    ("A --> grid { cols: 1 ; rows: 1 | 1 ; B }\nB --> terminal(wall)", "bad.grammar:1:7", "grid has 1 rows of cells, expected 2"),
-    ("A --> grid { cols: 1 | 1 ; rows: 1 | 1 ;\n B < / B v }\nB --> terminal(wall)", "bad.grammar:2:8", "do not form a rectangle"),
+    ("A --> grid { cols: 1 ; rows: 1 | 1 ; B }\nB --> terminal(wall)", "bad.grammar:1:7",
+     "grid has 1 rows of cells, expected 2"),
+    ("A --> grid { cols: 1 | 1 ; rows: 1 | 1 ;\n B < / B v }\nB --> terminal(wall)", "bad.grammar:2:8",
+     "do not form a rectangle"),
     ("A --> grid { cols: 1 | 1 ; rows: 1 | 1 ;\n B C / v < }\nB --> terminal(wall)\nC --> terminal(wall)",
      "bad.grammar:2:4", "do not form a rectangle"),
     ("A --> grid { cols: 1 ; rows: 1 ; < }", "bad.grammar:1:34", "'<' in the first column"),
