@@ -153,3 +153,8 @@ def test_error_text_renders_location_first():
 def test_terminals_fixture_is_valid():
     assert grammar("X --> A").start == "X"
     assert "Wall" in TERMINALS
+
+
+def test_regression_size_must_be_followed_by_colon():
+    # the first parser accepted "1 A" as "1: A" because the colon was only required before a non-symbol
+    assert "expected ':'" in parse_error("A --> split(x) { 1 B }\nB --> terminal(wall)").message
