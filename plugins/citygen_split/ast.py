@@ -11,6 +11,7 @@ from functools import cached_property
 from typing import Literal, Union
 
 from citygen.errors import SourceLocation
+from citygen_split.gridspans import merge_cells
 
 Axis = Literal["x", "y"]
 SizeKind = Literal["abs", "rel", "float"]
@@ -112,7 +113,6 @@ class Grid:
     @cached_property
     def regions(self) -> tuple[tuple[str, int, int, int, int], ...]:
         """Merged regions as ``(symbol, col0, row0, col1, row1)`` (end-exclusive), bottom row first."""
-        from citygen_split.gridspans import merge_cells
         return merge_cells(self.cells)
 
 

@@ -27,10 +27,11 @@ def evaluate(expr: Expr, env: Mapping[str, Any], attributes: Mapping[str, Any], 
         value = evaluate(expr.operand, env, attributes, rule)
         return (not value) if expr.op == "not" else -_number(value, rule)
     if isinstance(expr, Binary):
-        if expr.op == "and":
-            return bool(evaluate(expr.left, env, attributes, rule)) and bool(evaluate(expr.right, env, attributes, rule))
-        if expr.op == "or":
-            return bool(evaluate(expr.left, env, attributes, rule)) or bool(evaluate(expr.right, env, attributes, rule))
+        if expr.op in ("and", "or"):
+            left = bool(evaluate(expr.left, env, attributes, rule))
+            if left == (expr.op == "or"):  # short circuit
+                return left
+            return bool(evaluate(expr.right, env, attributes, rule))
         left = evaluate(expr.left, env, attributes, rule)
         right = evaluate(expr.right, env, attributes, rule)
         if expr.op in _ARITH:

@@ -203,8 +203,10 @@ class _Parser:
         return RepeatABA(axis, items[0], items[1])  # type: ignore[arg-type]
 
     def item(self) -> Item:
-        size = Size("rel", 1.0) if self.at("SYM") else self.size()
-        if not self.at("SYM"):
+        if self.at("SYM"):
+            size = Size("rel", 1.0)
+        else:
+            size = self.size()
             self.op(":")
         sym = self.expect("SYM", None, "a Symbol")
         return Item(size, sym.text, loc=self.loc(sym))

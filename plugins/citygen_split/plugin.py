@@ -17,7 +17,7 @@ class SplitGrammarKind(RulesetKind):
 
     id = "split"
     suffixes = (".grammar",)
-    description = "split grammar: split/repeat/repeatABA/symsplit/grid/floors rules with conditions (wu2014, mueller2007)"
+    description = "split grammar: split, repeat, repeatABA, symsplit, grid and floors rules with conditions (wu2014)"
 
     def load(self, path: Path) -> Grammar:
         return load(path)

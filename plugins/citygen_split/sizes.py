@@ -30,15 +30,19 @@ def resolve(sizes: Sequence[Size], length: float) -> list[float]:
 
 
 def place(extents: Sequence[float], start: float, length: float) -> list[tuple[float, float]]:
-    """``(offset, extent)`` per item: cumulative offsets from ``start``, the last item ending at ``start + length``."""
+    """``(offset, extent)`` per item, one after the other from ``start``; the last item ends exactly at
+    ``start + length``. Other items keep their extent bit for bit (so equal tiles stay equal) unless they would
+    pass the end, where they are clipped."""
     end = start + length
     placed = []
     pos = start
     last = len(extents) - 1
     for i, extent in enumerate(extents):
-        stop = end if i == last else min(pos + max(extent, 0.0), end)
-        placed.append((pos, max(stop - pos, 0.0)))
-        pos = stop
+        extent = max(extent, 0.0)
+        if i == last or pos + extent > end:
+            extent = max(end - pos, 0.0)
+        placed.append((pos, extent))
+        pos = pos + extent
     return placed
 
 
