@@ -135,9 +135,10 @@ class Registry:
                                   hint=f"known formats: {', '.join(sorted(self.importers))}")
             return self.importers[fmt]
         name = path.name.lower()
-        for importer in self.importers.values():
-            if any(name.endswith(s) for s in importer.suffixes):
-                return importer
+        matches = [(len(s), importer.id) for importer in self.importers.values() for s in importer.suffixes
+                   if name.endswith(s)]
+        if matches:  # the most specific suffix wins: ".city.json" before ".json"
+            return self.importers[max(matches)[1]]
         raise PluginError("no footprint importer for this file type", where=str(path),
                           hint=f"set format = one of {', '.join(sorted(self.importers))} in the scene")
 

@@ -13,11 +13,10 @@ All per-region work is numpy over the regions of a face; Python loops run per fa
 """
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
@@ -88,7 +87,9 @@ class _Sink:
             self.quads.setdefault(key, []).append(quads)
 
     def add_instances(self, proto: np.ndarray, positions: np.ndarray, rotation: np.ndarray, scales: np.ndarray):
-        self.rows.append((proto, positions, np.repeat(rotation[None, :], len(proto), axis=0), scales))
+        """Rows of instances; ``scales`` is ``(n, 2)`` (x, y) -- instances never scale along the normal."""
+        scale3 = np.column_stack([scales, np.ones(len(proto))])
+        self.rows.append((proto, positions, np.repeat(rotation[None, :], len(proto), axis=0), scale3))
 
     def meshes(self) -> dict[tuple[str, str], MeshData]:
         return {k: MeshData.from_quads(np.concatenate(v)) for k, v in sorted(self.quads.items())}
@@ -101,70 +102,92 @@ class _Sink:
         return Instances(tuple(self.keys), proto.astype(np.int32), pos, rot, scale.astype(np.float32))
 
 
-def _terminal_arrays(regions: Sequence[Region], wall_material: str, dx: float = 0.0, dy: float = 0.0,
-                     sx: float = 1.0, sy: float = 1.0):
-    """Visible terminals as arrays -- rects ``(n, 4)`` x0 y0 x1 y1 (shifted by ``-dx, -dy`` and scaled),
-    depth, label and material -- with label defaults applied."""
-    regions = [r for r in regions if r.label is not None and r.w > 1e-6 and r.h > 1e-6]
-    rects = np.array([(r.x, r.y, r.x + r.w, r.y + r.h) for r in regions], dtype=float).reshape(-1, 4)
-    rects = (rects - (dx, dy, dx, dy)) * (sx, sy, sx, sy)
-    depth = np.array([r.depth for r in regions], dtype=float)
-    labels = np.array([r.label for r in regions], dtype=object)
-    materials = np.array([r.material or "" for r in regions], dtype=object)
-    for label in set(labels):
-        sel = labels == label
-        depth[sel & (depth == 0.0)] = DEFAULT_DEPTH.get(label, TRIM_DEPTH.get(label, 0.0))
-        material = wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material)
-        materials[sel & (materials == "")] = material
-    return rects, depth, labels, materials
+@dataclass(frozen=True)
+class _Terminals:
+    """Visible terminals as arrays: rects ``(n, 4)`` x0 y0 x1 y1, depth, and a style code per terminal
+    indexing ``styles`` (label, material) -- label defaults for depth and material already applied."""
+
+    rects: np.ndarray
+    depth: np.ndarray
+    codes: np.ndarray
+    styles: tuple[tuple[str, str], ...]
 
 
-def _instance_keys(labels: np.ndarray, materials: np.ndarray, size: np.ndarray, depth: np.ndarray,
-                   keys: dict) -> np.ndarray:
-    """Prototype index per element; new prototypes are added to ``keys`` (one Python step per prototype)."""
-    q = np.column_stack([np.maximum(1, np.rint(size / QUANTUM)), np.rint(depth * 100)]).astype(np.int64)
-    names = np.char.add(np.char.add(labels.astype(str), "\x1f"), materials.astype(str))
-    uniq_names, name_code = np.unique(names, return_inverse=True)
-    combos, inverse = np.unique(np.column_stack([name_code.ravel(), q]), axis=0, return_inverse=True)
-    index = np.empty(len(combos), np.int32)
-    for k, (code, qw, qh, qd) in enumerate(combos):
-        label, material = uniq_names[code].split("\x1f")
-        index[k] = keys.setdefault(ProtoKey(label, material, int(qw), int(qh), int(qd)), len(keys))
-    return index[inverse.ravel()]
+def _terminal_arrays(regions: Iterable[Region], wall_material: str, dx: float = 0.0, dy: float = 0.0,
+                     sx: float = 1.0, sy: float = 1.0) -> _Terminals:
+    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass)."""
+    styles: dict[tuple[str, str], int] = {}
+    rows = []
+    for r in regions:
+        label = r.label
+        if label is None or r.w <= 1e-6 or r.h <= 1e-6:
+            continue
+        material = r.material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
+        depth = r.depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
+        code = styles.setdefault((label, material), len(styles))
+        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, depth, code))
+    table = np.array(rows, dtype=float).reshape(-1, 6)
+    rects = (table[:, :4] - (dx, dy, dx, dy)) * (sx, sy, sx, sy)
+    return _Terminals(rects, table[:, 4], table[:, 5].astype(np.int64), tuple(styles))
 
 
-def _emit(sink: _Sink, arrays, matrix: np.ndarray, wall_material: str) -> None:
-    """Facade quads and element instances of terminal arrays, transformed by a face (or identity) matrix."""
-    rects, depth, labels, materials = arrays
-    if not len(rects):
+def face_quaternion(matrix: np.ndarray) -> np.ndarray:
+    """Quaternion ``(x, y, z, w)`` of the rotation in a row-vector 4x4 transform (Shepperd's method)."""
+    m = matrix[:3, :3].T
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        t = 2.0 * np.sqrt(1.0 + trace)
+        q = ((m[2, 1] - m[1, 2]) / t, (m[0, 2] - m[2, 0]) / t, (m[1, 0] - m[0, 1]) / t, 0.25 * t)
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        t = 2.0 * np.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k])
+        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / t]
+        q[i], q[j], q[k] = 0.25 * t, (m[j, i] + m[i, j]) / t, (m[k, i] + m[i, k]) / t
+    return np.asarray(q, dtype=float)
+
+
+def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) -> None:
+    """Facade quads and element instances of terminals, transformed by a face (or identity) matrix."""
+    if not len(t.rects):
         return
-    instanced = np.isin(labels, list(INSTANCED))
-    panel = ~instanced
-    for label, material in sorted({(str(a), str(b)) for a, b in zip(labels[panel], materials[panel])}):
-        sel = panel & (labels == label) & (materials == material)
-        for d in np.unique(depth[sel]):
-            flat = merge_rects(rects[sel & (depth == d)])
-            sink.add_quads((label, material), to_world(box_quads(flat, np.full(len(flat), d)), matrix))
-    behind = instanced & ~np.isin(labels, list(OPENINGS))
+    style_instanced = np.array([label in INSTANCED for label, _ in t.styles])
+    style_behind = np.array([label in INSTANCED and label not in OPENINGS for label, _ in t.styles])
+    instanced = style_instanced[t.codes]
+    depth_mm = np.rint(t.depth * 1000).astype(np.int64)
+    panel_key = (t.codes << 32) | (depth_mm & 0xFFFFFFFF)
+    for key in np.unique(panel_key[~instanced]):
+        sel = panel_key == key
+        flat = merge_rects(t.rects[sel])
+        d = t.depth[np.argmax(sel)]
+        sink.add_quads(t.styles[key >> 32], to_world(box_quads(flat, np.full(len(flat), d)), matrix))
+    behind = style_behind[t.codes]
     if behind.any():
-        flat = merge_rects(rects[behind])
+        flat = merge_rects(t.rects[behind])
         sink.add_quads(("wall", wall_material), to_world(box_quads(flat, np.zeros(len(flat))), matrix))
-    if instanced.any():
-        r = rects[instanced]
-        size = np.column_stack([r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]])
-        proto = _instance_keys(labels[instanced], materials[instanced], size, depth[instanced], sink.keys)
-        keys = list(sink.keys)
-        quantised = np.array([keys[i].size[:2] for i in range(len(keys))])[proto]
-        sink.add_instances(proto, to_world(np.column_stack([r[:, 0], r[:, 1], np.zeros(len(r))]), matrix),
-                           Rotation.from_matrix(matrix[:3, :3].T).as_quat(),
-                           np.column_stack([size / quantised, np.ones(len(r))]))
+    if not instanced.any():
+        return
+    r, codes, depth = t.rects[instanced], t.codes[instanced], t.depth[instanced]
+    size = np.column_stack([r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]])
+    q = np.maximum(1, np.rint(size / QUANTUM)).astype(np.int64)
+    qd = np.rint(depth * 100).astype(np.int64)
+    key = (codes << 48) | (q[:, 0] << 32) | (q[:, 1] << 16) | (qd & 0xFFFF)
+    uniq, inverse = np.unique(key, return_inverse=True)
+    index = np.empty(len(uniq), np.int64)
+    for k, u in enumerate(uniq.tolist()):
+        (label, material), d = t.styles[u >> 48], ((u & 0xFFFF) ^ 0x8000) - 0x8000
+        proto = ProtoKey(label, material, (u >> 32) & 0xFFFF, (u >> 16) & 0xFFFF, d)
+        index[k] = sink.keys.setdefault(proto, len(sink.keys))
+    proto_index = index[inverse.ravel()]
+    sink.add_instances(proto_index, to_world(np.column_stack([r[:, 0], r[:, 1], np.zeros(len(r))]), matrix),
+                       face_quaternion(matrix), size / (q * QUANTUM))
 
 
 def _module_proto(key: ModuleKey, region: Region) -> ModuleProto:
     qw, qh = key.size
     sink = _Sink()
-    _emit(sink, _terminal_arrays(list(region.terminals()), key.wall, region.x, region.y, qw / region.w,
-                                 qh / region.h), np.eye(4), key.wall)
+    _emit(sink, _terminal_arrays(region.terminals(), key.wall, region.x, region.y, qw / region.w, qh / region.h),
+          np.eye(4), key.wall)
     return ModuleProto(sink.meshes(), sink.instances())
 
 
@@ -196,7 +219,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
             proto.append(sink.keys.setdefault(key, len(sink.keys)))
             qw, qh = key.size
             pos.append((r.x, r.y, 0.0))
-            scale.append((r.w / qw, r.h / qh, 1.0))
-        sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m),
-                           Rotation.from_matrix(m[:3, :3].T).as_quat(), np.asarray(scale))
+            scale.append((r.w / qw, r.h / qh))
+        sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m), face_quaternion(m),
+                           np.asarray(scale))
     return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=modules, roof=roof)

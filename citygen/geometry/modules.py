@@ -7,11 +7,14 @@ is what keeps a city's stage small (the walls, mouldings and frames around windo
 Every region gets a *signature*: a 64-bit hash of its size and content in centimetres (terminal: label,
 material, layer, depth; inner region: its children's signatures and offsets). Hashes of int tuples do not depend
 on ``PYTHONHASHSEED``, so signatures agree across worker processes. A region becomes a module when its signature
-occurs at least twice in the building, it holds some detail (not only flat wall), and none of its children
-repeats more often (then the children are the better modules: a floor of six identical bays instances the bay).
+occurs at least twice in the building, it holds some detail (not only flat wall), it saves enough geometry to
+pay for a prototype (``(count - 1) * terminals >= MIN_SAVING`` with at least ``MIN_TERMINALS`` terminals), and
+none of its children repeats more often (then the children are the better modules: a floor of six identical bays
+instances the bay).
 """
 from __future__ import annotations
 
+import functools
 import zlib
 from collections import Counter
 from collections.abc import Iterable
@@ -20,6 +23,8 @@ from dataclasses import dataclass
 from citygen.layout import Region
 
 CM = 100.0
+MIN_TERMINALS = 4
+MIN_SAVING = 24
 
 
 @dataclass(frozen=True)
@@ -44,12 +49,9 @@ class ModuleKey:
         return "module"
 
 
+@functools.lru_cache(maxsize=4096)
 def _code(text: str | None) -> int:
     return zlib.crc32((text or "").encode("utf-8"))
-
-
-def _cm(v: float) -> int:
-    return round(v * CM)
 
 
 class Signatures:
@@ -58,18 +60,25 @@ class Signatures:
     def __init__(self, roots: Iterable[Region]) -> None:
         self.sig: dict[int, int] = {}
         self.detail: dict[int, bool] = {}
+        self.size: dict[int, int] = {}
         self.counts: Counter[int] = Counter()
         for root in roots:
             self._visit(root)
 
     def _visit(self, r: Region) -> int:
-        if not r.children:
-            s = hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), _cm(r.w), _cm(r.h)))
-            self.detail[id(r)] = r.label not in ("wall", None) or r.depth != 0.0
+        children = r.children
+        if not children:
+            s = hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
+                      round(r.h * CM)))
+            self.detail[id(r)] = (r.label != "wall" and r.label is not None) or r.depth != 0.0
+            self.size[id(r)] = 1
         else:
-            s = hash((2, _cm(r.w), _cm(r.h),
-                      tuple((self._visit(c), _cm(c.x - r.x), _cm(c.y - r.y)) for c in r.children)))
-            self.detail[id(r)] = any(self.detail[id(c)] for c in r.children)
+            x, y, visit = r.x, r.y, self._visit
+            s = hash((2, round(r.w * CM), round(r.h * CM),
+                      *[(visit(c), round((c.x - x) * CM), round((c.y - y) * CM)) for c in children]))
+            detail = self.detail
+            detail[id(r)] = any([detail[id(c)] for c in children])
+            self.size[id(r)] = sum([self.size[id(c)] for c in children])
             self.counts[s] += 1
         self.sig[id(r)] = s
         return s
@@ -84,8 +93,8 @@ class Signatures:
             if not r.children:
                 loose.append(r)
                 continue
-            c = self.counts[self.sig[id(r)]]
-            if (c >= 2 and self.detail[id(r)]
+            c, n = self.counts[self.sig[id(r)]], self.size[id(r)]
+            if (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and self.detail[id(r)]
                     and not any(ch.children and self.counts[self.sig[id(ch)]] > c for ch in r.children)):
                 modules.append(r)
             else:

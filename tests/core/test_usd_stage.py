@@ -5,19 +5,7 @@ from citygen.cli import main
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
-
-
-def element_labels(stage, instancer):
-    """Semantic labels of every element an instancer places, modules flattened (nested instancers)."""
-    pi = UsdGeom.PointInstancer(instancer)
-    protos = [stage.GetPrimAtPath(t) for t in pi.GetPrototypesRel().GetTargets()]
-    labels = []
-    for i in pi.GetProtoIndicesAttr().Get():
-        proto = protos[i]
-        label = UsdSemantics.LabelsAPI(proto, "class").GetLabelsAttr().Get()[0]
-        nested = proto.GetChild("Elements")
-        labels += element_labels(stage, nested) if label == "module" and nested else [label]
-    return labels
+from tests.usd_util import element_labels
 
 
 def generate(scene_path, registry, out, **kw):

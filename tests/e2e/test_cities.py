@@ -1,0 +1,80 @@
+"""End to end on the shipped real data: Helsinki (OSM) and Delft (CityJSON)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from pxr import Usd
+
+from citygen.cli import main
+from citygen.pipeline import generate_city
+from citygen.scene import load_scene
+from citygen.usd.validate import validate_stage
+from tests.usd_util import buildings, element_labels
+
+REPO = Path(__file__).resolve().parents[2]
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def helsinki(tmp_path_factory):
+    out = tmp_path_factory.mktemp("helsinki") / "helsinki.usdc"
+    report = generate_city(load_scene(REPO / "scenes" / "helsinki.toml"), out=out, jobs=2)
+    return report, out
+
+
+def test_helsinki_every_building_accounted_for(helsinki):
+    report, _ = helsinki
+    assert report.written + len(report.skipped) == 486
+    assert report.written >= 478  # 6 features are broken in the OSM extract itself (lines, slivers)
+    assert all(s.reason for s in report.skipped)
+
+
+def test_helsinki_stage_validates(helsinki):
+    _, out = helsinki
+    assert [f for f in validate_stage(out) if f.severity == "error"] == []
+
+
+def test_helsinki_one_door_per_building_and_attributes(helsinki):
+    report, out = helsinki
+    stage = Usd.Stage.Open(str(out))
+    prims = buildings(stage)
+    assert len(prims) == report.written
+    with_facades = 0
+    for prim in prims:
+        doors = element_labels(stage, prim.GetChild("Elements")).count("door")
+        entrance = prim.GetAttribute("citygen:entranceFace").Get()
+        assert doors == (1 if entrance >= 0 else 0), prim.GetPath()
+        with_facades += doors
+    assert with_facades >= 0.9 * len(prims)
+    sources = {p.GetAttribute("citygen:heightSource").Get() for p in prims}
+    assert {"height", "building:levels", "default"} <= sources
+
+
+def test_delft_cityjson_scene(tmp_path):
+    out = tmp_path / "delft.usda"
+    report = generate_city(load_scene(REPO / "scenes" / "delft.toml"), out=out)
+    assert report.written == 160 and not report.skipped
+    assert [f for f in validate_stage(out) if f.severity == "error"] == []
+    stage = Usd.Stage.Open(str(out))
+    geo = stage.GetRootLayer().customLayerData["citygen"]["georeference"]
+    assert "7415" in geo["crs"]
+
+
+def test_generate_cli_reports_skips_and_strict_fails(tmp_path, capsys):
+    """A scene with one good and one self-intersecting (pentagram) footprint: written, reported, --strict fails."""
+    good = [[24.9400, 60.1700], [24.9402, 60.1700], [24.9402, 60.1701], [24.9400, 60.1701], [24.9400, 60.1700]]
+    star = [[24.9410 + 0.0002 * dx, 60.1700 + 0.0001 * dy] for dx, dy in
+            [(0, 1), (0.6, -0.8), (-1, 0.3), (1, 0.3), (-0.6, -0.8), (0, 1)]]
+    features = [{"type": "Feature", "properties": {"id": i, "osm_type": "way", "building:levels": "3"},
+                 "geometry": {"type": "Polygon", "coordinates": [ring]}} for i, ring in ((1, good), (2, star))]
+    (tmp_path / "mini.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": features}))
+    (tmp_path / "mini.toml").write_text(
+        f'[scene]\nseed = 1\n[footprints]\npath = "mini.geojson"\n[[assign]]\n'
+        f'ruleset = "{(REPO / "rulesets" / "house.grammar").as_posix()}"\n[output]\npath = "mini.usda"\n')
+    assert main(["generate", str(tmp_path / "mini.toml"), "-q"]) == 0
+    text = capsys.readouterr().out
+    assert "written 1 buildings, skipped 1" in text and "way/2" in text
+    assert main(["generate", str(tmp_path / "mini.toml"), "-q", "--strict"]) == 1
+    assert main(["validate", str(tmp_path / "mini.usda")]) == 0
