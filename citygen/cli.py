@@ -77,7 +77,7 @@ def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
         print(f"wrote {args.png}", file=sys.stderr)
     if not (args.json or args.png or args.explain):
         counts: dict[str, int] = {}
-        for r in layout.root.terminals():
+        for r in layout.leaves:
             counts[r.label or "(transparent)"] = counts.get(r.label or "(transparent)", 0) + 1
         print(f"{path.name} [{kind.id}] {width} x {height} m: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
     for p in problems:

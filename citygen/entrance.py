@@ -26,7 +26,7 @@ DOOR_DEPTH = -0.25
 
 def enforce_entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[FacadeLayout, str | None]:
     """``layout`` with exactly ``int(request.entrance)`` doors, and a note when a repair was needed."""
-    doors = [r for r in layout.root.terminals() if r.label == "door"]
+    doors = [r for r in layout.leaves if r.label == "door"]
     wanted = 1 if request.entrance else 0
     if len(doors) == wanted:
         return layout, None
@@ -71,7 +71,7 @@ def _door_rect(layout: FacadeLayout, request: FacadeRequest) -> tuple[float, flo
     height = min(DOOR_HEIGHT, ground - 0.3 if ground > 2.0 else 0.85 * ground)
     if width < 0.6 or height < 1.5:
         return None
-    terminals = [r for r in layout.root.terminals() if r.y < height]
+    terminals = [r for r in layout.leaves if r.y < height]
     centres = {layout.width / 2, *(r.x + r.w / 2 for r in terminals)}
     lo, hi = left + width / 2, layout.width - right - width / 2
     best, best_score = None, np.inf

@@ -9,6 +9,7 @@ The JSON form (``schema_version`` 1) is documented in ``docs/layout-json.md``.
 """
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
@@ -34,6 +35,11 @@ class Region:
 
     ``depth`` is the offset along the face normal in metres (negative = recessed). ``label is None`` on a
     terminal means a transparent region that produces no geometry (used by layer stacks).
+
+    ``key`` is an optional hint from the generator: regions of one building's layouts with the same non-None key
+    have identical subtrees relative to their origins (a grammar that derives a subtree once and places copies
+    says so). Geometry uses it to find repeated modules without hashing every copy; it is not part of equality
+    or of the JSON form.
     """
 
     x: float
@@ -47,6 +53,7 @@ class Region:
     asset: str | None = None
     layer: str | None = None
     children: tuple[Region, ...] = ()
+    key: int | None = field(default=None, compare=False, repr=False)
 
     @property
     def is_terminal(self) -> bool:
@@ -103,19 +110,24 @@ class FacadeLayout:
     root: Region
     meta: Mapping[str, Any] = field(default_factory=dict)
 
+    @functools.cached_property
+    def leaves(self) -> tuple[Region, ...]:
+        """Terminal regions in tree order, computed once (validators, geometry and repairs all walk them)."""
+        return tuple(self.root.terminals())
+
     def terminals(self) -> list[Region]:
-        return list(self.root.terminals())
+        return list(self.leaves)
 
     def labels(self) -> list[str | None]:
-        return [r.label for r in self.root.terminals()]
+        return [r.label for r in self.leaves]
 
     def terminal_array(self) -> np.ndarray:
         """Terminal rectangles as an ``(n, 4)`` float array of ``x, y, w, h``."""
-        rects = [(r.x, r.y, r.w, r.h) for r in self.root.terminals()]
+        rects = [(r.x, r.y, r.w, r.h) for r in self.leaves]
         return np.asarray(rects, dtype=float).reshape(-1, 4)
 
     def count(self, label: str) -> int:
-        return sum(1 for r in self.root.terminals() if r.label == label)
+        return sum(1 for r in self.leaves if r.label == label)
 
     def to_json(self) -> dict[str, Any]:
         return {"schema_version": SCHEMA_VERSION, "width": self.width, "height": self.height,
@@ -156,7 +168,7 @@ def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
     problems: list[str] = []
     eps = tol * max(layout.width, layout.height, 1e-9)
     by_layer: dict[str | None, list[Region]] = {}
-    for region in layout.root.terminals():
+    for region in layout.leaves:
         by_layer.setdefault(region.layer, []).append(region)
     for layer, regions in by_layer.items():
         rects = np.array([(r.x, r.y, r.w, r.h) for r in regions], dtype=float)

@@ -39,7 +39,7 @@ def draw_layout(layout: FacadeLayout, px_per_m: float = 40.0, margin: int = 10,
         return x0, y0, x0 + r.w * px_per_m, y0 + r.h * px_per_m
 
     layers: dict[str | None, list[Region]] = {}
-    for r in layout.root.terminals():
+    for r in layout.leaves:
         layers.setdefault(r.layer, []).append(r)
     for regions in layers.values():
         for r in regions:

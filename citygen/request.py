@@ -98,7 +98,7 @@ def check_request(layout: FacadeLayout, request: FacadeRequest, tol: float = 1e-
     lines = np.asarray(request.floor_lines[1:-1], dtype=float)
     doors = 0
     left, right = request.corner_widths
-    for r in layout.root.terminals():
+    for r in layout.leaves:
         if r.label == "door":
             doors += 1
             if r.y > request.floor_lines[1] - eps and request.floor_count > 1:

@@ -213,7 +213,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
             continue
         proto, pos, scale = [], [], []
         for r in placed:
-            key = ModuleKey(signatures.sig[id(r)], max(1, round(r.w * CM)), max(1, round(r.h * CM)), wall_material)
+            key = ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)), wall_material)
             if key not in modules:
                 modules[key] = _module_proto(key, r)
             proto.append(sink.keys.setdefault(key, len(sink.keys)))

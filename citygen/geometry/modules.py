@@ -55,48 +55,75 @@ def _code(text: str | None) -> int:
 
 
 class Signatures:
-    """Signature and detail flag of every region of some layouts (keyed by ``id(region)``)."""
+    """Signature, detail flag and terminal count of the regions of some layouts, plus signature counts.
+
+    Regions carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later
+    copies reuse the first one's results, including the counts of everything inside it.
+    """
 
     def __init__(self, roots: Iterable[Region]) -> None:
-        self.sig: dict[int, int] = {}
-        self.detail: dict[int, bool] = {}
-        self.size: dict[int, int] = {}
-        self.counts: Counter[int] = Counter()
+        self.info: dict[int, tuple[int, bool, int]] = {}
+        self.log: list[int] = []  # signature of every inner region visited or reused, in order
+        self.first: dict[int, Region] = {}
+        self.inner: dict[int, list[int]] = {}
         for root in roots:
             self._visit(root)
+        self.counts: Counter[int] = Counter(self.log)
 
-    def _visit(self, r: Region) -> int:
+    def _visit(self, r: Region) -> tuple[int, bool, int]:
+        key = r.key
+        if key is not None and key in self.first:
+            info = self.info[id(self.first[key])]
+            self.log.extend(self.inner[key])
+            self.info[id(r)] = info
+            return info
         children = r.children
         if not children:
-            s = hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
-                      round(r.h * CM)))
-            self.detail[id(r)] = (r.label != "wall" and r.label is not None) or r.depth != 0.0
-            self.size[id(r)] = 1
+            info = (hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM),
+                          round(r.w * CM), round(r.h * CM))),
+                    (r.label != "wall" and r.label is not None) or r.depth != 0.0, 1)
         else:
             x, y, visit = r.x, r.y, self._visit
-            s = hash((2, round(r.w * CM), round(r.h * CM),
-                      *[(visit(c), round((c.x - x) * CM), round((c.y - y) * CM)) for c in children]))
-            detail = self.detail
-            detail[id(r)] = any([detail[id(c)] for c in children])
-            self.size[id(r)] = sum([self.size[id(c)] for c in children])
-            self.counts[s] += 1
-        self.sig[id(r)] = s
-        return s
+            start = len(self.log)
+            parts = [visit(c) for c in children]
+            info = (hash((2, round(r.w * CM), round(r.h * CM),
+                          *[(p[0], round((c.x - x) * CM), round((c.y - y) * CM)) for p, c in zip(parts, children)])),
+                    any([p[1] for p in parts]), sum([p[2] for p in parts]))
+            self.log.append(info[0])
+            if key is not None:
+                self.inner[key] = self.log[start:]
+        if key is not None:
+            self.first[key] = r
+            self.inner.setdefault(key, [])
+        self.info[id(r)] = info
+        return info
+
+    def canonical(self, r: Region) -> Region:
+        """The copy of ``r`` whose whole subtree was hashed (itself unless it repeats a keyed subtree)."""
+        return self.first.get(r.key, r) if r.key is not None else r
+
+    def signature(self, r: Region) -> int:
+        return self.info[id(self.canonical(r))][0]
 
     def split(self, root: Region) -> tuple[list[Region], list[Region]]:
-        """The face's ``(modules, loose terminals)``: maximal repeated subtrees, and every terminal outside them."""
+        """The face's ``(modules, loose terminals)``: maximal repeated subtrees, and every terminal outside them.
+
+        Inside a keyed copy, the walk reads the hashed copy's results in parallel (``twin``).
+        """
         modules: list[Region] = []
         loose: list[Region] = []
-        stack = [root]
+        stack = [(root, root)]
         while stack:
-            r = stack.pop()
+            r, twin = stack.pop()
             if not r.children:
                 loose.append(r)
                 continue
-            c, n = self.counts[self.sig[id(r)]], self.size[id(r)]
-            if (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and self.detail[id(r)]
-                    and not any(ch.children and self.counts[self.sig[id(ch)]] > c for ch in r.children)):
+            twin = self.canonical(twin)
+            sig, detail, n = self.info[id(twin)]
+            c = self.counts[sig]
+            if (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
+                    and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children)):
                 modules.append(r)
             else:
-                stack.extend(reversed(r.children))
+                stack.extend(reversed(list(zip(r.children, twin.children))))
         return modules, loose

@@ -93,7 +93,9 @@ class _Derivation:
             done = self.cache.get(key)
             if done is not None:
                 return self.translated(done, x - done.x, y - done.y)
-            self.cache[key] = done = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
+            done = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
+            done.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
+            self.cache[key] = done
             return done
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 

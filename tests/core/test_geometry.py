@@ -40,3 +40,38 @@ def test_weld_shares_corners_of_adjacent_quads():
     points, indices = weld(quads)
     assert len(points) == 6 and indices.shape == (8,)
     assert np.allclose(points[indices].reshape(2, 4, 3), quads)
+
+
+def _bay(x, y, key=None):
+    from citygen.layout import Region
+    kids = (Region(x, y, 1, 3, "W", "wall"), Region(x + 1, y, 1.2, 1, "W", "wall"),
+            Region(x + 1, y + 1, 1.2, 1.5, "Win", "window", depth=-0.2), Region(x + 1, y + 2.5, 1.2, 0.5, "W", "wall"),
+            Region(x + 2.2, y, 0.8, 3, "W", "wall"))
+    return Region(x, y, 3, 3, "Bay", children=kids, key=key)
+
+
+def _facade(keyed):
+    from citygen.layout import Region
+    floors = tuple(Region(0, 3 * f, 30, 3, "Floor", children=tuple(_bay(3 * b, 3 * f, 7 if keyed else None)
+                                                                    for b in range(10))) for f in range(3))
+    return Region(0, 0, 30, 9, "Facade", children=floors)
+
+
+def test_modules_found_with_and_without_generator_keys():
+    from citygen.geometry.modules import Signatures
+    plain, keyed = _facade(False), _facade(True)
+    a, b = Signatures([plain]), Signatures([keyed])
+    mods_a, loose_a = a.split(plain)
+    mods_b, loose_b = b.split(keyed)
+    assert [m.symbol for m in mods_a] == [m.symbol for m in mods_b] == ["Bay"] * 30
+    assert [(m.x, m.y) for m in mods_a] == [(m.x, m.y) for m in mods_b]
+    assert {a.signature(m) for m in mods_a} == {b.signature(m) for m in mods_b}
+    assert len(loose_a) == len(loose_b)
+    assert len(b.info) < len(a.info)  # keyed copies were not hashed again
+
+
+def test_a_floor_of_identical_bays_instances_the_bay():
+    from citygen.geometry.modules import Signatures
+    facade = _facade(False)
+    mods, loose = Signatures([facade]).split(facade)
+    assert len(mods) == 30 and {m.symbol for m in mods} == {"Bay"} and loose == []
