@@ -205,12 +205,12 @@ def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, 
     nx, ny = len(xs), len(ys)
     if nx * ny > 25_000_000:
         return [f"{name}: {len(regions)} regions on a {nx}x{ny} grid are too irregular to check"]
-    diff = np.zeros((nx + 1, ny + 1), np.int32)
-    np.add.at(diff, (ix[0], iy[0]), 1)
-    np.add.at(diff, (ix[1], iy[0]), -1)
-    np.add.at(diff, (ix[0], iy[1]), -1)
-    np.add.at(diff, (ix[1], iy[1]), 1)
-    cover = np.cumsum(np.cumsum(diff, axis=0), axis=1)[: nx - 1, : ny - 1]
+    stride = ny + 1
+    corners = np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1], ix[1] * stride + iy[0],
+                              ix[0] * stride + iy[1]])
+    weights = np.repeat([1, 1, -1, -1], len(regions))
+    diff = np.bincount(corners, weights, minlength=(nx + 1) * stride).reshape(nx + 1, stride)
+    cover = np.rint(np.cumsum(np.cumsum(diff, axis=0), axis=1)[: nx - 1, : ny - 1]).astype(np.int64)
     problems = []
     holes = np.argwhere(cover == 0)
     if holes.size:

@@ -8,24 +8,23 @@ from __future__ import annotations
 
 import numpy as np
 
-# Corner selectors (index into x0,y0,x1,y1 columns, z side 0 = wall plane, 1 = depth) per side quad.
-_SIDES = (
-    ((0, 1, 0), (2, 1, 0), (2, 1, 1), (0, 1, 1)),  # bottom, y = y0
-    ((2, 1, 0), (2, 3, 0), (2, 3, 1), (2, 1, 1)),  # right, x = x1
-    ((2, 3, 0), (0, 3, 0), (0, 3, 1), (2, 3, 1)),  # top, y = y1
-    ((0, 3, 0), (0, 1, 0), (0, 1, 1), (0, 3, 1)),  # left, x = x0
-)
-_FRONT = ((0, 1, 1), (2, 1, 1), (2, 3, 1), (0, 3, 1))
+# Quad corners as indices into a rect's x0, y0, x1, y1 columns plus a flag for z (0 = wall plane, 1 = depth).
+_FRONT = np.array([[(0, 1, 1), (2, 1, 1), (2, 3, 1), (0, 3, 1)]])
+_SIDES = np.array([
+    [(0, 1, 0), (2, 1, 0), (2, 1, 1), (0, 1, 1)],  # bottom, y = y0
+    [(2, 1, 0), (2, 3, 0), (2, 3, 1), (2, 1, 1)],  # right, x = x1
+    [(2, 3, 0), (0, 3, 0), (0, 3, 1), (2, 3, 1)],  # top, y = y1
+    [(0, 3, 0), (0, 1, 0), (0, 1, 1), (0, 3, 1)],  # left, x = x0
+])
 
 
-def _corners(rects: np.ndarray, depth: np.ndarray, spec) -> np.ndarray:
-    """``(n, 4, 3)`` quad corners for ``n`` rectangles following a corner spec."""
-    out = np.empty((len(rects), 4, 3))
-    for k, (xi, yi, zi) in enumerate(spec):
-        out[:, k, 0] = rects[:, xi]
-        out[:, k, 1] = rects[:, yi]
-        out[:, k, 2] = depth if zi else 0.0
-    return out
+def _corners(rects: np.ndarray, depth: np.ndarray, spec: np.ndarray) -> np.ndarray:
+    """``(n * k, 4, 3)`` quad corners of ``n`` rectangles for a ``(k, 4, 3)`` corner spec."""
+    out = np.empty((len(rects), len(spec), 4, 3))
+    out[..., 0] = rects[:, spec[..., 0]]
+    out[..., 1] = rects[:, spec[..., 1]]
+    out[..., 2] = depth[:, None, None] * spec[..., 2]
+    return out.reshape(-1, 4, 3)
 
 
 def box_quads(rects: np.ndarray, depth: np.ndarray, front: bool = True, sides: bool = True,
@@ -37,15 +36,12 @@ def box_quads(rects: np.ndarray, depth: np.ndarray, front: bool = True, sides: b
     """
     rects = np.asarray(rects, dtype=float).reshape(-1, 4)
     depth = np.broadcast_to(np.asarray(depth, dtype=float), (len(rects),))
-    parts = []
-    if front:
-        parts.append(_corners(rects, depth, _FRONT))
+    parts = [_corners(rects, depth, _FRONT)] if front else []
     if sides:
         deep = np.abs(depth) > eps
         if deep.any():
-            r, d = rects[deep], depth[deep]
-            parts += [_corners(r, d, spec) for spec in _SIDES]
-    return np.concatenate(parts) if parts else np.zeros((0, 4, 3))
+            parts.append(_corners(rects[deep], depth[deep], _SIDES))
+    return np.concatenate(parts) if len(parts) > 1 else (parts[0] if parts else np.zeros((0, 4, 3)))
 
 
 def merge_rects(rects: np.ndarray, eps: float = 1e-6) -> np.ndarray:
@@ -55,6 +51,8 @@ def merge_rects(rects: np.ndarray, eps: float = 1e-6) -> np.ndarray:
     Wall pieces between the windows of a floor collapse into strips, which is most of a facade mesh's polygons.
     """
     rects = np.asarray(rects, dtype=float).reshape(-1, 4)
+    if len(rects) < 2:
+        return rects
     for lo, hi, a, b in ((0, 2, 1, 3), (1, 3, 0, 2)):  # merge along x within rows, then along y within columns
         if len(rects) < 2:
             break
