@@ -113,7 +113,7 @@ class _Builder:
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
             roof = self.roof.build(mass.outline, mass.base + mass.height) if self.roof else None
-            geometry = build_geometry(mass, faces, wall, roof)
+            geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
         except CitygenError as exc:
             return _BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
         except Exception as exc:  # a plugin bug must skip one building, not the city

@@ -16,6 +16,7 @@ from typing import Any
 from citygen.errors import SceneError, SourceLocation
 
 UP_AXES = ("Z", "Y")
+INSTANCING = ("modules", "elements")
 FACE_SCOPES = ("all", "street", "courtyard")
 
 
@@ -74,6 +75,7 @@ class Output:
     path: Path
     up_axis: str = "Z"
     tile_size: float = 250.0
+    instancing: str = "modules"
 
 
 @dataclass(frozen=True)
@@ -156,12 +158,15 @@ def load_scene(path: str | Path) -> Scene:
     fp_options = {k: v for k, v in fp.items() if k != "path"}
     d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
     defaults = Defaults(**{k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__})
-    out = r.table(data, "output", {"path", "up_axis", "tile_size"})
+    out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
+    instancing = out.get("instancing", "modules")
+    if instancing not in INSTANCING:
+        r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
     output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0))
+                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing)
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
                  assignments=_assignments(r, data.get("assign", [])), output=output,

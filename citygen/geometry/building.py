@@ -43,8 +43,13 @@ class MeshData:
 
     @classmethod
     def from_quads(cls, quads: np.ndarray) -> MeshData:
+        """Welded quads; quads that collapse under welding (sub-millimetre slivers) are dropped, since a face
+        repeating a vertex is invalid in DCC importers."""
         points, indices = weld(quads)
-        return cls(points, np.full(len(quads), 4, np.int32), indices)
+        idx = indices.reshape(-1, 4)
+        ok = ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
+              & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
+        return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
 
 
 @dataclass(frozen=True)
@@ -192,34 +197,34 @@ def _module_proto(key: ModuleKey, region: Region) -> ModuleProto:
 
 
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
-                   roof: MeshData | None) -> BuildingGeometry:
+                   roof: MeshData | None, modules: bool = True) -> BuildingGeometry:
     """Geometry of one building from its faces and their layouts (``None``: a plain wall face).
 
-    Repeated subtrees become module instances (:mod:`citygen.geometry.modules`); the remaining terminals become
-    facade quads and element instances.
+    With ``modules``, repeated subtrees become module instances (:mod:`citygen.geometry.modules`); the remaining
+    terminals become facade quads and element instances.
     """
     sink = _Sink()
-    modules: dict[ModuleKey, ModuleProto] = {}
-    signatures = Signatures(layout.root for _, layout in layouts if layout is not None)
+    protos: dict[ModuleKey, ModuleProto] = {}
+    signatures = Signatures(layout.root for _, layout in layouts if layout is not None and modules)
     for face, layout in layouts:
         m = face.matrix()
         if layout is None:
             sink.add_quads(("wall", wall_material),
                            to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), m))
             continue
-        placed, loose = signatures.split(layout.root)
+        placed, loose = signatures.split(layout.root) if modules else ([], layout.leaves)
         _emit(sink, _terminal_arrays(loose, wall_material), m, wall_material)
         if not placed:
             continue
         proto, pos, scale = [], [], []
         for r in placed:
             key = ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)), wall_material)
-            if key not in modules:
-                modules[key] = _module_proto(key, r)
+            if key not in protos:
+                protos[key] = _module_proto(key, r)
             proto.append(sink.keys.setdefault(key, len(sink.keys)))
             qw, qh = key.size
             pos.append((r.x, r.y, 0.0))
             scale.append((r.w / qw, r.h / qh))
         sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m), face_quaternion(m),
                            np.asarray(scale))
-    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=modules, roof=roof)
+    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof)

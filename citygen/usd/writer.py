@@ -95,7 +95,10 @@ class _Author:
         prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
 
     def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, material: Sdf.Path | None,
-             label: str | None) -> Sdf.PrimSpec:
+             label: str | None) -> Sdf.PrimSpec | None:
+        """A Mesh prim (none for an empty mesh)."""
+        if not len(mesh.counts):
+            return None
         prim = self.prim(parent, name, "Mesh")
         pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
         self.attr(prim, "points", T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
@@ -230,8 +233,8 @@ def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecor
         facade = author.prim(prim, "Facade", "Scope")
         names: set[str] = set()
         for (label, mat), mesh in geo.meshes.items():
-            author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, material(mat), label)
-            counts["meshes"] += 1
+            counts["meshes"] += author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, material(mat),
+                                            label) is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
         author.mesh(prim, "Roof", geo.roof, material("roof_dark"), "roof")
@@ -252,6 +255,7 @@ def _instancer(author: _Author, parent: Sdf.PrimSpec, inst: Instances, prototype
     for k, key in enumerate(inst.protos):
         ref = author.prim(holder, f"p{k}", "Xform")
         ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototype(key)))
+        ref.SetInfo("instanceable", True)  # one shared prototype per element kind: DCCs load it once
         targets.append(ref.path)
     author.rel(pi, "prototypes", targets)
     author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))

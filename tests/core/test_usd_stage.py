@@ -86,3 +86,23 @@ def test_validate_cli_exit_codes(small_scene, test_registry, tmp_path, capsys):
     (tmp_path / "garbage.usda").write_text("#usda 1.0\ndef {")
     assert main(["validate", str(tmp_path / "garbage.usda")]) == 1
     assert "cannot open stage" in capsys.readouterr().out
+
+
+def test_element_instancing_places_the_same_elements(small_scene, test_registry, tmp_path):
+    from collections import Counter
+    from tests.usd_util import buildings
+    modules_out = tmp_path / "modules.usda"
+    generate(small_scene, test_registry, modules_out)
+    small_scene.write_text(small_scene.read_text().replace('path = "out/small.usda"',
+                                                           'path = "out/small.usda"\ninstancing = "elements"'))
+    elements_out = tmp_path / "elements.usda"
+    report = generate(small_scene, test_registry, elements_out)
+    assert errors(elements_out) == []
+    counts = []
+    for out in (modules_out, elements_out):
+        stage = Usd.Stage.Open(str(out))
+        counts.append(Counter(label for b in buildings(stage) for label in element_labels(stage, b.GetChild("Elements"))))
+    assert counts[0] == counts[1] and "module" not in counts[1]
+    stage = Usd.Stage.Open(str(elements_out))
+    assert not [p for p in stage.GetPrimAtPath("/Prototypes").GetAllChildren() if p.GetName().startswith("module_")]
+    assert report.stats.prototypes == 2
