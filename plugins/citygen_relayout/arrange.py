@@ -54,6 +54,13 @@ class _State:
     same_occ: list[tuple[int, tuple, int, int]] = field(default_factory=list)
 
 
+def _find(parent: list[int], i: int) -> int:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
 def layout(ctx, node) -> Iterator[Solution]:
     """Yield valid arrangements of composite ``node`` (a ``search.Node``) one after another."""
     return _Layout(ctx, node).run()
@@ -130,7 +137,7 @@ class _Layout:
                     ctx.blame("entrance door budget of the face")
                     continue
             if any(sym in f.members and self._count(f.members) * mult + mult > hi for f, _, hi in self.freq):
-                ctx.blame(next(f.text for f, _, hi in self.freq if sym in f.members
+                ctx.blame(next(f"{f.text} (line {f.line})" for f, _, hi in self.freq if sym in f.members
                                and self._count(f.members) * mult + mult > hi))
                 continue
             rng = comp.size(sym, self.axis)
@@ -154,7 +161,7 @@ class _Layout:
         mult = self._mult()
         for f, lo, _ in self.freq:
             if self._count(f.members) * mult < lo:
-                self.ctx.blame(f.text)
+                self.ctx.blame(f"{f.text} (line {f.line})")
                 return False
         for sym, (lo, _) in self.inst.items():
             if any(s == sym for s, _ in self.st.elems) and len({i for s, i in self.st.elems if s == sym}) < lo:
@@ -265,11 +272,11 @@ class _Layout:
         target = targets[0]
         key = ("align", ref.index, ref.side, v, target[:2])
         if any(r.key == key for r in self.st.rows):
-            self.ctx.blame(f"align {al.text} (line {al.line})", frozenset({target[3]}))
+            self.ctx.blame(f"{al.text} (line {al.line})", frozenset({target[3]}))
             return False
         coefs = self._start_coefs(v)
         coefs[v] = coefs.get(v, 0.0) + lam
-        self.st.rows.append(Row(coefs, target[2] - self.off, True, f"align {al.text} (line {al.line})",
+        self.st.rows.append(Row(coefs, target[2] - self.off, True, f"{al.text} (line {al.line})",
                                 frozenset({target[3]}), key))
         return True
 
@@ -279,7 +286,7 @@ class _Layout:
         if scope is None:
             return
         body = {i: 1.0 for i in range(v, v + length)}
-        tag = f"samesize {ss.text} (line {ss.line})"
+        tag = f"{ss.text} (line {ss.line})"
         known = self.ctx.same_ref(ref.index, scope)
         if known is not None:
             self.st.rows.append(Row(body, known[0], True, tag, frozenset({known[1]})))
@@ -317,36 +324,51 @@ class _Layout:
                                     key=("corner", v)))
 
     # ---------------------------------------------------------------- QP
-    def _solve(self, new_from: int, rows_extra: list[Row] = (), total_eq: bool = False,
-               mirror: bool = False) -> bool:
+    def _solve(self, new_from: int, total_eq: bool = False, mirror: bool = False) -> bool:
+        """QP over the current arrangement; replica/symmetry equalities merge variables (exact reduction)."""
         st = self.st
         n = len(st.elems)
         xbar, lo, hi = np.asarray(st.xbar), np.asarray(st.lo), np.asarray(st.hi)
-        rows = st.rows if not rows_extra else [*st.rows, *rows_extra]
+        rows = st.rows
         mult = 2.0 if self.symmetric and not mirror else 1.0
         if (not total_eq and len(rows) == new_from and st.x.size == n - 1
                 and mult * (float(np.sum(st.x)) + min(max(xbar[-1], lo[-1]), hi[-1])) <= self.total + 1e-9):
             st.x = np.append(st.x, min(max(xbar[-1], lo[-1]), hi[-1]))  # no newly active row: still optimal
             return True
-        eq = [r for r in rows if r.eq]
-        le = [r for r in rows if not r.eq]
-        E = np.zeros((len(eq) + (1 if total_eq else 0), n))
-        for i, r in enumerate(eq):
-            for j, c in r.coefs.items():
-                E[i, j] += c
-        e_rhs = [r.rhs for r in eq]
-        L = np.zeros((len(le) + (0 if total_eq else 1), n))
-        for i, r in enumerate(le):
-            for j, c in r.coefs.items():
-                L[i, j] += c
-        l_rhs = [r.rhs for r in le]
-        if total_eq:
-            E[-1, :] = mult
-            e_rhs.append(self.total)
-        else:
-            L[-1, :] = mult
-            l_rhs.append(self.total)
-        x = solve_sizes(xbar, lo, hi, E, np.asarray(e_rhs, float), L, np.asarray(l_rhs, float))
+        group = list(range(n))
+        general = []
+        for r in rows:
+            if r.eq and r.rhs == 0.0 and len(r.coefs) == 2 and sorted(r.coefs.values()) == [-1.0, 1.0]:
+                u, v = (_find(group, i) for i in r.coefs)
+                group[max(u, v)] = min(u, v)
+            else:
+                general.append(r)
+        gid = [_find(group, i) for i in range(n)]
+        uniq = sorted(set(gid))
+        col = {g: k for k, g in enumerate(uniq)}
+        m = len(uniq)
+        member = np.array([col[g] for g in gid])
+        w = np.bincount(member, minlength=m).astype(float)
+        gx = np.bincount(member, weights=xbar, minlength=m) / w
+        glo = np.full(m, -np.inf)
+        ghi = np.full(m, np.inf)
+        np.maximum.at(glo, member, lo)
+        np.minimum.at(ghi, member, hi)
+        seen: dict[tuple, None] = {}
+        eq_rows, le_rows = [], []
+        for r in general:
+            vec = np.zeros(m)
+            for i, c in r.coefs.items():
+                vec[member[i]] += c
+            key = (r.eq, r.rhs, vec.tobytes())
+            if key not in seen:
+                seen[key] = None
+                (eq_rows if r.eq else le_rows).append((vec, r.rhs))
+        total = (np.bincount(member, minlength=m) * mult, self.total)
+        (eq_rows if total_eq else le_rows).append(total)
+        E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
+        L = np.array([v for v, _ in le_rows]).reshape(-1, m)
+        x = solve_sizes(gx, glo, ghi, E, np.array([b for _, b in eq_rows]), L, np.array([b for _, b in le_rows]), w)
         self.ctx.qp_calls += 1
         if x is None:
             blamed = rows[new_from:] or rows
@@ -355,7 +377,7 @@ class _Layout:
             self.ctx.blame(f"total size of {self.node.symbol}" if total_eq or not blamed
                            else f"size ranges in {self.node.symbol}")
             return False
-        st.x = x
+        st.x = x[member]
         return True
 
     # ---------------------------------------------------------------- completion

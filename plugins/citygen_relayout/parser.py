@@ -257,17 +257,15 @@ class _Builder:
 
     def con_freq(self, cur: Cursor) -> None:
         parent = self._composite(cur)
-        start = cur.i
         members = self._item(cur, parent.children)
         while cur.peek("|") or cur.peek("&") or cur.peek("-"):
             op = cur.take().text
             other = self._item(cur, parent.children)
             members = members | other if op == "|" else members & other if op == "&" else members - other
-        text = " ".join(t.text for t in cur.tokens[start:cur.i])
         lo, hi, _ = self._range(cur)
         relative = cur.accept("relative")
         self.freqs.setdefault(parent.name, []).append(
-            Frequency(frozenset(members), lo, hi, relative, f"freq {parent.name} {text}", cur.lineno))
+            Frequency(frozenset(members), lo, hi, relative, cur.text, cur.lineno))
 
     def _add_sequences(self, parent: str, seqs: list) -> None:
         self.sequences.setdefault(parent, []).extend(s for s in seqs if s not in self.sequences.get(parent, []))
@@ -375,24 +373,20 @@ class _Builder:
         return within, across
 
     def con_align(self, cur: Cursor) -> None:
-        start = cur.i
         a, la = self._side(cur, True)
         cur.take("=", expected="'='")
         b, lb = self._side(cur, True)
         within, across = self._tail(cur)
         if across:
             raise cur.error("within (alignment holds within one face)")
-        text = " ".join(t.text for t in cur.tokens[start - 1:])
-        self.alignments.append(Alignment(a, la, b, lb, within, text, cur.lineno))
+        self.alignments.append(Alignment(a, la, b, lb, within, cur.text, cur.lineno))
 
     def con_samesize(self, cur: Cursor) -> None:
-        start = cur.i
         a, _ = self._side(cur, False)
         cur.take("=", expected="'='")
         b, _ = self._side(cur, False)
         within, across = self._tail(cur)
-        text = " ".join(t.text for t in cur.tokens[start - 1:])
-        self.samesizes.append(SameSize(a, b, within, across, text, cur.lineno))
+        self.samesizes.append(SameSize(a, b, within, across, cur.text, cur.lineno))
 
     def build(self) -> Model:
         rules = {}

@@ -69,6 +69,8 @@ class _Frame:
     pending: tuple[Node, ...]
     log_len: int
     conflicts: set[int] = field(default_factory=set)
+    blockers: Counter = field(default_factory=Counter)
+    yielded: int = 0
 
 
 @dataclass
@@ -92,6 +94,8 @@ class Search:
         self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
         self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
         self.blockers: Counter[str] = Counter()
+        self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
+        self.dead_causes: Counter[str] = Counter()
         self.qp_calls = self.backtracks = self.total_backtracks = 0
         self.frames: list[_Frame] = []
 
@@ -109,6 +113,8 @@ class Search:
 
     def blame(self, tag: str, frames: frozenset[int] = frozenset()) -> None:
         self.blockers[tag] += 1
+        if self.frames:
+            self.frames[self.current].blockers[tag] += 1
         if frames and self.frames:
             self.frames[self.current].conflicts.update(f for f in frames if f < self.current)
 
@@ -179,8 +185,11 @@ class Search:
             except _OutOfTime:
                 status = "timeout"
                 break
-        top = tuple(self.blockers.most_common(5))
+        top = tuple((self.dead_causes or self.blockers).most_common(5))
         names = "; ".join(f"{tag} ({n}x)" for tag, n in top) or "no candidate arrangement for the root"
+        if self.dead:
+            names = ("no arrangement for " + ", ".join(f"{r} ({n}x)" for r, n in self.dead.most_common(3))
+                     + "; there: " + names)
         msg = (f"no {self.model.name} layout of {self.width:g} x {self.height:g} found ({status}, "
                f"{restarts + 1} attempts, {self.total_backtracks} backtracks); blocking constraints: {names}")
         return RelayoutResult(False, None, status, msg, restarts, self.total_backtracks, self.qp_calls, top,
@@ -211,9 +220,14 @@ class Search:
             while True:
                 sol = next(frame.gen, None)
                 if sol is not None:
+                    frame.yielded += 1
                     pending = list(frame.pending)
                     pending.extend(self._apply(m, sol))
                     break
+                if not frame.yielded:
+                    node = frame.node
+                    self.dead[f"{node.symbol} ({node.w:.1f} x {node.h:.1f} m)"] += 1
+                    self.dead_causes.update(frame.blockers)
                 self.backtrack()
                 earlier = [c for c in frame.conflicts if c < m]
                 if not earlier:
@@ -260,7 +274,7 @@ class Search:
             lam = al.a_anchor if side == 0 else al.b_anchor
             for s, e, y, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], node):
                 if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - y) > 1e-6 * max(self.width, self.height, 1.0):
-                    self.blame(f"align {al.text} (line {al.line})", frozenset({frame}))
+                    self.blame(f"{al.text} (line {al.line})", frozenset({frame}))
                     return
         yield sol
 

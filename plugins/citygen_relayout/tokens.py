@@ -44,6 +44,7 @@ class Cursor:
 
     def __init__(self, tokens: list[Token], path: str, lineno: int, line: str) -> None:
         self.tokens, self.path, self.lineno, self.i = tokens, path, lineno, 0
+        self.text = line.split("#", 1)[0].strip()
         self.end_col = len(line.split("#", 1)[0].rstrip()) + 1
 
     def where(self) -> SourceLocation:
