@@ -83,6 +83,10 @@ class _Layout:
         self.inst = {s: scaled_bounds(p.lo, p.hi, p.relative, self.total, self.input_size)
                      for s, p in self.rules.instances.items()}
         self.st = _State()
+        self.ortho = "y" if self.axis == "x" else "x"
+        self.across = node.h if self.axis == "x" else node.w
+        comp = ctx.compiled
+        self.min_size = {c: max(comp.size(c, self.axis).lo, comp.min_extent[(c, self.axis)]) for c in self.alphabet}
 
     def _freq_bounds(self, f) -> tuple[int, int]:
         lo, hi = scaled_bounds(f.lo, f.hi, f.relative, self.total, self.input_size)
@@ -140,9 +144,12 @@ class _Layout:
                 ctx.blame(next(f"{f.text} (line {f.line})" for f, _, hi in self.freq if sym in f.members
                                and self._count(f.members) * mult + mult > hi))
                 continue
-            rng = comp.size(sym, self.axis)
-            if used_lo + rng.lo * mult > self.total + 1e-9:
+            if used_lo + self.min_size[sym] * mult > self.total + 1e-9:
                 ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
+                continue
+            if comp.min_extent[(sym, self.ortho)] > self.across + 1e-9:
+                ctx.blame(f"minimum {self.ortho}-extent {comp.min_extent[(sym, self.ortho)]:.2f} of {sym} "
+                          f"in {self.node.symbol}")
                 continue
             for inst in self._instances(sym):
                 out.extend(((sym, inst, d), nxt, rnxt) for d in doors)
@@ -210,8 +217,8 @@ class _Layout:
         st, rng = self.st, self.ctx.compiled.size(sym, self.axis)
         st.elems.append((sym, inst))
         st.doors.append(door)
-        st.lo.append(rng.lo)
-        st.hi.append(rng.hi)
+        st.lo.append(self.min_size[sym])
+        st.hi.append(min(rng.hi, self.ctx.compiled.max_extent[(sym, self.axis)]))
         st.xbar.append(self.ctx.sample_size(rng))
         v = len(st.elems) - 1
         for u, e in enumerate(st.elems[:-1]):

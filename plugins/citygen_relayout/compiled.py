@@ -5,6 +5,7 @@ import math
 from dataclasses import dataclass
 
 from citygen.layout import FLOOR_BOUND_LABELS
+from citygen_relayout.bounds import extent_bounds
 from citygen_relayout.model import END, Model, Pattern, SizeRange
 from citygen_relayout.sequences import CoverAutomaton
 
@@ -44,6 +45,7 @@ class Compiled:
         self.doorless: dict[str, bool] = {}
         for name in model.symbols:
             self._doorless(name)
+        self.min_extent, self.max_extent = extent_bounds(model, self.automata)
         self.patterns: list[PatternRef] = []
         for k, al in enumerate(model.alignments):
             self.patterns += [PatternRef("align", k, 0, al.a), PatternRef("align", k, 1, al.b)]

@@ -14,10 +14,17 @@ from citygen.layout import FacadeLayout, Region
 from citygen_relayout.model import Symbol
 
 _EPS = 1e-6
+_TOL = 1e-3
 
 
-def symbols_from_layout(layout: FacadeLayout) -> tuple[dict[str, Symbol], str]:
-    """Symbols of the segmentation of ``layout`` and the root symbol."""
+def symbols_from_layout(layout: FacadeLayout, tolerance: float = 1e-3) -> tuple[dict[str, Symbol], str]:
+    """Symbols of the segmentation of ``layout`` and the root symbol.
+
+    Regions with the same label and decomposition whose sizes agree within ``tolerance`` (relative) are taken as
+    identical and share a symbol: the regularisation of almost-equal regions that bao2013 §4 asks the user for.
+    """
+    global _TOL
+    _TOL = tolerance
     table: dict[str, Symbol] = {}
     signatures: dict[tuple, str] = {}
     root = _segment(layout.root, table, signatures, prefer="y", is_root=True)
@@ -73,7 +80,7 @@ def _register(sym: Symbol, table: dict[str, Symbol]) -> str:
 
 def _same(a: Symbol, b: Symbol) -> bool:
     return (a.split, a.children, a.label, a.depth, a.material) == (b.split, b.children, b.label, b.depth, b.material) \
-        and all(abs(p - q) < 1e-3 * max(1.0, p) for p, q in zip(a.extent, b.extent))
+        and all(abs(p - q) <= _TOL * max(p, q, 1e-9) for p, q in zip(a.extent, b.extent))
 
 
 def _cuts(leaves: list[Region], lo: float, hi: float, axis: str) -> list[float]:
@@ -101,17 +108,37 @@ def _guillotine(box: Region, leaves: list[Region], table: dict, signatures: dict
     else:
         raise LayoutError(f"region {box.symbol} at {box.x:.3g},{box.y:.3g} has no guillotine cut",
                           hint="the layout needs a hierarchical (splittable) decomposition, bao2013 §4")
-    edges = [lo, *cuts, hi]
+    spans = _merge_walls(axis, [lo, *cuts, hi], leaves)
+    edges = [spans[0][0], *(b for _, b, _ in spans)]
     kids = []
-    for a, b in zip(edges, edges[1:]):
+    for a, b, inside in spans:
         part = Region(a, box.y, b - a, box.h, "S") if axis == "x" else Region(box.x, a, box.w, b - a, "S")
-        inside = [r for r in leaves if (a - _EPS <= (r.x if axis == "x" else r.y)
-                                        and (r.x + r.w if axis == "x" else r.y + r.h) <= b + _EPS)]
+        if len(inside) == 1:
+            leaf = inside[0]
+            inside = [Region(part.x, part.y, part.w, part.h, leaf.symbol, leaf.label, leaf.depth, leaf.material,
+                             leaf.asset)]
         kids.append(_guillotine(part, inside, table, signatures, "x" if axis == "y" else "y", None))
     sizes = tuple(round(b - a, 3) for a, b in zip(edges, edges[1:]))
     other = round(box.h if axis == "x" else box.w, 3)
     sig = (axis, tuple(kids), sizes, other)
     if name is None:
-        name = signatures.get(sig) or f"{'Col' if axis == 'y' else 'Row'}{len(signatures) + 1}"
+        probe = Symbol("?", (box.w, box.h), None, 0.0, None, None, axis, tuple(kids))
+        name = signatures.get(sig) or next((s.name for s in table.values() if _same(s, probe)), None) \
+            or f"{'Col' if axis == 'y' else 'Row'}{len(signatures) + 1}"
     signatures.setdefault(sig, name)
     return _register(Symbol(name, (box.w, box.h), None, 0.0, None, None, axis, tuple(kids)), table)
+
+
+def _merge_walls(axis: str, edges: list[float], leaves: list[Region]) -> list[tuple[float, float, list[Region]]]:
+    """Slices between cuts; adjacent slices that are a single plain-wall leaf each become one wall slice."""
+    spans: list[tuple[float, float, list[Region]]] = []
+    for a, b in zip(edges, edges[1:]):
+        inside = [r for r in leaves if (a - _EPS <= (r.x if axis == "x" else r.y)
+                                        and (r.x + r.w if axis == "x" else r.y + r.h) <= b + _EPS)]
+        plain = len(inside) == 1 and inside[0].label == "wall" and not inside[0].depth
+        if plain and spans and len(spans[-1][2]) == 1 and spans[-1][2][0].label == "wall" \
+                and not spans[-1][2][0].depth:
+            spans[-1] = (spans[-1][0], b, spans[-1][2])
+        else:
+            spans.append((a, b, inside))
+    return spans

@@ -82,9 +82,12 @@ class _Builder:
     def def_layout(self, cur: Cursor) -> None:
         tok = cur.take(kind="str", expected='a quoted path of a FacadeLayout JSON')
         path = self.base / tok.text.strip('"')
+        tolerance = 1e-3
+        if cur.accept("tolerance"):
+            tolerance = cur.number("a relative size tolerance")[0]
         try:
             layout = FacadeLayout.loads(path.read_text(encoding="utf-8"), str(path))
-            self.symbols, self.root = symbols_from_layout(layout)
+            self.symbols, self.root = symbols_from_layout(layout, tolerance)
         except OSError as exc:
             raise ParseError(f"cannot read layout {path.name}: {exc.strerror}",
                              where=SourceLocation(self.source, tok.line, tok.column)) from exc

@@ -168,6 +168,9 @@ class Search:
     def run(self) -> RelayoutResult:
         t0 = time.perf_counter()
         self.deadline = t0 + self.budget_s
+        too_small = self._static_check()
+        if too_small:
+            return RelayoutResult(False, None, "infeasible", too_small, seconds=time.perf_counter() - t0)
         self._ticks = 0
         status = "exhausted"
         restarts = root_failures = 0
@@ -194,6 +197,17 @@ class Search:
                f"{restarts + 1} attempts, {self.total_backtracks} backtracks); blocking constraints: {names}")
         return RelayoutResult(False, None, status, msg, restarts, self.total_backtracks, self.qp_calls, top,
                               time.perf_counter() - t0)
+
+    def _static_check(self) -> str | None:
+        """A reason when the target is outside the root's static extent bounds (see ``bounds``)."""
+        root = self.model.root
+        for axis, size in (("x", self.width), ("y", self.height)):
+            lo, hi = self.compiled.min_extent[(root, axis)], self.compiled.max_extent[(root, axis)]
+            if size < lo - 1e-9 or size > hi + 1e-9:
+                word = "width" if axis == "x" else "height"
+                return (f"no {self.model.name} layout of {self.width:g} x {self.height:g}: the model's {word} must lie "
+                        f"in {lo:.3f}..{hi:.3f} m (region-size ranges and sequences of {root} and below)")
+        return None
 
     def _reset(self) -> None:
         self.frames, self.log = [], []
