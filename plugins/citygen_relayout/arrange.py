@@ -86,7 +86,8 @@ class _Layout:
         self.ortho = "y" if self.axis == "x" else "x"
         self.across = node.h if self.axis == "x" else node.w
         comp = ctx.compiled
-        self.min_size = {c: max(comp.size(c, self.axis).lo, comp.min_extent[(c, self.axis)]) for c in self.alphabet}
+        self.min_extent, self.max_extent = comp.bounds[node.door == 0]
+        self.min_size = {c: max(comp.size(c, self.axis).lo, self.min_extent[(c, self.axis)]) for c in self.alphabet}
 
     def _freq_bounds(self, f) -> tuple[int, int]:
         lo, hi = scaled_bounds(f.lo, f.hi, f.relative, self.total, self.input_size)
@@ -147,8 +148,8 @@ class _Layout:
             if used_lo + self.min_size[sym] * mult > self.total + 1e-9:
                 ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
                 continue
-            if comp.min_extent[(sym, self.ortho)] > self.across + 1e-9:
-                ctx.blame(f"minimum {self.ortho}-extent {comp.min_extent[(sym, self.ortho)]:.2f} of {sym} "
+            if self.min_extent[(sym, self.ortho)] > self.across + 1e-9:
+                ctx.blame(f"minimum {self.ortho}-extent {self.min_extent[(sym, self.ortho)]:.2f} of {sym} "
                           f"in {self.node.symbol}")
                 continue
             for inst in self._instances(sym):
@@ -218,7 +219,7 @@ class _Layout:
         st.elems.append((sym, inst))
         st.doors.append(door)
         st.lo.append(self.min_size[sym])
-        st.hi.append(min(rng.hi, self.ctx.compiled.max_extent[(sym, self.axis)]))
+        st.hi.append(min(rng.hi, self.max_extent[(sym, self.axis)]))
         st.xbar.append(self.ctx.sample_size(rng))
         v = len(st.elems) - 1
         for u, e in enumerate(st.elems[:-1]):

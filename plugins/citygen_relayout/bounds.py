@@ -16,8 +16,9 @@ from citygen_relayout.model import END
 _STATE_LIMIT = 20000
 
 
-def extent_bounds(model, automata) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
-    """``(minimum, maximum)`` dicts keyed by ``(symbol, axis)``."""
+def extent_bounds(model, automata, door: dict[str, bool], relax_doors: bool) -> tuple[dict, dict]:
+    """``(minimum, maximum)`` dicts keyed by ``(symbol, axis)``; with ``relax_doors`` frequency minimums of
+    door-bearing symbols are ignored, as on a face without entrance."""
     lo: dict[tuple[str, str], float] = {}
     hi: dict[tuple[str, str], float] = {}
 
@@ -37,7 +38,8 @@ def extent_bounds(model, automata) -> tuple[dict[tuple[str, str], float], dict[t
                 else:
                     cost = {c: need(c, axis)[0] for c in kids}
                     mandatory = [need(next(iter(f.members)), axis)[0] for f in model.rules[name].frequencies
-                                 if len(f.members) == 1 and f.lo >= 1 and not f.relative]
+                                 if len(f.members) == 1 and f.lo >= 1 and not f.relative
+                                 and not (relax_doors and door[next(iter(f.members))])]
                     lo[key] = max(_path(automata[name], cost, max), *mandatory, 0.0)
                     hi[key] = math.inf
         return lo[key], hi[key]

@@ -45,7 +45,8 @@ class Compiled:
         self.doorless: dict[str, bool] = {}
         for name in model.symbols:
             self._doorless(name)
-        self.min_extent, self.max_extent = extent_bounds(model, self.automata)
+        self.bounds = {relax: extent_bounds(model, self.automata, self.door, relax) for relax in (False, True)}
+        self.min_extent, self.max_extent = self.bounds[False]
         self.patterns: list[PatternRef] = []
         for k, al in enumerate(model.alignments):
             self.patterns += [PatternRef("align", k, 0, al.a), PatternRef("align", k, 1, al.b)]

@@ -166,7 +166,8 @@ class _Builder:
             total = sum(s for _, s in children)
             along = extent[0] if axis == "x" else extent[1]
             if abs(total - along) > 1e-6 * max(1.0, along):
-                raise ParseError(f"children of {name} sum to {total:g}, its {axis}-size is {along:g}", where=where)
+                raise ParseError(f"children of {name} sum to {total:g}, its {axis}-size is {along:g}",
+                                 where=self.lines[name])
             self.symbols[name] = Symbol(name, extent, split=axis, children=tuple(c for c, _ in children))
             for child, size in children:
                 self._author(child, (size, extent[1]) if axis == "x" else (extent[0], size), self.lines[name], axis)

@@ -202,7 +202,8 @@ class Search:
         """A reason when the target is outside the root's static extent bounds (see ``bounds``)."""
         root = self.model.root
         for axis, size in (("x", self.width), ("y", self.height)):
-            lo, hi = self.compiled.min_extent[(root, axis)], self.compiled.max_extent[(root, axis)]
+            mins, maxs = self.compiled.bounds[self.doors == 0]
+            lo, hi = mins[(root, axis)], maxs[(root, axis)]
             if size < lo - 1e-9 or size > hi + 1e-9:
                 word = "width" if axis == "x" else "height"
                 return (f"no {self.model.name} layout of {self.width:g} x {self.height:g}: the model's {word} must lie "
