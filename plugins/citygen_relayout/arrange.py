@@ -126,8 +126,9 @@ class _Layout:
                 continue
             rnxt = None
             if self.symmetric and sym != END:
-                rnxt = self.rauto.step(rstate, ctx.model.mirrored(sym))
+                rnxt = self.rauto.step(rstate, ctx.model.mirrored(sym))  # the mirrored right end, read backwards
                 if rnxt is None:
+                    ctx.blame(f"sequences at the right end of symmetric {self.node.symbol}")
                     continue
             if sym == END:
                 if not self._can_end():

@@ -34,7 +34,7 @@ class Compiled:
     def __init__(self, model: Model) -> None:
         self.model = model
         self.automata = {name: CoverAutomaton(rules.sequences) for name, rules in model.rules.items()}
-        self.reverse_automata = {name: a.reversed(dict(model.mirror)) for name, a in self.automata.items()
+        self.reverse_automata = {name: a.reversed() for name, a in self.automata.items()
                                  if model.rules[name].symmetric}
         self.door: dict[str, bool] = {}
         self.bound: dict[tuple[str, str], bool] = {}

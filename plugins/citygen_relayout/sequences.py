@@ -27,10 +27,10 @@ class CoverAutomaton:
         self.start: State = (frozenset((k, 1, True) for k, s in enumerate(self.sequences)
                                        if len(s) > 1 and BEGIN in s[0]), False)
 
-    def reversed(self, mirror: dict[str, str]) -> CoverAutomaton:
-        """The automaton reading arrangements right to left (⊢ and ⊣ swapped, symbols mirrored)."""
+    def reversed(self) -> CoverAutomaton:
+        """The automaton reading arrangements right to left (sequences reversed, ⊢ and ⊣ swapped)."""
         swap = {BEGIN: END, END: BEGIN}
-        return CoverAutomaton(tuple(frozenset(swap.get(x, mirror.get(x, x)) for x in item) for item in reversed(s))
+        return CoverAutomaton(tuple(frozenset(swap.get(x, x) for x in item) for item in reversed(s))
                               for s in self.sequences)
 
     def _starting(self, symbol: str) -> tuple[int, ...]:
