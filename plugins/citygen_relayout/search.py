@@ -85,8 +85,8 @@ class Constraints:
 
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
-                 constraints: Constraints | None = None, budget_s: float = 2.0, max_backtracks: int = 1000,
-                 max_restarts: int = 50) -> None:
+                 constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
+                 max_restarts: int = 12) -> None:
         self.model, self.compiled = model, compile_model(model)
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
@@ -180,9 +180,10 @@ class Search:
                     return RelayoutResult(True, self._build(), "solved", "ok", restarts, self.total_backtracks,
                                           self.qp_calls, seconds=time.perf_counter() - t0)
                 status = "infeasible-root"
-                root_failures += 1
-                if root_failures >= 3:  # the root's own arrangements were exhausted: retrying will not help
-                    break
+                if not self.frames[0].yielded:  # the root itself has no arrangement: retrying will not help
+                    root_failures += 1
+                    if root_failures >= 2:
+                        break
             except _Restart:
                 status = "restart-limit"
             except _OutOfTime:

@@ -17,7 +17,7 @@ SIZES = {"townhouse": (st.floats(4, 30), st.floats(5.7, 25)),
 
 
 def check(model, width, height, seed):
-    result = relayout(model, width, height, seed=seed, budget_s=3.0)
+    result = relayout(model, width, height, seed=seed, budget_s=10.0)
     assert result.success, result.message
     layout = result.layout
     assert (layout.width, layout.height) == (width, height)
@@ -84,8 +84,8 @@ align A.min = C.min
 """
     model = parse_model(text, "clash.relayout")
     t = time.perf_counter()
-    result = relayout(model, 6.0, 6.0, budget_s=1.0)
-    assert time.perf_counter() - t < 1.5
+    result = relayout(model, 6.0, 6.0, max_restarts=3)
+    assert time.perf_counter() - t < 3.0
     assert not result.success
     assert "align A.min = C.min (line 12)" in result.message
     assert result.blockers
