@@ -189,7 +189,7 @@ class _Layout:
         weights = []
         for (sym, _, _), _, _ in cands:
             if sym == END:
-                weights.append(8.0 if stretch and filled > 0.6 else 0.05)
+                weights.append(8.0 if stretch and filled > 0.9 else 0.4 if stretch else 0.05)
             else:
                 mean = self.ctx.compiled.size(sym, self.axis).mean * self._mult()
                 weights.append(1.0 if filled + mean / max(self.total, 1e-9) <= 1.05 else 0.05)
