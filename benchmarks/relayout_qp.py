@@ -48,7 +48,6 @@ def solve_quadprog(xbar, lo, hi, eq, rhs):
 
 def solve_daqp(xbar, lo, hi, eq, rhs):
     import daqp
-    from ctypes import c_double, c_int  # noqa: F401  (daqp's Python API takes numpy arrays)
     n = xbar.size
     A = np.ascontiguousarray(eq)
     bupper = np.concatenate([hi, rhs])
@@ -83,15 +82,7 @@ def solve_osqp(xbar, lo, hi, eq, rhs):
     return res.x if res.info.status == "solved" else None
 
 
-def solve_proxsuite(xbar, lo, hi, eq, rhs):
-    import proxsuite
-    n = xbar.size
-    x = proxsuite.proxqp.dense.solve(np.eye(n), -xbar, eq, rhs, np.vstack([np.eye(n)]), lo, hi, eps_abs=1e-9)
-    return x.x
-
-
-SOLVERS = {"quadprog": solve_quadprog, "daqp": solve_daqp, "clarabel": solve_clarabel, "osqp": solve_osqp,
-           "proxsuite": solve_proxsuite}
+SOLVERS = {"quadprog": solve_quadprog, "daqp": solve_daqp, "clarabel": solve_clarabel, "osqp": solve_osqp}
 
 
 def main() -> None:

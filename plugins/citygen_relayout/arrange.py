@@ -208,11 +208,23 @@ class _Layout:
                 continue
             nrows, nsame, x_saved = len(st.rows), len(st.same_occ), st.x
             self._push(sym, inst, door)
-            if self._solve(new_from=nrows):
+            if self._solve(new_from=nrows) and self._accept():
                 yield from self._extend(nxt, rnxt)
             self._pop(nrows, nsame)
             st.x = x_saved
         ctx.backtrack()
+
+    def _accept(self) -> bool:
+        """Randomly reject an append whose QP strained the sizes (§7.3): p = exp(-error / temperature)."""
+        temp = self.ctx.accept_temperature
+        if temp <= 0:
+            return True
+        xbar = np.asarray(self.st.xbar)
+        err = float(np.sum((self.st.x - xbar) ** 2) / max(float(np.sum(xbar ** 2)), 1e-12))
+        if err == 0.0 or self.ctx.rng.random() < np.exp(-err / temp):
+            return True
+        self.ctx.blame(f"QP error of {self.node.symbol} (random rejection)")
+        return False
 
     # ---------------------------------------------------------------- elements and rows
     def _push(self, sym: str, inst: int, door: int) -> None:
@@ -268,8 +280,9 @@ class _Layout:
         size = float(x[v]) if v < x.size else self.st.xbar[v]
         return start, size
 
-    def _align_row(self, ref: PatternRef, v: int, interval: tuple[float, float] | None = None) -> bool:
-        """Align element ``v`` with the overlapping placed region of the other side; False if none overlaps."""
+    def _align_row(self, ref: PatternRef, v: int, interval: tuple[float, float] | None = None) -> bool | None:
+        """Align element ``v`` with the overlapping placed region of the other side; False if none overlaps,
+        None if the row exists already but the solution still violates it."""
         al = self.ctx.model.alignments[ref.index]
         lam = al.a_anchor if ref.side == 0 else al.b_anchor
         start, size = interval or self._position(v)
@@ -280,9 +293,9 @@ class _Layout:
             return False
         target = targets[0]
         key = ("align", ref.index, ref.side, v, target[:2])
-        if any(r.key == key for r in self.st.rows):
+        if any(r.key == key for r in self.st.rows):  # already required, yet still not aligned: unfixable
             self.ctx.blame(f"{al.text} (line {al.line})", frozenset({target[3]}))
-            return False
+            return None
         coefs = self._start_coefs(v)
         coefs[v] = coefs.get(v, 0.0) + lam
         self.st.rows.append(Row(coefs, target[2] - self.off, True, f"{al.text} (line {al.line})",
@@ -474,8 +487,8 @@ class _Layout:
                 if start < 0 or any(toks[start + j] not in items[j] for j in range(len(items))):
                     continue
                 v = start + len(ref.pattern.before) - 1
-                if 0 <= v < len(st.elems):
-                    self._align_row(ref, v, interval=(pos[v], st.x[v]))
+                if 0 <= v < len(st.elems) and self._align_row(ref, v, interval=(pos[v], st.x[v])) is None:
+                    return None
         for v, (sym, _) in enumerate(st.elems):
             if ctx.compiled.bound[(sym, self.axis)] and not ctx.inside(self.axis, pos[v], pos[v + 1]):
                 if any(r.key and r.key[0] in ("floor", "corner") and r.key[1] == v for r in st.rows):

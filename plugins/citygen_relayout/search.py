@@ -86,13 +86,14 @@ class Constraints:
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
                  constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
-                 max_restarts: int = 12) -> None:
+                 max_restarts: int = 12, accept_temperature: float = 0.0) -> None:
         self.model, self.compiled = model, compile_model(model)
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
         self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
         self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
         self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
+        self.accept_temperature = accept_temperature
         self.blockers: Counter[str] = Counter()
         self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
         self.dead_causes: Counter[str] = Counter()
@@ -180,7 +181,8 @@ class Search:
                     return RelayoutResult(True, self._build(), "solved", "ok", restarts, self.total_backtracks,
                                           self.qp_calls, seconds=time.perf_counter() - t0)
                 status = "infeasible-root"
-                if not self.frames[0].yielded:  # the root itself has no arrangement: retrying will not help
+                if not self.frames[0].yielded and not self.accept_temperature:
+                    # the root itself has no arrangement: retrying will not help
                     root_failures += 1
                     if root_failures >= 2:
                         break
