@@ -44,23 +44,25 @@ def test_backjump_keeps_the_replica_source_of_the_retried_frame():
         assert result.success and validate(result.layout, model) == []
 
 
-def test_popped_element_does_not_leave_a_stale_solution():
-    # after backtracking an element, the previous QP solution (one entry longer) was used for provisional
-    # positions of the next candidate; alignment then picked targets from a wrong position
+def test_alignment_between_rows_with_independent_gaps():
+    # windows of two rows with different counts: every overlapping pair is centred (exercises backtracking
+    # over elements whose provisional positions come from the previous QP solution)
     text = """model stale
 root F 6 4
 split F y A:2 B:2
-split A x W:1 X:1 W:2 X:1 W:1
+split A x W:1 X:1 W:1 X:1 W:1 X:1
 split B x V:2 Y:2 V:2
 terminal W wall
 terminal V wall
 terminal X window
 terminal Y window
-repeat A : W (X W)+
+repeat A : W (X W)* X
 repeat B : V (Y V)*
 size W 0.3..3
 size V 0.3..4
 align X.center = Y.center
+instances A W 1..6
+instances B V 1..6
 """
     model = parse_model(text, "stale.relayout")
     for seed in range(40):
