@@ -1,0 +1,28 @@
+"""Public entry points: one relayout, or several variations of one size."""
+from __future__ import annotations
+
+import numpy as np
+
+from citygen.rng import derive_rng
+from citygen_relayout.model import Model
+from citygen_relayout.search import Constraints, RelayoutResult, Search
+
+
+def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: np.random.Generator | None = None,
+             constraints: Constraints | None = None, budget_s: float = 10.0, max_restarts: int = 12) -> RelayoutResult:
+    """One variation of ``model`` for a ``width x height`` target (bao2013 §7); never raises on infeasibility.
+
+    The search budget is counted in work (``max_restarts`` restarts of 1000 backtracks each), so results do not
+    depend on machine speed; ``budget_s`` is a wall-clock safety net on top.
+    """
+    if width <= 0 or height <= 0:
+        return RelayoutResult(False, None, "invalid-size", f"target size {width:g} x {height:g} must be positive")
+    rng = rng if rng is not None else derive_rng("relayout", model.name, seed)
+    return Search(model, width, height, rng, constraints, budget_s=budget_s, max_restarts=max_restarts).run()
+
+
+def variations(model: Model, width: float, height: float, count: int, *, seed: int = 0,
+               budget_s: float = 10.0) -> list[RelayoutResult]:
+    """``count`` variations for one size, each from its own derived random stream."""
+    return [relayout(model, width, height, rng=derive_rng("relayout", model.name, seed, k), budget_s=budget_s)
+            for k in range(count)]

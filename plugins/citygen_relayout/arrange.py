@@ -1,0 +1,512 @@
+"""The ``layout`` function of bao2013 §7.2-§7.3 for one composite region.
+
+It builds the arrangement ``⊢ A1 .. An ⊣`` element by element: the successor set S comes from the sequences
+whose prefix overlaps a postfix of the arrangement (the cover automaton), pruned by frequency, instance, door
+budget and minimum-size checks; an element of S is chosen stochastically, its initial size sampled from its
+truncated Gaussian, and a QP re-sizes all elements under the newly active constraints (region size, instance
+replicas, alignment, same-size, floor lines / corner strips of the request, total size). A failed QP or an
+exhausted successor set backtracks. Symmetric regions are built from both ends at once (§7.3). Every complete
+arrangement is verified (alignment overlaps, floors, contexts ending at ⊣) and re-solved with the constraints that
+became active, then yielded; asking for the next solution resumes the search (chronological backtracking).
+"""
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from citygen_relayout.compiled import PatternRef, scaled_bounds
+from citygen_relayout.model import BEGIN, END
+from citygen_relayout.sizing import solve_sizes
+
+
+@dataclass
+class Row:
+    """A linear constraint ``sum coefs[i] * x_i (= or <=) rhs`` with its provenance for blame and backjumping."""
+
+    coefs: dict[int, float]
+    rhs: float
+    eq: bool
+    tag: str
+    frames: frozenset[int] = frozenset()
+    key: tuple = ()
+
+
+@dataclass
+class Solution:
+    elements: list[tuple[str, int]]
+    sizes: np.ndarray
+    align_occ: list[tuple[int, int, int]]  # (alignment index, side, element index)
+    same_occ: list[tuple[int, tuple, int, int]]  # (samesize index, scope, first element, length)
+    doors: list[int]  # door budget handed to each element (1 = this element holds the face's door)
+
+
+@dataclass
+class _State:
+    elems: list[tuple[str, int]] = field(default_factory=list)
+    doors: list[int] = field(default_factory=list)
+    xbar: list[float] = field(default_factory=list)
+    lo: list[float] = field(default_factory=list)
+    hi: list[float] = field(default_factory=list)
+    rows: list[Row] = field(default_factory=list)
+    x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    same_occ: list[tuple[int, tuple, int, int]] = field(default_factory=list)
+
+
+def _find(parent: list[int], i: int) -> int:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+def layout(ctx, node) -> Iterator[Solution]:
+    """Yield valid arrangements of composite ``node`` (a ``search.Node``) one after another."""
+    return _Layout(ctx, node).run()
+
+
+class _Layout:
+    def __init__(self, ctx, node) -> None:
+        self.ctx, self.node = ctx, node
+        model = ctx.model
+        self.sym = model.symbols[node.symbol]
+        self.rules = model.rules[node.symbol]
+        self.axis = self.sym.split
+        self.off, self.total = (node.x, node.w) if self.axis == "x" else (node.y, node.h)
+        self.input_size = self.sym.extent[0 if self.axis == "x" else 1]
+        self.auto = ctx.compiled.automata[node.symbol]
+        self.rauto = ctx.compiled.reverse_automata.get(node.symbol)
+        self.symmetric = self.rules.symmetric
+        self.alphabet = frozenset(self.sym.children)
+        self.freq = [(f, *self._freq_bounds(f)) for f in self.rules.frequencies]
+        self.inst = {s: scaled_bounds(p.lo, p.hi, p.relative, self.total, self.input_size)
+                     for s, p in self.rules.instances.items()}
+        self.st = _State()
+        self.ortho = "y" if self.axis == "x" else "x"
+        self.across = node.h if self.axis == "x" else node.w
+        comp = ctx.compiled
+        self.min_extent, self.max_extent = comp.bounds[node.door == 0]
+        self.min_size = {c: max(comp.size(c, self.axis).lo, self.min_extent[(c, self.axis)]) for c in self.alphabet}
+
+    def _freq_bounds(self, f) -> tuple[int, int]:
+        lo, hi = scaled_bounds(f.lo, f.hi, f.relative, self.total, self.input_size)
+        if self.node.door == 0 and all(self.ctx.compiled.door[m] for m in f.members):
+            lo = 0  # a face without entrance drops door-bearing regions (request, §9.1)
+        return lo, hi
+
+    # ---------------------------------------------------------------- search
+    def run(self) -> Iterator[Solution]:
+        st0 = self.auto.start
+        rst0 = self.rauto.start if self.rauto else None
+        yield from self._extend(st0, rst0)
+
+    def _mult(self) -> int:
+        return 2 if self.symmetric else 1
+
+    def _count(self, members) -> int:
+        return sum(1 for s, _ in self.st.elems if s in members)
+
+    def _doors(self) -> int:
+        return sum(self.st.doors)
+
+    def _successors(self, state, rstate) -> list[tuple[str, int, object, object]]:
+        ctx, st, comp = self.ctx, self.st, self.ctx.compiled
+        mult = self._mult()
+        used_lo = sum(st.lo) * mult
+        out = []
+        cands = self.auto.candidates(state)
+        if self.symmetric:  # the left half is followed by its mirror image, not by ⊣ (§7.3)
+            cands = (cands - {END}) | {END}
+        for sym in sorted(cands):
+            if sym != END and sym not in self.alphabet:
+                continue
+            nxt = state if (self.symmetric and sym == END) else self.auto.step(state, sym)
+            if nxt is None:
+                continue
+            rnxt = None
+            if self.symmetric and sym != END:
+                rnxt = self.rauto.step(rstate, ctx.model.mirrored(sym))  # the mirrored right end, read backwards
+                if rnxt is None:
+                    ctx.blame(f"sequences at the right end of symmetric {self.node.symbol}")
+                    continue
+            if sym == END:
+                if not self._can_end():
+                    continue
+                out.append(((END, 0, 0), nxt, rnxt))
+                continue
+            doors = [0]
+            if self.node.door is not None and comp.door[sym]:
+                doors = [d for d in (1, 0) if (d == 1 and self._doors() * mult + mult <= self.node.door)
+                         or (d == 0 and comp.doorless[sym])]
+                if not doors:
+                    ctx.blame("entrance door budget of the face")
+                    continue
+            if any(sym in f.members and self._count(f.members) * mult + mult > hi for f, _, hi in self.freq):
+                ctx.blame(next(f"{f.text} (line {f.line})" for f, _, hi in self.freq if sym in f.members
+                               and self._count(f.members) * mult + mult > hi))
+                continue
+            if used_lo + self.min_size[sym] * mult > self.total + 1e-9:
+                ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
+                continue
+            if self.min_extent[(sym, self.ortho)] > self.across + 1e-9:
+                ctx.blame(f"minimum {self.ortho}-extent {self.min_extent[(sym, self.ortho)]:.2f} of {sym} "
+                          f"in {self.node.symbol}")
+                continue
+            for inst in self._instances(sym):
+                out.extend(((sym, inst, d), nxt, rnxt) for d in doors)
+        return out
+
+    def _instances(self, sym: str) -> list[int]:
+        if sym not in self.inst:
+            return [0]
+        used = {i for s, i in self.st.elems if s == sym}
+        choices = sorted(used)
+        if len(used) < self.inst[sym][1]:
+            choices.append(len(used))
+        return choices
+
+    def _can_end(self) -> bool:
+        mult = self._mult()
+        for f, lo, _ in self.freq:
+            if self._count(f.members) * mult < lo:
+                self.ctx.blame(f"{f.text} (line {f.line})")
+                return False
+        for sym, (lo, _) in self.inst.items():
+            if any(s == sym for s, _ in self.st.elems) and len({i for s, i in self.st.elems if s == sym}) < lo:
+                self.ctx.blame(f"instances of {sym} in {self.node.symbol}")
+                return False
+        if self.node.door is not None and self._doors() * mult != self.node.door:
+            self.ctx.blame("entrance door budget of the face")
+            return False
+        return bool(self.st.elems)
+
+    def _order(self, cands: list) -> list:
+        """Stochastic order of the successor set: ⊣ is favoured once the sampled sizes fill the region."""
+        st = self.st
+        filled = (sum(st.xbar) * self._mult()) / self.total if self.total > 0 else 1.0
+        stretch = sum(st.hi) * self._mult() >= self.total
+        weights = []
+        for (sym, _, _), _, _ in cands:
+            if sym == END:
+                weights.append(8.0 if stretch and filled > 0.9 else 0.4 if stretch else 0.05)
+            else:
+                mean = self.ctx.compiled.size(sym, self.axis).mean * self._mult()
+                weights.append(1.0 if filled + mean / max(self.total, 1e-9) <= 1.05 else 0.05)
+        w = np.asarray(weights)
+        keys = self.ctx.rng.random(len(cands)) ** (1.0 / w)  # weighted random permutation
+        return [cands[i] for i in np.argsort(-keys)]
+
+    def _extend(self, state, rstate) -> Iterator[Solution]:
+        ctx, st = self.ctx, self.st
+        for (sym, inst, door), nxt, rnxt in self._order(self._successors(state, rstate)):
+            ctx.tick()
+            if sym == END:
+                sol = self._complete()
+                if sol is not None:
+                    yield sol
+                continue
+            nrows, nsame, x_saved = len(st.rows), len(st.same_occ), st.x
+            self._push(sym, inst, door)
+            if self._solve(new_from=nrows) and self._accept():
+                yield from self._extend(nxt, rnxt)
+            self._pop(nrows, nsame)
+            st.x = x_saved
+        ctx.backtrack()
+
+    def _accept(self) -> bool:
+        """Randomly reject an append whose QP strained the sizes (§7.3): p = exp(-error / temperature)."""
+        temp = self.ctx.accept_temperature
+        if temp <= 0:
+            return True
+        xbar = np.asarray(self.st.xbar)
+        err = float(np.sum((self.st.x - xbar) ** 2) / max(float(np.sum(xbar ** 2)), 1e-12))
+        if err == 0.0 or self.ctx.rng.random() < np.exp(-err / temp):
+            return True
+        self.ctx.blame(f"QP error of {self.node.symbol} (random rejection)")
+        return False
+
+    # ---------------------------------------------------------------- elements and rows
+    def _push(self, sym: str, inst: int, door: int) -> None:
+        st, rng = self.st, self.ctx.compiled.size(sym, self.axis)
+        st.elems.append((sym, inst))
+        st.doors.append(door)
+        st.lo.append(self.min_size[sym])
+        st.hi.append(min(rng.hi, self.max_extent[(sym, self.axis)]))
+        st.xbar.append(self.ctx.sample_size(rng))
+        v = len(st.elems) - 1
+        for u, e in enumerate(st.elems[:-1]):
+            if e == (sym, inst) and st.doors[u] == door:
+                st.rows.append(Row({v: 1.0, u: -1.0}, 0.0, True, f"instance replicas of {sym}"))
+                break
+        if not self.symmetric:
+            self._activate(len(st.elems))
+            self._request_rows(v, sym)
+
+    def _pop(self, nrows: int, nsame: int) -> None:
+        st = self.st
+        for lst in (st.elems, st.doors, st.lo, st.hi, st.xbar):
+            lst.pop()
+        del st.rows[nrows:]
+        del st.same_occ[nsame:]
+
+    def _tokens(self, complete: bool) -> list[str]:
+        return [BEGIN, *(s for s, _ in self.st.elems), *([END] if complete else [])]
+
+    def _activate(self, end: int, complete: bool = False) -> None:
+        """Rows of alignment / same-size occurrences whose pattern ends at arrangement position ``end``."""
+        toks = self._tokens(complete)
+        for ref in self.ctx.compiled.by_last.get(toks[end], ()):
+            items = ref.pattern.items
+            start = end - len(items) + 1
+            if start < 0 or any(toks[start + j] not in items[j] for j in range(len(items))):
+                continue
+            first = start + len(ref.pattern.before) - 1  # element index (position 1 is element 0)
+            if first < 0 or first + len(ref.pattern.body) > len(self.st.elems):
+                continue
+            if ref.kind == "align":
+                self._align_row(ref, first)
+            else:
+                self._same_row(ref, first, len(ref.pattern.body))
+
+    def _start_coefs(self, v: int) -> dict[int, float]:
+        return {i: 1.0 for i in range(v)}
+
+    def _position(self, v: int) -> tuple[float, float]:
+        """Provisional start and size of element ``v`` (current solution before it, sampled size for it)."""
+        x = self.st.x
+        start = self.off + float(np.sum(x[:v])) if v <= x.size else self.off + float(np.sum(x)) + \
+            float(np.sum(self.st.xbar[x.size:v]))
+        size = float(x[v]) if v < x.size else self.st.xbar[v]
+        return start, size
+
+    def _align_row(self, ref: PatternRef, v: int, interval: tuple[float, float] | None = None) -> bool | None:
+        """Align element ``v`` with the overlapping placed region of the other side; False if none overlaps,
+        None if the row exists already but the solution still violates it."""
+        al = self.ctx.model.alignments[ref.index]
+        lam = al.a_anchor if ref.side == 0 else al.b_anchor
+        start, size = interval or self._position(v)
+        targets = self.ctx.align_targets(ref, self.axis, start, start + size, self.node)
+        if interval is not None:  # verification: the first overlapping target it is not aligned with
+            targets = [t for t in targets if abs(start + lam * size - t[2]) > 1e-6 * max(1.0, self.total)]
+        if not targets:
+            return False
+        target = targets[0]
+        key = ("align", ref.index, ref.side, v, target[:2])
+        if any(r.key == key for r in self.st.rows):  # already required, yet still not aligned: unfixable
+            self.ctx.blame(f"{al.text} (line {al.line})", frozenset({target[3]}))
+            return None
+        coefs = self._start_coefs(v)
+        coefs[v] = coefs.get(v, 0.0) + lam
+        self.st.rows.append(Row(coefs, target[2] - self.off, True, f"{al.text} (line {al.line})",
+                                frozenset({target[3]}), key))
+        return True
+
+    def _same_row(self, ref: PatternRef, v: int, length: int) -> None:
+        ss = self.ctx.model.samesizes[ref.index]
+        scope = self.ctx.same_scope(ss, self.node)
+        if scope is None:
+            return
+        body = {i: 1.0 for i in range(v, v + length)}
+        tag = f"{ss.text} (line {ss.line})"
+        known = self.ctx.same_ref(ref.index, scope)
+        if known is not None:
+            self.st.rows.append(Row(body, known[0], True, tag, frozenset({known[1]})))
+        else:
+            first = next(((f, n) for k, sc, f, n in self.st.same_occ if k == ref.index and sc == scope), None)
+            if first is not None and first[0] != v:
+                coefs = dict(body)
+                for i in range(first[0], first[0] + first[1]):
+                    coefs[i] = coefs.get(i, 0.0) - 1.0
+                self.st.rows.append(Row(coefs, 0.0, True, tag))
+        if all(o[2] != v or o[0] != ref.index for o in self.st.same_occ):
+            self.st.same_occ.append((ref.index, scope, v, length))
+
+    def _request_rows(self, v: int, sym: str, interval: tuple[float, float] | None = None) -> None:
+        """Floor-line (y) and corner-strip (x) rows of a region holding a full-extent opening (request, §9.1)."""
+        ctx = self.ctx
+        if not ctx.compiled.bound[(sym, self.axis)]:
+            return
+        start, size = interval or self._position(v)
+        coefs = self._start_coefs(v)
+        end_coefs = {**coefs, v: 1.0}
+        if self.axis == "y" and ctx.floor_lines is not None:
+            lines = ctx.floor_lines
+            j = 0 if self.st.doors[v] else \
+                int(np.clip(np.searchsorted(lines, start + 0.5 * size) - 1, 0, len(lines) - 2))
+            neg = {i: -c for i, c in coefs.items()}
+            self.st.rows.append(Row(neg, self.off - lines[j], False, "floor lines of the building", key=("floor", v)))
+            self.st.rows.append(Row(end_coefs, lines[j + 1] - self.off, False, "floor lines of the building",
+                                    key=("floor", v)))
+        elif self.axis == "x" and ctx.corners is not None and any(ctx.corners):
+            left, right = ctx.corners
+            neg = {i: -c for i, c in coefs.items()}
+            self.st.rows.append(Row(neg, self.off - left, False, "corner strips of the face", key=("corner", v)))
+            self.st.rows.append(Row(end_coefs, ctx.width - right - self.off, False, "corner strips of the face",
+                                    key=("corner", v)))
+
+    # ---------------------------------------------------------------- QP
+    def _solve(self, new_from: int, total_eq: bool = False, mirror: bool = False) -> bool:
+        """QP over the current arrangement; replica/symmetry equalities merge variables (exact reduction)."""
+        st = self.st
+        n = len(st.elems)
+        xbar, lo, hi = np.asarray(st.xbar), np.asarray(st.lo), np.asarray(st.hi)
+        rows = st.rows
+        mult = 2.0 if self.symmetric and not mirror else 1.0
+        if (not total_eq and len(rows) == new_from and st.x.size == n - 1
+                and mult * (float(np.sum(st.x)) + min(max(xbar[-1], lo[-1]), hi[-1])) <= self.total + 1e-9):
+            st.x = np.append(st.x, min(max(xbar[-1], lo[-1]), hi[-1]))  # no newly active row: still optimal
+            return True
+        group = list(range(n))
+        general = []
+        for r in rows:
+            if r.eq and r.rhs == 0.0 and len(r.coefs) == 2 and sorted(r.coefs.values()) == [-1.0, 1.0]:
+                u, v = (_find(group, i) for i in r.coefs)
+                group[max(u, v)] = min(u, v)
+            else:
+                general.append(r)
+        gid = [_find(group, i) for i in range(n)]
+        uniq = sorted(set(gid))
+        col = {g: k for k, g in enumerate(uniq)}
+        m = len(uniq)
+        member = np.array([col[g] for g in gid])
+        w = np.bincount(member, minlength=m).astype(float)
+        gx = np.bincount(member, weights=xbar, minlength=m) / w
+        glo = np.full(m, -np.inf)
+        ghi = np.full(m, np.inf)
+        np.maximum.at(glo, member, lo)
+        np.minimum.at(ghi, member, hi)
+        seen: dict[tuple, None] = {}
+        eq_rows, le_rows = [], []
+        for r in general:
+            vec = np.zeros(m)
+            for i, c in r.coefs.items():
+                vec[member[i]] += c
+            key = (r.eq, r.rhs, vec.tobytes())
+            if key not in seen:
+                seen[key] = None
+                (eq_rows if r.eq else le_rows).append((vec, r.rhs))
+        total = (np.bincount(member, minlength=m) * mult, self.total)
+        (eq_rows if total_eq else le_rows).append(total)
+        E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
+        L = np.array([v for v, _ in le_rows]).reshape(-1, m)
+        x = solve_sizes(gx, glo, ghi, E, np.array([b for _, b in eq_rows]), L, np.array([b for _, b in le_rows]), w)
+        self.ctx.qp_calls += 1
+        if x is None:
+            blamed = rows[new_from:] or rows
+            for r in blamed:
+                self.ctx.blame(r.tag, r.frames)
+            self.ctx.blame(f"total size of {self.node.symbol}" if total_eq or not blamed
+                           else f"size ranges in {self.node.symbol}")
+            return False
+        st.x = x[member]
+        return True
+
+    # ---------------------------------------------------------------- completion
+    def _complete(self) -> Solution | None:
+        st = self.st
+        saved_rows, saved_same, saved_x = list(st.rows), list(st.same_occ), st.x
+        try:
+            if self.symmetric:
+                return self._complete_symmetric()
+            self._activate(len(st.elems) + 1, complete=True)
+            return self._finish(new_from=len(saved_rows))
+        finally:
+            st.rows, st.same_occ, st.x = saved_rows, saved_same, saved_x
+
+    def _complete_symmetric(self) -> Solution | None:
+        """Finish a symmetric arrangement: the last element ends at the midpoint or is centred on it (§7.3)."""
+        st, mirror = self.st, self.ctx.model.mirrored
+        left = list(st.elems)
+        options = []
+        if left and mirror(left[-1][0]) == left[-1][0]:
+            options.append(left[:-1])  # odd: the last element is the centre
+        options.append(left)
+        for base in self.ctx.rng.permutation(len(options)):
+            half = options[base]
+            centre = left[len(half):]
+            full = [*half, *centre, *[(mirror(s), i) for s, i in reversed(half)]]
+            if not self.auto.accepts([s for s, _ in full]):
+                self.ctx.blame(f"sequences of symmetric {self.node.symbol}")
+                continue
+            sol = self._finish_full(full, len(half))
+            if sol is not None:
+                return sol
+        return None
+
+    def _finish_full(self, full: list[tuple[str, int]], half: int) -> Solution | None:
+        st = self.st
+        saved = (list(st.elems), list(st.xbar), list(st.lo), list(st.hi), list(st.doors))
+        n = len(full)
+        idx = [i if i < n - half else n - 1 - i for i in range(n)]
+        st.elems = full
+        st.xbar, st.lo, st.hi = [saved[1][k] for k in idx], [saved[2][k] for k in idx], [saved[3][k] for k in idx]
+        st.doors = [saved[4][k] if i == k else 0 for i, k in enumerate(idx)]
+        st.rows = [Row({i: 1.0, n - 1 - i: -1.0}, 0.0, True, f"symmetry of {self.node.symbol}")
+                   for i in range(half)]
+        for u in range(n):
+            for w in range(u):
+                if full[w] == full[u] and st.doors[w] == st.doors[u]:
+                    st.rows.append(Row({u: 1.0, w: -1.0}, 0.0, True, f"instance replicas of {full[u][0]}"))
+                    break
+            self._request_rows(u, full[u][0])
+        st.same_occ = []
+        st.x = np.zeros(0)
+        for end in range(1, n + 2):
+            self._activate(end, complete=end == n + 1)
+        try:
+            return self._finish(new_from=0, mirror=True)
+        finally:
+            st.elems, st.xbar, st.lo, st.hi, st.doors = (list(a) for a in saved)
+
+    def _finish(self, new_from: int, mirror: bool = False) -> Solution | None:
+        for _ in range(6):
+            if not self._solve(new_from, total_eq=True, mirror=mirror):
+                return None
+            extra = self._violations()
+            if extra is None:
+                return None
+            if not extra:
+                return self._solution()
+            new_from = len(self.st.rows) - extra
+        self.ctx.blame(f"alignment of {self.node.symbol} (no fixpoint)")
+        return None
+
+    def _violations(self) -> int | None:
+        """Add rows for constraints the solved arrangement violates; their number, or None if unfixable."""
+        st, ctx = self.st, self.ctx
+        before = len(st.rows)
+        pos = self.off + np.concatenate([[0.0], np.cumsum(st.x)])
+        toks = self._tokens(True)
+        for end in range(1, len(toks)):
+            for ref in ctx.compiled.by_last.get(toks[end], ()):
+                if ref.kind != "align":
+                    continue
+                items = ref.pattern.items
+                start = end - len(items) + 1
+                if start < 0 or any(toks[start + j] not in items[j] for j in range(len(items))):
+                    continue
+                v = start + len(ref.pattern.before) - 1
+                if 0 <= v < len(st.elems) and self._align_row(ref, v, interval=(pos[v], st.x[v])) is None:
+                    return None
+        for v, (sym, _) in enumerate(st.elems):
+            if ctx.compiled.bound[(sym, self.axis)] and not ctx.inside(self.axis, pos[v], pos[v + 1]):
+                if any(r.key and r.key[0] in ("floor", "corner") and r.key[1] == v for r in st.rows):
+                    ctx.blame("floor lines of the building" if self.axis == "y" else "corner strips of the face")
+                    return None
+                self._request_rows(v, sym, interval=(pos[v], st.x[v]))
+        return len(st.rows) - before
+
+    def _solution(self) -> Solution:
+        st = self.st
+        align_occ = []
+        toks = self._tokens(True)
+        for end in range(1, len(toks)):
+            for ref in self.ctx.compiled.by_last.get(toks[end], ()):
+                items = ref.pattern.items
+                start = end - len(items) + 1
+                if ref.kind == "align" and start >= 0 and all(toks[start + j] in items[j] for j in range(len(items))):
+                    v = start + len(ref.pattern.before) - 1
+                    if 0 <= v < len(st.elems):
+                        align_occ.append((ref.index, ref.side, v))
+        return Solution(list(st.elems), st.x.copy(), align_occ, list(st.same_occ), list(st.doors))

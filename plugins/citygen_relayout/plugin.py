@@ -1,0 +1,96 @@
+"""citygen plugin: the ``relayout`` ruleset kind and the ``citygen relayout`` command."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from citygen.errors import CitygenError
+from citygen.hookspecs import hookimpl
+from citygen.layout import FacadeLayout
+from citygen.registry import Command, Registry, RulesetKind
+from citygen.request import FacadeRequest
+from citygen_relayout import building
+from citygen_relayout.api import variations
+from citygen_relayout.model import Model
+from citygen_relayout.parser import load_model
+
+
+class RelayoutKind(RulesetKind):
+    id = "relayout"
+    suffixes = (".relayout",)
+    description = "relayout model (bao2013): constrained variations of one facade layout"
+
+    def load(self, path: Path) -> Model:
+        return load_model(path)
+
+    def generate(self, ruleset: Model, request: FacadeRequest) -> FacadeLayout:
+        return building.generate_face(ruleset, request)
+
+    def generate_building(self, ruleset: Model, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
+        return building.generate_building(ruleset, requests)
+
+    def explain(self, ruleset: Model, request: FacadeRequest) -> str:
+        result = building.solve_face(ruleset, request)
+        head = (f"relayout model {ruleset.name}: {len(ruleset.symbols)} symbols, {ruleset.terminal_count()} input "
+                f"terminals, {sum(len(r.sequences) for r in ruleset.rules.values())} sequences, "
+                f"{len(ruleset.alignments)} alignments, {len(ruleset.samesizes)} same-size constraints")
+        if result.success:
+            tail = (f"solved {request.width:g} x {request.height:g} in {result.seconds * 1000:.1f} ms: "
+                    f"{len(result.layout.terminals())} terminals, {result.restarts} restarts, "
+                    f"{result.backtracks} backtracks, {result.qp_calls} QPs")
+        else:
+            tail = f"failed: {result.message} (a fallback layout is used)"
+        return f"{head}\n{tail}"
+
+
+class RelayoutCommand(Command):
+    name = "relayout"
+    help = "print or draw variations of a relayout model for one size"
+
+    def configure(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("model", type=Path, help="a .relayout model file")
+        parser.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+        parser.add_argument("--count", type=int, default=1)
+        parser.add_argument("--seed", type=int, default=0)
+        parser.add_argument("--budget", type=float, default=10.0, help="wall-clock safety limit per variation (s)")
+        out = parser.add_mutually_exclusive_group()
+        out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
+        out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
+
+    def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        try:
+            model = load_model(args.model)
+        except CitygenError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        width, height = args.size
+        results = variations(model, width, height, max(1, args.count), seed=args.seed, budget_s=args.budget)
+        layouts = [r.layout for r in results if r.success]
+        for k, r in enumerate(results):
+            if not r.success:
+                print(f"variation {k}: {r.message}", file=sys.stderr)
+        if args.json:
+            print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
+        elif args.png and layouts:
+            from citygen_relayout.draw import contact_sheet
+            contact_sheet(layouts, args.png)
+            print(f"wrote {args.png} ({len(layouts)} variations)")
+        else:
+            for k, r in enumerate(results):
+                if r.success:
+                    print(f"variation {k}: {len(r.layout.terminals())} terminals, {r.seconds * 1000:.1f} ms, "
+                          f"{r.backtracks} backtracks, {r.restarts} restarts")
+        return 0 if len(layouts) == len(results) else 1
+
+
+@hookimpl
+def citygen_ruleset_kinds() -> list[RulesetKind]:
+    return [RelayoutKind()]
+
+
+@hookimpl
+def citygen_commands() -> list[Command]:
+    return [RelayoutCommand()]

@@ -1,0 +1,377 @@
+"""Relayouting (bao2013 §7.1, §7.3): top-down depth-first over composite regions in randomized order.
+
+Each composite region becomes a *frame* holding the resumable ``layout`` generator of its arrangement. When a
+frame's generator is exhausted the search backjumps (conflict-directed) to the latest earlier frame it depends
+on -- its parent (which fixed its size) or a frame that placed an alignment target or set a same-size
+reference it could not meet -- undoing everything after it. After ``max_backtracks`` (1000, as in the paper) the
+whole layout restarts from the root with fresh random choices. A wall-clock budget bounds everything; failure
+returns a :class:`RelayoutResult` naming the constraints that blocked most often.
+"""
+from __future__ import annotations
+
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from citygen.layout import FacadeLayout, Region
+from citygen_relayout.arrange import Solution, layout
+from citygen_relayout.compiled import PatternRef, compile_model
+from citygen_relayout.model import Model, SameSize, SizeRange
+
+
+class _Restart(Exception):
+    pass
+
+
+class _OutOfTime(Exception):
+    pass
+
+
+@dataclass(frozen=True)
+class RelayoutResult:
+    """Outcome of one relayout: ``layout`` is set only when ``success``."""
+
+    success: bool
+    layout: FacadeLayout | None
+    status: str
+    message: str
+    restarts: int = 0
+    backtracks: int = 0
+    qp_calls: int = 0
+    blockers: tuple[tuple[str, int], ...] = ()
+    seconds: float = 0.0
+
+
+@dataclass
+class Node:
+    """A composite region instance to lay out."""
+
+    uid: int
+    symbol: str
+    x: float
+    y: float
+    w: float
+    h: float
+    anc: dict[str, int]
+    door: int | None
+    parent_frame: int
+    replica_of: int | None = None
+    children_uids: dict[int, int] = field(default_factory=dict)
+    key: tuple | None = None
+
+
+@dataclass
+class _Frame:
+    node: Node
+    gen: object
+    pending: tuple[Node, ...]
+    log_len: int
+    conflicts: set[int] = field(default_factory=set)
+    blockers: Counter = field(default_factory=Counter)
+    yielded: int = 0
+
+
+@dataclass
+class Constraints:
+    """Cross-face constraints of a request (§9.1): floor lines, corner strips, door budget, shared references."""
+
+    floor_lines: tuple[float, ...] | None = None
+    corners: tuple[float, float] | None = None
+    doors: int | None = None
+    shared: dict | None = None  # building-wide same-size references (``across``), filled by the first face
+
+
+class Search:
+    def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
+                 constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
+                 max_restarts: int = 12, accept_temperature: float = 0.0) -> None:
+        self.model, self.compiled = model, compile_model(model)
+        self.width, self.height, self.rng = float(width), float(height), rng
+        c = constraints or Constraints()
+        self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
+        self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
+        self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
+        self.accept_temperature = accept_temperature
+        self.blockers: Counter[str] = Counter()
+        self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
+        self.dead_causes: Counter[str] = Counter()
+        self.qp_calls = self.backtracks = self.total_backtracks = 0
+        self.frames: list[_Frame] = []
+
+    # ---------------------------------------------------------------- services used by arrange.layout
+    def tick(self) -> None:
+        self._ticks += 1
+        if self._ticks & 63 == 0 and time.perf_counter() > self.deadline:
+            raise _OutOfTime
+
+    def backtrack(self) -> None:
+        self.backtracks += 1
+        self.total_backtracks += 1
+        if self.backtracks > self.max_backtracks:
+            raise _Restart
+
+    def blame(self, tag: str, frames: frozenset[int] = frozenset()) -> None:
+        self.blockers[tag] += 1
+        if self.frames:
+            self.frames[self.current].blockers[tag] += 1
+        if frames and self.frames:
+            self.frames[self.current].conflicts.update(f for f in frames if f < self.current)
+
+    def sample_size(self, rng: SizeRange) -> float:
+        """Initial size from the truncated Gaussian of §5.1 (rejection sampling, clipped fallback)."""
+        if rng.hi - rng.lo < 1e-12 or rng.sigma <= 0:
+            return min(max(rng.mean, rng.lo), rng.hi)
+        for value in self.rng.normal(rng.mean, rng.sigma, 6):
+            if rng.lo <= value <= rng.hi:
+                return float(value)
+        return float(self.rng.uniform(rng.lo, rng.hi))
+
+    def align_targets(self, ref: PatternRef, axis: str, a: float, b: float, node: Node) -> list[tuple]:
+        """Placed regions of the other side overlapping ``[a, b]``: ``(start, end, anchor pos, frame)``."""
+        al = self.model.alignments[ref.index]
+        other, lam = (1, al.b_anchor) if ref.side == 0 else (0, al.a_anchor)
+        scope = node.anc.get(al.within) if al.within else 0
+        if scope is None:
+            return []
+        found = []
+        for (s, e, sc), frame in self.placed.get((ref.index, other, axis), {}).items():
+            overlap = min(b, e) - max(a, s)
+            if sc == scope and overlap > 1e-6:
+                found.append((overlap, (s, e, s + lam * (e - s), frame)))
+        found.sort(key=lambda t: -t[0])
+        return [t for _, t in found]
+
+    def same_scope(self, ss: SameSize, node: Node) -> tuple | None:
+        if ss.within:
+            uid = node.anc.get(ss.within)
+            return None if uid is None else ("within", uid)
+        return ("building",) if ss.across else ("face",)
+
+    def same_ref(self, index: int, scope: tuple) -> tuple[float, int] | None:
+        if scope == ("building",) and self.shared is not None and index in self.shared:
+            return self.shared[index], -1
+        return self.refs.get((index, scope))
+
+    def inside(self, axis: str, a: float, b: float) -> bool:
+        eps = 1e-6 * max(self.width, self.height, 1.0)
+        if axis == "y":
+            if self.floor_lines is None:
+                return True
+            j = int(np.clip(np.searchsorted(self.floor_lines, 0.5 * (a + b)) - 1, 0, len(self.floor_lines) - 2))
+            return a >= self.floor_lines[j] - eps and b <= self.floor_lines[j + 1] + eps
+        if not self.corners:
+            return True
+        return a >= self.corners[0] - eps and b <= self.width - self.corners[1] + eps
+
+    # ---------------------------------------------------------------- the search
+    def run(self) -> RelayoutResult:
+        t0 = time.perf_counter()
+        self.deadline = t0 + self.budget_s
+        too_small = self._static_check()
+        if too_small:
+            return RelayoutResult(False, None, "infeasible", too_small, seconds=time.perf_counter() - t0)
+        self._ticks = 0
+        status = "exhausted"
+        restarts = root_failures = 0
+        for restarts in range(self.max_restarts):
+            try:
+                if self._attempt():
+                    return RelayoutResult(True, self._build(), "solved", "ok", restarts, self.total_backtracks,
+                                          self.qp_calls, seconds=time.perf_counter() - t0)
+                status = "infeasible-root"
+                if not self.frames[0].yielded and not self.accept_temperature:
+                    # the root itself has no arrangement: retrying will not help
+                    root_failures += 1
+                    if root_failures >= 2:
+                        break
+            except _Restart:
+                status = "restart-limit"
+            except _OutOfTime:
+                status = "timeout"
+                break
+        top = tuple((self.dead_causes or self.blockers).most_common(5))
+        names = "; ".join(f"{tag} ({n}x)" for tag, n in top) or "no candidate arrangement for the root"
+        if self.dead:
+            names = ("no arrangement for " + ", ".join(f"{r} ({n}x)" for r, n in self.dead.most_common(3))
+                     + "; there: " + names)
+        msg = (f"no {self.model.name} layout of {self.width:g} x {self.height:g} found ({status}, "
+               f"{restarts + 1} attempts, {self.total_backtracks} backtracks); blocking constraints: {names}")
+        return RelayoutResult(False, None, status, msg, restarts, self.total_backtracks, self.qp_calls, top,
+                              time.perf_counter() - t0)
+
+    def _static_check(self) -> str | None:
+        """A reason when the target is outside the root's static extent bounds (see ``bounds``)."""
+        root = self.model.root
+        for axis, size in (("x", self.width), ("y", self.height)):
+            mins, maxs = self.compiled.bounds[self.doors == 0]
+            lo, hi = mins[(root, axis)], maxs[(root, axis)]
+            if size < lo - 1e-9 or size > hi + 1e-9:
+                word = "width" if axis == "x" else "height"
+                return (f"no {self.model.name} layout of {self.width:g} x {self.height:g}: the model's {word} must lie "
+                        f"in {lo:.3f}..{hi:.3f} m (region-size ranges and sequences of {root} and below)")
+        return None
+
+    def _reset(self) -> None:
+        self.frames, self.log = [], []
+        self.placed: dict[tuple, dict] = {}
+        self.refs: dict[tuple, tuple[float, int]] = {}
+        self.solutions: dict[int, tuple[Node, Solution]] = {}
+        self.replicas: dict[tuple, int] = {}
+        self._nodes: dict[int, Node] = {}
+        self.backtracks = 0
+        self.current = 0
+        self._uid = 0
+
+    def _attempt(self) -> bool:
+        self._reset()
+        root = Node(0, self.model.root, 0.0, 0.0, self.width, self.height, {self.model.root: 0}, self.doors, -1)
+        pending = [root]
+        while pending:
+            node = pending.pop()
+            gen = self._generator(node)  # may register the node as a replica source; kept across retries
+            frame = _Frame(node, gen, tuple(pending), len(self.log),
+                           {node.parent_frame} if node.parent_frame >= 0 else set())
+            self.frames.append(frame)
+            m = self.current = len(self.frames) - 1
+            while True:
+                sol = next(frame.gen, None)
+                if sol is not None:
+                    frame.yielded += 1
+                    pending = list(frame.pending)
+                    pending.extend(self._apply(m, sol))
+                    break
+                if not frame.yielded:
+                    node = frame.node
+                    self.dead[f"{node.symbol} ({node.w:.1f} x {node.h:.1f} m)"] += 1
+                    self.dead_causes.update(frame.blockers)
+                self.backtrack()
+                earlier = [c for c in frame.conflicts if c < m]
+                if not earlier:
+                    return False
+                target = max(earlier)
+                self._undo(target)
+                self.frames[target].conflicts |= {c for c in frame.conflicts if c < target}
+                frame = self.frames[target]
+                m = self.current = target
+        return True
+
+    def _undo(self, target: int) -> None:
+        """Drop frames after ``target`` and every effect of ``target``'s current solution."""
+        stop = self.frames[target].log_len
+        while len(self.log) > stop:
+            self.log.pop()()
+        del self.frames[target + 1:]
+
+    def _generator(self, node: Node):
+        """The first laid-out instance of a (parent, symbol, instance) is the source of its replicas."""
+        if node.replica_of is None and node.key is not None:
+            if node.key in self.replicas:
+                node.replica_of = self.replicas[node.key]
+            else:
+                self.replicas[node.key] = node.uid
+                self._log(lambda k2=node.key: self.replicas.pop(k2, None))
+        if node.replica_of is None:
+            return layout(self, node)
+        return self._replica(node)
+
+    def _replica(self, node: Node):
+        """A replica instance (§5.1 instances): the source's arrangement, verified at its own position."""
+        src_node, sol = self.solutions[node.replica_of]
+        axis = self.model.symbols[node.symbol].split
+        off = node.x if axis == "x" else node.y
+        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        for v, (sym, _) in enumerate(sol.elements):
+            if self.compiled.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1]):
+                self.blame("floor lines of the building" if axis == "y" else "corner strips of the face")
+                return
+        for k, side, v in sol.align_occ:
+            ref = PatternRef("align", k, side, None)
+            al = self.model.alignments[k]
+            lam = al.a_anchor if side == 0 else al.b_anchor
+            for s, e, y, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], node):
+                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - y) > 1e-6 * max(self.width, self.height, 1.0):
+                    self.blame(f"{al.text} (line {al.line})", frozenset({frame}))
+                    return
+        yield sol
+
+    def _log(self, undo) -> None:
+        self.log.append(undo)
+
+    def _apply(self, m: int, sol: Solution) -> list[Node]:
+        """Register the frame's arrangement; return its composite children in randomized order."""
+        node = self.frames[m].node
+        axis = self.model.symbols[node.symbol].split
+        self.solutions[node.uid] = (node, sol)
+        self._log(lambda uid=node.uid: self.solutions.pop(uid, None))
+        off = node.x if axis == "x" else node.y
+        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        for k, side, v in sol.align_occ:
+            within = self.model.alignments[k].within
+            scope = node.anc.get(within) if within else 0
+            table = self.placed.setdefault((k, side, axis), {})
+            key = (round(float(pos[v]), 9), round(float(pos[v + 1]), 9), scope)
+            if key not in table:
+                table[key] = m
+                self._log(lambda t=table, k2=key: t.pop(k2, None))
+        for k, scope, v, n in sol.same_occ:
+            if scope == ("building",) and self.shared is not None:
+                if k not in self.shared:
+                    self.shared[k] = float(np.sum(sol.sizes[v:v + n]))
+                    self._log(lambda k2=k: self.shared.pop(k2, None))
+            elif (k, scope) not in self.refs:
+                self.refs[(k, scope)] = (float(np.sum(sol.sizes[v:v + n])), m)
+                self._log(lambda k2=(k, scope): self.refs.pop(k2, None))
+        children = []
+        src = self.solutions.get(node.replica_of) if node.replica_of is not None else None
+        for v, (sym, inst) in enumerate(sol.elements):
+            symbol = self.model.symbols[sym]
+            if symbol.is_terminal:
+                continue
+            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
+                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
+            self._uid += 1
+            door = None if node.door is None else sol.doors[v]
+            child = Node(self._uid, sym, float(x), float(y), float(w), float(h), {**node.anc, sym: self._uid},
+                         door, m)
+            if src is not None:
+                child.replica_of = src[0].children_uids[v]
+            else:
+                child.key = (node.uid, sym, inst, door)
+            self._nodes[child.uid] = child
+            children.append((v, child))
+        node.children_uids = {v: c.uid for v, c in children}
+        order = self.rng.permutation(len(children))
+        return [children[i][1] for i in order]
+
+    # ---------------------------------------------------------------- output
+    def _build(self) -> FacadeLayout:
+        root = self.frames[0].node
+        region = self._region(root, self.model.root, 0)
+        return FacadeLayout(self.width, self.height, region,
+                            meta={"kind": "relayout", "model": self.model.name})
+
+    def _region(self, node: Node, sym_name: str, inst: int) -> Region:
+        sym = self.model.symbols[sym_name]
+        name = sym_name if inst == 0 else f"{sym_name}'{inst}"
+        _, sol = self.solutions[node.uid]
+        axis = sym.split
+        off = node.x if axis == "x" else node.y
+        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        kids = []
+        for v, (child_sym, child_inst) in enumerate(sol.elements):
+            c = self.model.symbols[child_sym]
+            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
+                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
+            if c.is_terminal:
+                cname = child_sym if child_inst == 0 else f"{child_sym}'{child_inst}"
+                kids.append(Region(float(x), float(y), float(w), float(h), cname, c.label, c.depth, c.material,
+                                   c.asset))
+            else:
+                kids.append(self._region(self._node_of(node, v), child_sym, child_inst))
+        return Region(node.x, node.y, node.w, node.h, name, sym.label, sym.depth, sym.material, sym.asset,
+                      children=tuple(kids))
+
+    def _node_of(self, node: Node, v: int) -> Node:
+        return self._nodes[node.children_uids[v]]
