@@ -22,9 +22,9 @@ from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import build_geometry
-from citygen.layout import FacadeLayout, check_partition
+from citygen.layout import FacadeLayout, Region, check_partition
 from citygen.mass import Mass, build_mass, party_walls
-from citygen.registry import Registry, default_registry
+from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.scene import Assignment, Scene
@@ -71,7 +71,7 @@ class _Builder:
         self.scene, self.seed = scene, seed
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
-        self.roof = self.registry.roof_builders.get("flat")
+        self.roofs = self.registry.roof_builders
 
     def ruleset(self, assignment: Assignment, path: Path):
         kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
@@ -107,12 +107,13 @@ class _Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                for request, layout in zip(requests, kind.generate_building(ruleset, requests)):
+                for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
                     layouts[request.context.face_index] = self._checked(layout, request, kind.id, warnings)
             palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof = self.roof.build(mass.outline, mass.base + mass.height) if self.roof else None
+            roof_builder = self.roofs.get(str(footprint.attributes.get("roof:shape")), self.roofs.get("flat"))
+            roof = roof_builder.build(mass.outline, mass.base + mass.height) if roof_builder else None
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
         except CitygenError as exc:
             return _BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
@@ -126,6 +127,26 @@ class _Builder:
         c = mass.outline.centroid
         tile = (math.floor(c.x / self.scene.output.tile_size), math.floor(c.y / self.scene.output.tile_size))
         return _BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+
+    @staticmethod
+    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
+                  warnings: list[str]) -> list[FacadeLayout]:
+        """Layouts for a building's faces; if the kind fails on the building, face by face, so one face it cannot
+        dress becomes a plain wall (reported) instead of costing the building."""
+        try:
+            return kind.generate_building(ruleset, requests)
+        except CitygenError:
+            pass
+        layouts = []
+        for request in requests:
+            try:
+                layouts.append(kind.generate(ruleset, request))
+            except CitygenError as exc:
+                warnings.append(f"{request.context.building_id} face {request.context.face_index}: plain wall, "
+                                f"the ruleset failed: {exc}")
+                layouts.append(FacadeLayout(request.width, request.height,
+                                            Region(0.0, 0.0, request.width, request.height, "Wall", "wall")))
+        return layouts
 
     @staticmethod
     def _checked(layout: FacadeLayout, request: FacadeRequest, kind_id: str, warnings: list[str]) -> FacadeLayout:
