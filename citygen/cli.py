@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -17,7 +18,8 @@ from citygen.usd.validate import validate_stage
 
 def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     scene = load_scene(args.scene)
-    report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=args.jobs,
+    jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
+    report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=jobs,
                            registry=registry, progress=None if args.quiet else terminal_progress)
     print(report.summary())
     return 1 if args.strict and (report.skipped or report.warnings) else 0
@@ -94,7 +96,8 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
     g.add_argument("--seed", type=int, help="override the scene seed")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped or warned")
-    g.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    g.add_argument("--jobs", type=int, default=0,
+                   help="worker processes (default 0: one per CPU core); the output does not depend on it")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g.set_defaults(run=_cmd_generate)
     v = sub.add_parser("validate", help="run UsdValidation and mesh topology checks on stages")
