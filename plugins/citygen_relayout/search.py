@@ -86,7 +86,7 @@ class Constraints:
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
                  constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
-                 max_restarts: int = 12, accept_temperature: float = 0.0) -> None:
+                 max_restarts: int = 12, accept_temperature: float = 0.0, relative: bool = True) -> None:
         self.model, self.compiled = model, compile_model(model)
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
@@ -94,6 +94,7 @@ class Search:
         self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
         self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
         self.accept_temperature = accept_temperature
+        self.relative = relative  # QP on relative size deviations (x - xbar)^2 / xbar^2; False: the paper's
         self.blockers: Counter[str] = Counter()
         self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
         self.dead_causes: Counter[str] = Counter()
@@ -153,6 +154,17 @@ class Search:
         if scope == ("building",) and self.shared is not None and index in self.shared:
             return self.shared[index], -1
         return self.refs.get((index, scope))
+
+    def spanned_floors(self, a: float, b: float) -> tuple[int, int] | None:
+        """``(first, last)`` floor indices of the y-range ``[a, b]`` when floor lines cross it, else None."""
+        lines = self.floor_lines
+        if lines is None or lines.size < 3:
+            return None
+        eps = 1e-6 * max(self.width, self.height, 1.0)
+        k0 = int(np.searchsorted(lines, a + eps, side="right")) - 1
+        k1 = int(np.searchsorted(lines, b - eps, side="left")) - 1
+        k0, k1 = max(k0, 0), min(k1, lines.size - 2)
+        return (k0, k1) if k1 > k0 else None
 
     def inside(self, axis: str, a: float, b: float) -> bool:
         eps = 1e-6 * max(self.width, self.height, 1.0)
@@ -282,9 +294,11 @@ class Search:
         axis = self.model.symbols[node.symbol].split
         off = node.x if axis == "x" else node.y
         pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        straddles = axis == "x" and self.spanned_floors(node.y, node.y + node.h) is not None
         for v, (sym, _) in enumerate(sol.elements):
-            if self.compiled.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1]):
-                self.blame("floor lines of the building" if axis == "y" else "corner strips of the face")
+            if (self.compiled.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1])) or \
+                    (straddles and self.compiled.bound[(sym, "y")]):
+                self.blame("floor lines of the building" if axis == "y" or straddles else "corner strips of the face")
                 return
         for k, side, v in sol.align_occ:
             ref = PatternRef("align", k, side, None)
