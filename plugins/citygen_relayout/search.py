@@ -9,6 +9,7 @@ returns a :class:`RelayoutResult` naming the constraints that blocked most often
 """
 from __future__ import annotations
 
+import hashlib
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -81,6 +82,7 @@ class Constraints:
     corners: tuple[float, float] | None = None
     doors: int | None = None
     shared: dict | None = None  # building-wide same-size references (``across``), filled by the first face
+    key_salt: tuple = ()  # distinguishes the module keys of the faces of one building (the request's seed)
 
 
 class Search:
@@ -91,7 +93,7 @@ class Search:
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
         self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
-        self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
+        self.corners, self.doors, self.shared, self.key_salt = c.corners, c.doors, c.shared, c.key_salt
         self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
         self.accept_temperature = accept_temperature
         self.relative = relative  # QP on relative size deviations (x - xbar)^2 / xbar^2; False: the paper's
@@ -362,6 +364,13 @@ class Search:
     # ---------------------------------------------------------------- output
     def _build(self) -> FacadeLayout:
         root = self.frames[0].node
+        self._sources = set()
+        stack = [root]
+        while stack:  # the replica sources of the final tree
+            node = stack.pop()
+            if node.replica_of is not None:
+                self._sources.add(node.replica_of)
+            stack.extend(self._nodes[uid] for uid in node.children_uids.values())
         region = self._region(root, self.model.root, 0)
         return FacadeLayout(self.width, self.height, region,
                             meta={"kind": "relayout", "model": self.model.name})
@@ -385,7 +394,15 @@ class Search:
             else:
                 kids.append(self._region(self._node_of(node, v), child_sym, child_inst))
         return Region(node.x, node.y, node.w, node.h, name, sym.label, sym.depth, sym.material, sym.asset,
-                      children=tuple(kids))
+                      children=tuple(kids), key=self._key(node))
+
+    def _key(self, node: Node) -> int | None:
+        """Module key of a replica and of its source (§7.3 replicas: identical subtrees), None otherwise."""
+        src = node.replica_of if node.replica_of is not None else node.uid if node.uid in self._sources else None
+        if src is None:
+            return None
+        text = repr((self.key_salt, self.model.name, node.symbol, src)).encode()
+        return int.from_bytes(hashlib.blake2b(text, digest_size=8).digest(), "big", signed=True)
 
     def _node_of(self, node: Node, v: int) -> Node:
         return self._nodes[node.children_uids[v]]
