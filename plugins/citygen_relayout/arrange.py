@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from itertools import accumulate
 
 import numpy as np
 
@@ -40,6 +41,7 @@ class Solution:
     align_occ: list[tuple[int, int, int]]  # (alignment index, side, element index)
     same_occ: list[tuple[int, tuple, int, int]]  # (samesize index, scope, first element, length)
     doors: list[int]  # door budget handed to each element (1 = this element holds the face's door)
+    cum: list[float] = field(default_factory=list)  # element boundaries relative to the region's start
 
 
 @dataclass
@@ -345,7 +347,7 @@ class _Layout:
         al = self.ctx.model.alignments[ref.index]
         lam = al.a_anchor if ref.side == 0 else al.b_anchor
         start, size = interval or self._position(v)
-        targets = self.ctx.align_targets(ref, self.axis, start, start + size, self.node)
+        targets = self.ctx.align_targets(ref, self.axis, start, start + size, self.node.anc)
         if interval is not None:  # verification: the first overlapping target it is not aligned with
             targets = [t for t in targets if abs(start + lam * size - t[2]) > 1e-6 * max(1.0, self.total)]
         if not targets:
@@ -570,4 +572,5 @@ class _Layout:
                     v = start + len(ref.pattern.before) - 1
                     if 0 <= v < len(st.elems):
                         align_occ.append((ref.index, ref.side, v))
-        return Solution(list(st.elems), st.x.copy(), align_occ, list(st.same_occ), list(st.doors))
+        return Solution(list(st.elems), st.x.copy(), align_occ, list(st.same_occ), list(st.doors),
+                        list(accumulate(st.x.tolist(), initial=0.0)))

@@ -61,6 +61,17 @@ class Compiled:
             for sym in ref.pattern.items[-1]:
                 self.by_last.setdefault(sym, []).append(ref)
         self.aligned_symbols = frozenset(s for al in model.alignments for p in (al.a, al.b) for s in p.body[0])
+        self.composite = {name: not sym.is_terminal for name, sym in model.symbols.items()}
+        # symbols that scope a constraint (``within``): the only ancestors a region needs to remember
+        self.scoped = frozenset(c.within for c in (*model.alignments, *model.samesizes) if c.within)
+        self._names: dict[tuple[str, int], str] = {}
+
+    def names(self, element: tuple[str, int]) -> str:
+        """Region name of an element: ``S`` for instance 0, ``S'k`` for instance k."""
+        name = self._names.get(element)
+        if name is None:
+            name = self._names[element] = element[0] if not element[1] else f"{element[0]}'{element[1]}"
+        return name
 
     def size(self, symbol: str, axis: str) -> SizeRange:
         return self.model.sizes[(symbol, axis)]

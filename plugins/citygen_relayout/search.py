@@ -70,7 +70,7 @@ class _Frame:
     pending: tuple[Node, ...]
     log_len: int
     conflicts: set[int] = field(default_factory=set)
-    blockers: Counter = field(default_factory=Counter)
+    blockers: Counter | None = None
     yielded: int = 0
 
 
@@ -118,7 +118,10 @@ class Search:
     def blame(self, tag: str, frames: frozenset[int] = frozenset()) -> None:
         self.blockers[tag] += 1
         if self.frames:
-            self.frames[self.current].blockers[tag] += 1
+            frame = self.frames[self.current]
+            if frame.blockers is None:
+                frame.blockers = Counter()
+            frame.blockers[tag] += 1
         if frames and self.frames:
             self.frames[self.current].conflicts.update(f for f in frames if f < self.current)
 
@@ -131,11 +134,12 @@ class Search:
                 return float(value)
         return float(self.rng.uniform(rng.lo, rng.hi))
 
-    def align_targets(self, ref: PatternRef, axis: str, a: float, b: float, node: Node) -> list[tuple]:
-        """Placed regions of the other side overlapping ``[a, b]``: ``(start, end, anchor pos, frame)``."""
+    def align_targets(self, ref: PatternRef, axis: str, a: float, b: float, anc: dict[str, int]) -> list[tuple]:
+        """Placed regions of the other side overlapping ``[a, b]``: ``(start, end, anchor pos, frame)``; ``anc``
+        are the ancestors (scopes) of the asking region."""
         al = self.model.alignments[ref.index]
         other, lam = (1, al.b_anchor) if ref.side == 0 else (0, al.a_anchor)
-        scope = node.anc.get(al.within) if al.within else 0
+        scope = anc.get(al.within) if al.within else 0
         if scope is None:
             return []
         found = []
@@ -259,7 +263,7 @@ class Search:
                 if not frame.yielded:
                     node = frame.node
                     self.dead[f"{node.symbol} ({node.w:.1f} x {node.h:.1f} m)"] += 1
-                    self.dead_causes.update(frame.blockers)
+                    self.dead_causes.update(frame.blockers or {})
                 self.backtrack()
                 earlier = [c for c in frame.conflicts if c < m]
                 if not earlier:
@@ -291,73 +295,98 @@ class Search:
         return self._replica(node)
 
     def _replica(self, node: Node):
-        """A replica instance (§5.1 instances): the source's arrangement, verified at its own position."""
-        src_node, sol = self.solutions[node.replica_of]
-        axis = self.model.symbols[node.symbol].split
-        off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
-        straddles = axis == "x" and self.spanned_floors(node.y, node.y + node.h) is not None
+        """A replica instance (§5.1 instances): the source's arrangement, verified at its own position with the
+        whole subtree below it (which ``_apply`` then places in the same frame)."""
+        if self._verify(node.replica_of, node.x, node.y, node.w, node.h, node.anc):
+            yield self.solutions[node.replica_of][1]
+
+    def _verify(self, src: int, x: float, y: float, w: float, h: float, anc: dict[str, int]) -> bool:
+        """Whether the subtree of source region ``src`` moved to ``(x, y)`` meets the request's floors and
+        corners and aligns with the regions placed so far (its inner alignments hold by translation)."""
+        src_node, sol = self.solutions[src]
+        comp = self.compiled
+        axis = self.model.symbols[src_node.symbol].split
+        off = x if axis == "x" else y
+        pos = [off + c for c in sol.cum]
+        straddles = axis == "x" and self.spanned_floors(y, y + h) is not None
         for v, (sym, _) in enumerate(sol.elements):
-            if (self.compiled.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1])) or \
-                    (straddles and self.compiled.bound[(sym, "y")]):
+            if (comp.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1])) or \
+                    (straddles and comp.bound[(sym, "y")]):
                 self.blame("floor lines of the building" if axis == "y" or straddles else "corner strips of the face")
-                return
+                return False
         for k, side, v in sol.align_occ:
             ref = PatternRef("align", k, side, None)
             al = self.model.alignments[k]
             lam = al.a_anchor if side == 0 else al.b_anchor
-            for s, e, y, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], node):
-                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - y) > 1e-6 * max(self.width, self.height, 1.0):
+            for s, e, t, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], anc):
+                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - t) > 1e-6 * max(self.width, self.height, 1.0):
                     self.blame(f"{al.text} (line {al.line})", frozenset({frame}))
-                    return
-        yield sol
+                    return False
+        for v, (sym, _) in enumerate(sol.elements):
+            if comp.composite[sym]:
+                a, b = pos[v], pos[v + 1]
+                inner = {**anc, sym: -1} if sym in comp.scoped else anc  # a new scope: nothing placed in it yet
+                if not (self._verify(src_node.children_uids[v], a, y, b - a, h, inner) if axis == "x" else
+                        self._verify(src_node.children_uids[v], x, a, w, b - a, inner)):
+                    return False
+        return True
 
     def _log(self, undo) -> None:
         self.log.append(undo)
 
-    def _apply(self, m: int, sol: Solution) -> list[Node]:
-        """Register the frame's arrangement; return its composite children in randomized order."""
-        node = self.frames[m].node
+    def _apply(self, m: int, sol: Solution, node: Node | None = None) -> list[Node]:
+        """Register the frame's arrangement; return its composite children in randomized order (a replica's
+        children are replicas too: they are placed right away, in the same frame)."""
+        node = node or self.frames[m].node
         axis = self.model.symbols[node.symbol].split
         self.solutions[node.uid] = (node, sol)
         self._log(lambda uid=node.uid: self.solutions.pop(uid, None))
         off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        cum = sol.cum
+        pos = [off + c for c in cum]
         for k, side, v in sol.align_occ:
             within = self.model.alignments[k].within
             scope = node.anc.get(within) if within else 0
             table = self.placed.setdefault((k, side, axis), {})
-            key = (round(float(pos[v]), 9), round(float(pos[v + 1]), 9), scope)
+            key = (round(pos[v], 9), round(pos[v + 1], 9), scope)
             if key not in table:
                 table[key] = m
                 self._log(lambda t=table, k2=key: t.pop(k2, None))
         for k, scope, v, n in sol.same_occ:
             if scope == ("building",) and self.shared is not None:
                 if k not in self.shared:
-                    self.shared[k] = float(np.sum(sol.sizes[v:v + n]))
+                    self.shared[k] = cum[v + n] - cum[v]
                     self._log(lambda k2=k: self.shared.pop(k2, None))
             elif (k, scope) not in self.refs:
-                self.refs[(k, scope)] = (float(np.sum(sol.sizes[v:v + n])), m)
+                self.refs[(k, scope)] = (cum[v + n] - cum[v], m)
                 self._log(lambda k2=(k, scope): self.refs.pop(k2, None))
         children = []
         src = self.solutions.get(node.replica_of) if node.replica_of is not None else None
+        composite, scoped = self.compiled.composite, self.compiled.scoped
+        horizontal = axis == "x"
         for v, (sym, inst) in enumerate(sol.elements):
-            symbol = self.model.symbols[sym]
-            if symbol.is_terminal:
+            if not composite[sym]:
                 continue
-            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
-                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
+            a, b = pos[v], pos[v + 1]
             self._uid += 1
+            uid = self._uid
             door = None if node.door is None else sol.doors[v]
-            child = Node(self._uid, sym, float(x), float(y), float(w), float(h), {**node.anc, sym: self._uid},
-                         door, m)
+            anc = {**node.anc, sym: uid} if sym in scoped else node.anc
+            child = Node(uid, sym, a, node.y, b - a, node.h, anc, door, m) if horizontal else \
+                Node(uid, sym, node.x, a, node.w, b - a, anc, door, m)
             if src is not None:
                 child.replica_of = src[0].children_uids[v]
             else:
                 child.key = (node.uid, sym, inst, door)
-            self._nodes[child.uid] = child
+            self._nodes[uid] = child
             children.append((v, child))
         node.children_uids = {v: c.uid for v, c in children}
+        if src is not None:
+            for _, child in children:
+                self._apply(m, self.solutions[child.replica_of][1], child)
+            return []
+        if len(children) < 2:
+            return [c for _, c in children]
         order = self.rng.permutation(len(children))
         return [children[i][1] for i in order]
 
@@ -376,24 +405,23 @@ class Search:
                             meta={"kind": "relayout", "model": self.model.name})
 
     def _region(self, node: Node, sym_name: str, inst: int) -> Region:
-        sym = self.model.symbols[sym_name]
-        name = sym_name if inst == 0 else f"{sym_name}'{inst}"
+        symbols, names = self.model.symbols, self.compiled.names
+        sym = symbols[sym_name]
         _, sol = self.solutions[node.uid]
-        axis = sym.split
-        off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        off, horizontal = (node.x, True) if sym.split == "x" else (node.y, False)
+        pos = [off + c for c in sol.cum]
+        x, y, w, h = node.x, node.y, node.w, node.h
         kids = []
-        for v, (child_sym, child_inst) in enumerate(sol.elements):
-            c = self.model.symbols[child_sym]
-            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
-                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
+        for v, element in enumerate(sol.elements):
+            c = symbols[element[0]]
             if c.is_terminal:
-                cname = child_sym if child_inst == 0 else f"{child_sym}'{child_inst}"
-                kids.append(Region(float(x), float(y), float(w), float(h), cname, c.label, c.depth, c.material,
-                                   c.asset))
+                a, b = pos[v], pos[v + 1]
+                kids.append(Region(a, y, b - a, h, names(element), c.label, c.depth, c.material, c.asset)
+                            if horizontal else
+                            Region(x, a, w, b - a, names(element), c.label, c.depth, c.material, c.asset))
             else:
-                kids.append(self._region(self._node_of(node, v), child_sym, child_inst))
-        return Region(node.x, node.y, node.w, node.h, name, sym.label, sym.depth, sym.material, sym.asset,
+                kids.append(self._region(self._nodes[node.children_uids[v]], *element))
+        return Region(x, y, w, h, names((sym_name, inst)), sym.label, sym.depth, sym.material, sym.asset,
                       children=tuple(kids), key=self._key(node))
 
     def _key(self, node: Node) -> int | None:
@@ -403,6 +431,3 @@ class Search:
             return None
         text = repr((self.key_salt, self.model.name, node.symbol, src)).encode()
         return int.from_bytes(hashlib.blake2b(text, digest_size=8).digest(), "big", signed=True)
-
-    def _node_of(self, node: Node, v: int) -> Node:
-        return self._nodes[node.children_uids[v]]
