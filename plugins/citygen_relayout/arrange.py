@@ -427,29 +427,36 @@ class _Layout:
             else:
                 general.append(r)
         gid = [_find(group, i) for i in range(n)]
-        uniq = sorted(set(gid))
-        col = {g: k for k, g in enumerate(uniq)}
-        m = len(uniq)
-        member = np.array([col[g] for g in gid])
         # relative deviations (default): a large region absorbs a change in proportion to its size
         ew = 1.0 / np.maximum(xbar, max(0.02 * self.total, 1e-3)) ** 2 if self.ctx.relative else np.ones(n)
-        w = np.bincount(member, weights=ew, minlength=m)
-        gx = np.bincount(member, weights=xbar * ew, minlength=m) / w
-        glo = np.full(m, -np.inf)
-        ghi = np.full(m, np.inf)
-        np.maximum.at(glo, member, lo)
-        np.minimum.at(ghi, member, hi)
-        seen: dict[tuple, None] = {}
+        if len(general) == len(rows):  # no merged variables
+            mem, m = gid, n
+            member = np.arange(n)
+            w, gx, glo, ghi = ew, xbar, lo, hi
+        else:
+            uniq = sorted(set(gid))
+            col = {g: k for k, g in enumerate(uniq)}
+            m = len(uniq)
+            mem = [col[g] for g in gid]
+            member = np.array(mem)
+            w = np.bincount(member, weights=ew, minlength=m)
+            gx = np.bincount(member, weights=xbar * ew, minlength=m) / w
+            glo_l, ghi_l = [-np.inf] * m, [np.inf] * m
+            for i, g in enumerate(mem):
+                glo_l[g] = max(glo_l[g], st.lo[i])
+                ghi_l[g] = min(ghi_l[g], st.hi[i])
+            glo, ghi = np.array(glo_l), np.array(ghi_l)
+        seen: set[tuple] = set()
         eq_rows, le_rows = [], []
         for r in general:
-            vec = np.zeros(m)
+            vec = [0.0] * m
             for i, c in r.coefs.items():
-                vec[member[i]] += c
-            key = (r.eq, r.rhs, vec.tobytes())
+                vec[mem[i]] += c
+            key = (r.eq, r.rhs, *vec)
             if key not in seen:
-                seen[key] = None
+                seen.add(key)
                 (eq_rows if r.eq else le_rows).append((vec, r.rhs))
-        total = (np.bincount(member, minlength=m) * mult, self.total)
+        total = ((np.bincount(member, minlength=m) * mult).tolist(), self.total)
         (eq_rows if total_eq else le_rows).append(total)
         E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
         L = np.array([v for v, _ in le_rows]).reshape(-1, m)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass
 
 from citygen.layout import FLOOR_BOUND_LABELS
@@ -65,6 +66,7 @@ class Compiled:
         # symbols that scope a constraint (``within``): the only ancestors a region needs to remember
         self.scoped = frozenset(c.within for c in (*model.alignments, *model.samesizes) if c.within)
         self._names: dict[tuple[str, int], str] = {}
+        self.code = zlib.crc32(model.name.encode()) ^ (len(model.symbols) << 32)  # part of region module keys
 
     def names(self, element: tuple[str, int]) -> str:
         """Region name of an element: ``S`` for instance 0, ``S'k`` for instance k."""

@@ -9,7 +9,6 @@ returns a :class:`RelayoutResult` naming the constraints that blocked most often
 """
 from __future__ import annotations
 
-import hashlib
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -45,7 +44,7 @@ class RelayoutResult:
     seconds: float = 0.0
 
 
-@dataclass
+@dataclass(slots=True)
 class Node:
     """A composite region instance to lay out."""
 
@@ -429,5 +428,4 @@ class Search:
         src = node.replica_of if node.replica_of is not None else node.uid if node.uid in self._sources else None
         if src is None:
             return None
-        text = repr((self.key_salt, self.model.name, node.symbol, src)).encode()
-        return int.from_bytes(hashlib.blake2b(text, digest_size=8).digest(), "big", signed=True)
+        return hash((self.key_salt, self.compiled.code, node.symbol, src))
