@@ -244,6 +244,7 @@ class Search:
     def _attempt(self) -> bool:
         self._reset()
         root = Node(0, self.model.root, 0.0, 0.0, self.width, self.height, {self.model.root: 0}, self.doors, -1)
+        self._nodes[0] = root
         pending = [root]
         while pending:
             node = pending.pop()
@@ -299,6 +300,11 @@ class Search:
         if self._verify(node.replica_of, node.x, node.y, node.w, node.h, node.anc):
             yield self.solutions[node.replica_of][1]
 
+    def _source(self, uid: int) -> int:
+        """The laid-out region whose arrangement region ``uid`` has (itself, or the source of a replica)."""
+        src = self._nodes[uid].replica_of
+        return uid if src is None else src
+
     def _verify(self, src: int, x: float, y: float, w: float, h: float, anc: dict[str, int]) -> bool:
         """Whether the subtree of source region ``src`` moved to ``(x, y)`` meets the request's floors and
         corners and aligns with the regions placed so far (its inner alignments hold by translation)."""
@@ -325,27 +331,57 @@ class Search:
             if comp.composite[sym]:
                 a, b = pos[v], pos[v + 1]
                 inner = {**anc, sym: -1} if sym in comp.scoped else anc  # a new scope: nothing placed in it yet
-                if not (self._verify(src_node.children_uids[v], a, y, b - a, h, inner) if axis == "x" else
-                        self._verify(src_node.children_uids[v], x, a, w, b - a, inner)):
+                child = self._source(src_node.children_uids[v])
+                if not (self._verify(child, a, y, b - a, h, inner) if axis == "x" else
+                        self._verify(child, x, a, w, b - a, inner)):
                     return False
         return True
 
     def _log(self, undo) -> None:
         self.log.append(undo)
 
-    def _apply(self, m: int, sol: Solution, node: Node | None = None) -> list[Node]:
-        """Register the frame's arrangement; return its composite children in randomized order (a replica's
-        children are replicas too: they are placed right away, in the same frame)."""
-        node = node or self.frames[m].node
+    def _apply(self, m: int, sol: Solution) -> list[Node]:
+        """Register the frame's arrangement; return its composite children in randomized order. A replica's
+        subtree is placed at once (its regions stay implicit: the source's, moved)."""
+        node = self.frames[m].node
+        if node.replica_of is not None:
+            self._place(m, node.replica_of, node.x, node.y, node.w, node.h, node.anc)
+            return []
         axis = self.model.symbols[node.symbol].split
         self.solutions[node.uid] = (node, sol)
         self._log(lambda uid=node.uid: self.solutions.pop(uid, None))
-        off = node.x if axis == "x" else node.y
+        pos = self._register(m, sol, axis, node.x if axis == "x" else node.y, node.anc)
+        children = []
+        composite, scoped = self.compiled.composite, self.compiled.scoped
+        horizontal = axis == "x"
+        for v, (sym, inst) in enumerate(sol.elements):
+            if not composite[sym]:
+                continue
+            a, b = pos[v], pos[v + 1]
+            self._uid += 1
+            uid = self._uid
+            door = None if node.door is None else sol.doors[v]
+            anc = {**node.anc, sym: uid} if sym in scoped else node.anc
+            child = Node(uid, sym, a, node.y, b - a, node.h, anc, door, m) if horizontal else \
+                Node(uid, sym, node.x, a, node.w, b - a, anc, door, m)
+            child.key = (node.uid, sym, inst, door)
+            self._nodes[uid] = child
+            children.append(child)
+        node.children_uids = {v: c.uid for v, c in zip(
+            [v for v, (sym, _) in enumerate(sol.elements) if composite[sym]], children)}
+        if len(children) < 2:
+            return children
+        order = self.rng.permutation(len(children))
+        return [children[i] for i in order]
+
+    def _register(self, m: int, sol: Solution, axis: str, off: float, anc: dict[str, int]) -> list[float]:
+        """Record the alignment occurrences and same-size references of an arrangement at ``off``; its
+        element boundaries."""
         cum = sol.cum
         pos = [off + c for c in cum]
         for k, side, v in sol.align_occ:
             within = self.model.alignments[k].within
-            scope = node.anc.get(within) if within else 0
+            scope = anc.get(within) if within else 0
             table = self.placed.setdefault((k, side, axis), {})
             key = (round(pos[v], 9), round(pos[v + 1], 9), scope)
             if key not in table:
@@ -359,73 +395,73 @@ class Search:
             elif (k, scope) not in self.refs:
                 self.refs[(k, scope)] = (cum[v + n] - cum[v], m)
                 self._log(lambda k2=(k, scope): self.refs.pop(k2, None))
-        children = []
-        src = self.solutions.get(node.replica_of) if node.replica_of is not None else None
+        return pos
+
+    def _place(self, m: int, src: int, x: float, y: float, w: float, h: float, anc: dict[str, int]) -> None:
+        """Register the subtree of source region ``src`` moved to ``(x, y)`` (a replica) in frame ``m``."""
+        src_node, sol = self.solutions[src]
+        axis = self.model.symbols[src_node.symbol].split
+        pos = self._register(m, sol, axis, x if axis == "x" else y, anc)
         composite, scoped = self.compiled.composite, self.compiled.scoped
-        horizontal = axis == "x"
-        for v, (sym, inst) in enumerate(sol.elements):
-            if not composite[sym]:
-                continue
-            a, b = pos[v], pos[v + 1]
-            self._uid += 1
-            uid = self._uid
-            door = None if node.door is None else sol.doors[v]
-            anc = {**node.anc, sym: uid} if sym in scoped else node.anc
-            child = Node(uid, sym, a, node.y, b - a, node.h, anc, door, m) if horizontal else \
-                Node(uid, sym, node.x, a, node.w, b - a, anc, door, m)
-            if src is not None:
-                child.replica_of = src[0].children_uids[v]
-            else:
-                child.key = (node.uid, sym, inst, door)
-            self._nodes[uid] = child
-            children.append((v, child))
-        node.children_uids = {v: c.uid for v, c in children}
-        if src is not None:
-            for _, child in children:
-                self._apply(m, self.solutions[child.replica_of][1], child)
-            return []
-        if len(children) < 2:
-            return [c for _, c in children]
-        order = self.rng.permutation(len(children))
-        return [children[i][1] for i in order]
+        for v, (sym, _) in enumerate(sol.elements):
+            if composite[sym]:
+                a, b = pos[v], pos[v + 1]
+                inner = anc
+                if sym in scoped:  # a new scope for ``within`` constraints
+                    self._uid += 1
+                    inner = {**anc, sym: self._uid}
+                child = self._source(src_node.children_uids[v])
+                if axis == "x":
+                    self._place(m, child, a, y, b - a, h, inner)
+                else:
+                    self._place(m, child, x, a, w, b - a, inner)
 
     # ---------------------------------------------------------------- output
     def _build(self) -> FacadeLayout:
         root = self.frames[0].node
-        self._sources = set()
-        stack = [root]
-        while stack:  # the replica sources of the final tree
-            node = stack.pop()
+        self._sources: set[int] = set()
+        stack, direct = [root.uid], []
+        while stack:  # the replica sources of the final tree, and every region below them
+            uid = stack.pop()
+            node = self._nodes[uid]
             if node.replica_of is not None:
-                self._sources.add(node.replica_of)
-            stack.extend(self._nodes[uid] for uid in node.children_uids.values())
-        region = self._region(root, self.model.root, 0)
+                direct.append(node.replica_of)
+            else:
+                stack.extend(node.children_uids.values())
+        while direct:
+            uid = self._source(direct.pop())
+            if uid not in self._sources:
+                self._sources.add(uid)
+                direct.extend(self._nodes[uid].children_uids.values())
+        region = self._region(root.uid, root.x, root.y, root.w, root.h, (self.model.root, 0), None)
         return FacadeLayout(self.width, self.height, region,
                             meta={"kind": "relayout", "model": self.model.name})
 
-    def _region(self, node: Node, sym_name: str, inst: int) -> Region:
+    def _region(self, uid: int, x: float, y: float, w: float, h: float, element: tuple[str, int],
+                key: int | None) -> Region:
+        """The region of laid-out region ``uid`` (or of a replica of it) at ``(x, y)``."""
         symbols, names = self.model.symbols, self.compiled.names
-        sym = symbols[sym_name]
-        _, sol = self.solutions[node.uid]
-        off, horizontal = (node.x, True) if sym.split == "x" else (node.y, False)
-        pos = [off + c for c in sol.cum]
-        x, y, w, h = node.x, node.y, node.w, node.h
+        sym = symbols[element[0]]
+        node, sol = self.solutions[uid]
+        horizontal = sym.split == "x"
+        pos = [(x if horizontal else y) + c for c in sol.cum]
         kids = []
-        for v, element in enumerate(sol.elements):
-            c = symbols[element[0]]
+        for v, child in enumerate(sol.elements):
+            c = symbols[child[0]]
+            a, b = pos[v], pos[v + 1]
             if c.is_terminal:
-                a, b = pos[v], pos[v + 1]
-                kids.append(Region(a, y, b - a, h, names(element), c.label, c.depth, c.material, c.asset)
+                kids.append(Region(a, y, b - a, h, names(child), c.label, c.depth, c.material, c.asset)
                             if horizontal else
-                            Region(x, a, w, b - a, names(element), c.label, c.depth, c.material, c.asset))
+                            Region(x, a, w, b - a, names(child), c.label, c.depth, c.material, c.asset))
             else:
-                kids.append(self._region(self._nodes[node.children_uids[v]], *element))
-        return Region(x, y, w, h, names((sym_name, inst)), sym.label, sym.depth, sym.material, sym.asset,
-                      children=tuple(kids), key=self._key(node))
+                src = self._source(node.children_uids[v])
+                kids.append(self._region(src, a, y, b - a, h, child, self._key(src)) if horizontal else
+                            self._region(src, x, a, w, b - a, child, self._key(src)))
+        return Region(x, y, w, h, names(element), sym.label, sym.depth, sym.material, sym.asset,
+                      children=tuple(kids), key=key)
 
-    def _key(self, node: Node) -> int | None:
-        """Module key of a replica and of its source (§7.3 replicas: identical subtrees), None otherwise."""
-        src = node.replica_of if node.replica_of is not None else node.uid if node.uid in self._sources else None
-        if src is None:
+    def _key(self, src: int) -> int | None:
+        """Module key of the copies of a replicated region (§7.3 replicas: identical subtrees), else None."""
+        if src not in self._sources:
             return None
-        return hash((self.key_salt, self.compiled.code, node.symbol, src))
+        return hash((self.key_salt, self.compiled.code, self._nodes[src].symbol, src))
