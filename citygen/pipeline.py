@@ -155,6 +155,8 @@ class _Builder:
         if problems:
             raise CitygenError(f"{where}: layout is not a partition: {problems[0]}", plugin=kind_id,
                                hint="this is a bug in the ruleset kind; please report it with the ruleset")
+        if layout.meta.get("fallback"):  # a kind that could not dress the face says why (e.g. relayout)
+            warnings.append(f"{where}: {kind_id} fell back to plain walls: {layout.meta['fallback']}")
         layout, note = enforce_entrance(layout, request)
         if note:
             warnings.append(f"{where}: {note}")

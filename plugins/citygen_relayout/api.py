@@ -17,7 +17,10 @@ def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: n
     """
     if width <= 0 or height <= 0:
         return RelayoutResult(False, None, "invalid-size", f"target size {width:g} x {height:g} must be positive")
-    rng = rng if rng is not None else derive_rng("relayout", model.name, seed)
+    if rng is None:
+        rng = derive_rng("relayout", model.name, seed)
+        if constraints is None:
+            constraints = Constraints(key_salt=(seed,))
     return Search(model, width, height, rng, constraints, budget_s=budget_s, max_restarts=max_restarts).run()
 
 

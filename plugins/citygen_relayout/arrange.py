@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from itertools import accumulate
 
 import numpy as np
 
@@ -40,12 +41,14 @@ class Solution:
     align_occ: list[tuple[int, int, int]]  # (alignment index, side, element index)
     same_occ: list[tuple[int, tuple, int, int]]  # (samesize index, scope, first element, length)
     doors: list[int]  # door budget handed to each element (1 = this element holds the face's door)
+    cum: list[float] = field(default_factory=list)  # element boundaries relative to the region's start
 
 
 @dataclass
 class _State:
     elems: list[tuple[str, int]] = field(default_factory=list)
     doors: list[int] = field(default_factory=list)
+    floor: list[int | None] = field(default_factory=list)  # floor an element is laid out in (None: free)
     xbar: list[float] = field(default_factory=list)
     lo: list[float] = field(default_factory=list)
     hi: list[float] = field(default_factory=list)
@@ -88,6 +91,9 @@ class _Layout:
         comp = ctx.compiled
         self.min_extent, self.max_extent = comp.bounds[node.door == 0]
         self.min_size = {c: max(comp.size(c, self.axis).lo, self.min_extent[(c, self.axis)]) for c in self.alphabet}
+        # floors of the request this region spans (§9.1): along y they are searched, across they prune
+        self.floors = ctx.spanned_floors(node.y, node.y + node.h)
+        self.straddles = self.floors is not None and self.axis == "x"
 
     def _freq_bounds(self, f) -> tuple[int, int]:
         lo, hi = scaled_bounds(f.lo, f.hi, f.relative, self.total, self.input_size)
@@ -139,15 +145,21 @@ class _Layout:
             if self.node.door is not None and comp.door[sym]:
                 doors = [d for d in (1, 0) if (d == 1 and self._doors() * mult + mult <= self.node.door)
                          or (d == 0 and comp.doorless[sym])]
-                if not doors:
-                    ctx.blame("entrance door budget of the face")
-                    continue
+            if self.node.door and not self.symmetric and self._doors() < self.node.door \
+                    and not comp.door_ahead(self.node.symbol, nxt):
+                doors = [d for d in doors if d]  # the door must come now: nothing later can hold it
+            if not doors:
+                ctx.blame("entrance door budget of the face")
+                continue
             if any(sym in f.members and self._count(f.members) * mult + mult > hi for f, _, hi in self.freq):
                 ctx.blame(next(f"{f.text} (line {f.line})" for f, _, hi in self.freq if sym in f.members
                                and self._count(f.members) * mult + mult > hi))
                 continue
             if used_lo + self.min_size[sym] * mult > self.total + 1e-9:
                 ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
+                continue
+            if self.straddles and comp.bound[(sym, "y")]:
+                ctx.blame("floor lines of the building")
                 continue
             if self.min_extent[(sym, self.ortho)] > self.across + 1e-9:
                 ctx.blame(f"minimum {self.ortho}-extent {self.min_extent[(sym, self.ortho)]:.2f} of {sym} "
@@ -208,11 +220,58 @@ class _Layout:
                 continue
             nrows, nsame, x_saved = len(st.rows), len(st.same_occ), st.x
             self._push(sym, inst, door)
-            if self._solve(new_from=nrows) and self._accept():
-                yield from self._extend(nxt, rnxt)
+            pushed = len(st.rows)
+            for floor in self._floor_options(len(st.elems) - 1, sym, door):
+                st.floor[-1] = floor
+                if floor is not None:
+                    self._floor_rows(len(st.elems) - 1, floor)
+                if self._solve(new_from=nrows) and self._accept():
+                    yield from self._extend(nxt, rnxt)
+                del st.rows[pushed:]
+                st.x = x_saved
             self._pop(nrows, nsame)
-            st.x = x_saved
         ctx.backtrack()
+
+    def _floor_options(self, v: int, sym: str, door: int) -> list[int | None]:
+        """Floors element ``v`` may be laid out in, most plausible first (floor lines are searched, §9.1).
+
+        Only along y in a region spanning floor lines, and only for elements holding an opening. An element
+        with an opening across its whole height must lie within one floor (the ground floor for the door);
+        any other one may also span floor lines (``None``), which its own arrangement then has to absorb.
+        """
+        comp = self.ctx.compiled
+        if self.axis != "y" or self.floors is None or not comp.opening[sym]:
+            return [None]
+        bound = comp.bound[(sym, "y")]
+        lines, (k0, k1) = self.ctx.floor_lines, self.floors
+        start, size = self._position(v)
+        first = max([k for k in self.st.floor[:v] if k is not None], default=k0)
+        if door and bound:  # the door lies in the ground floor
+            first, k1 = 0, 0 if k0 == 0 else -1
+        ranked = []
+        for k in range(first, k1 + 1):
+            room = min(lines[k + 1], self.off + self.total) - max(lines[k], self.off)
+            if room + 1e-9 < self.min_size[sym]:
+                continue
+            overlap = min(start + size, lines[k + 1]) - max(start, lines[k])
+            ranked.append((-overlap, k))
+        ranked.sort()
+        # the floors the provisional interval overlaps (the nearest one when it overlaps none)
+        options: list[int | None] = [k for o, k in ranked if o < 0] or [k for _, k in ranked[:1]]
+        if not bound and (len(options) != 1 or ranked[0][0] > -size + 1e-9):
+            options.append(None)  # spanning: only when it provisionally crosses a line or fits no floor
+        elif not options:
+            self.ctx.blame("floor lines of the building")
+        return options
+
+    def _floor_rows(self, v: int, k: int) -> None:
+        """Element ``v`` starts at or above floor line ``k`` and ends at or below line ``k + 1``."""
+        lines = self.ctx.floor_lines
+        coefs = self._start_coefs(v)
+        self.st.rows.append(Row({i: -c for i, c in coefs.items()}, self.off - lines[k], False,
+                                "floor lines of the building", key=("floor", v)))
+        self.st.rows.append(Row({**coefs, v: 1.0}, lines[k + 1] - self.off, False, "floor lines of the building",
+                                key=("floor", v)))
 
     def _accept(self) -> bool:
         """Randomly reject an append whose QP strained the sizes (§7.3): p = exp(-error / temperature)."""
@@ -231,6 +290,7 @@ class _Layout:
         st, rng = self.st, self.ctx.compiled.size(sym, self.axis)
         st.elems.append((sym, inst))
         st.doors.append(door)
+        st.floor.append(None)
         st.lo.append(self.min_size[sym])
         st.hi.append(min(rng.hi, self.max_extent[(sym, self.axis)]))
         st.xbar.append(self.ctx.sample_size(rng))
@@ -241,11 +301,12 @@ class _Layout:
                 break
         if not self.symmetric:
             self._activate(len(st.elems))
-            self._request_rows(v, sym)
+            if self.axis == "x":
+                self._request_rows(v, sym)
 
     def _pop(self, nrows: int, nsame: int) -> None:
         st = self.st
-        for lst in (st.elems, st.doors, st.lo, st.hi, st.xbar):
+        for lst in (st.elems, st.doors, st.floor, st.lo, st.hi, st.xbar):
             lst.pop()
         del st.rows[nrows:]
         del st.same_occ[nsame:]
@@ -286,7 +347,7 @@ class _Layout:
         al = self.ctx.model.alignments[ref.index]
         lam = al.a_anchor if ref.side == 0 else al.b_anchor
         start, size = interval or self._position(v)
-        targets = self.ctx.align_targets(ref, self.axis, start, start + size, self.node)
+        targets = self.ctx.align_targets(ref, self.axis, start, start + size, self.node.anc)
         if interval is not None:  # verification: the first overlapping target it is not aligned with
             targets = [t for t in targets if abs(start + lam * size - t[2]) > 1e-6 * max(1.0, self.total)]
         if not targets:
@@ -366,27 +427,36 @@ class _Layout:
             else:
                 general.append(r)
         gid = [_find(group, i) for i in range(n)]
-        uniq = sorted(set(gid))
-        col = {g: k for k, g in enumerate(uniq)}
-        m = len(uniq)
-        member = np.array([col[g] for g in gid])
-        w = np.bincount(member, minlength=m).astype(float)
-        gx = np.bincount(member, weights=xbar, minlength=m) / w
-        glo = np.full(m, -np.inf)
-        ghi = np.full(m, np.inf)
-        np.maximum.at(glo, member, lo)
-        np.minimum.at(ghi, member, hi)
-        seen: dict[tuple, None] = {}
+        # relative deviations (default): a large region absorbs a change in proportion to its size
+        ew = 1.0 / np.maximum(xbar, max(0.02 * self.total, 1e-3)) ** 2 if self.ctx.relative else np.ones(n)
+        if len(general) == len(rows):  # no merged variables
+            mem, m = gid, n
+            member = np.arange(n)
+            w, gx, glo, ghi = ew, xbar, lo, hi
+        else:
+            uniq = sorted(set(gid))
+            col = {g: k for k, g in enumerate(uniq)}
+            m = len(uniq)
+            mem = [col[g] for g in gid]
+            member = np.array(mem)
+            w = np.bincount(member, weights=ew, minlength=m)
+            gx = np.bincount(member, weights=xbar * ew, minlength=m) / w
+            glo_l, ghi_l = [-np.inf] * m, [np.inf] * m
+            for i, g in enumerate(mem):
+                glo_l[g] = max(glo_l[g], st.lo[i])
+                ghi_l[g] = min(ghi_l[g], st.hi[i])
+            glo, ghi = np.array(glo_l), np.array(ghi_l)
+        seen: set[tuple] = set()
         eq_rows, le_rows = [], []
         for r in general:
-            vec = np.zeros(m)
+            vec = [0.0] * m
             for i, c in r.coefs.items():
-                vec[member[i]] += c
-            key = (r.eq, r.rhs, vec.tobytes())
+                vec[mem[i]] += c
+            key = (r.eq, r.rhs, *vec)
             if key not in seen:
-                seen[key] = None
+                seen.add(key)
                 (eq_rows if r.eq else le_rows).append((vec, r.rhs))
-        total = (np.bincount(member, minlength=m) * mult, self.total)
+        total = ((np.bincount(member, minlength=m) * mult).tolist(), self.total)
         (eq_rows if total_eq else le_rows).append(total)
         E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
         L = np.array([v for v, _ in le_rows]).reshape(-1, m)
@@ -509,4 +579,5 @@ class _Layout:
                     v = start + len(ref.pattern.before) - 1
                     if 0 <= v < len(st.elems):
                         align_occ.append((ref.index, ref.side, v))
-        return Solution(list(st.elems), st.x.copy(), align_occ, list(st.same_occ), list(st.doors))
+        return Solution(list(st.elems), st.x.copy(), align_occ, list(st.same_occ), list(st.doors),
+                        list(accumulate(st.x.tolist(), initial=0.0)))

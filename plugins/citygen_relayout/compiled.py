@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass
 
 from citygen.layout import FLOOR_BOUND_LABELS
@@ -29,7 +30,8 @@ class PatternRef:
 
 
 class Compiled:
-    """Per-model tables: automata, size ranges, door-bearing and floor/corner-bound symbols, pattern index."""
+    """Per-model tables: automata, size ranges, door-bearing, opening-holding and floor/corner-bound symbols,
+    pattern index."""
 
     def __init__(self, model: Model) -> None:
         self.model = model
@@ -43,8 +45,11 @@ class Compiled:
             self._bound(name, "x")
             self._bound(name, "y")
         self.doorless: dict[str, bool] = {}
+        self.opening: dict[str, bool] = {}
+        self._door_ahead: dict[tuple, bool] = {}
         for name in model.symbols:
             self._doorless(name)
+            self._has_opening(name)
         self.bounds = {relax: extent_bounds(model, self.automata, self.door, relax) for relax in (False, True)}
         self.min_extent, self.max_extent = self.bounds[False]
         self.patterns: list[PatternRef] = []
@@ -57,6 +62,18 @@ class Compiled:
             for sym in ref.pattern.items[-1]:
                 self.by_last.setdefault(sym, []).append(ref)
         self.aligned_symbols = frozenset(s for al in model.alignments for p in (al.a, al.b) for s in p.body[0])
+        self.composite = {name: not sym.is_terminal for name, sym in model.symbols.items()}
+        # symbols that scope a constraint (``within``): the only ancestors a region needs to remember
+        self.scoped = frozenset(c.within for c in (*model.alignments, *model.samesizes) if c.within)
+        self._names: dict[tuple[str, int], str] = {}
+        self.code = zlib.crc32(model.name.encode()) ^ (len(model.symbols) << 32)  # part of region module keys
+
+    def names(self, element: tuple[str, int]) -> str:
+        """Region name of an element: ``S`` for instance 0, ``S'k`` for instance k."""
+        name = self._names.get(element)
+        if name is None:
+            name = self._names[element] = element[0] if not element[1] else f"{element[0]}'{element[1]}"
+        return name
 
     def size(self, symbol: str, axis: str) -> SizeRange:
         return self.model.sizes[(symbol, axis)]
@@ -67,6 +84,39 @@ class Compiled:
             self.door[name] = sym.label == "door" if sym.is_terminal else \
                 any([self._has_door(c) for c in sym.children])
         return self.door[name]
+
+    def door_ahead(self, name: str, state) -> bool:
+        """Whether some continuation of ``name``'s arrangement from automaton ``state`` holds a door-bearing
+        child (breadth-first, memoised): a face that still owes its door prunes prefixes that cannot place it."""
+        key = (name, state)
+        found = self._door_ahead.get(key)
+        if found is None:
+            auto = self.automata[name]
+            kids = list(dict.fromkeys(self.model.symbols[name].children))
+            seen, frontier, found = {state}, [state], False
+            while frontier and not found and len(seen) < 5000:
+                here = frontier.pop()
+                for c in kids:
+                    nxt = auto.step(here, c)
+                    if nxt is None:
+                        continue
+                    if self.door[c]:
+                        found = True
+                        break
+                    if nxt not in seen:
+                        seen.add(nxt)
+                        frontier.append(nxt)
+            found = found or len(seen) >= 5000
+            self._door_ahead[key] = found
+        return found
+
+    def _has_opening(self, name: str) -> bool:
+        """Whether ``name`` holds a floor-bound terminal (an opening) anywhere below: its floor matters."""
+        if name not in self.opening:
+            sym = self.model.symbols[name]
+            self.opening[name] = sym.label in FLOOR_BOUND_LABELS if sym.is_terminal else \
+                any([self._has_opening(c) for c in sym.children])
+        return self.opening[name]
 
     def _doorless(self, name: str) -> bool:
         """Whether ``name`` has a valid arrangement without any door (breadth-first over automaton states)."""

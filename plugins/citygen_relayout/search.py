@@ -44,7 +44,7 @@ class RelayoutResult:
     seconds: float = 0.0
 
 
-@dataclass
+@dataclass(slots=True)
 class Node:
     """A composite region instance to lay out."""
 
@@ -69,7 +69,7 @@ class _Frame:
     pending: tuple[Node, ...]
     log_len: int
     conflicts: set[int] = field(default_factory=set)
-    blockers: Counter = field(default_factory=Counter)
+    blockers: Counter | None = None
     yielded: int = 0
 
 
@@ -81,19 +81,21 @@ class Constraints:
     corners: tuple[float, float] | None = None
     doors: int | None = None
     shared: dict | None = None  # building-wide same-size references (``across``), filled by the first face
+    key_salt: tuple = ()  # distinguishes the module keys of the faces of one building (the request's seed)
 
 
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
                  constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
-                 max_restarts: int = 12, accept_temperature: float = 0.0) -> None:
+                 max_restarts: int = 12, accept_temperature: float = 0.0, relative: bool = True) -> None:
         self.model, self.compiled = model, compile_model(model)
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
         self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
-        self.corners, self.doors, self.shared = c.corners, c.doors, c.shared
+        self.corners, self.doors, self.shared, self.key_salt = c.corners, c.doors, c.shared, c.key_salt
         self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
         self.accept_temperature = accept_temperature
+        self.relative = relative  # QP on relative size deviations (x - xbar)^2 / xbar^2; False: the paper's
         self.blockers: Counter[str] = Counter()
         self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
         self.dead_causes: Counter[str] = Counter()
@@ -115,7 +117,10 @@ class Search:
     def blame(self, tag: str, frames: frozenset[int] = frozenset()) -> None:
         self.blockers[tag] += 1
         if self.frames:
-            self.frames[self.current].blockers[tag] += 1
+            frame = self.frames[self.current]
+            if frame.blockers is None:
+                frame.blockers = Counter()
+            frame.blockers[tag] += 1
         if frames and self.frames:
             self.frames[self.current].conflicts.update(f for f in frames if f < self.current)
 
@@ -128,11 +133,12 @@ class Search:
                 return float(value)
         return float(self.rng.uniform(rng.lo, rng.hi))
 
-    def align_targets(self, ref: PatternRef, axis: str, a: float, b: float, node: Node) -> list[tuple]:
-        """Placed regions of the other side overlapping ``[a, b]``: ``(start, end, anchor pos, frame)``."""
+    def align_targets(self, ref: PatternRef, axis: str, a: float, b: float, anc: dict[str, int]) -> list[tuple]:
+        """Placed regions of the other side overlapping ``[a, b]``: ``(start, end, anchor pos, frame)``; ``anc``
+        are the ancestors (scopes) of the asking region."""
         al = self.model.alignments[ref.index]
         other, lam = (1, al.b_anchor) if ref.side == 0 else (0, al.a_anchor)
-        scope = node.anc.get(al.within) if al.within else 0
+        scope = anc.get(al.within) if al.within else 0
         if scope is None:
             return []
         found = []
@@ -153,6 +159,17 @@ class Search:
         if scope == ("building",) and self.shared is not None and index in self.shared:
             return self.shared[index], -1
         return self.refs.get((index, scope))
+
+    def spanned_floors(self, a: float, b: float) -> tuple[int, int] | None:
+        """``(first, last)`` floor indices of the y-range ``[a, b]`` when floor lines cross it, else None."""
+        lines = self.floor_lines
+        if lines is None or lines.size < 3:
+            return None
+        eps = 1e-6 * max(self.width, self.height, 1.0)
+        k0 = int(np.searchsorted(lines, a + eps, side="right")) - 1
+        k1 = int(np.searchsorted(lines, b - eps, side="left")) - 1
+        k0, k1 = max(k0, 0), min(k1, lines.size - 2)
+        return (k0, k1) if k1 > k0 else None
 
     def inside(self, axis: str, a: float, b: float) -> bool:
         eps = 1e-6 * max(self.width, self.height, 1.0)
@@ -227,6 +244,7 @@ class Search:
     def _attempt(self) -> bool:
         self._reset()
         root = Node(0, self.model.root, 0.0, 0.0, self.width, self.height, {self.model.root: 0}, self.doors, -1)
+        self._nodes[0] = root
         pending = [root]
         while pending:
             node = pending.pop()
@@ -245,7 +263,7 @@ class Search:
                 if not frame.yielded:
                     node = frame.node
                     self.dead[f"{node.symbol} ({node.w:.1f} x {node.h:.1f} m)"] += 1
-                    self.dead_causes.update(frame.blockers)
+                    self.dead_causes.update(frame.blockers or {})
                 self.backtrack()
                 earlier = [c for c in frame.conflicts if c < m]
                 if not earlier:
@@ -277,101 +295,173 @@ class Search:
         return self._replica(node)
 
     def _replica(self, node: Node):
-        """A replica instance (§5.1 instances): the source's arrangement, verified at its own position."""
-        src_node, sol = self.solutions[node.replica_of]
-        axis = self.model.symbols[node.symbol].split
-        off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        """A replica instance (§5.1 instances): the source's arrangement, verified at its own position with the
+        whole subtree below it (which ``_apply`` then places in the same frame)."""
+        if self._verify(node.replica_of, node.x, node.y, node.w, node.h, node.anc):
+            yield self.solutions[node.replica_of][1]
+
+    def _source(self, uid: int) -> int:
+        """The laid-out region whose arrangement region ``uid`` has (itself, or the source of a replica)."""
+        src = self._nodes[uid].replica_of
+        return uid if src is None else src
+
+    def _verify(self, src: int, x: float, y: float, w: float, h: float, anc: dict[str, int]) -> bool:
+        """Whether the subtree of source region ``src`` moved to ``(x, y)`` meets the request's floors and
+        corners and aligns with the regions placed so far (its inner alignments hold by translation)."""
+        src_node, sol = self.solutions[src]
+        comp = self.compiled
+        axis = self.model.symbols[src_node.symbol].split
+        off = x if axis == "x" else y
+        pos = [off + c for c in sol.cum]
+        straddles = axis == "x" and self.spanned_floors(y, y + h) is not None
         for v, (sym, _) in enumerate(sol.elements):
-            if self.compiled.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1]):
-                self.blame("floor lines of the building" if axis == "y" else "corner strips of the face")
-                return
+            if (comp.bound[(sym, axis)] and not self.inside(axis, pos[v], pos[v + 1])) or \
+                    (straddles and comp.bound[(sym, "y")]):
+                self.blame("floor lines of the building" if axis == "y" or straddles else "corner strips of the face")
+                return False
         for k, side, v in sol.align_occ:
             ref = PatternRef("align", k, side, None)
             al = self.model.alignments[k]
             lam = al.a_anchor if side == 0 else al.b_anchor
-            for s, e, y, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], node):
-                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - y) > 1e-6 * max(self.width, self.height, 1.0):
+            for s, e, t, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], anc):
+                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - t) > 1e-6 * max(self.width, self.height, 1.0):
                     self.blame(f"{al.text} (line {al.line})", frozenset({frame}))
-                    return
-        yield sol
+                    return False
+        for v, (sym, _) in enumerate(sol.elements):
+            if comp.composite[sym]:
+                a, b = pos[v], pos[v + 1]
+                inner = {**anc, sym: -1} if sym in comp.scoped else anc  # a new scope: nothing placed in it yet
+                child = self._source(src_node.children_uids[v])
+                if not (self._verify(child, a, y, b - a, h, inner) if axis == "x" else
+                        self._verify(child, x, a, w, b - a, inner)):
+                    return False
+        return True
 
     def _log(self, undo) -> None:
         self.log.append(undo)
 
     def _apply(self, m: int, sol: Solution) -> list[Node]:
-        """Register the frame's arrangement; return its composite children in randomized order."""
+        """Register the frame's arrangement; return its composite children in randomized order. A replica's
+        subtree is placed at once (its regions stay implicit: the source's, moved)."""
         node = self.frames[m].node
+        if node.replica_of is not None:
+            self._place(m, node.replica_of, node.x, node.y, node.w, node.h, node.anc)
+            return []
         axis = self.model.symbols[node.symbol].split
         self.solutions[node.uid] = (node, sol)
         self._log(lambda uid=node.uid: self.solutions.pop(uid, None))
-        off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+        pos = self._register(m, sol, axis, node.x if axis == "x" else node.y, node.anc)
+        children = []
+        composite, scoped = self.compiled.composite, self.compiled.scoped
+        horizontal = axis == "x"
+        for v, (sym, inst) in enumerate(sol.elements):
+            if not composite[sym]:
+                continue
+            a, b = pos[v], pos[v + 1]
+            self._uid += 1
+            uid = self._uid
+            door = None if node.door is None else sol.doors[v]
+            anc = {**node.anc, sym: uid} if sym in scoped else node.anc
+            child = Node(uid, sym, a, node.y, b - a, node.h, anc, door, m) if horizontal else \
+                Node(uid, sym, node.x, a, node.w, b - a, anc, door, m)
+            child.key = (node.uid, sym, inst, door)
+            self._nodes[uid] = child
+            children.append(child)
+        node.children_uids = {v: c.uid for v, c in zip(
+            [v for v, (sym, _) in enumerate(sol.elements) if composite[sym]], children)}
+        if len(children) < 2:
+            return children
+        order = self.rng.permutation(len(children))
+        return [children[i] for i in order]
+
+    def _register(self, m: int, sol: Solution, axis: str, off: float, anc: dict[str, int]) -> list[float]:
+        """Record the alignment occurrences and same-size references of an arrangement at ``off``; its
+        element boundaries."""
+        cum = sol.cum
+        pos = [off + c for c in cum]
         for k, side, v in sol.align_occ:
             within = self.model.alignments[k].within
-            scope = node.anc.get(within) if within else 0
+            scope = anc.get(within) if within else 0
             table = self.placed.setdefault((k, side, axis), {})
-            key = (round(float(pos[v]), 9), round(float(pos[v + 1]), 9), scope)
+            key = (round(pos[v], 9), round(pos[v + 1], 9), scope)
             if key not in table:
                 table[key] = m
                 self._log(lambda t=table, k2=key: t.pop(k2, None))
         for k, scope, v, n in sol.same_occ:
             if scope == ("building",) and self.shared is not None:
                 if k not in self.shared:
-                    self.shared[k] = float(np.sum(sol.sizes[v:v + n]))
+                    self.shared[k] = cum[v + n] - cum[v]
                     self._log(lambda k2=k: self.shared.pop(k2, None))
             elif (k, scope) not in self.refs:
-                self.refs[(k, scope)] = (float(np.sum(sol.sizes[v:v + n])), m)
+                self.refs[(k, scope)] = (cum[v + n] - cum[v], m)
                 self._log(lambda k2=(k, scope): self.refs.pop(k2, None))
-        children = []
-        src = self.solutions.get(node.replica_of) if node.replica_of is not None else None
-        for v, (sym, inst) in enumerate(sol.elements):
-            symbol = self.model.symbols[sym]
-            if symbol.is_terminal:
-                continue
-            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
-                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
-            self._uid += 1
-            door = None if node.door is None else sol.doors[v]
-            child = Node(self._uid, sym, float(x), float(y), float(w), float(h), {**node.anc, sym: self._uid},
-                         door, m)
-            if src is not None:
-                child.replica_of = src[0].children_uids[v]
-            else:
-                child.key = (node.uid, sym, inst, door)
-            self._nodes[child.uid] = child
-            children.append((v, child))
-        node.children_uids = {v: c.uid for v, c in children}
-        order = self.rng.permutation(len(children))
-        return [children[i][1] for i in order]
+        return pos
+
+    def _place(self, m: int, src: int, x: float, y: float, w: float, h: float, anc: dict[str, int]) -> None:
+        """Register the subtree of source region ``src`` moved to ``(x, y)`` (a replica) in frame ``m``."""
+        src_node, sol = self.solutions[src]
+        axis = self.model.symbols[src_node.symbol].split
+        pos = self._register(m, sol, axis, x if axis == "x" else y, anc)
+        composite, scoped = self.compiled.composite, self.compiled.scoped
+        for v, (sym, _) in enumerate(sol.elements):
+            if composite[sym]:
+                a, b = pos[v], pos[v + 1]
+                inner = anc
+                if sym in scoped:  # a new scope for ``within`` constraints
+                    self._uid += 1
+                    inner = {**anc, sym: self._uid}
+                child = self._source(src_node.children_uids[v])
+                if axis == "x":
+                    self._place(m, child, a, y, b - a, h, inner)
+                else:
+                    self._place(m, child, x, a, w, b - a, inner)
 
     # ---------------------------------------------------------------- output
     def _build(self) -> FacadeLayout:
         root = self.frames[0].node
-        region = self._region(root, self.model.root, 0)
+        self._sources: set[int] = set()
+        stack, direct = [root.uid], []
+        while stack:  # the replica sources of the final tree, and every region below them
+            uid = stack.pop()
+            node = self._nodes[uid]
+            if node.replica_of is not None:
+                direct.append(node.replica_of)
+            else:
+                stack.extend(node.children_uids.values())
+        while direct:
+            uid = self._source(direct.pop())
+            if uid not in self._sources:
+                self._sources.add(uid)
+                direct.extend(self._nodes[uid].children_uids.values())
+        region = self._region(root.uid, root.x, root.y, root.w, root.h, (self.model.root, 0), None)
         return FacadeLayout(self.width, self.height, region,
                             meta={"kind": "relayout", "model": self.model.name})
 
-    def _region(self, node: Node, sym_name: str, inst: int) -> Region:
-        sym = self.model.symbols[sym_name]
-        name = sym_name if inst == 0 else f"{sym_name}'{inst}"
-        _, sol = self.solutions[node.uid]
-        axis = sym.split
-        off = node.x if axis == "x" else node.y
-        pos = off + np.concatenate([[0.0], np.cumsum(sol.sizes)])
+    def _region(self, uid: int, x: float, y: float, w: float, h: float, element: tuple[str, int],
+                key: int | None) -> Region:
+        """The region of laid-out region ``uid`` (or of a replica of it) at ``(x, y)``."""
+        symbols, names = self.model.symbols, self.compiled.names
+        sym = symbols[element[0]]
+        node, sol = self.solutions[uid]
+        horizontal = sym.split == "x"
+        pos = [(x if horizontal else y) + c for c in sol.cum]
         kids = []
-        for v, (child_sym, child_inst) in enumerate(sol.elements):
-            c = self.model.symbols[child_sym]
-            x, y, w, h = (pos[v], node.y, pos[v + 1] - pos[v], node.h) if axis == "x" else \
-                (node.x, pos[v], node.w, pos[v + 1] - pos[v])
+        for v, child in enumerate(sol.elements):
+            c = symbols[child[0]]
+            a, b = pos[v], pos[v + 1]
             if c.is_terminal:
-                cname = child_sym if child_inst == 0 else f"{child_sym}'{child_inst}"
-                kids.append(Region(float(x), float(y), float(w), float(h), cname, c.label, c.depth, c.material,
-                                   c.asset))
+                kids.append(Region(a, y, b - a, h, names(child), c.label, c.depth, c.material, c.asset)
+                            if horizontal else
+                            Region(x, a, w, b - a, names(child), c.label, c.depth, c.material, c.asset))
             else:
-                kids.append(self._region(self._node_of(node, v), child_sym, child_inst))
-        return Region(node.x, node.y, node.w, node.h, name, sym.label, sym.depth, sym.material, sym.asset,
-                      children=tuple(kids))
+                src = self._source(node.children_uids[v])
+                kids.append(self._region(src, a, y, b - a, h, child, self._key(src)) if horizontal else
+                            self._region(src, x, a, w, b - a, child, self._key(src)))
+        return Region(x, y, w, h, names(element), sym.label, sym.depth, sym.material, sym.asset,
+                      children=tuple(kids), key=key)
 
-    def _node_of(self, node: Node, v: int) -> Node:
-        return self._nodes[node.children_uids[v]]
+    def _key(self, src: int) -> int | None:
+        """Module key of the copies of a replicated region (§7.3 replicas: identical subtrees), else None."""
+        if src not in self._sources:
+            return None
+        return hash((self.key_salt, self.compiled.code, self._nodes[src].symbol, src))
