@@ -22,7 +22,7 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=jobs,
                            registry=registry, progress=None if args.quiet else terminal_progress)
     print(report.summary())
-    return 1 if args.strict and (report.skipped or report.warnings) else 0
+    return 1 if args.strict and report.skipped else 0
 
 
 def _cmd_validate(args: argparse.Namespace, registry: Registry) -> int:
@@ -95,7 +95,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g.add_argument("scene", help="scene TOML file")
     g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
     g.add_argument("--seed", type=int, help="override the scene seed")
-    g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped or warned")
+    g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
     g.add_argument("--jobs", type=int, default=0,
                    help="worker processes (default 0: one per CPU core); the output does not depend on it")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
