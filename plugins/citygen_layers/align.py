@@ -59,7 +59,8 @@ class Alignment:
 class _Words:
     """Per-row prefix sums and flag counts of one direction of a matrix (forward or reversed words)."""
 
-    def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray) -> None:
+    def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray,
+                 parents: Sequence[Sequence[int]] | None = None) -> None:
         self.m = len(words)
         self.n = np.array([len(w) for w in words])
         self.cum = [np.concatenate([[0.0], np.cumsum([x.size for x in w])]) for w in words]
@@ -72,6 +73,9 @@ class _Words:
         self.unocc = counts(lambda x: x.unoccludable)
         self.solid = counts(lambda x: not (x.transparent or x.opaque))
         self.attached = [np.array([x.attached for x in w] + [False]) for w in words]
+        parents = parents or [range(len(w)) for w in words]
+        self.inner = [np.array([False] + [a == b for a, b in zip(pa[:-1], pa[1:])] + [False])
+                      for pa in (list(p) for p in parents)]
         self.runend = []
         for w in words:
             ends = np.zeros(len(w) + 1, dtype=int)
@@ -84,7 +88,7 @@ class _Words:
     def eps_allowed(self, r: int, p: int) -> bool:
         """No insertion next to an attached letter (the fourth column constraint, pairwise)."""
         att = self.attached[r]
-        return not ((p > 0 and att[p - 1]) or (p < self.n[r] and att[p]))
+        return not ((p > 0 and att[p - 1]) or (p < self.n[r] and att[p]) or self.inner[r][p])
 
     def edges(self, state: tuple[int, ...], mu: float) -> list[tuple[float, int, Column, float]]:
         """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size)``."""
@@ -183,10 +187,14 @@ def _search_step(words: _Words, heap: list, dist: dict, size: dict, parent: dict
 
 
 def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, mu: float,
-          budget: Budget) -> Alignment | None:
-    """Best alignment with error ``Omega <= mu`` and size ``<= canvas + mu`` (bidirectional Dijkstra), or None."""
-    fwd = _Words(words, above)
-    bwd = _Words([tuple(reversed(w)) for w in words], above)
+          budget: Budget, parents: Sequence[Sequence[int]] | None = None) -> Alignment | None:
+    """Best alignment with error ``Omega <= mu`` and size ``<= canvas + mu`` (bidirectional Dijkstra), or None.
+
+    ``parents`` maps the parts of split transparent letters to their letter (no hole may open inside one).
+    """
+    fwd = _Words(words, above, parents)
+    bwd = _Words([tuple(reversed(w)) for w in words], above,
+                 None if parents is None else [tuple(reversed(p)) for p in parents])
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
     sides = []

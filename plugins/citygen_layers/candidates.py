@@ -40,6 +40,11 @@ class DirectionSpec:
     counters: Mapping[str, Counter]
     floor_pattern: str | None = None
     floor_heights: tuple[float, ...] = ()
+    storeys: frozenset[str] = frozenset()
+
+    def storey_letters(self, word: tuple[Letter, ...]) -> list[int]:
+        """Indices of the letters of the floor word that are storeys (one per floor line interval)."""
+        return [i for i, x in enumerate(word) if not self.storeys or x.symbol in self.storeys]
 
 
 def direction_spec(ruleset: Ruleset, axis: str, canvas: float, counters: Mapping[str, Counter],
@@ -54,7 +59,8 @@ def direction_spec(ruleset: Ruleset, axis: str, canvas: float, counters: Mapping
     floor_pattern = None
     if axis == "y" and ruleset.floors is not None and floor_heights:
         floor_pattern = ruleset.layer(ruleset.floors).y
-    return DirectionSpec(axis, canvas, tuple(rows), counters, floor_pattern, tuple(floor_heights))
+    return DirectionSpec(axis, canvas, tuple(rows), counters, floor_pattern, tuple(floor_heights),
+                         ruleset.storeys)
 
 
 def make_letter(raw: Raw, size: float | None, ruleset: Ruleset) -> Letter:
@@ -62,8 +68,9 @@ def make_letter(raw: Raw, size: float | None, ruleset: Ruleset) -> Letter:
     sym = ruleset.symbols.get(name)
     if sym is None:
         return Letter(name, float(size or 0.0), True, unsized=True, mirrored=mirrored)
-    return Letter(name, float(size if size is not None else (sym.size or 0.0)), transparent or sym.transparent,
-                  sym.opaque, sym.attached, sym.unoccludable, sym.size is None, mirrored)
+    transparent = transparent or sym.transparent
+    return Letter(name, float(size if size is not None else (sym.size or 0.0)), transparent,
+                  sym.opaque and not transparent, sym.attached, sym.unoccludable, sym.size is None, mirrored)
 
 
 def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
@@ -104,7 +111,9 @@ class CandidateGenerator:
             for p in users:
                 pattern = self.ruleset.patterns[p]
                 if p == self.spec.floor_pattern:
-                    over |= min_measure(pattern, {name: k}, self.spec.counters, lambda s: 1.0) > len(
+                    storey = self.spec.storeys
+                    over |= min_measure(pattern, {name: k}, self.spec.counters,
+                                        lambda s: 1.0 if not storey or s in storey else 0.0) > len(
                         self.spec.floor_heights)
                 else:
                     over |= min_measure(pattern, {name: k}, self.spec.counters, size) > self.spec.canvas + self.mu
@@ -133,12 +142,13 @@ class CandidateGenerator:
         hi = self.spec.canvas + self.mu
         out: list[tuple[Letter, ...]] = []
         for raw in raws:
-            if pattern == self.spec.floor_pattern:
-                if len(raw) == len(self.spec.floor_heights):
-                    out.append(tuple(make_letter(r, h, self.ruleset)
-                                     for r, h in zip(raw, self.spec.floor_heights)))
-                continue
             letters = [make_letter(r, None, self.ruleset) for r in raw]
+            if pattern == self.spec.floor_pattern:
+                if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
+                    continue
+                if not self.spec.storeys:   # every letter is a storey: sized to the floor heights, pinned
+                    out.append(tuple(make_letter(r, h, self.ruleset) for r, h in zip(raw, self.spec.floor_heights)))
+                    continue
             unsized = [i for i, letter in enumerate(letters) if letter.unsized]
             total = sum(letter.size for letter in letters)
             if not unsized:
@@ -192,7 +202,7 @@ class CandidateGenerator:
 
     def _fits(self, index: int, words: Mapping[str, tuple[Letter, ...]]) -> bool:
         row = self.spec.rows[index]
-        if row.pattern == self.spec.floor_pattern:
+        if row.pattern == self.spec.floor_pattern and not self.spec.storeys:
             return True
         size = sum(letter.size for letter in words[row.pattern])
         return self.lower_bound(index, words) - 1e-9 <= size <= self.spec.canvas + self.mu + 1e-9

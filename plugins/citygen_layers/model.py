@@ -140,6 +140,7 @@ class Ruleset:
     layers: tuple[Layer, ...]
     shapes: tuple[ShapeSpec, ...] = ()
     floors: str | None = None
+    storeys: frozenset[str] = frozenset()   # empty: every letter of the floor word is a storey
     options: SolveOptions = SolveOptions()
     source: str = "<string>"
 

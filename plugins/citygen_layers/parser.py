@@ -131,6 +131,7 @@ class _FileParser:
         self.floors: tuple[str, SourceLocation] | None = None
         self.options: dict[str, float | int] = {}
         self.last_pattern: str | None = None
+        self.storeys: frozenset[str] = frozenset()
 
     def loc(self, line: int, col: int) -> SourceLocation:
         return SourceLocation(self.path, line, col)
@@ -175,9 +176,14 @@ class _FileParser:
             self.options[key] = keys[key](_number(value, self.loc(n, col), key))
 
     def _kw_floors(self, line: str, words: list[tuple[str, int]], n: int) -> None:
-        if len(words) != 2:
-            raise ParseError("expected 'floors LAYER'", where=self.loc(n, words[0][1]))
+        if len(words) < 2:
+            raise ParseError("expected 'floors LAYER [STOREY_SYMBOL ...]'", where=self.loc(n, words[0][1]))
         self.floors = (words[1][0], self.loc(n, words[1][1]))
+        for word, col in words[2:]:
+            if word not in self.symbols:
+                raise ParseError(f"unknown storey symbol {word!r}", where=self.loc(n, col),
+                                 hint="declare storey symbols before 'floors'")
+        self.storeys = frozenset(w for w, _ in words[2:])
 
     def _kw_symbol(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         name = self._ident(words, 1, n, "a symbol name")
@@ -333,7 +339,8 @@ class _FileParser:
                 raise ParseError(f"floors names unknown layer {floors!r}", where=where)
         options = SolveOptions(**self.options)  # type: ignore[arg-type]
         return Ruleset(Path(self.path).stem, self.canvas, dict(self.symbols), dict(self.counters),
-                       dict(self.patterns), tuple(self.layers), tuple(self.shapes), floors, options, self.path)
+                       dict(self.patterns), tuple(self.layers), tuple(self.shapes), floors, self.storeys,
+                       options, self.path)
 
 
 def _symbols_of(node: Node) -> set[str]:

@@ -64,7 +64,7 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
         if result is None and any(x.transparent for w in words for x in w) and not budget.exhausted:
             split, parents = split_transparent(words, spec.canvas)
             split, parents = tuple(split), tuple(parents)
-            result = align(split, above, spec.canvas, mu, budget)
+            result = align(split, above, spec.canvas, mu, budget, parents)
         if result is None:
             return None
         matrices.append(Matrix(group, rows, split, parents, words, result))
@@ -125,22 +125,37 @@ def _sized(ruleset: Ruleset, spec: DirectionSpec, candidate: Candidate, matrices
            status: str, budget: Budget, bands: Callable[[Candidate], Bands] | None, floor_lines: Sequence[float],
            diagnostics: list[str]) -> DirectionSolution:
     pins = {}
+    band_map = {k: dict(v) for k, v in bands(candidate).items()} if bands is not None else {}
+    storey_bands: dict = {}
     if spec.floor_pattern is not None:
         for r in spec.rows:
-            if r.pattern == spec.floor_pattern and len(candidate.words[r.pattern]) == len(floor_lines) - 1:
-                pins[(r.group, r.pattern)] = list(zip(floor_lines[:-1], floor_lines[1:]))
-    band_map = dict(bands(candidate)) if bands is not None else {}
-    sizing = size_matrices(matrices, spec.canvas, pins, band_map)
+            word = candidate.words[r.pattern]
+            storeys = spec.storey_letters(word)
+            if r.pattern != spec.floor_pattern or len(storeys) != len(floor_lines) - 1:
+                continue
+            floors = list(zip(floor_lines[:-1], floor_lines[1:]))
+            if spec.storeys:    # storey letters stay inside their floor, other letters (ledges) are free
+                storey_bands.setdefault((r.group, r.pattern), {}).update(zip(storeys, floors))
+            else:
+                pins[(r.group, r.pattern)] = floors
+    sizing = size_matrices(matrices, spec.canvas, pins, _merge(band_map, storey_bands))
     if sizing.success and spec.axis == "y" and floor_lines and bands is not None:
         extra = _floor_bands(sizing, band_map, floor_lines)
         if extra:
-            sizing = size_matrices(matrices, spec.canvas, pins, extra)
+            sizing = size_matrices(matrices, spec.canvas, pins, _merge(extra, storey_bands))
     if not sizing.success:
         raise RulesetError(f"sizing failed in direction {spec.axis}: {sizing.message}", where=ruleset.source,
                            plugin="layers")
     diagnostics += [f"{spec.axis}: {r}" for r in sizing.relaxed]
     return DirectionSolution(spec.axis, spec.canvas, mu, status, candidate, matrices, sizing, budget.used,
                              tuple(diagnostics))
+
+
+def _merge(a: Bands, b: Bands) -> dict:
+    out = {k: dict(v) for k, v in a.items()}
+    for k, v in b.items():
+        out.setdefault(k, {}).update(v)
+    return out
 
 
 def _floor_bands(sizing: Sizing, wanted: Bands, lines: Sequence[float]) -> dict | None:
