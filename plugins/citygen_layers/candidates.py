@@ -97,6 +97,7 @@ class CandidateGenerator:
         names = set().union(*(pattern_counters(ruleset.patterns[p]) for p in self.patterns))
         self.counter_names = sorted(names)
         self._raw_cache: dict[tuple, list[tuple[Raw, ...]]] = {}
+        self._pinned: dict[str, float] = {}
 
     # counters ------------------------------------------------------------------------------------------------
     def counter_range(self, name: str) -> range:
@@ -142,7 +143,8 @@ class CandidateGenerator:
         hi = self.spec.canvas + self.mu
         out: list[tuple[Letter, ...]] = []
         for raw in raws:
-            letters = [make_letter(r, None, self.ruleset) for r in raw]
+            letters = [make_letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None,
+                                   self.ruleset) for r in raw]
             if pattern == self.spec.floor_pattern:
                 if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
                     continue
@@ -172,7 +174,7 @@ class CandidateGenerator:
         row = self.spec.rows[row_index]
         slack = 0.0
         for upper in self.spec.rows[:row_index]:
-            if upper.group != row.group or max(upper.layers) <= min(row.layers):
+            if upper.group != row.group or min(upper.layers) <= max(row.layers):
                 continue
             if words is None:
                 slack += max((self.opaque_size(w) for w in self._loose.get(upper.pattern, [])), default=0.0)
@@ -185,6 +187,7 @@ class CandidateGenerator:
         for values in itertools.product(*ranges):
             env = dict(zip(self.counter_names, values))
             self._loose: dict[str, list[tuple[Letter, ...]]] = {}
+            self._pinned = self._pinned_sizes(env)
             lists = {}
             for index, row in enumerate(self.spec.rows):   # uppermost first, so slack uses known words
                 if row.pattern in lists:
@@ -199,6 +202,20 @@ class CandidateGenerator:
                 words = dict(zip(self.patterns, combo))
                 if all(self._fits(i, words) for i in range(len(self.spec.rows))):
                     yield Candidate(env, words)
+
+    def _pinned_sizes(self, env: Mapping[str, int]) -> dict[str, float]:
+        """Symbols of a pinned floor word take their mean floor height in every other word of the candidate."""
+        floor = self.spec.floor_pattern
+        if floor is None or self.spec.storeys:
+            return {}
+        self._pinned = {}
+        words = self.sized_words(floor, self.raw_words(floor, env), 0.0)
+        if not words:
+            return {}
+        heights: dict[str, list[float]] = {}
+        for letter in words[0]:
+            heights.setdefault(letter.symbol, []).append(letter.size)
+        return {k: float(np.mean(v)) for k, v in heights.items()}
 
     def _fits(self, index: int, words: Mapping[str, tuple[Letter, ...]]) -> bool:
         row = self.spec.rows[index]

@@ -19,6 +19,12 @@ from citygen_layers.candidates import Row
 from citygen_layers.lsq import solve_lsq
 from citygen_layers.words import Letter
 
+#: Constraint kinds given up, in order, when the system has no solution (each step is reported).
+RELAXATIONS = (((), ""),
+               (("sync",), "synchronisation of symbol sizes dropped (pins and bands leave no common size)"),
+               (("sync", "band"), "corner/floor bands dropped (no room for them)"),
+               (("sync", "band", "pin"), "floor pins dropped (the words cannot meet the floor lines)"))
+
 #: Weight that ties an unsized symbol to its sampled size; only picks one optimum among equal ones.
 UNSIZED_WEIGHT = 1e-4
 
@@ -61,14 +67,14 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
     nvar = 0
     letter_vars: dict[tuple[str, str], list[list[int]]] = {}
     holes: dict[tuple[str, str], list[tuple[int, int]]] = {}
-    eq_rows: list[tuple[dict[int, float], float]] = []
-    ineq: list[tuple[dict[int, float], float]] = []
+    eq_rows: list[tuple[dict[int, float], float, str]] = []   # (coefficients, rhs, kind)
+    ineq: list[tuple[dict[int, float], float, str]] = []
     for matrix in matrices:
         ncol = len(matrix.alignment.columns)
         border = list(range(nvar, nvar + ncol + 1))
         nvar += ncol + 1
-        eq_rows += [({border[0]: 1.0}, 0.0), ({border[-1]: 1.0}, canvas)]
-        ineq += [({border[j]: 1.0, border[j + 1]: -1.0}, 0.0) for j in range(ncol)]
+        eq_rows += [({border[0]: 1.0}, 0.0, "cover"), ({border[-1]: 1.0}, canvas, "cover")]
+        ineq += [({border[j]: 1.0, border[j + 1]: -1.0}, 0.0, "order") for j in range(ncol)]
         for r, row in enumerate(matrix.rows):
             key = (row.group, row.pattern)
             spans = [[-1, -1] for _ in matrix.originals[r]]
@@ -102,13 +108,13 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
             key = (row.group, row.pattern)
             for i, letter in enumerate(matrix.originals[r]):
                 s, t = letter_vars[key][i]
-                ineq.append(({s: 1.0, t: -1.0}, 0.0))
+                ineq.append(({s: 1.0, t: -1.0}, 0.0, "order"))
                 if key in pins:
                     lo, hi = pins[key][i]
-                    eq_rows += [({s: 1.0}, lo), ({t: 1.0}, hi)]
+                    eq_rows += [({s: 1.0}, lo, "pin"), ({t: 1.0}, hi, "pin")]
                 if i in bands.get(key, {}):
                     lo, hi = bands[key][i]
-                    ineq += [({s: -1.0}, -lo), ({t: 1.0}, hi)]
+                    ineq += [({s: -1.0}, -lo, "band"), ({t: 1.0}, hi, "band")]
                 if letter.symbol in pinned:
                     continue
                 if letter.symbol not in proto:
@@ -118,23 +124,18 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
                 else:
                     ps, pt = proto[letter.symbol]
                     if (ps, pt) != (s, t):
-                        eq_rows.append((_add({t: 1.0, s: -1.0}, {pt: -1.0, ps: 1.0}), 0.0))
-    D, d = _matrix(obj, nvar)
-    A, b = _matrix(eq_rows, nvar)
-    G, h = _matrix(ineq, nvar)
-    result = solve_lsq(D, d, A, b, G, h)
+                        eq_rows.append((_add({t: 1.0, s: -1.0}, {pt: -1.0, ps: 1.0}), 0.0, "sync"))
+    D, d = _matrix([(c, r, "") for c, r in obj], nvar)
     relaxed: list[str] = []
-    if not result.success:
-        sync_free = [(row, rhs) for row, rhs in eq_rows if rhs != 0.0 or len(row) <= 1]
-        A2, b2 = _matrix(sync_free, nvar)
-        result = solve_lsq(D, d, A2, b2, G, h)
-        relaxed.append("synchronisation of symbol sizes dropped (the pins and bands leave no common size)")
-        if not result.success:
-            base = ineq[: sum(len(m.alignment.columns) for m in matrices)]
-            letters_ok = [(row, rhs) for row, rhs in ineq if rhs == 0.0]
-            G3, h3 = _matrix(letters_ok or base, nvar)
-            result = solve_lsq(D, d, A2, b2, G3, h3)
-            relaxed.append("corner/floor bands dropped (no room for them)")
+    result = None
+    for drop, why in RELAXATIONS:
+        if why:
+            relaxed.append(why)
+        A, b = _matrix([e for e in eq_rows if e[2] not in drop], nvar)
+        G, h = _matrix([e for e in ineq if e[2] not in drop], nvar)
+        result = solve_lsq(D, d, A, b, G, h)
+        if result.success:
+            break
     if not result.success:
         return Sizing({}, False, result.message, tuple(relaxed))
     x = np.clip(result.x, 0.0, canvas)
@@ -159,13 +160,13 @@ def _add(a: dict[int, float], b: dict[int, float]) -> dict[int, float]:
     return out
 
 
-def _matrix(rows: list[tuple[dict[int, float], float]], n: int) -> tuple[sp.csr_matrix, np.ndarray]:
+def _matrix(rows: list[tuple[dict[int, float], float, str]], n: int) -> tuple[sp.csr_matrix, np.ndarray]:
     data, ri, ci = [], [], []
-    for i, (coef, _) in enumerate(rows):
+    for i, (coef, _, _) in enumerate(rows):
         for j, v in coef.items():
             if v != 0.0:
                 ri.append(i)
                 ci.append(j)
                 data.append(v)
     mat = sp.csr_matrix((data, (ri, ci)), shape=(len(rows), n))
-    return mat, np.array([rhs for _, rhs in rows], dtype=float)
+    return mat, np.array([rhs for _, rhs, _ in rows], dtype=float)

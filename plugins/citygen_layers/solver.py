@@ -39,7 +39,7 @@ def _above(rows: Sequence[Row]) -> np.ndarray:
     out = np.zeros((m, m), dtype=bool)
     for h in range(m):
         for r in range(m):
-            out[h, r] = h != r and max(rows[h].layers) > min(rows[r].layers)
+            out[h, r] = min(rows[h].layers) > max(rows[r].layers)
     return out
 
 
@@ -49,7 +49,7 @@ def _groups(spec: DirectionSpec) -> list[str]:
 
 def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget: Budget,
                     greedy: bool = False) -> tuple[Matrix, ...] | None:
-    """Align every group of a candidate; transparent splits are tried when the plain words admit none."""
+    """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing)."""
     matrices = []
     for group in _groups(spec):
         rows = tuple(r for r in spec.rows if r.group == group)
@@ -59,12 +59,11 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
         if greedy:
             matrices.append(Matrix(group, rows, words, identity, words, greedy_alignment(words, above)))
             continue
-        result = align(words, above, spec.canvas, mu, budget)
         split, parents = words, identity
-        if result is None and any(x.transparent for w in words for x in w) and not budget.exhausted:
+        if any(x.transparent for w in words for x in w):
             split, parents = split_transparent(words, spec.canvas)
             split, parents = tuple(split), tuple(parents)
-            result = align(split, above, spec.canvas, mu, budget, parents)
+        result = align(split, above, spec.canvas, mu, budget, parents)
         if result is None:
             return None
         matrices.append(Matrix(group, rows, split, parents, words, result))
@@ -79,13 +78,21 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     mu = max(mu, 1e-3)
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
+    cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
     for _ in range(options.rounds):
         for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu)):
             if index >= options.candidates or budget.exhausted:
                 break
             fallback = fallback or (candidate, mu)
-            matrices = align_candidate(candidate, spec, mu, budget)
-            if matrices is not None:
+            key = tuple(candidate.words[r.pattern] for r in spec.rows)
+            matrices, cutoff = cache.get(key, (None, 0.0))
+            if matrices is None and cutoff < mu:
+                # searched with the next round's tolerance, so a failure is not repeated in that round
+                cutoff = mu * options.growth
+                matrices = align_candidate(candidate, spec, cutoff, budget)
+                cache[key] = (matrices, cutoff)
+            if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
+                                            m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
                 return _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
                               diagnostics)
         if budget.exhausted:
