@@ -112,7 +112,8 @@ class _Words:
             targets.append(self.cum[r, p[r] + 1:stop + 1] - base[r])
         if not targets:
             return []
-        t = np.unique(np.round(np.concatenate(targets), 9))
+        t = np.sort(np.round(np.concatenate(targets), 9))
+        t = t[np.concatenate([[True], np.diff(t) > 0])]
         tol = 1e-9
         choices = []
         for r in range(self.m):
@@ -129,8 +130,9 @@ class _Words:
         near = ends[:t.size]
         exact = np.abs(self.cum[self.rows, near] - base - t[:, None]) <= tol
         strict = np.where(exact | ~self.eps_ok[self.rows, p], near, p)
-        ends = np.unique(np.vstack([ends, strict]), axis=0)
-        return self._score(p, ends)
+        ends = np.vstack([ends, strict])
+        keep = list({row.tobytes(): k for k, row in enumerate(ends)}.values())
+        return self._score(p, ends[sorted(keep)])
 
     def _score(self, p: np.ndarray, ends: np.ndarray) -> list[tuple[float, int, Column, float]]:
         """Column error Phi (Eq. 9), size and symbol count of candidate columns; drops those that break the

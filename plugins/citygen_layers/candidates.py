@@ -194,9 +194,11 @@ class CandidateGenerator:
                     continue
                 lo = self.lower_bound(index, None)
                 words = self.sized_words(row.pattern, self.raw_words(row.pattern, env), lo)
+                if not words:
+                    break
                 self._loose[row.pattern] = words
                 lists[row.pattern] = words
-            if any(not lists[p] for p in self.patterns):
+            if len(lists) < len(self.patterns):
                 continue
             for combo in itertools.product(*(lists[p] for p in self.patterns)):
                 words = dict(zip(self.patterns, combo))

@@ -80,6 +80,7 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
     cells: list[list[tuple[float, float, float, float, str, Look]]] = []
+    looks: dict[tuple, Look] = {}
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         out = []
@@ -89,8 +90,10 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
                 if hs.letter is None or vs.letter is None:
                     out.append((hs.s, vs.s, w, h, "hole", Look(False, None, layer.depth, None, None)))
                     continue
-                out.append((hs.s, vs.s, w, h, f"{hs.letter.name}.{vs.letter.name}",
-                            look(ruleset, layer, hs.letter, vs.letter)))
+                key = (index, hs.letter.symbol, hs.letter.transparent, vs.letter.symbol, vs.letter.transparent)
+                if key not in looks:
+                    looks[key] = look(ruleset, layer, hs.letter, vs.letter)
+                out.append((hs.s, vs.s, w, h, f"{hs.letter.name}.{vs.letter.name}", looks[key]))
         cells.append(out)
     occluded = _occluded(cells)
     children = []

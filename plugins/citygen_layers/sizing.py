@@ -116,6 +116,9 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
                     lo, hi = bands[key][i]
                     ineq += [({s: -1.0}, -lo, "band"), ({t: 1.0}, hi, "band")]
                 if letter.symbol in pinned:
+                    # storeys vary with the floor lines: each instance outside the floor word keeps its own size
+                    if key not in pins:
+                        obj.append(({t: 1.0, s: -1.0}, letter.size))
                     continue
                 if letter.symbol not in proto:
                     proto[letter.symbol] = (s, t)
