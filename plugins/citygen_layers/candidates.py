@@ -1,0 +1,227 @@
+"""Candidate generation (§5.1): enumeration, pruning by canvas size (Eq. 7) and sampling of unsized symbols."""
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from citygen_layers.model import Counter, Ruleset
+from citygen_layers.words import Letter, Raw, min_measure, pattern_counters, pattern_words
+
+HARD_COUNT_LIMIT = 64
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of an alignment matrix: the word of a pattern shared by the layers ``layers`` (stack indices)."""
+
+    pattern: str
+    layers: tuple[int, ...]
+    group: str
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """Counter values and one word per pattern (§5.1): a tuple of words, one per layer."""
+
+    env: Mapping[str, int]
+    words: Mapping[str, tuple[Letter, ...]]
+
+
+@dataclass(frozen=True)
+class DirectionSpec:
+    """What one direction's solve needs: canvas size, rows, and the pattern bound to floor heights (if any)."""
+
+    axis: str
+    canvas: float
+    rows: tuple[Row, ...]
+    counters: Mapping[str, Counter]
+    floor_pattern: str | None = None
+    floor_heights: tuple[float, ...] = ()
+    storeys: frozenset[str] = frozenset()
+
+    def storey_letters(self, word: tuple[Letter, ...]) -> list[int]:
+        """Indices of the letters of the floor word that are storeys (one per floor line interval)."""
+        return [i for i, x in enumerate(word) if not self.storeys or x.symbol in self.storeys]
+
+
+def direction_spec(ruleset: Ruleset, axis: str, canvas: float, counters: Mapping[str, Counter],
+                   floor_heights: Sequence[float] = ()) -> DirectionSpec:
+    """Rows per alignment group, uppermost first (the paper's i = 1), patterns shared by layers merged."""
+    merged: dict[tuple[str, str], list[int]] = {}
+    for index, layer in enumerate(ruleset.layers):
+        pattern = layer.x if axis == "x" else layer.y
+        group = layer.groups[0 if axis == "x" else 1]
+        merged.setdefault((group, pattern), []).append(index)
+    rows = sorted((Row(p, tuple(idx), g) for (g, p), idx in merged.items()), key=lambda r: -max(r.layers))
+    floor_pattern = None
+    if axis == "y" and ruleset.floors is not None and floor_heights:
+        floor_pattern = ruleset.layer(ruleset.floors).y
+    return DirectionSpec(axis, canvas, tuple(rows), counters, floor_pattern, tuple(floor_heights),
+                         ruleset.storeys)
+
+
+def make_letter(raw: Raw, size: float | None, ruleset: Ruleset) -> Letter:
+    name, mirrored, transparent = raw
+    sym = ruleset.symbols.get(name)
+    if sym is None:
+        return Letter(name, float(size or 0.0), True, unsized=True, mirrored=mirrored)
+    transparent = transparent or sym.transparent
+    return Letter(name, float(size if size is not None else (sym.size or 0.0)), transparent,
+                  sym.opaque and not transparent, sym.attached, sym.unoccludable, sym.size is None, mirrored)
+
+
+def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
+    """Uniform samples (multiples of ``step``) of an unsized symbol's size in ``[lo, hi]``, positive, nearest the
+    interval's centre first (ties: larger first); the midpoint when no multiple falls inside (§5.1, Fig. 7)."""
+    lo = max(lo, 0.0)
+    if hi < lo - 1e-12:
+        return []
+    grid = np.arange(np.ceil(lo / step - 1e-9), np.floor(hi / step + 1e-9) + 1) * step if step > 0 else np.zeros(0)
+    grid = grid[grid > 1e-12]
+    if grid.size == 0:
+        return [0.5 * (lo + hi)]
+    centre = 0.5 * (lo + hi)
+    order = sorted(grid.tolist(), key=lambda v: (round(abs(v - centre), 9), -v))
+    return order[:count]
+
+
+class CandidateGenerator:
+    """Lazily yields candidates for one direction at tolerance ``mu`` in lexicographic counter order."""
+
+    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float) -> None:
+        self.ruleset, self.spec, self.mu = ruleset, spec, mu
+        self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
+        names = set().union(*(pattern_counters(ruleset.patterns[p]) for p in self.patterns))
+        self.counter_names = sorted(names)
+        self._raw_cache: dict[tuple, list[tuple[Raw, ...]]] = {}
+        self._pinned: dict[str, float] = {}
+
+    # counters ------------------------------------------------------------------------------------------------
+    def counter_range(self, name: str) -> range:
+        counter = self.spec.counters[name]
+        if counter.hi is not None and counter.hi - counter.lo <= HARD_COUNT_LIMIT:
+            return range(counter.lo, counter.hi + 1)
+        limit = HARD_COUNT_LIMIT
+        users = [p for p in self.patterns if name in pattern_counters(self.ruleset.patterns[p])]
+        size = self._size_of
+        for k in range(max(counter.lo, 0), HARD_COUNT_LIMIT + 1):
+            over = False
+            for p in users:
+                pattern = self.ruleset.patterns[p]
+                if p == self.spec.floor_pattern:
+                    storey = self.spec.storeys
+                    over |= min_measure(pattern, {name: k}, self.spec.counters,
+                                        lambda s: 1.0 if not storey or s in storey else 0.0) > len(
+                        self.spec.floor_heights)
+                else:
+                    over |= min_measure(pattern, {name: k}, self.spec.counters, size) > self.spec.canvas + self.mu
+            if over:
+                limit = k - 1
+                break
+        lo = max(counter.lo, -limit)
+        hi = limit if counter.hi is None else min(counter.hi, limit)
+        return range(lo, max(hi, lo - 1) + 1)
+
+    def _size_of(self, name: str) -> float:
+        sym = self.ruleset.symbols.get(name)
+        return float(sym.size) if sym is not None and sym.size is not None else 0.0
+
+    # words ---------------------------------------------------------------------------------------------------
+    def raw_words(self, pattern: str, env: Mapping[str, int]) -> list[tuple[Raw, ...]]:
+        own = pattern_counters(self.ruleset.patterns[pattern])
+        key = (pattern, tuple(sorted((k, v) for k, v in env.items() if k in own)))
+        if key not in self._raw_cache:
+            self._raw_cache[key] = pattern_words(self.ruleset.patterns[pattern], env, self.ruleset.symbols)
+        return self._raw_cache[key]
+
+    def sized_words(self, pattern: str, raws: list[tuple[Raw, ...]], lo: float) -> list[tuple[Letter, ...]]:
+        """Words of ``pattern`` whose size respects Eq. 7 (``lo <= |w| <= canvas + mu``), unsized symbols sampled;
+        the floor pattern instead must have one letter per floor, sized to the floor heights."""
+        hi = self.spec.canvas + self.mu
+        out: list[tuple[Letter, ...]] = []
+        for raw in raws:
+            letters = [make_letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None,
+                                   self.ruleset) for r in raw]
+            if pattern == self.spec.floor_pattern:
+                if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
+                    continue
+                if not self.spec.storeys:   # every letter is a storey: sized to the floor heights, pinned
+                    out.append(tuple(make_letter(r, h, self.ruleset) for r, h in zip(raw, self.spec.floor_heights)))
+                    continue
+            unsized = [i for i, letter in enumerate(letters) if letter.unsized]
+            total = sum(letter.size for letter in letters)
+            if not unsized:
+                if lo - 1e-9 <= total <= hi + 1e-9:
+                    out.append(tuple(letters))
+                continue
+            n = len(unsized)
+            for size in sample_sizes((lo - total) / n, (hi - total) / n, self.mu, self.ruleset.options.samples):
+                word = list(letters)
+                for i in unsized:
+                    word[i] = make_letter(raw[i], size, self.ruleset)
+                out.append(tuple(word))
+        out.sort(key=lambda w: abs(sum(letter.size for letter in w) - self.spec.canvas))
+        return out
+
+    def opaque_size(self, word: tuple[Letter, ...]) -> float:
+        return sum(letter.size for letter in word if letter.opaque)
+
+    def lower_bound(self, row_index: int, words: Mapping[str, tuple[Letter, ...]] | None) -> float:
+        """Eq. 7 lower bound l_i: upper layers of the same group may make space for their opaque symbols."""
+        row = self.spec.rows[row_index]
+        slack = 0.0
+        for upper in self.spec.rows[:row_index]:
+            if upper.group != row.group or min(upper.layers) <= max(row.layers):
+                continue
+            if words is None:
+                slack += max((self.opaque_size(w) for w in self._loose.get(upper.pattern, [])), default=0.0)
+            else:
+                slack += self.opaque_size(words[upper.pattern])
+        return self.spec.canvas - self.mu - slack
+
+    def __iter__(self) -> Iterator[Candidate]:
+        ranges = [self.counter_range(name) for name in self.counter_names]
+        for values in itertools.product(*ranges):
+            env = dict(zip(self.counter_names, values))
+            self._loose: dict[str, list[tuple[Letter, ...]]] = {}
+            self._pinned = self._pinned_sizes(env)
+            lists = {}
+            for index, row in enumerate(self.spec.rows):   # uppermost first, so slack uses known words
+                if row.pattern in lists:
+                    continue
+                lo = self.lower_bound(index, None)
+                words = self.sized_words(row.pattern, self.raw_words(row.pattern, env), lo)
+                if not words:
+                    break
+                self._loose[row.pattern] = words
+                lists[row.pattern] = words
+            if len(lists) < len(self.patterns):
+                continue
+            for combo in itertools.product(*(lists[p] for p in self.patterns)):
+                words = dict(zip(self.patterns, combo))
+                if all(self._fits(i, words) for i in range(len(self.spec.rows))):
+                    yield Candidate(env, words)
+
+    def _pinned_sizes(self, env: Mapping[str, int]) -> dict[str, float]:
+        """Symbols of a pinned floor word take their mean floor height in every other word of the candidate."""
+        floor = self.spec.floor_pattern
+        if floor is None or self.spec.storeys:
+            return {}
+        self._pinned = {}
+        words = self.sized_words(floor, self.raw_words(floor, env), 0.0)
+        if not words:
+            return {}
+        heights: dict[str, list[float]] = {}
+        for letter in words[0]:
+            heights.setdefault(letter.symbol, []).append(letter.size)
+        return {k: float(np.mean(v)) for k, v in heights.items()}
+
+    def _fits(self, index: int, words: Mapping[str, tuple[Letter, ...]]) -> bool:
+        row = self.spec.rows[index]
+        if row.pattern == self.spec.floor_pattern and not self.spec.storeys:
+            return True
+        size = sum(letter.size for letter in words[row.pattern])
+        return self.lower_bound(index, words) - 1e-9 <= size <= self.spec.canvas + self.mu + 1e-9

@@ -1,0 +1,162 @@
+"""The outer product (§5): each layer's horizontal x vertical segments become its shapes; shapes get labels,
+depth and materials (§3.1, shape overrides per layer or pattern), masks and transparency hide shapes (§3.4),
+and shapes fully covered by upper layers are removed (§3.2, "a window fully covered by a wall can be omitted")."""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region
+from citygen_layers.model import Layer, Ruleset, ShapeSpec
+from citygen_layers.sizing import Segment
+from citygen_layers.solver import DirectionSolution
+from citygen_layers.words import Letter
+
+#: Depth offset (metres along the normal) of a shape by label when neither shape nor symbol sets one.
+LABEL_DEPTH = {"window": -0.25, "door": -0.2, "glass": -0.25, "shop": -0.15, "blind": -0.05, "sill": 0.06,
+               "cornice": 0.15, "balcony": 0.35, "ledge": 0.08, "pillar": 0.1, "molding": 0.04, "deco": 0.05,
+               "frame": 0.03}
+
+
+@dataclass(frozen=True)
+class Look:
+    """Resolved attributes of one shape (symbol pair) in one layer."""
+
+    visible: bool
+    label: str | None
+    depth: float
+    material: str | None
+    asset: str | None
+
+
+def _specs(ruleset: Ruleset, layer: Layer, h: str, v: str) -> list[ShapeSpec]:
+    """Shape specs for ``(h, v)`` that apply to ``layer``, least specific first (later ones override)."""
+    hits = [s for s in ruleset.shapes if s.h == h and s.v == v
+            and s.layer in (None, layer.name) and s.pattern in (None, layer.x, layer.y)]
+    return sorted(hits, key=lambda s: (s.layer is not None) + (s.pattern is not None))
+
+
+def look(ruleset: Ruleset, layer: Layer, h: Letter, v: Letter) -> Look:
+    specs = _specs(ruleset, layer, h.symbol, v.symbol)
+
+    def pick(attr: str):
+        value = None
+        for spec in specs:
+            if getattr(spec, attr) is not None:
+                value = getattr(spec, attr)
+        return value
+
+    hs, vs = ruleset.symbols.get(h.symbol), ruleset.symbols.get(v.symbol)
+    visible = not (h.transparent or v.transparent)
+    if visible and layer.mask is not None:
+        visible = h.symbol in layer.mask or v.symbol in layer.mask
+    override = pick("visible")
+    if override is not None and not (h.transparent or v.transparent):
+        visible = override
+    label = pick("label")
+    if label is None:
+        labels = [s.label for s in (hs, vs) if s is not None and s.label is not None]
+        label = "wall" if not labels or "wall" in labels else labels[0]
+    depth = pick("depth")
+    if depth is None:
+        depth = next((s.depth for s in (hs, vs) if s is not None and s.depth is not None),
+                     LABEL_DEPTH.get(label, 0.0))
+    material = pick("material") or next((s.material for s in (hs, vs) if s is not None and s.material), None)
+    asset = pick("asset") or next((s.asset for s in (hs, vs) if s is not None and s.asset), None)
+    return Look(visible, label, layer.depth + depth, material, asset)
+
+
+def layer_segments(solution: DirectionSolution, layer_index: int, layer: Layer) -> tuple[Segment, ...]:
+    axis = solution.axis
+    pattern = layer.x if axis == "x" else layer.y
+    group = layer.groups[0 if axis == "x" else 1]
+    return solution.sizing.segments[(group, pattern)]
+
+
+def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta: dict | None = None
+            ) -> FacadeLayout:
+    """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
+    width, height = sx.canvas, sy.canvas
+    cells: list[list[tuple[float, float, float, float, str, Look]]] = []
+    looks: dict[tuple, Look] = {}
+    for index, layer in enumerate(ruleset.layers):
+        hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
+        out = []
+        for vs in vseg:
+            for hs in hseg:
+                w, h = hs.t - hs.s, vs.t - vs.s
+                if hs.letter is None or vs.letter is None:
+                    out.append((hs.s, vs.s, w, h, "hole", Look(False, None, layer.depth, None, None)))
+                    continue
+                key = (index, hs.letter.symbol, hs.letter.transparent, vs.letter.symbol, vs.letter.transparent)
+                if key not in looks:
+                    looks[key] = look(ruleset, layer, hs.letter, vs.letter)
+                out.append((hs.s, vs.s, w, h, f"{hs.letter.name}.{vs.letter.name}", looks[key]))
+        cells.append(out)
+    occluded = _occluded(cells)
+    children = []
+    for index, layer in enumerate(ruleset.layers):
+        terminals = []
+        for k, (x, y, w, h, symbol, lk) in enumerate(cells[index]):
+            shown = lk.visible and not occluded[index][k]
+            if not shown and w * h <= 1e-12:
+                continue
+            if shown:
+                terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset, layer.name))
+            else:
+                terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
+        children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
+    root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
+    return FacadeLayout(width, height, root, meta or {})
+
+
+def _occluded(cells: Sequence[Sequence[tuple]]) -> list[list[bool]]:
+    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?"""
+    xs = np.unique(np.round([v for layer in cells for c in layer for v in (c[0], c[0] + c[2])], 9))
+    ys = np.unique(np.round([v for layer in cells for c in layer for v in (c[1], c[1] + c[3])], 9))
+    covered = np.zeros((max(len(ys) - 1, 0), max(len(xs) - 1, 0)), dtype=bool)
+    out = [[False] * len(layer) for layer in cells]
+    for index in range(len(cells) - 1, -1, -1):
+        boxes = []
+        for k, (x, y, w, h, _, lk) in enumerate(cells[index]):
+            if not lk.visible or w * h <= 1e-12:
+                continue
+            i0, i1 = np.searchsorted(xs, round(x, 9)), np.searchsorted(xs, round(x + w, 9))
+            j0, j1 = np.searchsorted(ys, round(y, 9)), np.searchsorted(ys, round(y + h, 9))
+            if covered[j0:j1, i0:i1].all():
+                out[index][k] = True
+            else:
+                boxes.append((j0, j1, i0, i1))
+        for j0, j1, i0, i1 in boxes:
+            covered[j0:j1, i0:i1] = True
+    return out
+
+
+def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: tuple[float, float]
+            ) -> tuple[FacadeLayout, list[str]]:
+    """Last-resort safety net of a best-effort solve: openings that straddle a floor line or enter a corner strip
+    become wall (reported). A solved layout never needs it."""
+    lines = np.asarray(floor_lines[1:-1], dtype=float)
+    eps = 1e-6 * max(layout.width, layout.height, 1.0)
+    left, right = corner_widths
+    notes: list[str] = []
+
+    def fix(region: Region) -> Region:
+        if region.children:
+            return Region(region.x, region.y, region.w, region.h, region.symbol, region.label, region.depth,
+                          region.material, region.asset, region.layer, tuple(fix(c) for c in region.children))
+        if region.label not in FLOOR_BOUND_LABELS:
+            return region
+        cut = lines.size and np.any((lines > region.y + eps) & (lines < region.y + region.h - eps))
+        strip = region.x < left - eps or region.x + region.w > layout.width - right + eps
+        if not (cut or strip):
+            return region
+        notes.append(f"{region.layer}/{region.symbol}: {region.label} at x={region.x:.2f} y={region.y:.2f} "
+                     f"{'straddles a floor line' if cut else 'enters a corner strip'}; made wall")
+        return Region(region.x, region.y, region.w, region.h, region.symbol, "wall", region.depth - LABEL_DEPTH.get(region.label, 0.0),
+                      region.material, region.asset, region.layer)
+
+    root = fix(layout.root)
+    return FacadeLayout(layout.width, layout.height, root, layout.meta), notes

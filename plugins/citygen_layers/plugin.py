@@ -1,0 +1,98 @@
+"""The ``layers`` ruleset kind: registers the layer-stack generator with citygen."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from citygen.hookspecs import hookimpl
+from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
+from citygen.registry import RulesetKind
+from citygen.request import FacadeRequest
+from citygen_layers.candidates import Candidate
+from citygen_layers.compose import compose, conform, look
+from citygen_layers.explain import explain_text
+from citygen_layers.model import Pattern, Ruleset
+from citygen_layers.parser import _symbols_of, load
+from citygen_layers.solver import DirectionSolution, solve
+from citygen_layers.words import Letter
+
+
+def _visible_symbols(ruleset: Ruleset, pattern: Pattern) -> list[Letter]:
+    """Letters a pattern can produce visibly (substituted content, or any letter of a plain pattern)."""
+    if pattern.substituted:
+        names = set().union(*(_symbols_of(c) for c in pattern.substitutions.values()))
+    else:
+        names = _symbols_of(pattern.control)
+    out = []
+    for name in sorted(names):
+        sym = ruleset.symbols.get(name)
+        if sym is not None and not sym.transparent:
+            out.append(Letter(name, sym.size or 0.0))
+    return out
+
+
+def _opening_bands(ruleset: Ruleset, axis: str, interval: tuple[float, float]):
+    """Letters of ``axis`` words that make floor-bound shapes (windows, doors, ...) must stay in ``interval``."""
+
+    def bands(candidate: Candidate) -> dict:
+        out: dict = {}
+        for layer in ruleset.layers:
+            pattern = layer.x if axis == "x" else layer.y
+            others = _visible_symbols(ruleset, ruleset.patterns[layer.y if axis == "x" else layer.x])
+            key = (layer.groups[0 if axis == "x" else 1], pattern)
+            for i, letter in enumerate(candidate.words[pattern]):
+                if letter.transparent:
+                    continue
+                for other in others:
+                    h, v = (letter, other) if axis == "x" else (other, letter)
+                    lk = look(ruleset, layer, h, v)
+                    if lk.visible and lk.label in FLOOR_BOUND_LABELS:
+                        out.setdefault(key, {})[i] = interval
+                        break
+        return out
+
+    return bands
+
+
+def solve_request(ruleset: Ruleset, request: FacadeRequest) -> tuple[DirectionSolution, DirectionSolution]:
+    left, right = request.corner_widths
+    x_bands = _opening_bands(ruleset, "x", (left, request.width - right)) if left or right else None
+    y_bands = _opening_bands(ruleset, "y", (0.0, request.height)) if len(request.floor_lines) > 2 else None
+    return solve(ruleset, request.width, request.height, request.floor_lines, request.entrance,
+                 request.corner_widths, x_bands, y_bands)
+
+
+def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
+    """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack)."""
+    sx, sy = solve_request(ruleset, request)
+    diagnostics = [*sx.diagnostics, *sy.diagnostics]
+    meta = {"kind": "layers", "ruleset": ruleset.source, "status": {"x": sx.status, "y": sy.status},
+            "mu": {"x": sx.mu, "y": sy.mu}, "expansions": sx.expansions + sy.expansions,
+            "counters": {**sx.candidate.env, **sy.candidate.env}}
+    layout = compose(ruleset, sx, sy, meta)
+    if "best-effort" in (sx.status, sy.status) or any("dropped" in d for d in diagnostics):
+        layout, notes = conform(layout, request.floor_lines, request.corner_widths)
+        diagnostics += notes
+    if diagnostics:
+        layout = FacadeLayout(layout.width, layout.height, layout.root, {**layout.meta, "diagnostics": diagnostics})
+    return layout
+
+
+class LayersKind(RulesetKind):
+    id = "layers"
+    suffixes = (".layers",)
+    description = "layer stacks of horizontal x vertical patterns, aligned and sized automatically (ilcik2015)"
+
+    def load(self, path: Path) -> Ruleset:
+        return load(path)
+
+    def generate(self, ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
+        return generate(ruleset, request)
+
+    def explain(self, ruleset: Ruleset, request: FacadeRequest) -> str:
+        sx, sy = solve_request(ruleset, request)
+        return explain_text(ruleset, sx, sy)
+
+
+@hookimpl
+def citygen_ruleset_kinds() -> list[RulesetKind]:
+    return [LayersKind()]

@@ -1,0 +1,200 @@
+"""The facade layout solver (§5): per direction, candidates -> alignment -> sizing, with tolerance mu raised
+until a solution is found (§5), bounded by an expansion/time budget with a best-effort result (§6.3 removed)."""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from citygen.errors import RulesetError
+from citygen_layers.align import Alignment, Budget, align, greedy_alignment
+from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, direction_spec
+from citygen_layers.model import Counter, Ruleset
+from citygen_layers.sizing import Matrix, Sizing, size_matrices
+from citygen_layers.splits import split_transparent
+
+#: Bands per row: letter index -> interval the letter must stay inside.
+Bands = Mapping[tuple[str, str], Mapping[int, tuple[float, float]]]
+
+
+@dataclass(frozen=True)
+class DirectionSolution:
+    """The solved layout of one direction: the chosen candidate, alignment matrices and the placed letters."""
+
+    axis: str
+    canvas: float
+    mu: float
+    status: str                    # "solved" or "best-effort"
+    candidate: Candidate
+    matrices: tuple[Matrix, ...]
+    sizing: Sizing
+    expansions: int
+    diagnostics: tuple[str, ...] = ()
+
+
+def _above(rows: Sequence[Row]) -> np.ndarray:
+    m = len(rows)
+    out = np.zeros((m, m), dtype=bool)
+    for h in range(m):
+        for r in range(m):
+            out[h, r] = min(rows[h].layers) > max(rows[r].layers)
+    return out
+
+
+def _groups(spec: DirectionSpec) -> list[str]:
+    return list(dict.fromkeys(r.group for r in spec.rows))
+
+
+def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget: Budget,
+                    greedy: bool = False) -> tuple[Matrix, ...] | None:
+    """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing)."""
+    matrices = []
+    for group in _groups(spec):
+        rows = tuple(r for r in spec.rows if r.group == group)
+        words = tuple(candidate.words[r.pattern] for r in rows)
+        identity = tuple(tuple(range(len(w))) for w in words)
+        above = _above(rows)
+        if greedy:
+            matrices.append(Matrix(group, rows, words, identity, words, greedy_alignment(words, above)))
+            continue
+        split, parents = words, identity
+        if any(x.transparent for w in words for x in w):
+            split, parents = split_transparent(words, spec.canvas)
+            split, parents = tuple(split), tuple(parents)
+        result = align(split, above, spec.canvas, mu, budget, parents)
+        if result is None:
+            return None
+        matrices.append(Matrix(group, rows, split, parents, words, result))
+    return tuple(matrices)
+
+
+def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
+                    bands: Callable[[Candidate], Bands] | None = None,
+                    floor_lines: Sequence[float] = ()) -> DirectionSolution:
+    options = ruleset.options
+    mu = options.tolerance if options.tolerance is not None else 0.05 * spec.canvas
+    mu = max(mu, 1e-3)
+    diagnostics: list[str] = []
+    fallback: tuple[Candidate, float] | None = None
+    cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
+    for _ in range(options.rounds):
+        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu)):
+            if index >= options.candidates or budget.exhausted:
+                break
+            fallback = fallback or (candidate, mu)
+            key = tuple(candidate.words[r.pattern] for r in spec.rows)
+            matrices, cutoff = cache.get(key, (None, 0.0))
+            if matrices is None and cutoff < mu:
+                # searched with the next round's tolerance, so a failure is not repeated in that round
+                cutoff = mu * options.growth
+                matrices = align_candidate(candidate, spec, cutoff, budget)
+                cache[key] = (matrices, cutoff)
+            if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
+                                            m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
+                return _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
+                              diagnostics)
+        if budget.exhausted:
+            why = "time" if budget.timed_out else "expansion"
+            diagnostics.append(f"{spec.axis}: {why} budget exhausted at mu={mu:.3g} after {budget.used} "
+                               "expansions; best-effort layout")
+            break
+        mu *= options.growth
+    else:
+        diagnostics.append(f"{spec.axis}: no alignment within mu={mu / options.growth:.3g}; best-effort layout")
+    if fallback is None:
+        fallback = _any_candidate(ruleset, spec, diagnostics)
+    candidate, mu_c = fallback
+    matrices = align_candidate(candidate, spec, mu_c, budget, greedy=True)
+    for m in matrices:
+        diagnostics += [f"{spec.axis}/{m.group}: {v}" for v in m.alignment.violations]
+    return _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines, diagnostics)
+
+
+def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]) -> tuple[Candidate, float]:
+    """A candidate when none fits Eq. 7 within the rounds: a very loose tolerance, then without floor binding."""
+    big = 10.0 * spec.canvas + 1.0
+    for attempt in (spec, replace(spec, floor_pattern=None)):
+        for candidate in CandidateGenerator(ruleset, attempt, big):
+            if attempt.floor_pattern is None and spec.floor_pattern is not None:
+                diagnostics.append(f"floor pattern {spec.floor_pattern!r} has no word with "
+                                   f"{len(spec.floor_heights)} letters; floors are not bound")
+            diagnostics.append(f"{spec.axis}: candidate taken at tolerance {big:.3g}")
+            return candidate, big
+    names = ", ".join(dict.fromkeys(r.pattern for r in spec.rows))
+    raise RulesetError(f"patterns {names} produce no word of size up to {big:.3g} in direction {spec.axis}",
+                       where=ruleset.source, plugin="layers",
+                       hint="check counters' ranges and symbol sizes against the canvas")
+
+
+def _sized(ruleset: Ruleset, spec: DirectionSpec, candidate: Candidate, matrices: tuple[Matrix, ...], mu: float,
+           status: str, budget: Budget, bands: Callable[[Candidate], Bands] | None, floor_lines: Sequence[float],
+           diagnostics: list[str]) -> DirectionSolution:
+    pins = {}
+    band_map = {k: dict(v) for k, v in bands(candidate).items()} if bands is not None else {}
+    storey_bands: dict = {}
+    if spec.floor_pattern is not None:
+        for r in spec.rows:
+            word = candidate.words[r.pattern]
+            storeys = spec.storey_letters(word)
+            if r.pattern != spec.floor_pattern or len(storeys) != len(floor_lines) - 1:
+                continue
+            floors = list(zip(floor_lines[:-1], floor_lines[1:]))
+            if spec.storeys:    # storey letters stay inside their floor, other letters (ledges) are free
+                storey_bands.setdefault((r.group, r.pattern), {}).update(zip(storeys, floors))
+            else:
+                pins[(r.group, r.pattern)] = floors
+    sizing = size_matrices(matrices, spec.canvas, pins, _merge(band_map, storey_bands))
+    if sizing.success and spec.axis == "y" and floor_lines and bands is not None:
+        extra = _floor_bands(sizing, band_map, floor_lines)
+        if extra:
+            sizing = size_matrices(matrices, spec.canvas, pins, _merge(extra, storey_bands))
+    if not sizing.success:
+        raise RulesetError(f"sizing failed in direction {spec.axis}: {sizing.message}", where=ruleset.source,
+                           plugin="layers")
+    diagnostics += [f"{spec.axis}: {r}" for r in sizing.relaxed]
+    return DirectionSolution(spec.axis, spec.canvas, mu, status, candidate, matrices, sizing, budget.used,
+                             tuple(diagnostics))
+
+
+def _merge(a: Bands, b: Bands) -> dict:
+    out = {k: dict(v) for k, v in a.items()}
+    for k, v in b.items():
+        out.setdefault(k, {}).update(v)
+    return out
+
+
+def _floor_bands(sizing: Sizing, wanted: Bands, lines: Sequence[float]) -> dict | None:
+    """Keep letters that make openings inside the floor holding their centre (second pass, only if needed)."""
+    lines_arr = np.asarray(lines)
+    out: dict = {}
+    straddle = False
+    for key, letters in wanted.items():
+        out[key] = {}
+        for seg in sizing.segments.get(key, ()):
+            if seg.index in letters:
+                k = int(np.clip(np.searchsorted(lines_arr, 0.5 * (seg.s + seg.t), side="right") - 1, 0,
+                                len(lines) - 2))
+                out[key][seg.index] = (float(lines[k]), float(lines[k + 1]))
+                straddle |= seg.s < lines[k] - 1e-9 or seg.t > lines[k + 1] + 1e-9
+    return out if straddle else None
+
+
+def solve(ruleset: Ruleset, width: float, height: float, floor_lines: Sequence[float] = (),
+          entrance: bool = False, corner_widths: tuple[float, float] = (0.0, 0.0),
+          x_bands: Callable[[Candidate], Bands] | None = None,
+          y_bands: Callable[[Candidate], Bands] | None = None) -> tuple[DirectionSolution, DirectionSolution]:
+    """Solve both directions for a canvas ``width x height`` (the outer product is built by ``compose``)."""
+    counters: dict[str, Counter] = dict(ruleset.counters)
+    counters["entrance"] = Counter("entrance", int(entrance), int(entrance))
+    options = ruleset.options
+    heights = tuple(np.diff(np.asarray(floor_lines, dtype=float))) if len(floor_lines) > 1 else ()
+    sx = solve_direction(ruleset, direction_spec(ruleset, "x", width, counters),
+                         Budget(options.expansions, time.perf_counter() + options.time / 2), x_bands)
+    sy = solve_direction(ruleset, direction_spec(ruleset, "y", height, counters, heights),
+                         Budget(options.expansions, time.perf_counter() + options.time / 2), y_bands, floor_lines)
+    return sx, sy
+
+
+__all__ = ["Alignment", "DirectionSolution", "solve", "solve_direction"]

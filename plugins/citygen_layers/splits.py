@@ -1,0 +1,54 @@
+"""Transparent splits (§5.2): letters of control patterns are invisible, so they may be cut into parts where
+other words have boundaries. Done as a preprocessing step on the words of one alignment matrix."""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from citygen_layers.words import Letter
+
+MIN_PIECE = 0.02
+
+
+def split_transparent(words: Sequence[Sequence[Letter]], canvas: float
+                      ) -> tuple[list[tuple[Letter, ...]], list[tuple[int, ...]]]:
+    """Cut transparent letters at the (canvas-scaled) boundaries of the other words that touch a visible
+    letter -- of the words without transparent letters when there are any (the structure the placeholders stand
+    for); cuts closer than ``MIN_PIECE`` of the canvas to another cut or an end are dropped.
+
+    Returns the new words and, per word, the index of the original letter each part belongs to; parts keep
+    the letter's flags and take the length of their piece as size.
+    """
+    bounds = []
+    solid = []
+    for w in words:
+        flags = [not x.transparent for x in w]
+        solid.append(np.array([a or b for a, b in zip(flags[:-1], flags[1:])], dtype=bool))
+        cum = np.concatenate([[0.0], np.cumsum([x.size for x in w])])
+        scale = canvas / cum[-1] if cum[-1] > 0 else 1.0
+        bounds.append(cum * scale)
+    out_words: list[tuple[Letter, ...]] = []
+    out_parents: list[tuple[int, ...]] = []
+    eps = MIN_PIECE * max(canvas, 1e-9)
+    plain = [o for o, w in enumerate(words) if w and not any(x.transparent for x in w)]
+    for r, w in enumerate(words):
+        sources = [o for o in (plain or range(len(words))) if o != r]
+        others = np.unique(np.concatenate([bounds[o][1:-1][solid[o]] for o in sources] or [np.zeros(0)]))
+        scale = bounds[r][-1] / max(sum(x.size for x in w), 1e-12)
+        letters: list[Letter] = []
+        parents: list[int] = []
+        for i, letter in enumerate(w):
+            a, b = bounds[r][i], bounds[r][i + 1]
+            cuts = others[(others > a + eps) & (others < b - eps)] if letter.transparent else np.zeros(0)
+            if cuts.size > 1:
+                cuts = cuts[np.concatenate([[True], np.diff(cuts) > eps])]
+            edges = np.concatenate([[a], cuts, [b]])
+            for lo, hi in zip(edges[:-1], edges[1:]):
+                size = (hi - lo) / scale if cuts.size else letter.size
+                letters.append(replace(letter, size=float(size)))
+                parents.append(i)
+        out_words.append(tuple(letters))
+        out_parents.append(tuple(parents))
+    return out_words, out_parents
