@@ -78,3 +78,19 @@ def test_generate_cli_reports_skips_and_strict_fails(tmp_path, capsys):
     assert "written 1 buildings, skipped 1" in text and "way/2" in text
     assert main(["generate", str(tmp_path / "mini.toml"), "-q", "--strict"]) == 1
     assert main(["validate", str(tmp_path / "mini.usda")]) == 0
+
+
+@pytest.mark.parametrize("scene_path", sorted((REPO / "scenes").glob("*.toml")), ids=lambda p: p.name)
+def test_every_shipped_scene_loads_with_its_rulesets(scene_path):
+    from citygen.registry import default_registry
+    scene = load_scene(scene_path)
+    registry = default_registry()
+    assert scene.footprints.exists()
+    kinds = set()
+    for assignment in scene.assignments:
+        for path in assignment.rulesets:
+            kind = registry.kind_for_path(path)
+            kind.load(path)
+            kinds.add(kind.id)
+    if scene_path.name == "helsinki_all_kinds.toml":
+        assert kinds == {"split", "layers", "relayout"}
