@@ -85,6 +85,7 @@ class _Words:
         self.nonopaque = prefix(lambda x: not x.opaque)
         self.unocc = prefix(lambda x: x.unoccludable)
         self.solid = prefix(lambda x: not (x.transparent or x.opaque))
+        self.clear = prefix(lambda x: x.transparent)
         self.eps_ok = np.zeros((self.m, width), dtype=bool)
         self.runend = np.zeros((self.m, width), dtype=np.int64)
         for r, w in enumerate(words):
@@ -138,13 +139,15 @@ class _Words:
         """Column error Phi (Eq. 9), size and symbol count of candidate columns; drops those that break the
         column constraints: an opaque entry in every column, epsilon only below an opaque entry of an upper
         layer and never beside an attached letter, unoccludable letters covered only by transparent or opaque
-        entries. (Transparent separation holds by construction: entries never cross a transparency change.)"""
+        entries; transparent letters separated from the others (edges() never proposes such entries)."""
         rows = self.rows
         eps = ends == p
+        clear = self.clear[rows, ends] - self.clear[rows, p]
+        mixed = (clear > 0) & (clear < ends - p)
         sums = self.cum[rows, ends] - self.cum[rows, p]
         opaque = ~eps & (self.nonopaque[rows, ends] == self.nonopaque[rows, p])
         covered = (opaque.astype(float) @ self.above) > 0
-        ok = ~np.all(eps, axis=1) & np.any(opaque, axis=1)
+        ok = ~np.all(eps, axis=1) & np.any(opaque, axis=1) & ~np.any(mixed, axis=1)
         ok &= np.all(~eps | (covered & self.eps_ok[rows, p]), axis=1)
         unocc = ~eps & (self.unocc[rows, ends] > self.unocc[rows, p])
         solid = ~eps & (self.solid[rows, ends] > self.solid[rows, p])

@@ -91,8 +91,9 @@ def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
 class CandidateGenerator:
     """Lazily yields candidates for one direction at tolerance ``mu`` in lexicographic counter order."""
 
-    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float) -> None:
+    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float, budget=None) -> None:
         self.ruleset, self.spec, self.mu = ruleset, spec, mu
+        self.budget = budget      # an align.Budget: every counter assignment examined costs one unit
         self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
         names = set().union(*(pattern_counters(ruleset.patterns[p]) for p in self.patterns))
         self.counter_names = sorted(names)
@@ -185,6 +186,8 @@ class CandidateGenerator:
     def __iter__(self) -> Iterator[Candidate]:
         ranges = [self.counter_range(name) for name in self.counter_names]
         for values in itertools.product(*ranges):
+            if self.budget is not None and not self.budget.spend():
+                return
             env = dict(zip(self.counter_names, values))
             self._loose: dict[str, list[tuple[Letter, ...]]] = {}
             self._pinned = self._pinned_sizes(env)
@@ -200,7 +203,9 @@ class CandidateGenerator:
                 lists[row.pattern] = words
             if len(lists) < len(self.patterns):
                 continue
-            for combo in itertools.product(*(lists[p] for p in self.patterns)):
+            for count, combo in enumerate(itertools.product(*(lists[p] for p in self.patterns))):
+                if count % 64 == 63 and self.budget is not None and not self.budget.spend():
+                    return
                 words = dict(zip(self.patterns, combo))
                 if all(self._fits(i, words) for i in range(len(self.spec.rows))):
                     yield Candidate(env, words)

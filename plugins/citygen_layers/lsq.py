@@ -30,6 +30,11 @@ def solve_lsq(D: sp.csr_matrix, d: np.ndarray, A: sp.csr_matrix, b: np.ndarray, 
         return QPResult(np.full(n, np.nan), False, "infeasible", "equality constraints are inconsistent")
     N = sla.null_space(Ad) if Ad.shape[0] else np.eye(n)
     Dd = D.toarray()
+    Gd0 = G.toarray()
+    if N.shape[1] == 0:   # the equalities fix every variable
+        ok = bool(np.all(Gd0 @ x0 <= h + tol))
+        return QPResult(x0, ok, "solved" if ok else "infeasible", "determined by the equalities",
+                        float(np.sum((Dd @ x0 - d) ** 2)))
     DN = Dd @ N
     Pz = 2.0 * DN.T @ DN
     qz = -2.0 * DN.T @ (d - Dd @ x0)

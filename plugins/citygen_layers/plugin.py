@@ -67,7 +67,9 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     diagnostics = [*sx.diagnostics, *sy.diagnostics]
     meta = {"kind": "layers", "ruleset": ruleset.source, "status": {"x": sx.status, "y": sy.status},
             "mu": {"x": sx.mu, "y": sy.mu}, "expansions": sx.expansions + sy.expansions,
-            "counters": {**sx.candidate.env, **sy.candidate.env}}
+            "counters": {**sx.candidate.env, **sy.candidate.env},
+            "columns": {"x": {g: list(b) for g, b in sx.sizing.borders.items()},
+                        "y": {g: list(b) for g, b in sy.sizing.borders.items()}}}
     layout = compose(ruleset, sx, sy, meta)
     if "best-effort" in (sx.status, sy.status) or any("dropped" in d for d in diagnostics):
         layout, notes = conform(layout, request.floor_lines, request.corner_widths)

@@ -57,6 +57,7 @@ class Sizing:
     success: bool
     message: str
     relaxed: tuple[str, ...] = field(default=())
+    borders: Mapping[str, tuple[float, ...]] = field(default_factory=dict)   # column borders per group
 
 
 def size_matrices(matrices: Sequence[Matrix], canvas: float,
@@ -66,12 +67,14 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
     pins, bands = pins or {}, bands or {}
     nvar = 0
     letter_vars: dict[tuple[str, str], list[list[int]]] = {}
+    border_vars: dict[str, list[int]] = {}
     holes: dict[tuple[str, str], list[tuple[int, int]]] = {}
     eq_rows: list[tuple[dict[int, float], float, str]] = []   # (coefficients, rhs, kind)
     ineq: list[tuple[dict[int, float], float, str]] = []
     for matrix in matrices:
         ncol = len(matrix.alignment.columns)
         border = list(range(nvar, nvar + ncol + 1))
+        border_vars[matrix.group] = border
         nvar += ncol + 1
         eq_rows += [({border[0]: 1.0}, 0.0, "cover"), ({border[-1]: 1.0}, canvas, "cover")]
         ineq += [({border[j]: 1.0, border[j + 1]: -1.0}, 0.0, "order") for j in range(ncol)]
@@ -153,7 +156,8 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
             segments[key] = tuple(sorted(
                 (Segment(seg.s, max(seg.t, seg.s), matrix.originals[r][seg.index] if seg.index >= 0 else None,
                          seg.index) for seg in segments[key]), key=lambda g: (g.s, g.t, g.index)))
-    return Sizing(segments, True, result.message, tuple(relaxed))
+    borders = {g: tuple(float(x[v]) for v in vs) for g, vs in border_vars.items()}
+    return Sizing(segments, True, result.message, tuple(relaxed), borders)
 
 
 def _add(a: dict[int, float], b: dict[int, float]) -> dict[int, float]:

@@ -80,7 +80,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     fallback: tuple[Candidate, float] | None = None
     cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
     for _ in range(options.rounds):
-        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu)):
+        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget)):
             if index >= options.candidates or budget.exhausted:
                 break
             fallback = fallback or (candidate, mu)
@@ -116,7 +116,8 @@ def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
     """A candidate when none fits Eq. 7 within the rounds: a very loose tolerance, then without floor binding."""
     big = 10.0 * spec.canvas + 1.0
     for attempt in (spec, replace(spec, floor_pattern=None)):
-        for candidate in CandidateGenerator(ruleset, attempt, big):
+        budget = Budget(ruleset.options.expansions, time.perf_counter() + max(ruleset.options.time, 0.5))
+        for candidate in CandidateGenerator(ruleset, attempt, big, budget):
             if attempt.floor_pattern is None and spec.floor_pattern is not None:
                 diagnostics.append(f"floor pattern {spec.floor_pattern!r} has no word with "
                                    f"{len(spec.floor_heights)} letters; floors are not bound")

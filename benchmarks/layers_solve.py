@@ -1,0 +1,48 @@
+"""Median solve times of layer stacks (ilcik2015 §6: 8 layers 0.8 s, 26 layers about 1 s on a 2015 desktop).
+
+Run: python benchmarks/layers_solve.py [--repeat N]
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+from citygen.request import FacadeRequest
+from citygen_layers.parser import load
+from citygen_layers.plugin import generate
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = [
+    ("Fig. 5 house (3 layers)", ROOT / "rulesets" / "residential_house.layers", FacadeRequest(6.0, 3.0, (0.0, 1.6, 3.0), True)),
+    ("terraced house (3 layers)", ROOT / "rulesets" / "terraced_house.layers", FacadeRequest.preview(14, 16, 3.0, 4.0)),
+    ("tenement (8 layers, 30 symbols)", ROOT / "rulesets" / "tenement.layers", FacadeRequest.preview(16, 15, 3.0, 4.0)),
+    ("26-layer stack", ROOT / "benchmarks" / "data" / "layers" / "tonhalle26.layers",
+     FacadeRequest.preview(24, 19, 3.0, 4.5, entrance=False)),
+    ("under-constrained (budget)", ROOT / "benchmarks" / "data" / "layers" / "underconstrained.layers",
+     FacadeRequest(17.0, 13.0, (0.0, 13.0))),
+]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--repeat", type=int, default=7)
+    args = parser.parse_args()
+    print(f"{'case':34} {'median ms':>10} {'cpu ms':>8} {'expansions':>10}  status")
+    for name, path, request in CASES:
+        ruleset = load(path)
+        generate(ruleset, request)   # warm-up (imports, caches)
+        wall, cpu = [], []
+        for _ in range(args.repeat):
+            t0, c0 = time.perf_counter(), time.process_time()
+            layout = generate(ruleset, request)
+            wall.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
+        status = "/".join(layout.meta["status"].values())
+        print(f"{name:34} {1e3 * statistics.median(wall):10.1f} {1e3 * statistics.median(cpu):8.1f} "
+              f"{layout.meta['expansions']:10d}  {status}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,82 @@
+"""The worked examples of ilcik2015 (§4, Fig. 7, Eq. 8, transparent splits)."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from citygen.layout import check_partition
+from citygen.request import FacadeRequest, check_request
+from citygen_layers.align import Budget, _Words, align
+from citygen_layers.candidates import CandidateGenerator, direction_spec
+from citygen_layers.model import Counter
+from citygen_layers.parser import load, parse
+from citygen_layers.plugin import generate, solve_request
+
+RULESETS = Path(__file__).resolve().parents[2] / "rulesets"
+
+
+def _spec(rs, axis, canvas):
+    counters = dict(rs.counters)
+    counters["entrance"] = Counter("entrance", 0, 0)
+    return direction_spec(rs, axis, canvas, counters)
+
+
+def test_fig7_counting_and_sizing_candidates():
+    rs = parse("symbol B size=3\nsymbol A size=2\nsymbol C size=1.3\ncounter k in 1..\ncounter s in 1..\n"
+               "counter t in 1..\npattern P = e b^k e ; b := B\npattern R = A^s C^t A^s\nlayer l x=P y=R\n")
+    gen = CandidateGenerator(rs, _spec(rs, "x", 10.0), mu=1.0)
+    found = {}
+    for k in (1, 2, 3):
+        for word in gen.sized_words("P", gen.raw_words("P", {"k": k}), 9.0):
+            found.setdefault(k, []).append(word[0].size)
+    assert found == {1: [4.0, 3.0], 2: [2.0], 3: [1.0]}
+    ygen = CandidateGenerator(rs, _spec(rs, "y", 10.0), mu=1.0)
+    fits = {(s, t) for s in range(1, 4) for t in range(1, 8)
+            if ygen.sized_words("R", ygen.raw_words("R", {"s": s, "t": t}), 9.0)}
+    assert fits == {(1, 4), (1, 5), (2, 1), (2, 2)}
+
+
+def _ceca():
+    rs = parse("symbol C size=1 opaque\nsymbol A size=1 opaque\nsymbol B size=1 opaque\n"
+               "pattern T = c e c ; c := C\npattern L = A (B A)^2\nlayer low x=L y=L\nlayer top x=T y=L\n")
+    spec = _spec(rs, "x", 5.0)
+    cand = next(iter(CandidateGenerator(rs, spec, 0.5)))
+    words = [cand.words[r.pattern] for r in spec.rows]
+    above = np.array([[False, True], [False, False]])
+    return words, above
+
+
+def test_eq8_alignments_of_CeC_ABABA():
+    words, above = _ceca()
+    net = _Words(words, above)
+    # (Ce C / ABA BA): an entry mixes transparent e with C -- rejected by transparent separation
+    assert net.score(((0, 2), (0, 3))) is None
+    # (C e C / eps ABABA eps): the lower layer makes space for the opaque C
+    assert net.score(((0, 1), (0, 0))) is not None
+    best = align(words, above, 5.0, 0.5, Budget(1000, 1e18))
+    assert best.columns == (((0, 1), (0, 1)), ((1, 2), (1, 4)), ((2, 3), (4, 5)))   # Fig. 8's red path
+    assert best.error == pytest.approx(0.0)
+
+
+def test_transparent_split_fAf_CeC_ABABA():
+    rs = parse("symbol A size=2 opaque\nsymbol B size=3 opaque\nsymbol C size=2\n"
+               "pattern F = f a f ; a := A\npattern T = c e c ; c := C\npattern L = A (B A)^2\n"
+               "layer low x=L y=L\nlayer mid x=T y=L\nlayer top x=F y=L\n")
+    sx, _ = solve_request(rs, FacadeRequest(12.0, 12.0, (0.0, 12.0)))
+    assert sx.status == "solved"
+    (matrix,) = sx.matrices
+    assert len(matrix.alignment.columns) == 5   # f and e split; Omega > 0 only from the sampled sizes
+    assert sx.sizing.borders["main"] == pytest.approx((0, 2, 5, 7, 10, 12), abs=1e-3)
+
+
+def test_section4_residential_house():
+    rs = load(RULESETS / "residential_house.layers")
+    request = FacadeRequest(6.0, 3.0, (0.0, 1.6, 3.0), entrance=False)
+    layout = generate(rs, request)
+    assert check_partition(layout) == [] and check_request(layout, request) == []
+    assert [c.layer for c in layout.root.children] == ["basic", "columns", "entrance"]
+    pillars = [r for r in layout.terminals() if r.label == "pillar"]
+    assert len(pillars) == 2 and all(r.y == 0 and r.h == pytest.approx(1.6) for r in pillars)   # mask = P
+    walls = [r for r in layout.terminals() if r.layer == "basic" and r.symbol == "A.P"]
+    assert {round(p.x, 6) for p in pillars} <= {round(w.x, 6) for w in walls} | {0.0}   # C aligned with A
+    assert layout.meta["status"] == {"x": "solved", "y": "solved"}

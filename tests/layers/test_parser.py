@@ -1,0 +1,37 @@
+import pytest
+
+from citygen.errors import ParseError
+from citygen_layers.model import Alt, Rep, Seq, Sym
+from citygen_layers.parser import parse
+
+HEAD = "symbol A size=1 opaque\nsymbol B size=1\ncounter k\n"
+
+
+def test_alternation_binds_tighter_than_concatenation():
+    rs = parse(HEAD + "pattern P = A|B A\nlayer l x=P y=P\n")
+    node = rs.patterns["P"].control
+    assert isinstance(node, Seq) and isinstance(node.items[0], Alt) and node.items[1] == Sym("A")
+
+
+def test_counting_reflection_and_substitution():
+    rs = parse(HEAD + "pattern P = A (B A)^-k\npattern Q = c e c ; c := A B\nlayer l x=P y=Q\n")
+    rep = rs.patterns["P"].control.items[1]
+    assert isinstance(rep, Rep) and rep.count == "k" and rep.negate
+    assert set(rs.patterns["Q"].substitutions) == {"c"}
+
+
+@pytest.mark.parametrize("text, where, words", [
+    ("frobnicate 1\n", ":4:1", "unknown statement"),
+    ("pattern P = A (B\nlayer l x=P y=P\n", ":4:17", "expected ')'"),
+    ("pattern P = A $\n", ":4:15", "unexpected character"),
+    ("pattern P = A^q\nlayer l x=P y=P\n", ":4:15", "unknown counter"),
+    ("pattern P = A Z\nlayer l x=P y=P\n", ":4:15", "no declaration"),
+    ("pattern P = A\nlayer l x=P y=Nope\n", ":5:13", "unknown pattern"),
+    ("pattern P = A ; z := B\n", ":4:17", "does not occur"),
+    ("pattern P = A^k\npattern R = B^k\nlayer l x=P y=R\n", ":5:15", "both directions"),
+    ("symbol C size=-1\n", ":4:10", "non-negative"),
+])
+def test_errors_name_file_line_column(text, where, words):
+    with pytest.raises(ParseError) as info:
+        parse(HEAD + text, "stack.layers")
+    assert f"stack.layers{where}" in str(info.value) and words in str(info.value)
