@@ -70,12 +70,7 @@ def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
     if args.json:
         print(layout.dumps())
     if args.png:
-        render = getattr(kind, "render_png", None)
-        if render is not None:
-            render(ruleset, request, layout, args.png)
-        else:
-            from citygen.preview import save_png
-            save_png(layout, args.png, lines=[("y", y) for y in request.floor_lines[1:-1]])
+        kind.render_png(layout, Path(args.png), request.floor_lines[1:-1])
         print(f"wrote {args.png}", file=sys.stderr)
     if not (args.json or args.png or args.explain):
         counts: dict[str, int] = {}

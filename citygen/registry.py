@@ -54,6 +54,11 @@ class RulesetKind(ABC):
         """Human-readable account of how the layout for ``request`` was derived (``citygen facade --explain``)."""
         return f"{self.id}: no explanation available"
 
+    def render_png(self, layout: FacadeLayout, path: Path, floor_lines: Sequence[float] = ()) -> None:
+        """Draw a layout for ``citygen facade --png`` (override to show kind-specific structure)."""
+        from citygen.preview import save_png
+        save_png(layout, path, lines=[("y", y) for y in floor_lines])
+
 
 class FootprintImporter(ABC):
     """Reads building footprints from a file format."""

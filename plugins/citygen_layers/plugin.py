@@ -84,6 +84,11 @@ class LayersKind(RulesetKind):
     suffixes = (".layers",)
     description = "layer stacks of horizontal x vertical patterns, aligned and sized automatically (ilcik2015)"
 
+    def render_png(self, layout, path, floor_lines=()):
+        """Layers back to front with the alignment columns of the solve."""
+        from citygen_layers.preview import render
+        render(layout, path)
+
     def load(self, path: Path) -> Ruleset:
         return load(path)
 
