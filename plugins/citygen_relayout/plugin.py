@@ -75,8 +75,9 @@ class RelayoutCommand(Command):
         if args.json:
             print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
         elif args.png and layouts:
-            from citygen_relayout.draw import contact_sheet
-            contact_sheet(layouts, args.png)
+            from citygen.preview import contact_sheet, draw_layout
+            px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
+            contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(args.png)
             print(f"wrote {args.png} ({len(layouts)} variations)")
         else:
             for k, r in enumerate(results):
