@@ -282,6 +282,9 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
                 inner.unlink(missing_ok=True)
         else:
             _export(layer, tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a stage is an ordinary file
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)

@@ -22,6 +22,7 @@ def test_every_format_validates(small_scene, test_registry, tmp_path, suffix):
     generate(small_scene, test_registry, out)
     assert errors(out) == []
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".city")], "temporary file left behind"
+    assert out.stat().st_mode & 0o044, "the stage must be readable by others (not mkstemp's 0600)"
 
 
 def test_same_seed_same_bytes_and_jobs_do_not_matter(small_scene, test_registry, tmp_path):
