@@ -28,7 +28,7 @@ import numpy as np
 
 from citygen.errors import LayoutError, ParseError, SourceLocation
 from citygen.layout import FacadeLayout, Region, check_partition
-from citygen.qp import solve_eq_qp
+from citygen_inverse.regularize import regularize_axis
 
 #: CMP label names -> citygen labels (``facade`` and ``background`` inside the facade are wall).
 CMP_TO_LABEL = {"background": "wall", "facade": "wall", "window": "window", "door": "door", "cornice": "cornice",
@@ -109,69 +109,6 @@ def parse_cmp_xml(text: str, source: str, labels: dict[int, tuple[str, int]]) ->
     return objects
 
 
-def _cluster(values: np.ndarray, tol: float, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
-    """1-D clustering: sorted distinct centres and, for every value, the index of its centre."""
-    order = np.argsort(values, kind="stable")
-    sorted_v = values[order]
-    ids = np.empty(values.size, dtype=int)
-    start, k = -np.inf, -1
-    for i, v in enumerate(sorted_v):  # a cluster spans at most ``tol`` (no chaining through dense edges)
-        if v - start > tol:
-            start, k = v, k + 1
-        ids[i] = k
-    centres = np.array([sorted_v[ids == k].mean() for k in range(ids[-1] + 1)])
-    centres[np.abs(centres - lo) <= tol] = lo
-    centres[np.abs(centres - hi) <= tol] = hi
-    centres, ids = np.unique(centres, return_inverse=True)[0], np.unique(centres, return_inverse=True)[1][ids]
-    index = np.empty(values.size, dtype=int)
-    index[order] = ids
-    return centres, index
-
-
-def _regularize(lines: np.ndarray, pairs: np.ndarray, names: list[str], tol: float, min_gap: float
-                ) -> tuple[np.ndarray, str]:
-    """QP moving ``lines`` (ends fixed) so boxes of one label with sizes within ``tol`` get equal sizes.
-
-    Equal-size constraints are added one at a time, closest pairs first; one that would collapse or reorder
-    lines (gaps below ``min_gap``) is left out, so the result always keeps the snapped order.
-    """
-    n = lines.size
-    sizes = lines[pairs[:, 1]] - lines[pairs[:, 0]]
-    candidates: dict[tuple[int, int, int, int], float] = {}
-    for name in sorted(set(names)):
-        members = np.flatnonzero(np.array([m == name for m in names]))
-        if members.size < 2:
-            continue
-        _, group = _cluster(sizes[members], tol, -np.inf, np.inf)
-        for g in np.unique(group):
-            distinct = sorted({tuple(pairs[m]) for m in members[group == g]})
-            for a, b in zip(distinct, distinct[1:]):
-                gap = abs((lines[a[1]] - lines[a[0]]) - (lines[b[1]] - lines[b[0]]))
-                if 0 < gap <= 0.15 * min(lines[a[1]] - lines[a[0]], lines[b[1]] - lines[b[0]]):
-                    candidates[(*a, *b)] = gap
-    if not candidates:
-        return lines, "nothing to regularise"
-    P, q = np.eye(n), -lines
-    anchor = np.zeros((2, n))
-    anchor[0, 0] = anchor[1, -1] = 1
-    accepted: list[np.ndarray] = [anchor[0], anchor[1]]
-    best, rejected = lines, 0
-    for (a0, a1, b0, b1), _ in sorted(candidates.items(), key=lambda kv: kv[1]):
-        row = np.zeros(n)
-        row[[a1, b0]] += 1
-        row[[a0, b1]] -= 1
-        A = np.vstack([*accepted, row])
-        b = np.zeros(len(A))
-        b[0], b[1] = lines[0], lines[-1]
-        result = solve_eq_qp(P, q, A, b)
-        if result.success and np.all(np.diff(result.x) >= min_gap):
-            accepted.append(row)
-            best = result.x
-        else:
-            rejected += 1
-    return best, f"{len(accepted) - 2} equal-size constraints, {rejected} rejected"
-
-
 def _decompose(grid: np.ndarray, r0: int, r1: int, c0: int, c1: int, out: list, pinwheels: list) -> None:
     """Guillotine decomposition of ``grid[r0:r1, c0:c1]`` (instance id per cell, -1 = wall) into rectangles."""
     block = grid[r0:r1, c0:c1]
@@ -180,7 +117,9 @@ def _decompose(grid: np.ndarray, r0: int, r1: int, c0: int, c1: int, out: list, 
         return
     for axis in (0, 1):
         a, b = (block[1:], block[:-1]) if axis == 0 else (block[:, 1:], block[:, :-1])
-        crossed = np.any((a == b) & (a >= 0), axis=1 - axis)
+        # a line is a cut when no object crosses it and the content changes there (wall-only lines of other
+        # parts of the facade do not slice walls into slivers)
+        crossed = np.any((a == b) & (a >= 0), axis=1 - axis) | np.all(a == b, axis=1 - axis)
         cuts = np.flatnonzero(~crossed) + 1
         if cuts.size:
             bounds = [0, *cuts.tolist(), block.shape[axis]]
@@ -238,7 +177,7 @@ def _png_agreement(png: Path, layout: FacadeLayout, box_px: tuple[float, float, 
 
 
 def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: float | None = None,
-               floor_height: float = 3.0, snap: float = 0.004, regularize: float = 0.02,
+               floor_height: float = 3.0, snap: float = 0.01, align: float = 0.025, regularize: float = 0.03,
                labels_path: str | Path | None = None) -> FacadeLayout:
     """Read a CMP annotation as a FacadeLayout in metres whose terminals partition the facade exactly."""
     xml_path = Path(xml_path)
@@ -266,20 +205,17 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     dropped = int((~keep).sum())
     parts = [p for p, k in zip(parts, keep) if k]
     clipped = clipped[keep]
-    xs = np.concatenate([[0.0, fw], clipped[:, 0], clipped[:, 2]])
-    ys = np.concatenate([[0.0, fh], clipped[:, 1], clipped[:, 3]])
-    xl, xi = _cluster(xs, snap * fw, 0.0, fw)
-    yl, yi = _cluster(ys, snap * fh, 0.0, fh)
-    m = len(parts)
-    xp = np.stack([xi[2:2 + m], xi[2 + m:]], axis=1)
-    yp = np.stack([yi[2:2 + m], yi[2 + m:]], axis=1)
+    names = [p.name for p in parts]
+    xr = regularize_axis(clipped[:, 0], clipped[:, 2], clipped[:, [1, 3]], names, fw,
+                         snap=snap * fw, align=align * fw, size=regularize * fw)
+    yr = regularize_axis(clipped[:, 1], clipped[:, 3], clipped[:, [0, 2]], names, fh,
+                         snap=snap * fh, align=align * fh, size=regularize * fh)
+    xp, yp = np.stack([xr.lo, xr.hi], axis=1), np.stack([yr.lo, yr.hi], axis=1)
     alive = (xp[:, 0] < xp[:, 1]) & (yp[:, 0] < yp[:, 1])
     dropped += int((~alive).sum())
     parts = [p for p, a in zip(parts, alive) if a]
     xp, yp = xp[alive], yp[alive]
-    names = [p.name for p in parts]
-    xl, x_status = _regularize(xl, xp, names, regularize * fw, 0.25 * snap * fw)
-    yl, y_status = _regularize(yl, yp, names, regularize * fh, 0.25 * snap * fh)
+    xl, yl, x_status, y_status = xr.lines, yr.lines, xr.status, yr.status
     grid = np.full((yl.size - 1, xl.size - 1), -1, dtype=np.int64)
     for k in sorted(range(len(parts)), key=lambda k: (parts[k].z, parts[k].order)):
         grid[yp[k, 0]:yp[k, 1], xp[k, 0]:xp[k, 1]] = k

@@ -17,7 +17,7 @@ def test_import_is_an_exact_partition_in_metres():
     assert layout.width == pytest.approx(12.0, abs=1e-3)
     assert {"window", "wall", "balcony"} <= set(layout.labels())
     assert layout.meta["label_map_agreement"] > 0.85  # the <x>/<y> swap (SOURCE.txt) is handled
-    assert "equal-size constraints" in layout.meta["regularization"]["x"]
+    assert "equal-size/spacing constraints" in layout.meta["regularization"]["x"]
 
 
 def test_floor_height_scale():
@@ -61,3 +61,18 @@ def test_cli_import_extract_cost(tmp_path, capsys):
     assert "cost" in capsys.readouterr().err
     assert GrammarCommand().run(parser.parse_args(["cost", str(grammar)]), None) == 0
     assert capsys.readouterr().out.startswith("cost ")
+
+
+def test_walls_are_not_sliced_by_lines_of_other_floors():
+    """Regression: wall-only grid lines of other rows cut walls into slivers (1087 terminals on cmp_b0001)."""
+    layout = import_cmp(DATA / "cmp_b0002.xml")
+    assert len(layout.terminals()) < 200
+    walls = [t for t in layout.terminals() if t.label == "wall"]
+    assert min(t.w for t in walls) > 0.005 * layout.width
+
+
+def test_window_columns_share_lines():
+    """Aligned windows (wu2014 §3.3): the windows of cmp_b0002 stand on a few shared column lines."""
+    layout = import_cmp(DATA / "cmp_b0002.xml")
+    lefts = {round(t.x, 6) for t in layout.terminals() if t.label == "window" and t.w > 0.6}
+    assert len(lefts) <= 4
