@@ -28,7 +28,7 @@ import numpy as np
 
 from citygen.errors import LayoutError, ParseError, SourceLocation
 from citygen.layout import FacadeLayout, Region, check_partition
-from citygen_inverse.regularize import regularize_axis
+from citygen_inverse.regularize import integer_lines, regularize_axis
 
 #: CMP label names -> citygen labels (``facade`` and ``background`` inside the facade are wall).
 CMP_TO_LABEL = {"background": "wall", "facade": "wall", "window": "window", "door": "door", "cornice": "cornice",
@@ -42,6 +42,8 @@ DEFAULT_LABELS = {1: ("background", 1), 2: ("facade", 2), 3: ("window", 10), 4: 
                   6: ("sill", 3), 7: ("balcony", 4), 8: ("blind", 6), 9: ("deco", 8), 10: ("molding", 7),
                   11: ("pillar", 12), 12: ("shop", 9)}
 _ROW_LABELS = ("window", "door", "shop")
+#: Output grid of the imported lines (m).
+UNIT = 1e-4
 
 
 @dataclass(frozen=True)
@@ -224,7 +226,9 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     _decompose(grid, 0, grid.shape[0], 0, grid.shape[1], rects, pinwheels)
     rows = _count_rows([(b.y0, b.y1) for b in parts if b.name in _ROW_LABELS])
     scale = width / fw if width else floor_height * max(rows, 1) / fh
-    X, Y = np.round(xl * scale, 4), np.round(yl * scale, 4)  # 0.1 mm: equal sizes stay equal as decimals
+    # 0.1 mm grid, rounded jointly so that sizes and pitches the QP made equal stay exactly equal
+    X = np.round(integer_lines(xl * scale, xr.equal, UNIT) * UNIT, 4)
+    Y = np.round(integer_lines(yl * scale, yr.equal, UNIT) * UNIT, 4)
     terminals = []
     for r0, r1, c0, c1, ident in rects:
         label = CMP_TO_LABEL[parts[ident].name] if ident >= 0 else "wall"

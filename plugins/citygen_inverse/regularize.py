@@ -13,7 +13,9 @@ same size nor on the same row/column lines, and a grammar finds few exact transl
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
@@ -28,6 +30,7 @@ class AxisLines:
     lo: np.ndarray
     hi: np.ndarray
     status: str
+    equal: tuple[tuple[int, int, int, int], ...] = ()  # accepted (a0, a1, b0, b1): a1 - a0 == b1 - b0
 
 
 def cluster(values: np.ndarray, tol: float, lo: float = -np.inf, hi: float = np.inf
@@ -125,20 +128,20 @@ def regularize_axis(lo: np.ndarray, hi: np.ndarray, across: np.ndarray, names: l
             members = sorted({(lo_i[k], hi_i[k]) for k in sel[row == r]})
             pitches += [(a[0], b[0]) for a, b in zip(members, members[1:]) if b[0] >= a[1]]
         candidates += _candidates(lines, pitches, size, rel)
-    lines, status = _solve(lines, candidates, 0.25 * snap)
-    return AxisLines(lines, lo_i, hi_i, status)
+    lines, equal, status = _solve(lines, candidates, 0.25 * snap)
+    return AxisLines(lines, lo_i, hi_i, status, equal)
 
 
 def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int, int]]], min_gap: float
-           ) -> tuple[np.ndarray, str]:
+           ) -> tuple[np.ndarray, tuple[tuple[int, int, int, int], ...], str]:
     """Least movement of ``lines`` (ends fixed) under the accepted equal-length constraints, closest first."""
     if not candidates:
-        return lines, "nothing to regularise"
+        return lines, (), "nothing to regularise"
     n = lines.size
     P, q = np.eye(n), -lines
     rows = [np.eye(n)[0], np.eye(n)[-1]]
     rhs = [lines[0], lines[-1]]
-    best, rejected, seen = lines, 0, set()
+    best, rejected, seen, equal = lines, 0, set(), []
     for _, (a0, a1, b0, b1) in sorted(candidates):
         row = np.zeros(n)
         row[[a1, b0]] += 1
@@ -152,7 +155,56 @@ def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int,
                 np.vstack([*rows, row]) @ result.x, [*rhs, 0.0], atol=1e-7 * max(lines[-1], 1.0)):
             rows.append(row)
             rhs.append(0.0)
+            equal.append((a0, a1, b0, b1))
             best = result.x
         else:
             rejected += 1
-    return best, f"{len(rows) - 2} equal-size/spacing constraints, {rejected} rejected"
+    return best, tuple(equal), f"{len(rows) - 2} equal-size/spacing constraints, {rejected} rejected"
+
+
+def integer_lines(lines: np.ndarray, equal: tuple[tuple[int, int, int, int], ...], unit: float) -> np.ndarray:
+    """``lines / unit`` on the integer grid with every equal-length constraint still exact and line 0 at 0.
+
+    Rounding each line separately lets lengths the QP made equal drift one unit apart (then they are no longer
+    repeats). Instead the constraints are brought to reduced row echelon form over the rationals (pivot = the
+    highest line of a row with a unit coefficient); the free lines are rounded and the pivot lines follow from
+    them exactly; a free line with fractional coefficients (e.g. 3/2) is rounded to a multiple of their
+    denominators, so the pivots are integers too.
+    """
+    target = np.asarray(lines, dtype=float) / unit
+    n = target.size
+    rows: list[dict[int, Fraction]] = [{0: Fraction(1)}]
+    for a0, a1, b0, b1 in equal:
+        row: dict[int, Fraction] = {}
+        for k, c in ((a1, 1), (b0, 1), (a0, -1), (b1, -1)):
+            row[k] = row.get(k, Fraction(0)) + c
+        rows.append({k: c for k, c in row.items() if c})
+    pivots: dict[int, dict[int, Fraction]] = {}  # pivot line -> {other line: coefficient}, line = sum
+    for row in rows:
+        for p, expr in pivots.items():  # eliminate known pivots
+            c = row.pop(p, None)
+            if c:
+                for k, v in expr.items():
+                    row[k] = row.get(k, Fraction(0)) + c * v
+        row = {k: c for k, c in row.items() if c}
+        if not row:
+            continue  # redundant constraint
+        p = max(row, key=lambda k: (abs(row[k]) == 1, k))
+        c = row.pop(p)
+        expr = {k: -v / c for k, v in row.items()}
+        for q, other in pivots.items():  # keep the form reduced
+            d = other.pop(p, None)
+            if d:
+                for k, v in expr.items():
+                    other[k] = other.get(k, Fraction(0)) + d * v
+                pivots[q] = {k: v for k, v in other.items() if v}
+        pivots[p] = expr
+    step = np.ones(n, dtype=np.int64)  # a free line rounds to a multiple of its coefficients' denominators
+    for expr in pivots.values():
+        for k, v in expr.items():
+            step[k] = math.lcm(int(step[k]), v.denominator)
+    out = (np.round(target / step) * step).astype(np.int64)
+    for p, expr in pivots.items():
+        value = sum((v * int(out[k]) for k, v in expr.items()), Fraction(0))
+        out[p] = round(value)
+    return out

@@ -1,6 +1,7 @@
 import argparse
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from citygen.errors import LayoutError, ParseError
@@ -76,3 +77,46 @@ def test_window_columns_share_lines():
     layout = import_cmp(DATA / "cmp_b0002.xml")
     lefts = {round(t.x, 6) for t in layout.terminals() if t.label == "window" and t.w > 0.6}
     assert len(lefts) <= 4
+
+
+@pytest.mark.parametrize("name", ["cmp_b0002", "cmp_b0005", "cmp_b0009", "cmp_b0012"])
+def test_equal_sizes_stay_exact_after_rounding(name, monkeypatch):
+    """Regression: rounding each line to 0.1 mm after the QP let equal sizes drift apart (0.8309 vs 0.8308 m)."""
+    import citygen_inverse.cmp as cmp_module
+    from citygen_inverse.regularize import integer_lines
+    seen = []
+
+    def spy(lines, equal, unit):
+        out = integer_lines(lines, equal, unit)
+        seen.append((out, equal))
+        return out
+    monkeypatch.setattr(cmp_module, "integer_lines", spy)
+    layout = import_cmp(DATA / f"{name}.xml")
+    assert sum(len(eq) for _, eq in seen) > 0
+    for out, equal in seen:
+        for a0, a1, b0, b1 in equal:
+            assert out[a1] - out[a0] == out[b1] - out[b0]
+    for label in set(layout.labels()):
+        for attr in ("w", "h"):
+            sizes = sorted({round(getattr(t, attr) * 1e4) for t in layout.terminals() if t.label == label})
+            assert all(b - a != 1 for a, b in zip(sizes, sizes[1:])), f"{label} {attr}: sizes 0.1 mm apart"
+
+
+def test_integer_lines_keep_every_equality_exact():
+    """Lines with equal sizes and pitches (as after the QP) on a coarse grid: every equality exact, little movement."""
+    from citygen_inverse.regularize import integer_lines
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        steps = rng.choice(rng.uniform(0.3, 2.0, 3), size=12)
+        lines = np.concatenate([[0.0], np.cumsum(steps)])
+        pairs = [(i, j) for i in range(13) for j in range(i + 1, min(i + 4, 13))]
+        equal = []
+        for a in pairs:
+            for b in pairs:
+                if a < b and a[1] <= b[0] and abs((lines[a[1]] - lines[a[0]]) - (lines[b[1]] - lines[b[0]])) < 1e-12:
+                    equal.append((*a, *b))
+        out = integer_lines(lines, tuple(equal), 0.01)
+        assert out[0] == 0 and out.dtype.kind == "i" and np.all(np.diff(out) > 0)
+        for a0, a1, b0, b1 in equal:
+            assert out[a1] - out[a0] == out[b1] - out[b0]
+        assert np.max(np.abs(out - lines / 0.01)) <= 8
