@@ -47,8 +47,8 @@ class Action:
     grid_lines: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
 
 
-def _ops(seq: list[int], model: CostModel) -> tuple[str, float, int]:
-    """Cheapest operator for a child sequence: (op, cost, number of items written)."""
+def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]:
+    """Cheapest operator for a child sequence of (signature, size along the axis): (op, cost, items written)."""
     k = len(seq)
     best = ("split", model.split + k, k)
     for p in range(1, k):
@@ -74,6 +74,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
                                 & (sym.boxes[:, 3] == y1)))
     inst = sym.boxes[inside]
     weight = sym.terminals[inside] / index.sigs[sig].n
+    if index.sigs[sig].period is not None:
+        return _periodic(index, sig, model, inst, weight)
     actions: list[Action] = []
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
@@ -89,7 +91,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             for a, b in zip(lo[sel], hi[sel]):
                 covered[(bounds > a) & (bounds < b)] = True
             groupings.add(tuple(k for k in range(1, m) if not covered[k]))
-        atoms = [index.sig(_piece(box, axis, bounds[k], bounds[k + 1])) for k in range(m)]
+        atoms = [(index.sig(_piece(box, axis, bounds[k], bounds[k + 1])), int(bounds[k + 1] - bounds[k]))
+                 for k in range(m)]
         groupings.update(_repeated_runs(atoms))
         seen = set()
         for keep in groupings:
@@ -108,7 +111,25 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     return actions
 
 
-def _repeated_runs(atoms: list[int], limit: int = 16) -> list[tuple[int, ...]]:
+def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, weight: np.ndarray
+              ) -> list[Action]:
+    """A periodic region (any tile count shares its signature) only gets ``repeat`` rules: over whole tiles, or
+    over the tile's atoms written inline."""
+    box = index.sigs[sig].box
+    axis, p = index.sigs[sig].period
+    lo, hi = inst[:, axis], inst[:, axis + 2]
+    starts = range(box[axis], box[axis + 2], p)
+    tiles = [_piece(box, axis, a, a + p) for a in starts]
+    out = [_make(index, box, axis, tiles, [index.sig(t) for t in tiles], model, lo, hi, weight)]
+    cuts = index.cuts(box, axis)
+    if cuts.size + 1 > len(tiles):
+        bounds = np.concatenate([[box[axis]], cuts, [box[axis + 2]]])
+        atoms = [_piece(box, axis, a, b) for a, b in zip(bounds, bounds[1:])]
+        out.append(_make(index, box, axis, atoms, [index.sig(t) for t in atoms], model, lo, hi, weight))
+    return [a for a in out if a.op == "repeat"]  # (always: for >= 2 tiles repeat is the cheapest operator)
+
+
+def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[int, ...]]:
     """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis)."""
     m = len(atoms)
     found: list[tuple[float, tuple[int, ...]]] = []
@@ -137,12 +158,16 @@ def _merge_runs(index: LayoutIndex, box: Box, axis: int, pieces: list[Box], sigs
                 ) -> tuple[list[Box], list[int]]:
     out_p, out_s, start = [], [], 0
     for k in range(1, len(pieces) + 1):
-        if k == len(pieces) or sigs[k] != sigs[start]:
+        if k == len(pieces) or sigs[k] != sigs[start] or _len(pieces[k], axis) != _len(pieces[start], axis):
             merged = _piece(box, axis, pieces[start][axis], pieces[k - 1][axis + 2])
             out_p.append(merged)
             out_s.append(index.sig(merged) if k - start > 1 else sigs[start])
             start = k
     return out_p, out_s
+
+
+def _len(p: Box, axis: int) -> int:
+    return p[axis + 2] - p[axis]
 
 
 def _rel(box: Box, p: Box) -> Box:
@@ -151,7 +176,7 @@ def _rel(box: Box, p: Box) -> Box:
 
 def _make(index: LayoutIndex, box: Box, axis: int, pieces: list[Box], sigs: list[int], model: CostModel,
           lo: np.ndarray, hi: np.ndarray, weight: np.ndarray) -> Action:
-    op, cost, k = _ops(sigs, model)
+    op, cost, k = _ops([(s, _len(p, axis)) for s, p in zip(sigs, pieces)], model)
     cuts = np.array([p[axis] for p in pieces[1:]], dtype=np.int64)
     crossing = (lo[:, None] < cuts[None, :]) & (hi[:, None] > cuts[None, :])
     line_cost = float(weight @ crossing.sum(axis=1)) if crossing.size else 0.0

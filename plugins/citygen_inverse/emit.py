@@ -69,12 +69,8 @@ class GrammarWriter:
             self.names[s] = f"{base}{counters[base]}"
         return order
 
-    def size(self, s: int, axis: int) -> float:
-        b = self.index.sigs[s].box
-        return (b[2 + axis] - b[axis]) * self.index.quantum
-
-    def _item(self, s: int, axis: int, mode: str) -> str:
-        v = self.size(s, axis)
+    def _item(self, s: int, rel: tuple[int, int, int, int], axis: int, mode: str) -> str:
+        v = (rel[2 + axis] - rel[axis]) * self.index.quantum  # the item's own size (free extents share a symbol)
         if mode == "exact" or v < THIN:
             prefix = ""
         else:
@@ -86,11 +82,10 @@ class GrammarWriter:
         axis = "xy"[a.axis]
         rel = "rel" if independent else "exact"
         flo = "float" if independent else "exact"
-        items = [c for c, _ in a.items]
         if a.op == "grid":
             return self._grid(s, a, independent)
         mode = flo if a.op in ("repeat", "repeatABA") else rel
-        text = " | ".join(self._item(c, a.axis, mode) for c in items)
+        text = " | ".join(self._item(c, box, a.axis, mode) for c, box in a.items)
         return f"{a.op}({axis}) {{ {text} }}"
 
     def _grid(self, s: int, a: Action, independent: bool) -> str:
@@ -149,15 +144,15 @@ class GrammarWriter:
         if a.axis != 1 or a.op not in ("split", "repeat"):
             return None
         if a.op == "repeat":
-            tile = [c for c, _ in a.items]
+            tile = list(a.items)
             return f"floors {{ *: {self._group('Floor', tile, extra)} }}"
-        items = [c for c, _ in a.items]
-        reps = [k for k, c in enumerate(items) if c in self.rules and self.rules[c].op == "repeat"
+        items = list(a.items)
+        reps = [k for k, (c, _) in enumerate(items) if c in self.rules and self.rules[c].op == "repeat"
                 and self.rules[c].axis == 1]
         if not reps:
             return None
-        k = max(reps, key=lambda i: self.size(items[i], 1))
-        tile = [c for c, _ in self.rules[items[k]].items]
+        k = max(reps, key=lambda i: items[i][1][3] - items[i][1][1])
+        tile = list(self.rules[items[k][0]].items)
         parts = [f"*: {self._group('Floor', tile, extra)}"]
         if k > 0:
             parts.insert(0, f"0: {self._group('Ground', items[:k], extra)}")
@@ -165,10 +160,10 @@ class GrammarWriter:
             parts.insert(1 if k > 0 else 0, f"-1: {self._group('Top', items[k + 1:], extra)}")
         return f"floors {{ {' | '.join(parts)} }}"
 
-    def _group(self, name: str, items: list[int], extra: list[str]) -> str:
+    def _group(self, name: str, items: list[tuple[int, tuple[int, int, int, int]]], extra: list[str]) -> str:
         if len(items) == 1:
-            return self.names[items[0]]
-        text = " | ".join(self._item(c, 1, "rel") for c in items)
+            return self.names[items[0][0]]
+        text = " | ".join(self._item(c, box, 1, "rel") for c, box in items)
         extra.append(f"{name} --> split(y) {{ {text} }}")
         return name
 

@@ -3,6 +3,13 @@
 A *region* is an axis-aligned box exactly tiled by terminals (wu2014 §3.1). Two regions with the same content up
 to translation share a *signature* (an interned integer), so they share one grammar symbol and one rule.
 Coordinates are quantised to ``quantum`` metres (1e-7 of the facade size) so equality is exact.
+
+*Free extents*: as in wu2014 §3.1 terminal symbols are materials (label and depth), their sizes being set by the
+parent rule. The same holds for a region all of whose terminals span its full width (a vertical stack): no rule
+inside it fixes its width, so stacks that differ only in width share one signature and one rule (likewise for
+height). Likewise a region that is an exact periodic sequence of >= 2 tiles along an axis is derived by one
+``repeat`` rule whatever the count, so its signature is (axis, tile length, tile signature). With
+``free_extents=False`` signatures are strictly translational (sizes included).
 """
 from __future__ import annotations
 
@@ -33,12 +40,14 @@ class SigInfo:
     box: Box
     n: int
     terminal: int | None
+    period: tuple[int, int] | None = None  # (axis, tile length): a repeat of >= 2 tiles, shared by any count
 
 
 class LayoutIndex:
     """Terminals of one or more layouts (placed side by side) with region lookup by box."""
 
-    def __init__(self, layouts: list[FacadeLayout]) -> None:
+    def __init__(self, layouts: list[FacadeLayout], free_extents: bool = True) -> None:
+        self.free_extents = free_extents
         if not layouts:
             raise LayoutError("no layout to extract from")
         for k, layout in enumerate(layouts):
@@ -64,13 +73,16 @@ class LayoutIndex:
         self.X0, self.Y0, self.X1, self.Y1 = arr.T.copy()
         self.kinds: list[TerminalKind] = []
         kind_ids: dict[TerminalKind, int] = {}
-        sym = []
+        materials: dict[tuple, int] = {}
+        sym, mat = [], []
         for (label, depth), (x0, y0, x1, y1) in zip(kinds, rows):
             kind = TerminalKind(label, depth, x1 - x0, y1 - y0)
             sym.append(kind_ids.setdefault(kind, len(kind_ids)))
+            mat.append(materials.setdefault((label, depth), len(materials)))
             if len(kind_ids) > len(self.kinds):
                 self.kinds.append(kind)
         self.sym = np.array(sym, dtype=np.int64)
+        self.material = np.array(mat, dtype=np.int64)
         self.sigs: list[SigInfo] = [SigInfo((0, 0, 0, 0), 0, None)]  # id 0: the empty dummy
         self._sig_ids: dict[bytes, int] = {}
         self._boxes: dict[Box, int] = {}
@@ -93,14 +105,32 @@ class LayoutIndex:
         if idx.size == 0 or area != (x1 - x0) * (y1 - y0):
             self._boxes[box] = -1
             return -1
-        rel = np.stack([self.sym[idx], self.X0[idx] - x0, self.Y0[idx] - y0], axis=1)
-        rel = rel[np.lexsort(rel.T[::-1])]
-        key = np.concatenate([[x1 - x0, y1 - y0], rel.ravel()]).tobytes()
+        X0, Y0, X1, Y1 = self.X0[idx] - x0, self.Y0[idx] - y0, self.X1[idx] - x0, self.Y1[idx] - y0
+        free_w = self.free_extents and bool(np.all((X0 == 0) & (X1 == x1 - x0)))
+        free_h = self.free_extents and bool(np.all((Y0 == 0) & (Y1 == y1 - y0)))
+        w, h = (-1 if free_w else x1 - x0), (-1 if free_h else y1 - y0)
+        if free_w:
+            X1 = np.zeros_like(X1)
+        if free_h:
+            Y1 = np.zeros_like(Y1)
+        rel = np.stack([self.material[idx], X0, Y0, X1, Y1], axis=1)
+        period = None
+        if self.free_extents and idx.size > 1:
+            for axis, free in ((0, free_w), (1, free_h)):
+                p = None if free else _period(rel, axis, (x1 - x0, y1 - y0)[axis])
+                if p is not None:
+                    tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
+                    period = (axis, p)
+                    key = np.array([-2 - axis, p, self.sig(tile)]).tobytes()
+                    break
+        if period is None:
+            rel = rel[np.lexsort(rel.T[::-1])]
+            key = np.concatenate([[w, h], rel.ravel()]).tobytes()
         sid = self._sig_ids.get(key)
         if sid is None:
             sid = len(self.sigs)
             self._sig_ids[key] = sid
-            self.sigs.append(SigInfo(box, int(idx.size), int(self.sym[idx[0]]) if idx.size == 1 else None))
+            self.sigs.append(SigInfo(box, int(idx.size), int(self.sym[idx[0]]) if idx.size == 1 else None, period))
         self._boxes[box] = sid
         return sid
 
@@ -114,3 +144,25 @@ class LayoutIndex:
             return cand
         crossed = np.any((lo[:, None] < cand[None, :]) & (hi[:, None] > cand[None, :]), axis=0)
         return cand[~crossed]
+
+
+def _period(rel: np.ndarray, axis: int, length: int) -> int | None:
+    """Smallest tile length ``p`` (``length / p >= 2``) such that the content is ``length / p`` identical tiles."""
+    lo, hi = rel[:, 1 + axis], rel[:, 3 + axis]
+    n = rel.shape[0]
+    for p in np.unique(lo[lo > 0]).tolist():
+        if 2 * p > length:
+            break
+        k = length // p
+        if length % p or n % k or np.any(lo // p != (hi - 1) // p):
+            continue
+        first = rel[lo < p]
+        shifted = rel.copy()
+        tile = lo // p
+        shifted[:, 1 + axis] -= tile * p
+        shifted[:, 3 + axis] -= tile * p
+        shifted = shifted[np.lexsort(shifted.T[::-1])]
+        first = np.repeat(first[np.lexsort(first.T[::-1])], k, axis=0)
+        if first.shape == shifted.shape and np.array_equal(first, shifted):
+            return int(p)
+    return None

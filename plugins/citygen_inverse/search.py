@@ -13,7 +13,9 @@ iteration is the greedy one, so ADP is never worse than greedy.
 from __future__ import annotations
 
 import heapq
+import math
 import time
+from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,31 +40,45 @@ class SearchResult:
 
 
 class GrammarSearch:
-    """Search state shared by all iterations: the layout index, repeated regions and per-signature actions."""
+    """Search state shared by all iterations: the layout index, repeated regions and per-signature actions.
+
+    Per signature the actions are kept as plain lists (costs, non-terminal successors, greedy choice, softmax
+    cumulative weights) because the per-region work is too small for numpy; protection is a bit mask over the
+    important repeated instances per (signature, position).
+    """
 
     def __init__(self, index: LayoutIndex, model: CostModel = CostModel(), max_groups: int = 1500) -> None:
         self.index = index
         self.model = model
         self.sym: RepeatedRegions = detect_symmetry(index, max_groups)
         self._actions: dict[int, list[Action]] = {}
-        self._arrays: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._cost: dict[int, list[float]] = {}
+        self._kids: dict[int, list[tuple[int, ...]]] = {}
+        self._greedy_k: dict[int, int] = {}
+        self._cum: dict[int, list[float]] = {}
+        self._weights: dict[int, list[float]] = {}
+        self._masks: dict[tuple[int, int, int], list[int]] = {}
         self.value: dict[int, float] = {}
         self.best_action: dict[int, int] = {}
         self.roots = [index.sig(box) for box in index.roots]
         imp = self.sym.importance.astype(float)
         self._important = np.flatnonzero(imp > 0)
         self._importance = imp[self._important]
+        self._imp_boxes = self.sym.boxes[self._important]
+        self._u: list[float] = []
 
     def actions(self, sig: int) -> list[Action]:
         acts = self._actions.get(sig)
         if acts is None:
             acts = region_actions(self.index, sig, self.sym, self.model)
             self._actions[sig] = acts
-            cost = np.array([a.cost for a in acts])
-            heur = np.array([a.heuristic for a in acts])
-            kids = [[0] + [c for c, _ in a.children] for a in acts]
-            offsets = np.cumsum([0] + [len(k) for k in kids[:-1]])
-            self._arrays[sig] = (cost, heur, np.concatenate(kids).astype(np.int64), offsets)
+            heur = [a.heuristic for a in acts]
+            self._cost[sig] = [a.cost for a in acts]
+            self._kids[sig] = [tuple(c for c, _ in a.children) for a in acts]
+            self._greedy_k[sig] = int(np.argmin(heur))
+            low = min(heur)
+            self._weights[sig] = [math.exp(low - h) for h in heur]
+            self._cum[sig] = list(np.cumsum(self._weights[sig]))
         return acts
 
     def estimate(self, sig: int) -> float:
@@ -70,123 +86,156 @@ class GrammarSearch:
         return 1.0 + 0.25 * self.index.sigs[sig].n
 
     # ---- one iteration ---------------------------------------------------------------------------------------
-    def iterate(self, choose, protected: np.ndarray) -> tuple[dict[int, int], float]:
+    def iterate(self, choose, protected: int) -> tuple[dict[int, int], float]:
+        """One grammar, top-down; ``protected`` is a bit mask over the important repeated instances."""
         rules: dict[int, int] = {}
         intro: dict[int, int] = {}
-        heap = [(box[1], box[0], sig, box[0], box[1]) for sig, box in zip(self.roots, self.index.roots)]
+        heap = [(box[1], box[0], sig) for sig, box in zip(self.roots, self.index.roots)]
         heapq.heapify(heap)
         order = []
+        sigs = self.index.sigs
         while heap:
-            _, _, sig, x, y = heapq.heappop(heap)
-            if sig in rules or self.index.sigs[sig].n <= 1:
+            y, x, sig = heapq.heappop(heap)
+            if sig in rules or sigs[sig].n <= 1:
                 continue
-            acts = self.actions(sig)
-            allowed = self._allowed(sig, acts, protected, x, y)
-            k = choose(sig, acts, allowed, rules)
+            acts = self._actions.get(sig) or self.actions(sig)
+            masks = self._protection(sig, x, y) if protected else None
+            if masks is not None and all(m & protected for m in masks):
+                masks = None  # every rule cuts a protected region: protection is dropped here
+            k = choose(sig, masks, protected, rules)
             rules[sig] = k
             order.append(sig)
             for child, rel in acts[k].children:
                 if child not in rules:
                     intro.setdefault(child, sig)
-                    heapq.heappush(heap, (y + rel[1], x + rel[0], child, x + rel[0], y + rel[1]))
+                    heapq.heappush(heap, (y + rel[1], x + rel[0], child))
         sub: dict[int, float] = {}
+        total = 0.0
         for sig in reversed(order):
-            sub[sig] = sub.get(sig, 0.0) + self._actions[sig][rules[sig]].cost
+            c = self._cost[sig][rules[sig]]
+            total += c
+            sub[sig] = sub.get(sig, 0.0) + c
             parent = intro.get(sig)
             if parent is not None:
                 sub[parent] = sub.get(parent, 0.0) + sub[sig]
+        value, best = self.value, self.best_action
         for sig in order:
-            if sub[sig] < self.value.get(sig, np.inf):
-                self.value[sig] = sub[sig]
-                self.best_action[sig] = rules[sig]
-        return rules, sum(self._actions[s][k].cost for s, k in rules.items())
+            if sub[sig] < value.get(sig, math.inf):
+                value[sig] = sub[sig]
+                best[sig] = rules[sig]
+        return rules, total
 
-    def _allowed(self, sig: int, acts: list[Action], protected: np.ndarray, x: int, y: int) -> np.ndarray:
-        ok = np.ones(len(acts), dtype=bool)
-        if protected.size == 0:
-            return ok
-        w, h = self.index.sigs[sig].box[2] - self.index.sigs[sig].box[0], \
-            self.index.sigs[sig].box[3] - self.index.sigs[sig].box[1]
-        p = protected - np.array([x, y, x, y])
-        p = p[(p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 2] <= w) & (p[:, 3] <= h)
-              & ~((p[:, 0] == 0) & (p[:, 1] == 0) & (p[:, 2] == w) & (p[:, 3] == h))]
-        if p.size == 0:
-            return ok
-        for k, a in enumerate(acts):
-            if a.cuts:
-                c = np.asarray(a.cuts)
-                ok[k] = not np.any((p[:, a.axis, None] < c) & (p[:, a.axis + 2, None] > c))
-        return ok if ok.any() else np.ones(len(acts), dtype=bool)
+    def _protection(self, sig: int, x: int, y: int) -> list[int]:
+        """Per action, the bit mask of important instances strictly inside the region that its lines cut."""
+        key = (sig, x, y)
+        masks = self._masks.get(key)
+        if masks is None:
+            box = self.index.sigs[sig].box
+            w, h = box[2] - box[0], box[3] - box[1]
+            p = self._imp_boxes - np.array([x, y, x, y])
+            inside = np.flatnonzero((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 2] <= w) & (p[:, 3] <= h)
+                                    & ~((p[:, 0] == 0) & (p[:, 1] == 0) & (p[:, 2] == w) & (p[:, 3] == h)))
+            masks = []
+            for a in self._actions[sig]:
+                m = 0
+                if a.cuts and inside.size:
+                    c = np.asarray(a.cuts)
+                    q = p[inside]
+                    hit = inside[np.any((q[:, a.axis, None] < c) & (q[:, a.axis + 2, None] > c), axis=1)]
+                    for i in hit.tolist():
+                        m |= 1 << i
+                masks.append(m)
+            self._masks[key] = masks
+        return masks
 
-    def _protect(self, rng: np.random.Generator, count: int = 6) -> np.ndarray:
-        """A random non-overlapping set of important repeated-region instances (sampled by f(a, o))."""
+    def _protect(self, rng: np.random.Generator, count: int = 6) -> int:
+        """A random non-overlapping set of important repeated-region instances (sampled by f(a, o)), as a mask."""
         if self._important.size == 0:
-            return np.zeros((0, 4), dtype=np.int64)
+            return 0
         keys = np.log(rng.random(self._important.size)) / self._importance  # weighted order (Efraimidis-Spirakis)
         chosen: list[np.ndarray] = []
-        for k in self._important[np.argsort(-keys)]:
-            b = self.sym.boxes[k]
+        mask = 0
+        for k in np.argsort(-keys).tolist():
+            b = self._imp_boxes[k]
             if all(b[2] <= c[0] or c[2] <= b[0] or b[3] <= c[1] or c[3] <= b[1] for c in chosen):
                 chosen.append(b)
+                mask |= 1 << k
                 if len(chosen) >= count:
                     break
-        return np.array(chosen, dtype=np.int64).reshape(-1, 4)
+        return mask
 
     # ---- policies --------------------------------------------------------------------------------------------
-    def _greedy(self, sig, acts, allowed, rules) -> int:
-        heur = np.where(allowed, self._arrays[sig][1], np.inf)
-        return int(np.argmin(heur))
+    def _greedy(self, sig, masks, protected, rules) -> int:
+        if masks is None:
+            return self._greedy_k[sig]
+        heur = [a.heuristic for a in self._actions[sig]]
+        return min((k for k in range(len(heur)) if not masks[k] & protected), key=heur.__getitem__)
+
+    def _uniform(self, rng: np.random.Generator) -> float:
+        if not self._u:
+            self._u = rng.random(1024).tolist()
+        return self._u.pop()
 
     def _sample(self, rng):
-        def choose(sig, acts, allowed, rules) -> int:
-            heur = self._arrays[sig][1]
-            logits = np.where(allowed, -(heur - heur[allowed].min()), -np.inf)
-            p = np.exp(logits)
-            return int(rng.choice(len(acts), p=p / p.sum()))
+        def choose(sig, masks, protected, rules) -> int:
+            if masks is None:
+                cum = self._cum[sig]
+                return min(bisect_right(cum, self._uniform(rng) * cum[-1]), len(cum) - 1)
+            w = [0.0 if m & protected else v for v, m in zip(self._weights[sig], masks)]
+            cum = list(np.cumsum(w))
+            return min(bisect_right(cum, self._uniform(rng) * cum[-1]), len(cum) - 1)
         return choose
 
-    def _exploit(self, sig, acts, allowed, rules) -> int:
-        cost, _, kids, offsets = self._arrays[sig]
-        v = np.array([0.0 if (c == 0 or c in rules) else self.value.get(c, self.estimate(c)) for c in kids])
-        total = cost + np.add.reduceat(v, offsets)
-        best = self.best_action.get(sig)
-        if best is not None and allowed[best]:
-            total[best] -= 1e-9  # ties keep the best known action
-        return int(np.argmin(np.where(allowed, total, np.inf)))
+    def _exploit(self, sig, masks, protected, rules) -> int:
+        """Eq. 4: min_a C(a) + sum of V over the successors that get a rule later (ties keep the best action)."""
+        value, sigs = self.value, self.index.sigs
+        keep = self.best_action.get(sig)
+        best_k, best_t = -1, math.inf
+        for k, (c, kids) in enumerate(zip(self._cost[sig], self._kids[sig])):
+            if masks is not None and masks[k] & protected:
+                continue
+            t = c - (1e-9 if k == keep else 0.0)
+            for kid in kids:
+                if kid not in rules:
+                    v = value.get(kid)
+                    t += v if v is not None else 1.0 + 0.25 * sigs[kid].n
+            if t < best_t:
+                best_k, best_t = k, t
+        return best_k
 
     def run(self, method: str = "adp", iterations: int = 2000, seed: int = 0,
             time_limit: float | None = None) -> SearchResult:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         start = time.perf_counter()
-        none = np.zeros((0, 4), dtype=np.int64)
-        best_rules, best_cost = self.iterate(self._greedy, none)
+        best_rules, best_cost = self.iterate(self._greedy, 0)
         history = [best_cost]
         if method == "greedy":
             iterations = 1
         rng = derive_rng(seed, "citygen_inverse", method)
+        self._u = []
         sample = self._sample(rng)
         decay = (0.01 / 0.9) ** (1.0 / max(iterations, 1))
         done = 1
         for it in range(1, iterations):
             if time_limit is not None and time.perf_counter() - start > time_limit:
                 break
-            protected = self._protect(rng) if rng.random() < 0.5 else none
+            protected = self._protect(rng) if self._uniform(rng) < 0.5 else 0
             if method == "is":
                 policy = sample
             else:
                 eps = 0.9 * decay ** it
-                def policy(sig, acts, allowed, rules, eps=eps):
-                    if rng.random() < eps:
-                        return sample(sig, acts, allowed, rules)
-                    return self._exploit(sig, acts, allowed, rules)
+                def policy(sig, masks, protected, rules, eps=eps):
+                    if self._uniform(rng) < eps:
+                        return sample(sig, masks, protected, rules)
+                    return self._exploit(sig, masks, protected, rules)
             rules, cost = self.iterate(policy, protected)
             done += 1
             if cost < best_cost - 1e-9:
                 best_rules, best_cost = rules, cost
             history.append(best_cost)
         if method == "adp":
-            rules, cost = self.iterate(self._exploit, none)
+            rules, cost = self.iterate(self._exploit, 0)
             if cost < best_cost - 1e-9:
                 best_rules, best_cost = rules, cost
         chosen = {s: self._actions[s][k] for s, k in best_rules.items()}
