@@ -83,29 +83,29 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             continue
         bounds = np.concatenate([[box[axis]], cuts, [box[axis + 2]]])
         m = bounds.size - 1
+        # cov[i, k]: boundary k lies strictly inside repeated instance i; line[k]: Eq. 5 cost of cutting there
+        cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
+        line = (weight @ cov).tolist() if inst.size else [0.0] * (m + 1)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
-        lo, hi = inst[:, axis], inst[:, axis + 2]
-        for g in np.unique(sym.group[inside]):
-            sel = sym.group[inside] == g
-            covered = np.zeros(m + 1, dtype=bool)  # covered[k]: boundary k lies strictly inside an instance
-            for a, b in zip(lo[sel], hi[sel]):
-                covered[(bounds > a) & (bounds < b)] = True
-            groupings.add(tuple(k for k in range(1, m) if not covered[k]))
-        atoms = [(index.sig(_piece(box, axis, bounds[k], bounds[k + 1])), int(bounds[k + 1] - bounds[k]))
-                 for k in range(m)]
-        groupings.update(_repeated_runs(atoms))
+        if inst.size:
+            groups, inv = np.unique(sym.group[inside], return_inverse=True)
+            per_group = np.zeros((groups.size, m + 1), dtype=bool)
+            np.logical_or.at(per_group, inv, cov)  # keep every instance of one repeated region whole
+            for row in np.unique(per_group[:, 1:m], axis=0):
+                groupings.add(tuple((np.flatnonzero(~row) + 1).tolist()))
+        bl = bounds.tolist()
+        atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
+        groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         seen = set()
         for keep in groupings:
-            for merge_runs in (False, True):
-                edges = [0, *keep, m]
-                pieces = [_piece(box, axis, bounds[a], bounds[b]) for a, b in zip(edges, edges[1:])]
-                sigs = [index.sig(p) for p in pieces]
-                if merge_runs:
-                    pieces, sigs = _merge_runs(index, box, axis, pieces, sigs)
-                if len(pieces) < 2 or tuple(p[axis] for p in pieces) in seen:
+            edges = [0, *keep, m]
+            sigs = [atom_sigs[a] if b == a + 1 else index.sig(_piece(box, axis, bl[a], bl[b]))
+                    for a, b in zip(edges, edges[1:])]
+            for e, sg in ((edges, sigs), _merge_runs(index, box, axis, bl, edges, sigs)):
+                if len(e) < 3 or tuple(e) in seen:
                     continue
-                seen.add(tuple(p[axis] for p in pieces))
-                actions.append(_make(index, box, axis, pieces, sigs, model, lo, hi, weight))
+                seen.add(tuple(e))
+                actions.append(_make(index, box, axis, bl, e, sg, model, line))
     if not actions:
         actions.append(_grid(index, sig, model))
     return actions
@@ -117,15 +117,18 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     over the tile's atoms written inline."""
     box = index.sigs[sig].box
     axis, p = index.sigs[sig].period
-    lo, hi = inst[:, axis], inst[:, axis + 2]
-    starts = range(box[axis], box[axis + 2], p)
-    tiles = [_piece(box, axis, a, a + p) for a in starts]
-    out = [_make(index, box, axis, tiles, [index.sig(t) for t in tiles], model, lo, hi, weight)]
     cuts = index.cuts(box, axis)
-    if cuts.size + 1 > len(tiles):
-        bounds = np.concatenate([[box[axis]], cuts, [box[axis + 2]]])
-        atoms = [_piece(box, axis, a, b) for a, b in zip(bounds, bounds[1:])]
-        out.append(_make(index, box, axis, atoms, [index.sig(t) for t in atoms], model, lo, hi, weight))
+    bl = [box[axis], *cuts.tolist(), box[axis + 2]]
+    bounds = np.array(bl)
+    cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
+    line = (weight @ cov).tolist() if inst.size else [0.0] * len(bl)
+    tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
+    out = []
+    for edges in (tiles, list(range(len(bl)))):
+        sigs = [index.sig(_piece(box, axis, bl[a], bl[b])) for a, b in zip(edges, edges[1:])]
+        out.append(_make(index, box, axis, bl, edges, sigs, model, line))
+        if len(tiles) == len(bl):
+            break
     return [a for a in out if a.op == "repeat"]  # (always: for >= 2 tiles repeat is the cheapest operator)
 
 
@@ -154,32 +157,31 @@ def _piece(box: Box, axis: int, a: int, b: int) -> Box:
     return (int(a), box[1], int(b), box[3]) if axis == 0 else (box[0], int(a), box[2], int(b))
 
 
-def _merge_runs(index: LayoutIndex, box: Box, axis: int, pieces: list[Box], sigs: list[int]
-                ) -> tuple[list[Box], list[int]]:
-    out_p, out_s, start = [], [], 0
-    for k in range(1, len(pieces) + 1):
-        if k == len(pieces) or sigs[k] != sigs[start] or _len(pieces[k], axis) != _len(pieces[start], axis):
-            merged = _piece(box, axis, pieces[start][axis], pieces[k - 1][axis + 2])
-            out_p.append(merged)
-            out_s.append(index.sig(merged) if k - start > 1 else sigs[start])
+def _merge_runs(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int]
+                ) -> tuple[list[int], list[int]]:
+    """Runs of identical consecutive children merged into one child (which a repeat rule then explains)."""
+    out_e, out_s, start = [edges[0]], [], 0
+    n = len(sigs)
+    for k in range(1, n + 1):
+        if k == n or sigs[k] != sigs[start] or \
+                bl[edges[k + 1]] - bl[edges[k]] != bl[edges[start + 1]] - bl[edges[start]]:
+            out_e.append(edges[k])
+            out_s.append(index.sig(_piece(box, axis, bl[edges[start]], bl[edges[k]])) if k - start > 1
+                         else sigs[start])
             start = k
-    return out_p, out_s
-
-
-def _len(p: Box, axis: int) -> int:
-    return p[axis + 2] - p[axis]
+    return out_e, out_s
 
 
 def _rel(box: Box, p: Box) -> Box:
     return (p[0] - box[0], p[1] - box[1], p[2] - box[0], p[3] - box[1])
 
 
-def _make(index: LayoutIndex, box: Box, axis: int, pieces: list[Box], sigs: list[int], model: CostModel,
-          lo: np.ndarray, hi: np.ndarray, weight: np.ndarray) -> Action:
-    op, cost, k = _ops([(s, _len(p, axis)) for s, p in zip(sigs, pieces)], model)
-    cuts = np.array([p[axis] for p in pieces[1:]], dtype=np.int64)
-    crossing = (lo[:, None] < cuts[None, :]) & (hi[:, None] > cuts[None, :])
-    line_cost = float(weight @ crossing.sum(axis=1)) if crossing.size else 0.0
+def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int],
+          model: CostModel, line: list[float]) -> Action:
+    """The rule splitting ``box`` at the atom boundaries ``edges`` into children ``sigs``."""
+    pieces = [_piece(box, axis, bl[a], bl[b]) for a, b in zip(edges, edges[1:])]
+    op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], model)
+    line_cost = sum(line[e] for e in edges[1:-1])
     items = tuple((s, _rel(box, p)) for s, p in zip(sigs[:k], pieces[:k]))
     children, seen = [], set()
     for s, p in zip(sigs, pieces):
@@ -187,7 +189,7 @@ def _make(index: LayoutIndex, box: Box, axis: int, pieces: list[Box], sigs: list
             seen.add(s)
             children.append((s, _rel(box, p)))
     return Action(op, axis, items, tuple(children), cost, model.lambda1 * cost + model.lambda2 * line_cost,
-                  tuple(int(c - box[axis]) for c in cuts))
+                  tuple(bl[e] - box[axis] for e in edges[1:-1]))
 
 
 def _grid(index: LayoutIndex, sig: int, model: CostModel) -> Action:
