@@ -64,8 +64,10 @@ def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]
     return best
 
 
-def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel) -> list[Action]:
-    """All candidate rules for the region signature ``sig`` (its representative box)."""
+def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
+                   max_groupings: int = 24) -> list[Action]:
+    """Candidate rules for the region signature ``sig`` (its representative box); per axis at most
+    ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7)."""
     box = index.sigs[sig].box
     x0, y0, x1, y1 = box
     inside = np.flatnonzero((sym.boxes[:, 0] >= x0) & (sym.boxes[:, 1] >= y0) & (sym.boxes[:, 2] <= x1)
@@ -91,8 +93,11 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             groups, inv = np.unique(sym.group[inside], return_inverse=True)
             per_group = np.zeros((groups.size, m + 1), dtype=bool)
             np.logical_or.at(per_group, inv, cov)  # keep every instance of one repeated region whole
-            for row in np.unique(per_group[:, 1:m], axis=0):
-                groupings.add(tuple((np.flatnonzero(~row) + 1).tolist()))
+            score = np.zeros(groups.size)
+            np.maximum.at(score, inv, sym.importance[inside])
+            rows, first = np.unique(per_group[:, 1:m], axis=0, return_index=True)
+            for r in np.argsort(-score[first], kind="stable")[:max_groupings]:
+                groupings.add(tuple((np.flatnonzero(~rows[r]) + 1).tolist()))
         bl = bounds.tolist()
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))

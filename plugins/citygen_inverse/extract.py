@@ -1,6 +1,7 @@
 """Public API: extract a split grammar from one or several labelled facade layouts (wu2014 §3-§6.1)."""
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 from citygen.layout import FacadeLayout
@@ -22,6 +23,7 @@ class Extraction:
     iterations: int
     terminals: int
     method: str
+    cpu_seconds: float = 0.0  # process time of index, symmetry detection and search (``seconds`` is wall time)
 
 
 def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "adp", iterations: int = 2000,
@@ -29,9 +31,11 @@ def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "a
                     ) -> Extraction:
     """Extract one grammar for ``layouts`` (several layouts: joint extraction, wu2014 §6.1 / Fig. 13)."""
     layouts = [layouts] if isinstance(layouts, FacadeLayout) else list(layouts)
+    wall, cpu = time.perf_counter(), time.process_time()
     index = LayoutIndex(layouts)
     search = GrammarSearch(index, model)
     result: SearchResult = search.run(method, iterations, seed, time_limit)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     writer = GrammarWriter(index, result.rules)
     terminals = int(index.X0.size)
     header = [f"extracted by citygen grammar extract (wu2014), method {method}, {result.iterations} iterations, "
@@ -43,5 +47,5 @@ def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "a
     exact = writer.text(header)
     independent = writer.text([*header, "size-independent version (wu2014 §5)"], independent=True,
                               floors=len(layouts) == 1)
-    return Extraction(exact, independent, result.cost, len(result.rules), result.seconds, result.iterations,
-                      terminals, method)
+    return Extraction(exact, independent, result.cost, len(result.rules), wall, result.iterations,
+                      terminals, method, cpu)

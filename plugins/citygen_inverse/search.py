@@ -47,7 +47,8 @@ class GrammarSearch:
     important repeated instances per (signature, position).
     """
 
-    def __init__(self, index: LayoutIndex, model: CostModel = CostModel(), max_groups: int = 1500) -> None:
+    def __init__(self, index: LayoutIndex, model: CostModel = CostModel(), max_groups: int = 800,
+                 max_protected: int = 256) -> None:
         self.index = index
         self.model = model
         self.sym: RepeatedRegions = detect_symmetry(index, max_groups)
@@ -62,7 +63,8 @@ class GrammarSearch:
         self.best_action: dict[int, int] = {}
         self.roots = [index.sig(box) for box in index.roots]
         imp = self.sym.importance.astype(float)
-        self._important = np.flatnonzero(imp > 0)
+        order = np.argsort(-imp, kind="stable")[:max_protected]
+        self._important = np.sort(order[imp[order] > 0])  # protection samples from the most important instances
         self._importance = imp[self._important]
         self._imp_boxes = self.sym.boxes[self._important]
         self._u: list[float] = []

@@ -29,28 +29,32 @@ class RepeatedRegions:
         return (self.terminals - 1) * (self.occurrences - 1)
 
 
-def _grow(index: LayoutIndex, box: Box, direction: int) -> Box | None:
-    x0, y0, x1, y1 = box
-    X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
-    if direction == 0:    # right
-        m = (X0 == x1) & (Y0 < y1) & (Y1 > y0)
-        lo, hi, far = Y0[m], Y1[m], X1[m]
-    elif direction == 1:  # left
-        m = (X1 == x0) & (Y0 < y1) & (Y1 > y0)
-        lo, hi, far = Y0[m], Y1[m], X0[m]
-    elif direction == 2:  # up
-        m = (Y0 == y1) & (X0 < x1) & (X1 > x0)
-        lo, hi, far = X0[m], X1[m], Y1[m]
-    else:                 # down
-        m = (Y1 == y0) & (X0 < x1) & (X1 > x0)
-        lo, hi, far = X0[m], X1[m], Y0[m]
-    if far.size == 0 or np.any(far != far[0]):
-        return None
-    a, b = (y0, y1) if direction < 2 else (x0, x1)
-    if lo.min() < a or hi.max() > b:
-        return None
-    f = int(far[0])
-    return ((x0, y0, f, y1), (f, y0, x1, y1), (x0, y0, x1, f), (x0, f, x1, y1))[direction]
+def _grow(index: LayoutIndex, boxes: np.ndarray, direction: int) -> list[Box | None]:
+    """Each box grown by the strip of terminals adjacent to one side (0 right, 1 left, 2 up, 3 down) when the
+    strip lies within the side and its far edges align (Fig. 7); None where it cannot grow."""
+    X0, Y0, X1, Y1 = index.X0[None, :], index.Y0[None, :], index.X1[None, :], index.Y1[None, :]
+    x0, y0, x1, y1 = (boxes[:, k, None] for k in range(4))
+    if direction == 0:
+        m, lo, hi, far, a, b = (X0 == x1) & (Y0 < y1) & (Y1 > y0), Y0, Y1, X1, y0, y1
+    elif direction == 1:
+        m, lo, hi, far, a, b = (X1 == x0) & (Y0 < y1) & (Y1 > y0), Y0, Y1, X0, y0, y1
+    elif direction == 2:
+        m, lo, hi, far, a, b = (Y0 == y1) & (X0 < x1) & (X1 > x0), X0, X1, Y1, x0, x1
+    else:
+        m, lo, hi, far, a, b = (Y1 == y0) & (X0 < x1) & (X1 > x0), X0, X1, Y0, x0, x1
+    big = np.iinfo(np.int64).max
+    fmin = np.where(m, far, big).min(axis=1)
+    fmax = np.where(m, far, -big).max(axis=1)
+    ok = m.any(axis=1) & (fmin == fmax) & (np.where(m, lo, big).min(axis=1) >= a[:, 0]) \
+        & (np.where(m, hi, -big).max(axis=1) <= b[:, 0])
+    out: list[Box | None] = []
+    for k, (bx0, by0, bx1, by1) in enumerate(boxes.tolist()):
+        if not ok[k]:
+            out.append(None)
+            continue
+        f = int(fmin[k])
+        out.append(((bx0, by0, f, by1), (f, by0, bx1, by1), (bx0, by0, bx1, f), (bx0, f, bx1, by1))[direction])
+    return out
 
 
 def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegions:
@@ -65,8 +69,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         sig = queue.popleft()
         for direction in range(4):
             grown: dict[int, list[Box]] = defaultdict(list)
-            for box in groups[sig]:
-                new = _grow(index, box, direction)
+            for new in _grow(index, np.array(groups[sig], dtype=np.int64), direction):
                 if new is not None:
                     grown[index.sig(new)].append(new)
             for new_sig, boxes in grown.items():
