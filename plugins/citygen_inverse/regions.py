@@ -150,11 +150,14 @@ def _period(rel: np.ndarray, axis: int, length: int) -> int | None:
     """Smallest tile length ``p`` (``length / p >= 2``) such that the content is ``length / p`` identical tiles."""
     lo, hi = rel[:, 1 + axis], rel[:, 3 + axis]
     n = rel.shape[0]
-    for p in np.unique(lo[lo > 0]).tolist():
-        if 2 * p > length:
-            break
+    cand = np.unique(lo[(lo > 0) & (2 * lo <= length)])
+    cand = cand[length % cand == 0]
+    if cand.size == 0:
+        return None
+    cand = cand[np.searchsorted(np.sort(lo), cand) * (length // cand) == n]  # a tile holds n / k terminals
+    for p in cand.tolist():
         k = length // p
-        if length % p or n % k or np.any(lo // p != (hi - 1) // p):
+        if np.any(lo // p != (hi - 1) // p):
             continue
         first = rel[lo < p]
         shifted = rel.copy()

@@ -6,6 +6,7 @@ occurs two or more times enters the hash table (signature -> instances) and is g
 """
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from collections import defaultdict, deque
 from dataclasses import dataclass
 
@@ -29,36 +30,54 @@ class RepeatedRegions:
         return (self.terminals - 1) * (self.occurrences - 1)
 
 
-def _grow(index: LayoutIndex, boxes: np.ndarray, direction: int) -> list[Box | None]:
-    """Each box grown by the strip of terminals adjacent to one side (0 right, 1 left, 2 up, 3 down) when the
-    strip lies within the side and its far edges align (Fig. 7); None where it cannot grow."""
-    X0, Y0, X1, Y1 = index.X0[None, :], index.Y0[None, :], index.X1[None, :], index.Y1[None, :]
-    x0, y0, x1, y1 = (boxes[:, k, None] for k in range(4))
-    if direction == 0:
-        m, lo, hi, far, a, b = (X0 == x1) & (Y0 < y1) & (Y1 > y0), Y0, Y1, X1, y0, y1
-    elif direction == 1:
-        m, lo, hi, far, a, b = (X1 == x0) & (Y0 < y1) & (Y1 > y0), Y0, Y1, X0, y0, y1
-    elif direction == 2:
-        m, lo, hi, far, a, b = (Y0 == y1) & (X0 < x1) & (X1 > x0), X0, X1, Y1, x0, x1
-    else:
-        m, lo, hi, far, a, b = (Y1 == y0) & (X0 < x1) & (X1 > x0), X0, X1, Y0, x0, x1
-    big = np.iinfo(np.int64).max
-    fmin = np.where(m, far, big).min(axis=1)
-    fmax = np.where(m, far, -big).max(axis=1)
-    ok = m.any(axis=1) & (fmin == fmax) & (np.where(m, lo, big).min(axis=1) >= a[:, 0]) \
-        & (np.where(m, hi, -big).max(axis=1) <= b[:, 0])
-    out: list[Box | None] = []
-    for k, (bx0, by0, bx1, by1) in enumerate(boxes.tolist()):
-        if not ok[k]:
-            out.append(None)
-            continue
-        f = int(fmin[k])
-        out.append(((bx0, by0, f, by1), (f, by0, bx1, by1), (bx0, by0, bx1, f), (bx0, f, bx1, by1))[direction])
-    return out
+class _Sides:
+    """Per side (0 right, 1 left, 2 up, 3 down) and line coordinate, the terminals touching that line from the
+    outside, sorted along it: (starts, ends, far edges, materials) as lists for bisection."""
+
+    def __init__(self, index: LayoutIndex) -> None:
+        X0, Y0, X1, Y1 = (a.tolist() for a in (index.X0, index.Y0, index.X1, index.Y1))
+        mat = index.material.tolist()
+        spec = ((X0, Y0, Y1, X1), (X1, Y0, Y1, X0), (Y0, X0, X1, Y1), (Y1, X0, X1, Y0))
+        self.sides: list[dict[int, tuple[list[int], list[int], list[int], list[int]]]] = []
+        for line, start, end, far in spec:
+            by_line: dict[int, list[int]] = defaultdict(list)
+            for k, v in enumerate(line):
+                by_line[v].append(k)
+            side = {}
+            for v, ks in by_line.items():
+                ks.sort(key=start.__getitem__)
+                side[v] = ([start[k] for k in ks], [end[k] for k in ks], [far[k] for k in ks], [mat[k] for k in ks])
+            self.sides.append(side)
+
+    def grow(self, box: Box, direction: int) -> tuple[Box, tuple] | None:
+        """``box`` grown by the strip of terminals adjacent to one side when the strip exactly covers that side
+        and its far edges align (Fig. 7), with a content key of the strip; None when it cannot grow."""
+        x0, y0, x1, y1 = box
+        line = (x1, x0, y1, y0)[direction]
+        a, b = (y0, y1) if direction < 2 else (x0, x1)
+        entry = self.sides[direction].get(line)
+        if entry is None:
+            return None
+        starts, ends, fars, mats = entry
+        i, j = bisect_right(ends, a), bisect_left(starts, b)
+        if i >= j or starts[i] != a or ends[j - 1] != b:
+            return None
+        f = fars[i]
+        for k in range(i + 1, j):
+            if fars[k] != f or starts[k] != ends[k - 1]:
+                return None
+        strip = (f - line, *((mats[k], starts[k] - a) for k in range(i, j)))
+        grown = ((x0, y0, f, y1), (f, y0, x1, y1), (x0, y0, x1, f), (x0, f, x1, y1))[direction]
+        return grown, strip
 
 
 def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegions:
-    """All repeated regions reachable by growing (capped at ``max_groups`` signatures)."""
+    """All repeated regions reachable by growing (capped at ``max_groups`` signatures).
+
+    Instances of one group that are grown by strips of identical content (and have the same size) have identical
+    content, so only one of them is looked up in the signature table.
+    """
+    sides = _Sides(index)
     table: dict[int, list[Box]] = defaultdict(list)
     for k in range(index.X0.size):
         box = (int(index.X0[k]), int(index.Y0[k]), int(index.X1[k]), int(index.Y1[k]))
@@ -68,10 +87,14 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
     while queue and len(groups) < max_groups:
         sig = queue.popleft()
         for direction in range(4):
+            same: dict[tuple, list[Box]] = defaultdict(list)
+            for box in groups[sig]:
+                found = sides.grow(box, direction)
+                if found is not None:
+                    same[(box[2] - box[0], box[3] - box[1], found[1])].append(found[0])
             grown: dict[int, list[Box]] = defaultdict(list)
-            for new in _grow(index, np.array(groups[sig], dtype=np.int64), direction):
-                if new is not None:
-                    grown[index.sig(new)].append(new)
+            for boxes in same.values():
+                grown[index.sig(boxes[0])].extend(boxes)
             for new_sig, boxes in grown.items():
                 if new_sig > 0 and len(boxes) >= 2 and new_sig not in groups:
                     groups[new_sig] = boxes
