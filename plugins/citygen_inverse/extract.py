@@ -27,12 +27,14 @@ class Extraction:
 
 
 def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "adp", iterations: int = 2000,
-                    seed: int = 0, model: CostModel = CostModel(), time_limit: float | None = None
-                    ) -> Extraction:
-    """Extract one grammar for ``layouts`` (several layouts: joint extraction, wu2014 §6.1 / Fig. 13)."""
+                    seed: int = 0, model: CostModel = CostModel(), time_limit: float | None = None,
+                    free_extents: bool = True) -> Extraction:
+    """Extract one grammar for ``layouts`` (several layouts: joint extraction, wu2014 §6.1 / Fig. 13).
+
+    ``free_extents=False`` restricts shared rules to strictly translational repeats (see ``regions.py``)."""
     layouts = [layouts] if isinstance(layouts, FacadeLayout) else list(layouts)
     wall, cpu = time.perf_counter(), time.process_time()
-    index = LayoutIndex(layouts)
+    index = LayoutIndex(layouts, free_extents)
     search = GrammarSearch(index, model)
     result: SearchResult = search.run(method, iterations, seed, time_limit)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu

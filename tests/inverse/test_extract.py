@@ -116,3 +116,48 @@ def test_cost_model_is_configurable():
     layout = regular_facade()
     cheap = extract_grammar(layout, "greedy", model=CostModel(split=0.0, repeat=0.0))
     assert cheap.cost < extract_grammar(layout, "greedy").cost
+
+
+def _stacks(widths) -> FacadeLayout:
+    """Side-by-side columns of the same vertical stack (sill 0.3 | window 1.2 | wall 1.5) at different widths,
+    separated by 1 m walls."""
+    ts, x = [], 0.0
+    for w in widths:
+        ts += [Region(x, 0, 1, 3, "W", "wall"), Region(x + 1, 0, w, 0.3, "S", "sill"),
+               Region(x + 1, 0.3, w, 1.2, "N", "window"), Region(x + 1, 1.5, w, 1.5, "W", "wall")]
+        x += 1 + w
+    ts.append(Region(x, 0, 1, 3, "W", "wall"))
+    return FacadeLayout(x + 1, 3, Region(0, 0, x + 1, 3, "Facade", children=tuple(ts)))
+
+
+def test_stacks_of_different_widths_share_one_rule():
+    """Free extents: a vertical stack fixes no width, so stacks 0.8, 1.2 and 1.5 m wide share one rule."""
+    layout = _stacks([0.8, 1.2, 1.5])
+    result = extract_grammar(layout, "greedy")
+    assert_reproduces(result.text, layout)
+    facade = next(line for line in result.text.splitlines() if line.startswith("Facade -->"))
+    stack = facade.split("|")[1].split(":")[1].strip()
+    assert facade.count(f": {stack} ") == 3  # one symbol (one rule) for the three stacks
+    strict = extract_grammar(layout, "greedy", free_extents=False)
+    assert result.cost < strict.cost
+
+
+def test_repeats_of_different_counts_share_one_rule():
+    """Periodic signatures: rows of 6 and of 4 identical bays are derived by one repeat rule (joint grammar)."""
+    a, b = regular_facade(3, 6), regular_facade(3, 4)
+    joint = extract_grammar([a, b], "adp", 100, seed=0)
+    for layout, name in ((a, "Facade1"), (b, "Facade2")):
+        lines = [line for line in joint.text.splitlines() if not line.startswith("Facade -->")]
+        assert_reproduces("\n".join([f"Facade --> {name}", *lines]) + "\n", layout)
+    repeats_x = [line for line in joint.text.splitlines() if "repeat(x)" in line]
+    assert len(repeats_x) == 1
+
+
+@pytest.mark.parametrize("xml", FIXTURES[:2], ids=lambda p: p.stem)
+def test_adp_is_deterministic_per_seed_and_not_worse_than_greedy_on_cmp(xml):
+    layout = import_cmp(xml)
+    greedy = extract_grammar(layout, "greedy")
+    a = extract_grammar(layout, "adp", 150, seed=7)
+    assert a.text == extract_grammar(layout, "adp", 150, seed=7).text
+    assert a.cost <= greedy.cost + 1e-9
+    assert_reproduces(a.text, layout)
