@@ -110,7 +110,8 @@ def main() -> int:
     if args.write:
         out = ["# Grammar extraction on CMP facades", "",
                f"`python benchmarks/inverse_eval.py --limit {args.limit} --big {args.big} --big-limit {args.big_limit}"
-               + (f" --extra {' '.join(args.extra)}" if args.extra else "") + " --write`: CMP base facades imported "
+               + (f" --extra {' '.join(args.extra)}" if args.extra else "") + (" --synthetic" if args.synthetic else "")
+               + (" --strong" if args.strong else "") + " --write`: CMP base facades imported "
                "with default options, seed 0, times wall / cpu (process time) in seconds including index and "
                "symmetry detection, on this machine (2 cores shared with other jobs).", "",
                "| facade | #T | greedy cost | rules | s (wall / cpu) | ADP 2K cost | rules | s | % below greedy "
