@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import pickle
 import sys
 import time
 from collections import deque
@@ -23,10 +24,10 @@ from citygen.coordinator import plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
-from citygen.geometry.building import build_geometry
+from citygen.geometry.building import build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen.mass import Mass, build_mass, party_walls
-from citygen.registry import Registry, RulesetKind, default_registry
+from citygen.registry import Registry, RulesetKind, default_registry, load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.scene import Assignment, Scene
@@ -74,6 +75,7 @@ class _Builder:
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
         self.roofs = self.registry.roof_builders
+        clear_module_cache()
 
     def ruleset(self, assignment: Assignment, path: Path):
         kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
@@ -169,9 +171,21 @@ _Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: _Builder | None = None
 
 
-def _init_worker(scene: Scene, seed: int) -> None:
+def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None) -> None:
     global _WORKER
-    _WORKER = _Builder(scene, seed)
+    _WORKER = _Builder(scene, seed, None if plugins is None else load_registry(*plugins))
+
+
+def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | None | str:
+    """How a worker loads ``registry``: ``None`` for the default one, the plugins to register, or why it cannot
+    be rebuilt in another process."""
+    if registry is default_registry():
+        return None
+    try:
+        pickle.dumps(registry.extra_plugins)
+    except Exception as exc:
+        return f"its in-process plugins cannot be pickled ({type(exc).__name__}: {exc})"
+    return registry.extra_plugins, registry.entry_points
 
 
 def _work(chunk: Sequence[_Work]) -> list[_BuildingOutcome]:
@@ -208,13 +222,18 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     size = scene.output.tile_size
     tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
     work = sorted(zip(footprints, masses, party, names, tiles), key=lambda w: (w[4], w[3]))
+    plugins = _worker_plugins(registry) if jobs > 1 else None
+    if isinstance(plugins, str):
+        report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
+                               f"worker processes: {plugins}")
+        jobs, plugins = 1, None
     t2 = time.perf_counter()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     usd = 0.0
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
                      tile_layers=scene.output.tile_layers) as writer:
-        for outcome in _run(work, scene, seed, jobs, registry, progress):
+        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
             report.warnings += outcome.warnings
             if outcome.record is None:
                 report.skipped.append(outcome.skipped)
@@ -231,7 +250,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
 
 
 def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
-         progress: Callable[[int, int], None] | None) -> Iterator[_BuildingOutcome]:
+         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None) -> Iterator[_BuildingOutcome]:
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
     buildings never pile up in memory faster than the stage writer consumes them."""
     total = len(work)
@@ -245,7 +264,7 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     size = max(1, min(16, total // (8 * jobs)))
     chunks = iter([work[i:i + size] for i in range(0, total, size)])
     done = 0
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed)) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins)) as pool:
         pending = deque(pool.submit(_work, c) for c in itertools.islice(chunks, 4 * jobs))
         while pending:
             outcomes = pending.popleft().result()
