@@ -107,11 +107,16 @@ class GrammarCommand(Command):
             return report(exc)
 
     def _extract(self, args: argparse.Namespace) -> int:
-        from citygen.layout import FacadeLayout
+        from citygen.layout import FacadeLayout, check_partition
         from citygen_inverse.actions import CostModel
         from citygen_inverse.extract import extract_grammar
         from citygen_inverse.independent import extract_size_independent
         layouts = [FacadeLayout.loads(Path(p).read_text(), p) for p in args.layouts]
+        for path, layout in zip(args.layouts, layouts):
+            problems = check_partition(layout)
+            if problems:
+                raise LayoutError("not a partition: " + "; ".join(problems[:3]), where=path,
+                                  hint="grammar extraction needs terminals that tile the facade exactly")
         model = CostModel(split=args.split_cost, repeat=args.repeat_cost)
         if args.size_independent:
             if len(layouts) > 1:
