@@ -18,6 +18,7 @@ doors become windows), so a face has one door in its ground floor exactly when t
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import replace
 
@@ -132,7 +133,7 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
              f"GroundFloor --> case entrance: EntranceRow  else: {sym[1]}Row",
              _entrance(sym[0], f"{sym[1]}Row", layout.width)]
     rules += [f"{s}Row --> repeat(x) {{ ~{W}: {s} }}" for s in dict.fromkeys(sym[1:])]
-    body = "\n".join(rules + writer.rule_lines("linear")) + "\n"
+    body = "\n".join(_merge_identical(rules + writer.rule_lines("linear"))) + "\n"
     grammar = citygen_split.parse(body, "<size-independent>")
     cost = citygen_split.grammar_cost(grammar, model.split, model.repeat)
     count = sum(1 for r in grammar.rules if type(r.body).__name__ != "Terminal")
@@ -144,6 +145,23 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
              f"@size {W} {_num(layout.height)}"]
     text = "\n".join(lines) + "\n" + body
     return Extraction(text, text, cost, count, result.seconds, result.iterations, int(index.X0.size), method)
+
+
+def _merge_identical(lines: list[str]) -> list[str]:
+    """Merge symbols whose rules read the same (regions of one content but other sizes: in the linear mode a
+    region's size comes from its parent), until no two rules are alike."""
+    while True:
+        first: dict[str, str] = {}
+        alias: dict[str, str] = {}
+        for line in lines:
+            name, body = line.split(" --> ", 1)
+            alias[name] = first.setdefault(body, name)
+        alias = {a: b for a, b in alias.items() if a != b}
+        if not alias:
+            return lines
+        pattern = re.compile(r"\b(" + "|".join(map(re.escape, alias)) + r")\b")
+        lines = [pattern.sub(lambda m: alias[m.group(1)], line) for line in lines
+                 if line.split(" --> ", 1)[0] not in alias]
 
 
 def _selectors(sym: list[str]) -> str:
