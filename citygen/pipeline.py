@@ -6,10 +6,13 @@ input order, so the stage is byte-identical whatever the job count.
 """
 from __future__ import annotations
 
+import itertools
 import math
+import pickle
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,15 +24,15 @@ from citygen.coordinator import plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
-from citygen.geometry.building import build_geometry
+from citygen.geometry.building import build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen.mass import Mass, build_mass, party_walls
-from citygen.registry import Registry, RulesetKind, default_registry
+from citygen.registry import Registry, RulesetKind, default_registry, load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
-from citygen.usd.writer import BuildingRecord, StageStats, prim_name, write_stage
+from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, prim_name
 
 
 @dataclass
@@ -72,6 +75,7 @@ class _Builder:
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
         self.roofs = self.registry.roof_builders
+        clear_module_cache()
 
     def ruleset(self, assignment: Assignment, path: Path):
         kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
@@ -90,7 +94,8 @@ class _Builder:
                 return a, a.rulesets[int(pick)]
         return None
 
-    def build(self, footprint: Footprint, mass: Mass, party: np.ndarray, name: str) -> _BuildingOutcome:
+    def build(self, footprint: Footprint, mass: Mass, party: np.ndarray, name: str,
+              tile: tuple[int, int]) -> _BuildingOutcome:
         warnings: list[str] = []
         try:
             plan = plan_building(footprint, mass, party, self.scene.defaults, self.seed)
@@ -124,8 +129,6 @@ class _Builder:
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
                       "ruleset": ", ".join(used) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
-        c = mass.outline.centroid
-        tile = (math.floor(c.x / self.scene.output.tile_size), math.floor(c.y / self.scene.output.tile_size))
         return _BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
 
     @staticmethod
@@ -164,17 +167,30 @@ class _Builder:
         return layout
 
 
+_Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: _Builder | None = None
 
 
-def _init_worker(scene: Scene, seed: int) -> None:
+def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None) -> None:
     global _WORKER
-    _WORKER = _Builder(scene, seed)
+    _WORKER = _Builder(scene, seed, None if plugins is None else load_registry(*plugins))
 
 
-def _work(args: tuple[Footprint, Mass, np.ndarray, str]) -> _BuildingOutcome:
+def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | None | str:
+    """How a worker loads ``registry``: ``None`` for the default one, the plugins to register, or why it cannot
+    be rebuilt in another process."""
+    if registry is default_registry():
+        return None
+    try:
+        pickle.dumps(registry.extra_plugins)
+    except Exception as exc:
+        return f"its in-process plugins cannot be pickled ({type(exc).__name__}: {exc})"
+    return registry.extra_plugins, registry.entry_points
+
+
+def _work(chunk: Sequence[_Work]) -> list[_BuildingOutcome]:
     assert _WORKER is not None
-    return _WORKER.build(*args)
+    return [_WORKER.build(*item) for item in chunk]
 
 
 def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = None, jobs: int = 1,
@@ -203,45 +219,63 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     party = party_walls(masses)
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in footprints]
-    work = list(zip(footprints, masses, party, names))
+    size = scene.output.tile_size
+    tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
+    work = sorted(zip(footprints, masses, party, names, tiles), key=lambda w: (w[4], w[3]))
+    plugins = _worker_plugins(registry) if jobs > 1 else None
+    if isinstance(plugins, str):
+        report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
+                               f"worker processes: {plugins}")
+        jobs, plugins = 1, None
     t2 = time.perf_counter()
-    outcomes = _run(work, scene, seed, jobs, registry, progress)
-    records = []
-    for outcome in outcomes:
-        report.warnings += outcome.warnings
-        if outcome.record is not None:
-            records.append(outcome.record)
-        else:
-            report.skipped.append(outcome.skipped)
-    t3 = time.perf_counter()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
-    report.stats = write_stage(out, sorted(records, key=lambda r: (r.tile, r.name)), up_axis=scene.output.up_axis,
-                               layer_data=layer_data)
-    report.written = len(records)
-    report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2,
-                      "usd": time.perf_counter() - t3, "total": time.perf_counter() - t0}
+    usd = 0.0
+    with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
+                     tile_layers=scene.output.tile_layers) as writer:
+        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
+            report.warnings += outcome.warnings
+            if outcome.record is None:
+                report.skipped.append(outcome.skipped)
+                continue
+            tw = time.perf_counter()
+            writer.add(outcome.record)
+            usd += time.perf_counter() - tw
+            report.written += 1
+        t3 = time.perf_counter()
+        report.stats = writer.close()
+    report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
+                      "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
     return report
 
 
-def _run(work: Sequence[tuple[Footprint, Mass, np.ndarray, str]], scene: Scene, seed: int, jobs: int,
-         registry: Registry, progress: Callable[[int, int], None] | None) -> list[_BuildingOutcome]:
+def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
+         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None) -> Iterator[_BuildingOutcome]:
+    """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
+    buildings never pile up in memory faster than the stage writer consumes them."""
     total = len(work)
     if jobs <= 1 or total < 2 * jobs:
         builder = _Builder(scene, seed, registry)
-        outcomes = []
         for k, item in enumerate(work):
-            outcomes.append(builder.build(*item))
+            yield builder.build(*item)
             if progress:
                 progress(k + 1, total)
-        return outcomes
-    outcomes = []
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed)) as pool:
-        for k, outcome in enumerate(pool.map(_work, work, chunksize=max(1, total // (8 * jobs)))):
-            outcomes.append(outcome)
-            if progress:
-                progress(k + 1, total)
-    return outcomes
+        return
+    size = max(1, min(16, total // (8 * jobs)))
+    chunks = iter([work[i:i + size] for i in range(0, total, size)])
+    done = 0
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins)) as pool:
+        pending = deque(pool.submit(_work, c) for c in itertools.islice(chunks, 4 * jobs))
+        while pending:
+            outcomes = pending.popleft().result()
+            following = next(chunks, None)
+            if following is not None:
+                pending.append(pool.submit(_work, following))
+            for outcome in outcomes:
+                done += 1
+                yield outcome
+                if progress:
+                    progress(done, total)
 
 
 def terminal_progress(done: int, total: int) -> None:

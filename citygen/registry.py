@@ -116,6 +116,9 @@ class Registry:
     commands: dict[str, Command] = field(default_factory=dict)
     origins: dict[tuple[str, str], Origin] = field(default_factory=dict)
     broken: list[tuple[str, str]] = field(default_factory=list)
+    #: how it was loaded, so worker processes can load the same registry
+    extra_plugins: tuple[object, ...] = ()
+    entry_points: bool = True
 
     def ruleset_kind(self, kind_id: str) -> RulesetKind:
         try:
@@ -156,7 +159,8 @@ def load_registry(extra_plugins: Iterable[object] = (), entry_points: bool = Tru
     """Load plugins from the ``citygen`` entry-point group (plus ``extra_plugins``) into a :class:`Registry`."""
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs)
-    registry = Registry()
+    extra_plugins = tuple(extra_plugins)
+    registry = Registry(extra_plugins=extra_plugins, entry_points=entry_points)
     dists: dict[str, str] = {}
     if entry_points:
         for ep in sorted(importlib.metadata.entry_points(group=hookspecs.PROJECT), key=lambda e: e.name):

@@ -76,6 +76,7 @@ class Output:
     up_axis: str = "Z"
     tile_size: float = 250.0
     instancing: str = "modules"
+    tile_layers: bool = False
 
 
 @dataclass(frozen=True)
@@ -158,15 +159,18 @@ def load_scene(path: str | Path) -> Scene:
     fp_options = {k: v for k, v in fp.items() if k != "path"}
     d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
     defaults = Defaults(**{k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__})
-    out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing"})
+    out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
+    tile_layers = out.get("tile_layers", False)
+    if not isinstance(tile_layers, bool):
+        r.fail(f"tile_layers must be true or false, got {tile_layers!r}", "tile_layers")
     output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing)
+                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, tile_layers=tile_layers)
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
                  assignments=_assignments(r, data.get("assign", [])), output=output,

@@ -188,7 +188,29 @@ def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) ->
                        face_quaternion(matrix), size / (q * QUANTUM))
 
 
+_MODULE_CACHE: dict[ModuleKey, ModuleProto] = {}
+_MODULE_CACHE_SIZE = 4096
+
+
 def _module_proto(key: ModuleKey, region: Region) -> ModuleProto:
+    """A module's prototype geometry, cached per process: buildings dressed by one ruleset share most modules.
+
+    Stages stay deterministic: the writer keeps the first prototype of a key in stage order, and that building,
+    being the first with the key in its worker too, built it itself (the pipeline clears the cache per city).
+    """
+    proto = _MODULE_CACHE.get(key)
+    if proto is None:
+        if len(_MODULE_CACHE) >= _MODULE_CACHE_SIZE:
+            _MODULE_CACHE.clear()
+        proto = _MODULE_CACHE[key] = _build_module_proto(key, region)
+    return proto
+
+
+def clear_module_cache() -> None:
+    _MODULE_CACHE.clear()
+
+
+def _build_module_proto(key: ModuleKey, region: Region) -> ModuleProto:
     qw, qh = key.size
     sink = _Sink()
     _emit(sink, _terminal_arrays(region.terminals(), key.wall, region.x, region.y, qw / region.w, qh / region.h),

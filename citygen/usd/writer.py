@@ -11,11 +11,15 @@ Layout of the stage::
           Elements             PointInstancer; Prototypes/<pN> reference /Prototypes/<name>
     /Prototypes                class: one prototype per element kind and quantised size
 
-Authoring goes through the Sdf API inside one change block, which is what keeps a 100k-building city writable.
+With tile layers, each ``Tile_<i>_<j>`` lives in its own layer ``<stem>_tiles/Tile_<i>_<j>.usdc`` (a sublayer of
+the root, with the prototypes first used in that tile), written as soon as the tile is complete, so memory stays
+bounded by one tile. Authoring goes through
+the Sdf API in change blocks, which is what keeps a 100k-building city writable.
 """
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -156,69 +160,169 @@ def _dictionary(data: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+class StageWriter:
+    """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
+
+    With ``tile_layers`` every tile is its own layer (``<stem>_tiles/Tile_i_j<suffix>``) holding its buildings and
+    the ``/Prototypes`` first used there; it is exported and dropped from memory as soon as the next tile starts,
+    so memory stays bounded by one tile whatever the city's size. The root layer holds ``/World`` and its materials
+    and lists the tile layers as sublayers: internal references and material bindings compose as in one file (the
+    tile layers are a streaming device, not independently loadable assets). Without it everything goes into the
+    root layer. Nothing at ``path`` changes until :meth:`close` succeeds.
+    """
+
+    def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
+                 tile_layers: bool = False) -> None:
+        self.path = Path(path)
+        suffix = self.path.suffix.lower()
+        if suffix not in SUFFIXES:
+            raise ExportError(f"unsupported stage extension {self.path.suffix!r}", where=str(self.path),
+                              hint=f"use one of {', '.join(SUFFIXES)}")
+        self.up_axis = up_axis
+        self.tile_suffix = ".usdc" if suffix == ".usdz" else suffix
+        self.tiles_dir = self.path.with_name(f"{self.path.stem}_tiles") if tile_layers else None
+        self.staging: Path | None = None
+        self.layer = Sdf.Layer.CreateAnonymous(".usda")
+        self.author = _Author(self.layer)
+        self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
+        self.materials: dict[str, Sdf.Path] = {}
+        self.material_names: set[str] = set()
+        self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
+        self.sublayers: list[str] = []
+        self.tile: tuple[tuple[int, int], Sdf.Layer | None, Sdf.PrimSpec] | None = None
+        self.seen_tiles: set[tuple[int, int]] = set()
+        with Sdf.ChangeBlock():
+            self.layer.defaultPrim = "World"
+            self.layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
+            self.layer.pseudoRoot.SetInfo("upAxis", up_axis)
+            self.layer.customLayerData = {"citygen": _dictionary(layer_data or {})}
+            self.world = self.author.prim(self.layer, "World", "Xform")
+            self.world.SetInfo("kind", "assembly")
+            if up_axis == "Y":
+                self.author.attr(self.world, "xformOp:rotateX", T.Float, -90.0)
+                self.author.attr(self.world, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:rotateX"]),
+                                 uniform=True)
+            self.looks = self.author.prim(self.world, "Looks", "Scope")
+        self.protos_root: Sdf.PrimSpec | None = None
+
+    def __enter__(self) -> StageWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        """On an error, remove the staged tile layers (the files at ``path`` were never touched)."""
+        if exc_type is not None and self.staging is not None and self.staging != self.tiles_dir:
+            shutil.rmtree(self.staging, ignore_errors=True)
+
+    def material(self, name: str) -> Sdf.Path:
+        if name not in self.materials:
+            with Sdf.ChangeBlock():
+                self.materials[name] = self.author.material(self.looks, prim_name(name, self.material_names))
+        return self.materials[name]
+
+    def prototype(self, key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
+        """The ``/Prototypes`` prim of an element kind or module, authored on first use."""
+        if key in self.prototypes:
+            return self.prototypes[key]
+        author = self.author
+        if self.protos_root is None:
+            layer = self.layer if self.tile is None or self.tile[1] is None else self.tile[1]
+            self.protos_root = author.prim(layer, "Prototypes", "", Sdf.SpecifierClass)
+        proto = author.prim(self.protos_root, Tf.MakeValidIdentifier(key.name), "Xform")
+        author.api(proto, "SemanticsLabelsAPI:class")
+        author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([key.label]), uniform=True)
+        if isinstance(key, ModuleKey):
+            module = modules[key]
+            names: set[str] = set()
+            for (label, mat), mesh in module.meshes.items():
+                author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, self.material(mat), label)
+            if len(module.elements.proto_indices):
+                _instancer(author, proto, module.elements, lambda k: self.prototype(k, modules))
+        else:
+            for part in build_prototype(key):
+                if len(part.quads):
+                    author.mesh(proto, part.name, MeshData.from_quads(part.quads), self.material(part.material),
+                                None)
+        self.prototypes[key] = proto.path
+        return proto.path
+
+    def add(self, record: BuildingRecord) -> None:
+        """Author one building; records must come grouped by tile (a tile cannot be reopened)."""
+        with Sdf.ChangeBlock():
+            _write_building(self.author, self._tile_prim(record.tile), record, self.material, self.prototype,
+                            self.counts)
+
+    def _tile_prim(self, tile: tuple[int, int]) -> Sdf.PrimSpec:
+        if self.tile is not None and self.tile[0] == tile:
+            return self.tile[2]
+        if tile in self.seen_tiles:
+            raise ExportError(f"tile {tile} was already written", where=str(self.path),
+                              hint="add buildings sorted by tile")
+        self._flush_tile()
+        self.seen_tiles.add(tile)
+        name = f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
+        if self.tiles_dir is None:
+            layer, parent = None, self.world
+        else:
+            layer = Sdf.Layer.CreateAnonymous(self.tile_suffix)
+            layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
+            layer.pseudoRoot.SetInfo("upAxis", self.up_axis)
+            parent = Sdf.PrimSpec(layer, "World", Sdf.SpecifierOver)
+        prim = self.author.prim(parent, name, "Xform")
+        prim.SetInfo("kind", "group")
+        self.tile = (tile, layer, prim)
+        return prim
+
+    def _flush_tile(self) -> None:
+        """Export the open tile layer into the staging folder and let it go."""
+        if self.tile is None or self.tile[1] is None:
+            return
+        assert self.tiles_dir is not None
+        if self.staging is None:
+            self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
+            self.staging = Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
+        name = self.tile[2].name + self.tile_suffix
+        _export(self.tile[1], self.staging / name)
+        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
+        self.tile, self.protos_root = None, None
+
+    def close(self) -> StageStats:
+        """Write the last tile, the tile folder and the root layer; return the stage's figures."""
+        self._flush_tile()
+        if self.tiles_dir is not None:
+            self.layer.subLayerPaths = self.sublayers
+            self._publish_tiles()
+        size = _finish(self.layer, self.path)
+        if self.tiles_dir is not None:
+            if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
+                shutil.rmtree(self.tiles_dir)
+            else:
+                size += sum(f.stat().st_size for f in self.tiles_dir.iterdir())
+        return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
+                          meshes=self.counts["meshes"], instances=self.counts["instances"],
+                          prototypes=len(self.prototypes), polygons=self.counts["polygons"], bytes=size)
+
+    def _publish_tiles(self) -> None:
+        """Move the staged tile folder into place (replacing an old one)."""
+        assert self.tiles_dir is not None
+        staging = self.staging or Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
+        self.staging = staging
+        os.chmod(staging, 0o777 & ~_umask())
+        if self.tiles_dir.exists():
+            old = self.tiles_dir.with_name(f".{self.tiles_dir.name}.old")
+            shutil.rmtree(old, ignore_errors=True)
+            os.replace(self.tiles_dir, old)
+            shutil.rmtree(old, ignore_errors=True)
+        os.replace(staging, self.tiles_dir)
+        self.staging = self.tiles_dir
+
+
 def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axis: str = "Z",
-                layer_data: Mapping[str, Any] | None = None) -> StageStats:
-    """Author the city and write it to ``path`` atomically (temporary file + rename)."""
-    path = Path(path)
-    if path.suffix.lower() not in SUFFIXES:
-        raise ExportError(f"unsupported stage extension {path.suffix!r}", where=str(path),
-                          hint=f"use one of {', '.join(SUFFIXES)}")
-    layer = Sdf.Layer.CreateAnonymous(".usda")
-    author = _Author(layer)
-    counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
-    with Sdf.ChangeBlock():
-        layer.defaultPrim = "World"
-        layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-        layer.pseudoRoot.SetInfo("upAxis", up_axis)
-        layer.customLayerData = {"citygen": _dictionary(layer_data or {})}
-        world = author.prim(layer, "World", "Xform")
-        world.SetInfo("kind", "assembly")
-        if up_axis == "Y":
-            author.attr(world, "xformOp:rotateX", T.Float, -90.0)
-            author.attr(world, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:rotateX"]), uniform=True)
-        looks = author.prim(world, "Looks", "Scope")
-        protos_root = author.prim(layer, "Prototypes", "", Sdf.SpecifierClass)
-        materials: dict[str, Sdf.Path] = {}
-        material_names: set[str] = set()
-        prototypes: dict[ProtoKey, Sdf.Path] = {}
-
-        def material(name: str) -> Sdf.Path:
-            if name not in materials:
-                materials[name] = author.material(looks, prim_name(name, material_names))
-            return materials[name]
-
-        def prototype(key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
-            if key not in prototypes:
-                proto = author.prim(protos_root, Tf.MakeValidIdentifier(key.name), "Xform")
-                author.api(proto, "SemanticsLabelsAPI:class")
-                author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([key.label]), uniform=True)
-                if isinstance(key, ModuleKey):
-                    module = modules[key]
-                    names: set[str] = set()
-                    for (label, mat), mesh in module.meshes.items():
-                        author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, material(mat), label)
-                    if len(module.elements.proto_indices):
-                        _instancer(author, proto, module.elements, lambda k: prototype(k, modules))
-                else:
-                    for part in build_prototype(key):
-                        if len(part.quads):
-                            author.mesh(proto, part.name, MeshData.from_quads(part.quads), material(part.material),
-                                        None)
-                prototypes[key] = proto.path
-            return prototypes[key]
-
-        tiles: dict[tuple[int, int], Sdf.PrimSpec] = {}
+                layer_data: Mapping[str, Any] | None = None, tile_layers: bool = False) -> StageStats:
+    """Author the city (records sorted by tile) and write it to ``path``; see :class:`StageWriter`."""
+    with StageWriter(path, up_axis=up_axis, layer_data=layer_data, tile_layers=tile_layers) as writer:
         for record in buildings:
-            if record.tile not in tiles:
-                i, j = record.tile
-                tile = author.prim(world, f"Tile_{i}_{j}".replace("-", "m"), "Xform")
-                tile.SetInfo("kind", "group")
-                tiles[record.tile] = tile
-            _write_building(author, tiles[record.tile], record, material, prototype, counts)
-    stage_layer = _finish(layer, path)
-    return StageStats(path=path, buildings=counts["buildings"], prims=author.prims, meshes=counts["meshes"],
-                      instances=counts["instances"], prototypes=len(prototypes), polygons=counts["polygons"],
-                      bytes=stage_layer)
+            writer.add(record)
+        return writer.close()
 
 
 def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecord, material, prototype,
@@ -282,13 +386,17 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
                 inner.unlink(missing_ok=True)
         else:
             _export(layer, tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a stage is an ordinary file
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a stage is an ordinary file
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
     return path.stat().st_size
+
+
+def _umask() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
 
 
 def _export(layer: Sdf.Layer, target: Path) -> None:

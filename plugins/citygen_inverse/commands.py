@@ -7,7 +7,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from citygen.errors import CitygenError
+from citygen.errors import CitygenError, LayoutError
 from citygen.registry import Command, Registry
 
 
@@ -23,6 +23,29 @@ def write_text(path: str | None, text: str) -> None:
     os.replace(tmp, target)
 
 
+def report(exc: Exception) -> int:
+    """Print ``exc`` as one ``error:`` line naming the file (no traceback); exit status 2."""
+    if isinstance(exc, FileNotFoundError):
+        print(f"error: {exc.filename}: no such file", file=sys.stderr)
+    elif isinstance(exc, IsADirectoryError):
+        print(f"error: {exc.filename}: is a directory, expected a file", file=sys.stderr)
+    else:
+        print(f"error: {exc}", file=sys.stderr)
+    return 2
+
+
+def check_degenerate(xml: str) -> None:
+    """Refuse CMP objects of zero width or height (cmp_b0284 has one) naming file and object."""
+    from citygen_inverse.cmp import _find_labels, parse_cmp_xml
+    path = Path(xml)
+    labels = _find_labels(path)
+    for x0, x1, y0, y1, label, order in parse_cmp_xml(path.read_text(), xml, labels):
+        if x0 == x1 or y0 == y1:
+            raise LayoutError(f"object {order} ({labels[label][0]}) is a zero-size box "
+                              f"(x {x0:g}..{x1:g}, y {y0:g}..{y1:g})", where=xml,
+                              hint="fix the annotation or pass --drop-degenerate to drop such boxes")
+
+
 class LayoutCommand(Command):
     name = "layout"
     help = "layout tools: import annotated facades as FacadeLayout JSON"
@@ -36,15 +59,18 @@ class LayoutCommand(Command):
         scale.add_argument("--width", type=float, help="facade width in metres")
         scale.add_argument("--floor-height", type=float, default=3.0,
                            help="metres per row of windows/doors/shops (default 3.0)")
+        cmp.add_argument("--drop-degenerate", action="store_true",
+                         help="drop zero-size boxes instead of refusing the annotation")
         cmp.add_argument("-o", "--output", help="output JSON file (default stdout)")
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
         from citygen_inverse.cmp import import_cmp
         try:
+            if not args.drop_degenerate:
+                check_degenerate(args.xml)
             layout = import_cmp(args.xml, png=args.png, width=args.width, floor_height=args.floor_height)
         except (CitygenError, OSError) as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
+            return report(exc)
         write_text(args.output, layout.dumps() + "\n")
         meta = layout.meta
         print(f"{args.xml}: {len(layout.terminals())} terminals, {layout.width:.2f} x {layout.height:.2f} m "
@@ -66,7 +92,8 @@ class GrammarCommand(Command):
         ext.add_argument("--split-cost", type=float, default=0.1)
         ext.add_argument("--repeat-cost", type=float, default=0.5)
         ext.add_argument("--size-independent", action="store_true",
-                         help="relative sizes, filling repeats and floors (wu2014 §5)")
+                         help="a grammar for any face: floor slabs on the building's floor lines, a door on entrance "
+                              "faces, alignment kept (wu2014 §5, Fig. 12); one layout only")
         ext.add_argument("-o", "--output", help="grammar file (default stdout)")
         cost = sub.add_parser("cost", help="wu2014 Eq. 1-2 cost of a grammar file")
         cost.add_argument("grammar")
@@ -77,17 +104,32 @@ class GrammarCommand(Command):
         try:
             return self._extract(args) if args.grammar_command == "extract" else self._cost(args)
         except (CitygenError, OSError) as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
+            return report(exc)
 
     def _extract(self, args: argparse.Namespace) -> int:
-        from citygen.layout import FacadeLayout
+        from citygen.layout import FacadeLayout, check_partition
         from citygen_inverse.actions import CostModel
         from citygen_inverse.extract import extract_grammar
+        from citygen_inverse.independent import extract_size_independent
         layouts = [FacadeLayout.loads(Path(p).read_text(), p) for p in args.layouts]
-        result = extract_grammar(layouts, args.method, args.iterations, args.seed,
-                                 CostModel(split=args.split_cost, repeat=args.repeat_cost))
-        write_text(args.output, result.size_independent if args.size_independent else result.text)
+        for path, layout in zip(args.layouts, layouts):
+            problems = check_partition(layout)
+            if problems:
+                raise LayoutError("not a partition: " + "; ".join(problems[:3]), where=path,
+                                  hint="grammar extraction needs terminals that tile the facade exactly")
+        model = CostModel(split=args.split_cost, repeat=args.repeat_cost)
+        if args.size_independent:
+            if len(layouts) > 1:
+                raise LayoutError("--size-independent takes one layout", where=args.layouts[1],
+                                  hint="extract a joint grammar without --size-independent")
+            command = " ".join(["citygen grammar extract", Path(args.layouts[0]).name, "--method", args.method,
+                                "--iterations", str(args.iterations), "--seed", str(args.seed),
+                                "--size-independent"])
+            result = extract_size_independent(layouts[0], args.method, args.iterations, args.seed, model,
+                                              header=(f"made by: {command}",))
+        else:
+            result = extract_grammar(layouts, args.method, args.iterations, args.seed, model)
+        write_text(args.output, result.text)
         print(f"cost {result.cost:.2f}  rules {result.rules}  terminals {result.terminals}  "
               f"time {result.seconds:.3f} s  ({result.method}, {result.iterations} iterations)", file=sys.stderr)
         return 0

@@ -1,11 +1,16 @@
 """Write an extracted grammar in citygen's grammar DSL (docs/grammar.md) with readable names.
 
-Terminals are named from their labels (``Window1``, ``Wall2``: identical regions share a symbol); non-terminals
-from their dominant label and place (``WindowBand3`` spans the facade width, ``WallColumn1`` its height, else
-``...Group``); the axiom is ``Facade``. ``exact`` sizes are absolute metres, so deriving at the input size
-reproduces the input. ``size_independent`` (wu2014 §5) turns sizes into relative weights except thin structures,
-repeat tiles into floating sizes that fill any extent, and a facade whose rows form floors into a ``floors`` rule
-that follows the building's floor lines.
+Terminals are named by their label (``Window``, ``Wall``, ``Door``); a second terminal kind of one label (another
+depth) gets a number (``Window2``). Their size comes from the parent split, so terminals of one label and depth
+share one symbol whatever their size, and terminal rules cost nothing (docs/grammar.md, Cost): naming does not
+change the Eq. 1 cost. Non-terminals are named from their dominant label and place (``WindowBand3`` spans the
+facade width, ``WallColumn1`` its height, else ``...Group``); the axiom is ``Facade``.
+
+Sizes are written in one of three modes: ``exact`` (absolute metres: deriving at the input size reproduces the
+input), ``independent`` (wu2014 §5: relative weights except thin structures, floating repeat tiles) and ``linear``
+(every size relative, repeats written out as splits of their tile count: the derivation is then the input scaled
+along each axis, so every edge aligned in the input stays aligned at any size -- used by
+:mod:`citygen_inverse.independent`, see docs/inverse.md "Alignment").
 """
 from __future__ import annotations
 
@@ -23,10 +28,12 @@ def _num(v: float) -> str:
 
 
 class GrammarWriter:
-    def __init__(self, index: LayoutIndex, rules: dict[int, Action], names: list[str] | None = None) -> None:
+    def __init__(self, index: LayoutIndex, rules: dict[int, Action], names: list[str] | None = None,
+                 reserved: frozenset[str] = frozenset()) -> None:
         self.index = index
         self.rules = rules
         self.names: dict[int, str] = {}
+        self.reserved = {"Corner", *reserved}  # Corner has a built-in meaning in ``floors`` (docs/grammar.md)
         roots = [index.sig(b) for b in index.roots]
         for k, r in enumerate(roots):
             self.names.setdefault(r, names[k] if names else ("Facade" if len(roots) == 1 else f"Facade{k + 1}"))
@@ -44,7 +51,8 @@ class GrammarWriter:
             if s in self.rules:
                 stack.extend(reversed([c for c, _ in self.rules[s].items]))
         counters: Counter[str] = Counter()
-        terminal_names: dict[int, str] = {}
+        taken = set(self.reserved) | set(self.names.values())
+        terminal_names: dict[tuple[str | None, float], str] = {}
         fw = max(b[2] - b[0] for b in self.index.roots)
         fh = max(b[3] - b[1] for b in self.index.roots)
         for s in order:
@@ -52,12 +60,11 @@ class GrammarWriter:
                 continue
             info = self.index.sigs[s]
             if info.n == 1:
-                kind = info.terminal
-                if kind not in terminal_names:
-                    label = (self.index.kinds[kind].label or "none").capitalize()
-                    counters[label] += 1
-                    terminal_names[kind] = f"{label}{counters[label]}"
-                self.names[s] = terminal_names[kind]
+                kind = self.index.kinds[info.terminal]
+                key = (kind.label, kind.depth)
+                if key not in terminal_names:
+                    terminal_names[key] = _fresh((kind.label or "none").capitalize(), counters, taken, first="")
+                self.names[s] = terminal_names[key]
                 continue
             x0, y0, x1, y1 = info.box
             idx = self.index.inside(info.box)
@@ -65,37 +72,53 @@ class GrammarWriter:
             labels.pop("wall", None)
             base = (labels.most_common(1)[0][0] if labels else "wall").capitalize()
             base += "Band" if x1 - x0 == fw else "Column" if y1 - y0 == fh else "Group"
-            counters[base] += 1
-            self.names[s] = f"{base}{counters[base]}"
+            self.names[s] = _fresh(base, counters, taken)
         return order
 
     def _item(self, s: int, rel: tuple[int, int, int, int], axis: int, mode: str) -> str:
         v = (rel[2 + axis] - rel[axis]) * self.index.quantum  # the item's own size (free extents share a symbol)
+        if mode == "linear":
+            return f"'{_num(v)}: {self.names[s]}"
         if mode == "exact" or v < THIN:
             prefix = ""
         else:
             prefix = "~" if mode == "float" else "'"
         return f"{prefix}{_num(v)}: {self.names[s]}"
 
-    def body(self, s: int, independent: bool) -> str:
+    def body(self, s: int, mode: str) -> str:
+        """The rule body of signature ``s`` with sizes in ``mode`` (exact, independent or linear)."""
         a = self.rules[s]
         axis = "xy"[a.axis]
-        rel = "rel" if independent else "exact"
-        flo = "float" if independent else "exact"
+        items = list(a.items)
         if a.op == "grid":
-            return self._grid(s, a, independent)
-        mode = flo if a.op in ("repeat", "repeatABA") else rel
-        text = " | ".join(self._item(c, box, a.axis, mode) for c, box in a.items)
-        return f"{a.op}({axis}) {{ {text} }}"
+            return self._grid(a, mode)
+        op = a.op
+        if mode == "linear" and op in ("repeat", "repeatABA"):
+            items, op = self._expand(s, a), "split"
+        item_mode = {"exact": "exact", "linear": "linear"}.get(mode, "float" if op in ("repeat", "repeatABA")
+                                                                     else "rel")
+        text = " | ".join(self._item(c, box, a.axis, item_mode) for c, box in items)
+        return f"{op}({axis}) {{ {text} }}"
 
-    def _grid(self, s: int, a: Action, independent: bool) -> str:
+    def _expand(self, s: int, a: Action) -> list[tuple[int, tuple[int, int, int, int]]]:
+        """The successors a repeat or repeatABA places at the input size (its tile count is fixed by the input;
+        so the index must not share periodic signatures across counts)."""
+        extent = self.index.sigs[s].box[2 + a.axis] - self.index.sigs[s].box[a.axis]
+        sizes = [box[2 + a.axis] - box[a.axis] for _, box in a.items]
+        items = list(a.items)
+        if a.op == "repeat":
+            return items * (extent // sum(sizes))
+        n = (extent - sizes[0]) // sum(sizes)
+        return items * n + items[:1]
+
+    def _grid(self, a: Action, mode: str) -> str:
         q = self.index.quantum
         xs, ys = a.grid_lines
         def sizes(lines):
             out = []
             for lo, hi in zip(lines, lines[1:]):
                 v = (hi - lo) * q
-                out.append(f"'{_num(v)}" if independent and v >= THIN else _num(v))
+                out.append(f"'{_num(v)}" if mode == "linear" or (mode == "independent" and v >= THIN) else _num(v))
             return " | ".join(out)
         cells = [["?"] * (len(xs) - 1) for _ in range(len(ys) - 1)]
         for c, (x0, y0, x1, y1) in a.items:
@@ -112,6 +135,7 @@ class GrammarWriter:
         return f"terminal({kind.label or 'none'}{depth})"
 
     def text(self, header: list[str], independent: bool = False, floors: bool = False) -> str:
+        """The grammar file: header comments, ``@size`` (or the joint axiom), rules in derivation order."""
         lines = [f"# {h}" for h in header]
         if len(self.roots) == 1:
             b = self.index.roots[0]
@@ -129,14 +153,23 @@ class GrammarWriter:
                 if body:
                     lines.append(f"{self.names[s]} --> {body}")
                     continue
-            lines.append(f"{self.names[s]} --> {self.body(s, independent)}")
+            lines.append(f"{self.names[s]} --> {self.body(s, 'independent' if independent else 'exact')}")
         lines.extend(extra)
-        written = set()
+        lines.extend(self.terminal_rules())
+        return "\n".join(lines) + "\n"
+
+    def rule_lines(self, mode: str) -> list[str]:
+        """Every rule (non-terminals in derivation order, then terminals) with sizes in ``mode``."""
+        body = [f"{self.names[s]} --> {self.body(s, mode)}" for s in self._order if s in self.rules]
+        return body + self.terminal_rules()
+
+    def terminal_rules(self) -> list[str]:
+        lines, written = [], set()
         for s in self._order:
             if s not in self.rules and self.index.sigs[s].n == 1 and self.names[s] not in written:
                 written.add(self.names[s])
                 lines.append(f"{self.names[s]} --> {self.terminal(s)}")
-        return "\n".join(lines) + "\n"
+        return lines
 
     def _floors(self, s: int, extra: list[str]) -> str | None:
         """``floors`` for a facade split along y into [ground...] [repeated floors] [top...] (wu2014 §5)."""
@@ -167,3 +200,13 @@ class GrammarWriter:
         extra.append(f"{name} --> split(y) {{ {text} }}")
         return name
 
+
+
+def _fresh(base: str, counters: Counter[str], taken: set[str], first: str | None = None) -> str:
+    """``base`` + the next free number (``first`` for the first one, e.g. "" so the first window is ``Window``)."""
+    while True:
+        counters[base] += 1
+        name = f"{base}{first if counters[base] == 1 and first is not None else counters[base]}"
+        if name not in taken:
+            taken.add(name)
+            return name

@@ -34,7 +34,7 @@ def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "a
     ``free_extents=False`` restricts shared rules to strictly translational repeats (see ``regions.py``)."""
     layouts = [layouts] if isinstance(layouts, FacadeLayout) else list(layouts)
     wall, cpu = time.perf_counter(), time.process_time()
-    index = LayoutIndex(layouts, free_extents)
+    index = LayoutIndex(layouts, free_extents, periodic=free_extents)
     search = GrammarSearch(index, model)
     result: SearchResult = search.run(method, iterations, seed, time_limit)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu

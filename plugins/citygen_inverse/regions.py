@@ -8,8 +8,9 @@ Coordinates are quantised to ``quantum`` metres (1e-7 of the facade size) so equ
 parent rule. The same holds for a region all of whose terminals span its full width (a vertical stack): no rule
 inside it fixes its width, so stacks that differ only in width share one signature and one rule (likewise for
 height). Likewise a region that is an exact periodic sequence of >= 2 tiles along an axis is derived by one
-``repeat`` rule whatever the count, so its signature is (axis, tile length, tile signature). With
-``free_extents=False`` signatures are strictly translational (sizes included).
+``repeat`` rule whatever the count, so its signature is (axis, tile length, tile signature) (``periodic=True``;
+off by default because a writer that expands repeats to the input's count, the ``linear`` mode, cannot share
+them). With ``free_extents=False`` signatures are strictly translational (sizes included).
 """
 from __future__ import annotations
 
@@ -46,8 +47,9 @@ class SigInfo:
 class LayoutIndex:
     """Terminals of one or more layouts (placed side by side) with region lookup by box."""
 
-    def __init__(self, layouts: list[FacadeLayout], free_extents: bool = True) -> None:
+    def __init__(self, layouts: list[FacadeLayout], free_extents: bool = True, periodic: bool = False) -> None:
         self.free_extents = free_extents
+        self.periodic = periodic
         if not layouts:
             raise LayoutError("no layout to extract from")
         for k, layout in enumerate(layouts):
@@ -115,7 +117,7 @@ class LayoutIndex:
             Y1 = np.zeros_like(Y1)
         rel = np.stack([self.material[idx], X0, Y0, X1, Y1], axis=1)
         period = None
-        if self.free_extents and idx.size > 1:
+        if self.periodic and idx.size > 1:
             for axis, free in ((0, free_w), (1, free_h)):
                 p = None if free else _period(rel, axis, (x1 - x0, y1 - y0)[axis])
                 if p is not None:

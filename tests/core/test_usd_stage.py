@@ -1,3 +1,5 @@
+import json
+
 import pytest
 from pxr import Kind, Usd, UsdGeom, UsdSemantics
 
@@ -10,6 +12,16 @@ from tests.usd_util import element_labels
 
 def generate(scene_path, registry, out, **kw):
     return generate_city(load_scene(scene_path), registry=registry, out=out, **kw)
+
+
+def copy_city(scene_path, copies):
+    """Add ``copies`` shifted copies of the small city's footprints (enough buildings for worker processes)."""
+    city = scene_path.parent / "city.local.json"
+    features = json.loads(city.read_text())
+    city.write_text(json.dumps(features + [
+        {**f, "id": f"{f['id']}-copy{k}",
+         "coordinates": [[[x + 100 * k, y + 0.37 * k] for x, y in ring] for ring in f["coordinates"]]}
+        for k in range(1, copies + 1) for f in features]))
 
 
 def errors(path):
@@ -32,6 +44,17 @@ def test_same_seed_same_bytes_and_jobs_do_not_matter(small_scene, test_registry,
     generate(small_scene, test_registry, c, seed=99)
     assert a.read_bytes() == b.read_bytes()
     assert a.read_bytes() != c.read_bytes()
+
+
+def test_worker_processes_and_module_cache_do_not_change_bytes(small_scene, test_registry, tmp_path):
+    """Enough buildings for the process pool; module prototypes are cached per process and cleared per city."""
+    copy_city(small_scene, 2)
+    a, b, c = tmp_path / "a.usdc", tmp_path / "b.usdc", tmp_path / "c.usdc"
+    generate(small_scene, test_registry, a, jobs=1)
+    generate(small_scene, test_registry, tmp_path / "other.usdc", seed=5, jobs=1)  # fills the cache differently
+    generate(small_scene, test_registry, b, jobs=1)
+    generate(small_scene, test_registry, c, jobs=2)
+    assert a.read_bytes() == b.read_bytes() == c.read_bytes()
 
 
 def test_stage_structure(small_scene, test_registry, tmp_path):
@@ -107,3 +130,16 @@ def test_element_instancing_places_the_same_elements(small_scene, test_registry,
     stage = Usd.Stage.Open(str(elements_out))
     assert not [p for p in stage.GetPrimAtPath("/Prototypes").GetAllChildren() if p.GetName().startswith("module_")]
     assert report.stats.prototypes == 2
+
+
+def test_a_registry_workers_cannot_rebuild_runs_in_one_job(small_scene, test_registry, tmp_path):
+    from citygen.registry import load_registry
+    from tests.core.fakes import FakePlugin
+
+    class LocalPlugin(FakePlugin):  # defined in a function: cannot be pickled for worker processes
+        pass
+
+    copy_city(small_scene, 1)
+    report = generate(small_scene, load_registry(extra_plugins=[LocalPlugin()]), tmp_path / "a.usda", jobs=2)
+    assert report.written == 6
+    assert any("running with 1 job" in w and "pickled" in w for w in report.warnings)

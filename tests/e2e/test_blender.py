@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import importlib.util
 import subprocess
+from dataclasses import replace
 import sys
 from pathlib import Path
 
@@ -27,9 +28,13 @@ print("BUILDINGS", len(buildings), "MESHES", len(meshes), "INSTANCERS",
 """
 
 
-def test_blender_imports_the_delft_city(tmp_path):
+@pytest.mark.parametrize("tile_layers", [False, True], ids=["one-layer", "tile-layers"])
+def test_blender_imports_the_delft_city(tmp_path, tile_layers):
     out = tmp_path / "delft.usdc"
-    report = generate_city(load_scene(REPO / "scenes" / "delft.toml"), out=out)
+    scene = load_scene(REPO / "scenes" / "delft.toml")
+    scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0))
+    report = generate_city(scene, out=out)
+    assert len(list(tmp_path.glob("delft_tiles/*.usdc"))) == (5 if tile_layers else 0)
     # bpy bundles its own USD; run it in a separate interpreter so it never meets usd-core in one process
     result = subprocess.run([sys.executable, "-c", IMPORT, str(out)], capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr[-2000:]

@@ -1,0 +1,106 @@
+"""Tile layers: each tile streamed into its own sublayer of the root stage (`[output] tile_layers = true`)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pxr import Sdf, Usd
+
+from citygen.errors import ExportError
+from citygen.geometry.building import BuildingGeometry, Instances
+from citygen.pipeline import generate_city
+from citygen.scene import load_scene
+from citygen.usd.validate import validate_stage
+from citygen.usd.writer import BuildingRecord, StageWriter
+from tests.usd_util import buildings
+
+
+def _scene(small_scene: Path, output: str) -> Path:
+    small_scene.write_text(small_scene.read_text().split("[output]")[0] + output)
+    return small_scene
+
+
+def _composed(path: Path) -> dict[str, tuple[str, ...]]:
+    """Building prim path -> names of its children, from the composed stage."""
+    stage = Usd.Stage.Open(str(path))
+    return {str(p.GetPath()): tuple(c.GetName() for c in p.GetChildren()) for p in buildings(stage)}
+
+
+def test_tile_layers_compose_to_the_single_file_stage(small_scene, test_registry, tmp_path):
+    scene = _scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\n')
+    single = generate_city(load_scene(scene), registry=test_registry)
+    tiled_scene = _scene(small_scene, '[output]\npath = "tiled/small.usda"\ntile_size = 20\ntile_layers = true\n')
+    tiled = generate_city(load_scene(tiled_scene), registry=test_registry)
+    root = tiled.stats.path
+    tiles = sorted(p.name for p in (root.parent / "small_tiles").iterdir())
+    assert tiles == ["Tile_0_0.usda", "Tile_0_2.usda", "Tile_1_0.usda"]
+    assert Sdf.Layer.FindOrOpen(str(root)).subLayerPaths == [f"small_tiles/{t}" for t in tiles]
+    assert _composed(root) == _composed(single.stats.path)
+    assert (tiled.stats.buildings, tiled.stats.instances, tiled.stats.polygons) == \
+        (single.stats.buildings, single.stats.instances, single.stats.polygons)
+    assert [f for f in validate_stage(root) if f.severity == "error"] == []
+    # a tile layer holds only its own buildings, under an `over` of /World
+    layer = Sdf.Layer.FindOrOpen(str(root.parent / "small_tiles" / "Tile_1_0.usda"))
+    assert layer.GetPrimAtPath("/World").specifier == Sdf.SpecifierOver
+    assert [p.name for p in layer.GetPrimAtPath("/World/Tile_1_0").nameChildren] == ["way_2"]
+
+
+def test_tile_layers_are_byte_identical_across_runs_and_job_counts(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n'))
+    out = Path(scene.output.path)
+
+    def files() -> dict[str, bytes]:
+        return {p.name: p.read_bytes() for p in [out, *sorted((out.parent / "small_tiles").iterdir())]}
+
+    generate_city(scene, registry=test_registry, jobs=1)
+    first = files()
+    generate_city(scene, registry=test_registry, jobs=2)
+    assert files() == first
+
+
+def test_rewriting_replaces_the_old_tiles(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    tiles = Path(scene.output.path).parent / "small_tiles"
+    (tiles / "Tile_9_9.usda").write_text("#usda 1.0\n")  # left over from an older, bigger city
+    generate_city(scene, registry=test_registry)
+    assert "Tile_9_9.usda" not in {p.name for p in tiles.iterdir()}
+    assert not [p for p in tiles.parent.iterdir() if p.name.startswith(".")]  # no staging folders left
+
+
+def test_usdz_packages_the_tile_layers(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdz"\ntile_size = 20\ntile_layers = true\n'))
+    report = generate_city(scene, registry=test_registry)
+    assert not (report.stats.path.parent / "small_tiles").exists()
+    assert len(buildings(Usd.Stage.Open(str(report.stats.path)))) == 3
+    assert [f for f in validate_stage(report.stats.path) if f.severity == "error"] == []
+
+
+def test_a_failed_run_leaves_the_old_stage_and_no_staging(small_scene, test_registry, monkeypatch):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    out = Path(scene.output.path)
+    before = {p.name: p.read_bytes() for p in (out.parent / "small_tiles").iterdir()}
+
+    def broken(self):
+        raise ExportError("disk full", where=str(out))
+
+    monkeypatch.setattr(StageWriter, "close", broken)
+    with pytest.raises(ExportError):
+        generate_city(scene, registry=test_registry)
+    assert {p.name: p.read_bytes() for p in (out.parent / "small_tiles").iterdir()} == before
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]
+
+
+def _record(name: str, tile: tuple[int, int]) -> BuildingRecord:
+    empty = Instances((), np.zeros(0, np.int32), np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, 3), np.float32))
+    return BuildingRecord(name, tile, BuildingGeometry({}, empty, {}, None), {})
+
+
+def test_a_tile_cannot_be_reopened(tmp_path):
+    writer = StageWriter(tmp_path / "x.usda", tile_layers=True)
+    writer.add(_record("a", (0, 0)))
+    writer.add(_record("b", (1, 0)))
+    with pytest.raises(ExportError, match="tile \\(0, 0\\) was already written"):
+        writer.add(_record("c", (0, 0)))

@@ -1,0 +1,134 @@
+"""The inverse commands through ``citygen.cli.main``: import, extract (each method), cost, and bad input."""
+import json
+from pathlib import Path
+
+import pytest
+
+import citygen_split
+from citygen.cli import main
+from citygen.layout import FacadeLayout, Region, check_partition
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "inverse"
+XML = DATA / "cmp_b0009.xml"
+
+
+@pytest.fixture(scope="module")
+def layout_json(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "b0009.json"
+    assert main(["layout", "import-cmp", str(XML), "--width", "14", "--png", str(DATA / "cmp_b0009.png"),
+                 "-o", str(out)]) == 0
+    return out
+
+
+def test_import_cmp_with_width_and_png(layout_json, capsys):
+    layout = FacadeLayout.loads(layout_json.read_text())
+    assert check_partition(layout) == []
+    assert layout.width == pytest.approx(14.0, abs=1e-3)
+    assert layout.meta["scale_from"] == "width 14.0 m"
+    assert layout.meta["label_map_agreement"] > 0.5
+
+
+def test_import_cmp_to_stdout(capsys):
+    assert main(["layout", "import-cmp", str(XML), "--floor-height", "3.2"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["width"] > 0 and "terminals" in err
+
+
+@pytest.mark.parametrize("method", ["greedy", "is", "adp"])
+def test_extract_each_method(layout_json, tmp_path, capsys, method):
+    out = tmp_path / f"{method}.grammar"
+    assert main(["grammar", "extract", str(layout_json), "--method", method, "--iterations", "15", "--seed", "3",
+                 "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    cost = float(err.split()[1])
+    assert main(["grammar", "cost", str(out)]) == 0
+    assert float(capsys.readouterr().out.split()[1]) == pytest.approx(cost, abs=0.005)
+    assert f"method {method}" in out.read_text()
+
+
+def test_extract_size_independent(layout_json, tmp_path, capsys):
+    out = tmp_path / "si.grammar"
+    assert main(["grammar", "extract", str(layout_json), "--method", "greedy", "--size-independent",
+                 "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "floors {" in text and "case entrance" in text and "made by: citygen grammar extract" in text
+    assert str(tmp_path) not in text  # no absolute paths in a file meant to be committed
+    cost = float(capsys.readouterr().err.split()[1])
+    assert citygen_split.grammar_cost(citygen_split.parse(text, "si")) == pytest.approx(cost, abs=0.005)
+    assert main(["facade", str(out), "--size", "20", "12", "--json"]) == 0
+
+
+def test_cost_of_a_hand_written_grammar(tmp_path, capsys):
+    g = tmp_path / "hand.grammar"
+    g.write_text("F1 --> split(x) { 1: A | 2: B | 1: A }\nF2 --> repeat(x) { 1: A | 2: B }\n"
+                 "A --> terminal(wall)\nB --> terminal(window)\n")
+    assert main(["grammar", "cost", str(g)]) == 0
+    assert capsys.readouterr().out.split()[:4] == ["cost", "5.60", "rules", "2"]  # wu2014 §3.2: 3.1 + 2.5
+    assert main(["grammar", "cost", str(g), "--split-cost", "0", "--repeat-cost", "0"]) == 0
+    assert capsys.readouterr().out.split()[1] == "5.00"
+
+
+def _fails(capsys, argv, *needles):
+    assert main(argv) != 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.startswith("error: ")
+    for needle in needles:
+        assert needle in err, err
+    return err
+
+
+def _object(tmp_path, name, body):
+    path = tmp_path / name
+    path.write_text(body)
+    (tmp_path / "label_names.txt").write_text((DATA / "label_names.txt").read_text())
+    return str(path)
+
+
+BOX = "<object><points><x>{}</x><x>{}</x><y>{}</y><y>{}</y></points><label>{}</label></object>"
+
+
+def test_malformed_xml(tmp_path, capsys):
+    path = _object(tmp_path, "bad.xml", "<object><points><x>0.1</x></points>")
+    _fails(capsys, ["layout", "import-cmp", path], "bad.xml:1:", "malformed CMP annotation")
+
+
+def test_unknown_label_id(tmp_path, capsys):
+    path = _object(tmp_path, "unknown.xml", BOX.format(0, 1, 0, 1, 2) + BOX.format(0.1, 0.2, 0.1, 0.2, 42))
+    _fails(capsys, ["layout", "import-cmp", path], "unknown.xml", "object 1", "label 42")
+
+
+def test_zero_size_box_is_refused_unless_dropped(tmp_path, capsys):
+    path = _object(tmp_path, "zero.xml", BOX.format(0, 1, 0, 1, 2) + BOX.format(0.5, 0.5, 0.2, 0.3, 3))
+    _fails(capsys, ["layout", "import-cmp", path], "zero.xml", "object 1 (window)", "zero-size",
+           "--drop-degenerate")
+    out = tmp_path / "zero.json"
+    assert main(["layout", "import-cmp", path, "--drop-degenerate", "-o", str(out)]) == 0
+    assert FacadeLayout.loads(out.read_text()).meta["dropped_boxes"] == 1
+
+
+@pytest.mark.parametrize("argv,name", [
+    (["layout", "import-cmp", "{}/missing.xml"], "missing.xml"),
+    (["grammar", "extract", "{}/missing.json"], "missing.json"),
+    (["grammar", "cost", "{}/missing.grammar"], "missing.grammar"),
+])
+def test_missing_files(tmp_path, capsys, argv, name):
+    _fails(capsys, [a.format(tmp_path) for a in argv], name)
+
+
+def test_bad_layout_and_grammar_files(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"width": 3')
+    _fails(capsys, ["grammar", "extract", str(bad)], "bad.json:1:")
+    overlap = tmp_path / "overlap.json"
+    overlap.write_text(FacadeLayout(2, 1, Region(0, 0, 2, 1, "F", children=(
+        Region(0, 0, 1.5, 1, "A", "wall"), Region(1, 0, 1, 1, "B", "window")))).dumps())
+    _fails(capsys, ["grammar", "extract", str(overlap), "--method", "greedy"], "overlap.json", "not a partition")
+    _fails(capsys, ["grammar", "extract", str(overlap), "--size-independent"], "overlap.json", "not a partition")
+    g = tmp_path / "bad.grammar"
+    g.write_text("Facade --> split(x) { 1: A | B\n")
+    _fails(capsys, ["grammar", "cost", str(g)], "bad.grammar:2:1")
+
+
+def test_size_independent_takes_one_layout(layout_json, capsys):
+    _fails(capsys, ["grammar", "extract", str(layout_json), str(layout_json), "--size-independent"],
+           "one layout")
