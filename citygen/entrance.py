@@ -8,7 +8,8 @@ repairs the layout generically and says what it did, so the building still gets 
 * the entrance face keeps the door nearest its centre;
 * an entrance face without a door gets one carved into its ground floor where it clips the least opening area;
   regions the door overlaps are cut into the rectangles around it (openings that are cut become wall), so the
-  terminals still partition the face.
+  terminals still partition the face (in a layer stack: the door goes into the front layer, every other layer
+  keeps an unlabelled, occluded region in its place).
 """
 from __future__ import annotations
 
@@ -42,8 +43,16 @@ def enforce_entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[Faca
         return layout, "entrance face has no room for a door"
     x0, y0, x1, y1 = door
     root = _map_terminals(layout.root, lambda r: _cut(r, door))
-    root = replace(root, children=(*root.children, Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol="Entrance",
-                                                          label="door", depth=DOOR_DEPTH)))
+    hole = Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol="Entrance", label="door", depth=DOOR_DEPTH)
+    layers = root.children
+    if layers and all(c.layer is not None for c in layers):  # a layer stack: the door in the front layer,
+        last = len(layers) - 1                             # the hole in the others occluded (no label)
+        root = replace(root, children=tuple(
+            replace(c, children=(*c.children, replace(hole, layer=c.layer, **({} if i == last else
+                                                                            {"label": None, "depth": 0.0}))))
+            for i, c in enumerate(layers)))
+    else:
+        root = replace(root, children=(*root.children, hole))
     return replace(layout, root=root), f"carved an entrance door at x={x0:.2f}..{x1:.2f}"
 
 

@@ -14,6 +14,7 @@ tile count and edges aligned in the input stay aligned (columns across floors, e
 wide face gets more bays instead of stretched windows. ``EntranceRow`` picks by the face width the split of the
 same tiles with exactly one ``GroundDoor`` tile in the middle; every other slab has no door (extra and upper-floor
 doors become windows), so a face has one door in its ground floor exactly when the request asks for an entrance.
+Faces narrower than half a tile get ``<Slab>Narrow`` instead: one opening per floor at its input size, centred.
 """
 from __future__ import annotations
 
@@ -132,8 +133,14 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
     rules = [f"Facade --> floors {{ {_selectors(sym)} }}",
              f"GroundFloor --> case entrance: EntranceRow  else: {sym[1]}Row",
              _entrance(sym[0], f"{sym[1]}Row", layout.width)]
-    rules += [f"{s}Row --> repeat(x) {{ ~{W}: {s} }}" for s in dict.fromkeys(sym[1:])]
-    body = "\n".join(_merge_identical(rules + writer.rule_lines("linear"))) + "\n"
+    first = dict(zip(reversed(sym), reversed(slabs)))  # each name's first slab
+    narrow: list[str] = []
+    for s in dict.fromkeys(sym[1:]):
+        rules.append(f"{s}Row --> case width < {_num(0.5 * layout.width)}: {s}Narrow\n"
+                     f"    else: repeat(x) {{ ~{W}: {s} }}")
+        narrow += _narrow(s, first[s], ROW_LABELS - {"door"}, entrance=False)
+    narrow += _narrow(sym[0], first[sym[0]], frozenset({"door"}), entrance=True)
+    body = "\n".join(_merge_identical(rules + writer.rule_lines("linear") + narrow)) + "\n"
     grammar = citygen_split.parse(body, "<size-independent>")
     cost = citygen_split.grammar_cost(grammar, model.split, model.repeat)
     count = sum(1 for r in grammar.rules if type(r.body).__name__ != "Terminal")
@@ -145,6 +152,30 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
              f"@size {W} {_num(layout.height)}"]
     text = "\n".join(lines) + "\n" + body
     return Extraction(text, text, cost, count, result.seconds, result.iterations, int(index.X0.size), method)
+
+
+def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: bool) -> list[str]:
+    """``<name>Narrow``: the slab on a face narrower than half its tile, where squeezing the tile would give
+    slivers of windows: plain wall with the slab's most common opening of ``labels`` once in the middle at its
+    input size (input height profile kept), or wall alone when the face cannot hold it. The entrance variant
+    always has its door, narrowed with the face when needed."""
+    ts = [t for t in slab.terminals() if t.label in labels]
+    if not ts:
+        return [f"{name}Narrow --> NarrowWall", "NarrowWall --> terminal(wall)"]
+    sizes = Counter((round(t.w, 3), round(t.h, 3)) for t in ts)
+    t = min(ts, key=lambda t: (-sizes[round(t.w, 3), round(t.h, 3)], abs(t.x + 0.5 * t.w - 0.5 * slab.width)))
+    depth = f", depth: {_num(t.depth)}" if t.depth else ""
+    ys = [("NarrowWall", t.y), (f"{name}Opening", t.h), ("NarrowWall", slab.height - t.y - t.h)]
+    pane = " | ".join(f"'{_num(h)}: {sym}" for sym, h in ys if h > 1e-9 * slab.height)
+    fits = f"split(x) {{ '1: NarrowWall | {_num(t.w)}: {name}Pane | '1: NarrowWall }}"
+    if entrance:  # the door stays, narrowed with the face
+        small, least = f"split(x) {{ '1: NarrowWall | '8: {name}Pane | '1: NarrowWall }}", t.w + 0.4
+    else:  # a window needs piers beside it: at least 0.8 m and its own width of wall in all
+        small, least = "NarrowWall", max(t.w + 0.8, 2 * t.w)
+    return [f"{name}Narrow --> case width < {_num(least)}: {small}\n    else: {fits}",
+            f"{name}Pane --> split(y) {{ {pane} }}",
+            f"{name}Opening --> terminal({t.label}{depth})",
+            "NarrowWall --> terminal(wall)"]
 
 
 def _merge_identical(lines: list[str]) -> list[str]:
@@ -183,11 +214,11 @@ def _entrance(door: str, row: str, width: float) -> str:
     """``EntranceRow``: as many slab tiles as ``repeat`` would place (n = round(L / W)), the middle one with the
     door, so the ground floor's tiles line up with the other floors' (for faces up to MAX_ALIGNED_WIDTH)."""
     top = max(1, math.ceil(MAX_ALIGNED_WIDTH / width + 0.5))
-    alts = []
+    alts = [f"case width < {_num(0.5 * width)}: {door}Narrow"]
     for n in range(1, top + 1):
         left = (n - 1) // 2
         right = n - 1 - left
         items = ([f"'{left}: {row}"] if left else []) + [f"'1: {door}"] + ([f"'{right}: {row}"] if right else [])
         body = door if n == 1 else f"split(x) {{ {' | '.join(items)} }}"
         alts.append(body if n == top else f"case width < {_num((n + 0.5) * width)}: {body}")
-    return "EntranceRow --> " + ("\n    ".join(alts[:-1]) + "\n    else: " + alts[-1] if len(alts) > 1 else alts[0])
+    return "EntranceRow --> " + "\n    ".join(alts[:-1]) + "\n    else: " + alts[-1]

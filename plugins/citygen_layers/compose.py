@@ -4,7 +4,7 @@ and shapes fully covered by upper layers are removed (§3.2, "a window fully cov
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -136,27 +136,36 @@ def _occluded(cells: Sequence[Sequence[tuple]]) -> list[list[bool]]:
 
 def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: tuple[float, float]
             ) -> tuple[FacadeLayout, list[str]]:
-    """Last-resort safety net of a best-effort solve: openings that straddle a floor line or enter a corner strip
-    become wall (reported). A solved layout never needs it."""
+    """Last-resort safety net of a best-effort solve: openings that straddle a floor line become wall, openings
+    that enter a corner strip are cut at the strip line (the part in the strip becomes wall; all of it when the
+    rest is under half the opening). Every repair is reported; a solved layout never needs one."""
     lines = np.asarray(floor_lines[1:-1], dtype=float)
     eps = 1e-6 * max(layout.width, layout.height, 1.0)
     left, right = corner_widths
+    inner = (left, layout.width - right)
     notes: list[str] = []
+
+    def wall(region: Region, **kw) -> Region:
+        return replace(region, label="wall", depth=region.depth - LABEL_DEPTH.get(region.label, 0.0), **kw)
 
     def fix(region: Region) -> Region:
         if region.children:
-            return Region(region.x, region.y, region.w, region.h, region.symbol, region.label, region.depth,
-                          region.material, region.asset, region.layer, tuple(fix(c) for c in region.children))
+            return replace(region, children=tuple(fix(c) for c in region.children))
         if region.label not in FLOOR_BOUND_LABELS:
             return region
         cut = lines.size and np.any((lines > region.y + eps) & (lines < region.y + region.h - eps))
-        strip = region.x < left - eps or region.x + region.w > layout.width - right + eps
-        if not (cut or strip):
+        x0, x1 = max(region.x, inner[0]), min(region.x + region.w, inner[1])
+        if not cut and x0 <= region.x + eps and x1 >= region.x + region.w - eps:
             return region
-        notes.append(f"{region.layer}/{region.symbol}: {region.label} at x={region.x:.2f} y={region.y:.2f} "
-                     f"{'straddles a floor line' if cut else 'enters a corner strip'}; made wall")
-        return Region(region.x, region.y, region.w, region.h, region.symbol, "wall", region.depth - LABEL_DEPTH.get(region.label, 0.0),
-                      region.material, region.asset, region.layer)
+        where = f"{region.layer}/{region.symbol}: {region.label} at x={region.x:.2f} y={region.y:.2f}"
+        if cut or x1 - x0 < 0.5 * region.w:
+            notes.append(f"{where} {'straddles a floor line' if cut else 'lies in a corner strip'}; made wall")
+            return wall(region)
+        notes.append(f"{where} enters a corner strip; cut at the strip line")
+        pieces = [wall(region, w=x0 - region.x) if x0 > region.x + eps else None,
+                  replace(region, x=x0, w=x1 - x0),
+                  wall(region, x=x1, w=region.x + region.w - x1) if x1 < region.x + region.w - eps else None]
+        return replace(region, label=None, children=tuple(p for p in pieces if p is not None))
 
     root = fix(layout.root)
     return FacadeLayout(layout.width, layout.height, root, layout.meta), notes

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from citygen.entrance import enforce_entrance
 from citygen.hookspecs import hookimpl
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
 from citygen.registry import RulesetKind
@@ -70,10 +71,9 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
             "counters": {**sx.candidate.env, **sy.candidate.env},
             "columns": {"x": {g: list(b) for g, b in sx.sizing.borders.items()},
                         "y": {g: list(b) for g, b in sy.sizing.borders.items()}}}
-    layout = compose(ruleset, sx, sy, meta)
-    if "best-effort" in (sx.status, sy.status) or any("dropped" in d for d in diagnostics):
-        layout, notes = conform(layout, request.floor_lines, request.corner_widths)
-        diagnostics += notes
+    layout, notes = conform(compose(ruleset, sx, sy, meta), request.floor_lines, request.corner_widths)
+    layout, note = enforce_entrance(layout, request)  # e.g. a door the corner strips left no room for
+    diagnostics += notes + ([note] if note else [])
     if diagnostics:
         layout = FacadeLayout(layout.width, layout.height, layout.root, {**layout.meta, "diagnostics": diagnostics})
     return layout

@@ -40,3 +40,16 @@ def test_narrow_face_reports_no_room():
     layout = FacadeLayout(0.5, 3, Region(0, 0, 0.5, 3, "Wall", "wall"))
     fixed, note = enforce_entrance(layout, FacadeRequest.preview(0.5, 3, entrance=True))
     assert fixed is layout and "no room" in note
+
+
+def test_layer_stack_gets_the_door_in_its_front_layer():
+    """Regression: a door carved into a layer stack left a hole in every layer (per-layer partition broken)."""
+    layers = tuple(Region(0, 0, 6, 4, name, layer=name, children=(Region(0, 0, 6, 4, "W", "wall", layer=name),))
+                   for name in ("back", "front"))
+    layout = FacadeLayout(6, 4, Region(0, 0, 6, 4, "Stack", children=layers))
+    fixed, note = enforce_entrance(layout, FacadeRequest.preview(6, 4, entrance=True))
+    assert "carved" in note and check_partition(fixed) == []
+    doors = [r for r in fixed.leaves if r.label == "door"]
+    assert [r.layer for r in doors] == ["front"]
+    back = [r for r in fixed.leaves if r.layer == "back"]
+    assert any(r.label is None and (r.x, r.w) == (doors[0].x, doors[0].w) for r in back)

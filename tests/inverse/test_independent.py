@@ -132,7 +132,7 @@ def _distinct(values, tol=1e-6):
     return values[np.concatenate([[True], np.diff(values) > tol])]
 
 
-@pytest.mark.parametrize("width,height,levels", [(14.0, 12.0, 4), (26.0, 18.0, 6), (5.0, 30.0, 9)])
+@pytest.mark.parametrize("width,height,levels", [(14.0, 12.0, 4), (26.0, 18.0, 6), (6.0, 30.0, 9)])
 def test_window_columns_stay_aligned_across_floors(width, height, levels):
     layout, _, g = grammar("cmp")
     corner = 0.4
@@ -147,6 +147,26 @@ def test_window_columns_stay_aligned_across_floors(width, height, levels):
     err = np.min(np.abs(np.asarray(got)[:, None] - expected[None, :]), axis=1)
     assert err.max() < 1e-6  # every opening starts on a column line of the input, on every floor
     assert len(_distinct(got)) <= len(expected)
+
+
+@pytest.mark.parametrize("width", [1.0, 2.0, 3.0, 4.0])
+@pytest.mark.parametrize("entrance", [False, True])
+def test_narrow_faces_get_one_centred_opening_per_floor(width, entrance):
+    """Faces under half the input width: no squeezed tile, at most one opening per floor at its input width,
+    centred on the face (so the openings of all floors share one axis); the entrance keeps its door."""
+    layout, _, g = grammar("cmp")
+    assert width < 0.5 * layout.width
+    req = request(width, 15.0, 5, entrance=entrance)
+    out = citygen_split.derive(g, req)
+    assert check_partition(out) == [] and check_request(out, req) == []
+    sizes = {round(t.w, 6) for t in layout.terminals()}
+    lines = req.floor_lines
+    for lo, hi in zip(lines, lines[1:]):
+        openings = [t for t in out.terminals() if t.label in ("window", "door", "shop") and lo - 1e-9 <= t.y < hi - 1e-9]
+        assert len(openings) <= 1
+        for t in openings:
+            assert abs(t.x + 0.5 * t.w - 0.5 * width) < 1e-9
+            assert round(t.w, 6) in sizes or t.label == "door"
 
 
 @pytest.mark.parametrize("width,height,levels", [(14.0, 12.0, 4), (26.0, 18.0, 6)])

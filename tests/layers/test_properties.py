@@ -27,7 +27,8 @@ def stacks(draw):
                            min_size=1, max_size=4))
     flags = {s: draw(st.sampled_from(["", " attached", " unoccludable"])) for s in "BCD"}
     lines = [f"symbol {s} size={v}{' opaque' if s in 'APQ' else ''}{flags.get(s, '')}" for s, v in SIZES.items()]
-    lines += ["counter k", "counter j", "counter n in 0..", "budget expansions=3000 time=2"]
+    # the wall-clock limit is only a safety net: with time to spare the expansion budget decides (deterministic)
+    lines += ["counter k", "counter j", "counter n in 0..", "budget expansions=3000 time=120"]
     lines += [f"pattern X{i} = {p}" for i, p in enumerate(X_PATTERNS)]
     lines += [f"pattern Y{i} = {p}" for i, p in enumerate(Y_PATTERNS)]
     lines.append("layer base x=X0 y=Y0")
@@ -111,3 +112,30 @@ def test_preview_renders(tmp_path):
     out = render(generate(rs, FacadeRequest.preview(16, 15, 3.0, 4.0)), tmp_path / "t.png")
     assert out.stat().st_size > 1000
     assert np.isfinite(out.stat().st_size)
+
+
+@pytest.mark.parametrize(("width", "corner"), [(3.5, 0.6), (4.0, 0.375), (4.0, 0.6), (5.0, 0.375)])
+def test_regression_narrow_entrance_face_keeps_its_door(width, corner):
+    """The terraced house's door follows its full-width bay W into the corner strips on narrow faces; it was made
+    wall (no door at all). Openings are now cut at the strip line, and a door is carved as a last resort."""
+    rs = load(ROOT / "rulesets" / "terraced_house.layers")
+    base = FacadeRequest.preview(width, 7.5, floor_height=3.0, ground_height=4.0, entrance=True)
+    request = FacadeRequest(width, 7.5, base.floor_lines, True, (corner, corner), base.context)
+    layout = generate(rs, request)
+    assert check_partition(layout) == [] and check_request(layout, request) == []
+    assert layout.count("door") == 1 and layout.meta["diagnostics"]
+
+
+def test_conform_cuts_openings_at_the_corner_strip():
+    from citygen.layout import FacadeLayout, Region
+    from citygen_layers.compose import conform
+    window = Region(0.0, 1.0, 2.0, 1.5, "W", "window", depth=-0.25, layer="l")
+    wall = Region(2.0, 1.0, 4.0, 1.5, "V", "wall", layer="l")
+    layout = FacadeLayout(6.0, 2.5, Region(0, 0, 6, 2.5, "S", children=(
+        Region(0, 0, 6, 2.5, "l", layer="l", children=(Region(0, 0, 6, 1, "V", "wall", layer="l"), window, wall)),)))
+    fixed, notes = conform(layout, (0.0, 2.5), (0.5, 0.5))
+    assert check_partition(fixed) == [] and "cut at the strip line" in notes[0]
+    windows = [r for r in fixed.leaves if r.label == "window"]
+    assert [(r.x, r.w) for r in windows] == [(0.5, 1.5)]
+    fixed, notes = conform(layout, (0.0, 2.5), (1.5, 0.5))  # under half of the window is left: all wall
+    assert fixed.count("window") == 0 and "made wall" in notes[0]
