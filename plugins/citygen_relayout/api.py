@@ -13,7 +13,8 @@ def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: n
     """One variation of ``model`` for a ``width x height`` target (bao2013 §7); never raises on infeasibility.
 
     The search budget is counted in work (``max_restarts`` restarts of 1000 backtracks each), so results do not
-    depend on machine speed; ``budget_s`` is a wall-clock safety net on top.
+    depend on machine speed; ``budget_s`` (seconds of this process's CPU time, so a loaded machine does not
+    trigger it) is a safety net on top.
     """
     if width <= 0 or height <= 0:
         return RelayoutResult(False, None, "invalid-size", f"target size {width:g} x {height:g} must be positive")

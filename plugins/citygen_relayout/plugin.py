@@ -55,7 +55,7 @@ class RelayoutCommand(Command):
         parser.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
         parser.add_argument("--count", type=int, default=1)
         parser.add_argument("--seed", type=int, default=0)
-        parser.add_argument("--budget", type=float, default=10.0, help="wall-clock safety limit per variation (s)")
+        parser.add_argument("--budget", type=float, default=10.0, help="CPU-time safety limit per variation (s)")
         out = parser.add_mutually_exclusive_group()
         out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
         out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
