@@ -155,43 +155,63 @@ class _Words:
             for ends in zip(*rows):
                 order.pop(ends, None)      # a column keeps the place of its last proposal
                 order[ends] = None
-        return [e for e in map(lambda ends: self._score(p, ends), order) if e is not None]
+        entries = [{e: self._entry(r, p[r], e) for e in {*near_rows[r], *lo_rows[r], *hi_rows[r], *strict_rows[r]}}
+                   for r in range(self.m)]
+        out = []
+        for ends in order:
+            column = [row[e] for row, e in zip(entries, ends)]
+            if None not in column:
+                scored = self._column(p, ends, column)
+                if scored is not None:
+                    out.append(scored)
+        return out
 
-    def _score(self, p: tuple[int, ...], ends: tuple[int, ...]) -> tuple[float, int, Column, float] | None:
-        """``(phi, symbols, column, size)`` of a column: Phi (Eq. 9) and size, or None when it breaks a column
-        constraint: an opaque entry in every column, epsilon only below an opaque entry of an upper layer and
-        never beside an attached letter, unoccludable letters covered only by transparent or opaque entries;
-        transparent letters separated from the others (edges() never proposes such entries)."""
+    def _entry(self, r: int, a: int, e: int) -> tuple | None:
+        """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, opaque bit, solid bit, rows one of which
+        must be opaque, rows none of which may be solid)``, size None for epsilon; None when the entry alone
+        breaks a constraint (epsilon beside an attached letter or with no upper row, transparent mixed with
+        other letters)."""
+        upper = self.upper[r]
+        if e == a:
+            return (None, 0, 0, upper, 0) if upper and self.eps_ok[r][a] else None
+        clear = self.clear[r][e] - self.clear[r][a]
+        if 0 < clear < e - a:
+            return None
+        bit = 1 << r
+        return (self.cum[r][e] - self.cum[r][a], bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
+                bit if self.solid[r][e] > self.solid[r][a] else 0, 0,
+                upper if self.unocc[r][e] > self.unocc[r][a] else 0)
+
+    @staticmethod
+    def _column(p: tuple[int, ...], ends: tuple[int, ...], column: Sequence[tuple]
+                ) -> tuple[float, int, Column, float] | None:
+        """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries, or None when it
+        breaks a column constraint: an opaque entry in every column, epsilon only below an opaque entry of an
+        upper layer, unoccludable letters covered only by transparent or opaque entries."""
         opaque = solid = 0
-        unocc = []
-        eps_rows = []
         hi, lo = -math.inf, math.inf
-        for r, (a, e) in enumerate(zip(p, ends)):
-            if e == a:
-                eps_rows.append(r)
+        needs, guards = [], []
+        for size, opaque_bit, solid_bit, need, guard in column:
+            if size is None:
+                needs.append(need)
                 continue
-            clear = self.clear[r][e] - self.clear[r][a]
-            if 0 < clear < e - a:
-                return None
-            s = self.cum[r][e] - self.cum[r][a]
-            hi, lo = max(hi, s), min(lo, s)
-            if self.nonopaque[r][e] == self.nonopaque[r][a]:
-                opaque |= 1 << r
-            if self.solid[r][e] > self.solid[r][a]:
-                solid |= 1 << r
-            if self.unocc[r][e] > self.unocc[r][a]:
-                unocc.append(r)
-        if not opaque:    # also rejects the all-epsilon column
-            return None
-        if any(not (opaque & self.upper[r] and self.eps_ok[r][p[r]]) for r in eps_rows):
-            return None
-        if any(solid & self.upper[r] for r in unocc):
-            return None
+            if size > hi:
+                hi = size
+            if size < lo:
+                lo = size
+            opaque |= opaque_bit
+            solid |= solid_bit
+            if guard:
+                guards.append(guard)
+        if not opaque or any(not opaque & need for need in needs) or any(solid & guard for guard in guards):
+            return None    # (no opaque entry also rejects the all-epsilon column)
         return hi - lo, sum(ends) - sum(p), tuple(zip(p, ends)), hi
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
-        out = self._score(tuple(a for a, _ in col), tuple(b for _, b in col))
+        p, ends = tuple(a for a, _ in col), tuple(b for _, b in col)
+        column = [self._entry(r, a, e) for r, (a, e) in enumerate(col)]
+        out = None if None in column else self._column(p, ends, column)
         return (out[0], out[1], out[3]) if out else None
 
 

@@ -3,6 +3,7 @@ depth and materials (§3.1, shape overrides per layer or pattern), masks and tra
 and shapes fully covered by upper layers are removed (§3.2, "a window fully covered by a wall can be omitted")."""
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -80,20 +81,24 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
     cells: list[list[tuple[float, float, float, float, str, Look]]] = []
-    looks: dict[tuple, Look] = {}
+    looks: dict[tuple, tuple[str, Look]] = {}
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
+        hole = Look(False, None, layer.depth, None, None)
         out = []
         for vs in vseg:
+            h = vs.t - vs.s
             for hs in hseg:
-                w, h = hs.t - hs.s, vs.t - vs.s
                 if hs.letter is None or vs.letter is None:
-                    out.append((hs.s, vs.s, w, h, "hole", Look(False, None, layer.depth, None, None)))
+                    out.append((hs.s, vs.s, hs.t - hs.s, h, "hole", hole))
                     continue
-                key = (index, hs.letter.symbol, hs.letter.transparent, vs.letter.symbol, vs.letter.transparent)
-                if key not in looks:
-                    looks[key] = look(ruleset, layer, hs.letter, vs.letter)
-                out.append((hs.s, vs.s, w, h, f"{hs.letter.name}.{vs.letter.name}", looks[key]))
+                key = (index, hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored,
+                       vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
+                cell = looks.get(key)
+                if cell is None:
+                    cell = looks[key] = (f"{hs.letter.name}.{vs.letter.name}",
+                                         look(ruleset, layer, hs.letter, vs.letter))
+                out.append((hs.s, vs.s, hs.t - hs.s, h, *cell))
         cells.append(out)
     occluded = _occluded(cells)
     children = []
@@ -113,24 +118,30 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
 
 
 def _occluded(cells: Sequence[Sequence[tuple]]) -> list[list[bool]]:
-    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?"""
-    xs = np.unique(np.round([v for layer in cells for c in layer for v in (c[0], c[0] + c[2])], 9))
-    ys = np.unique(np.round([v for layer in cells for c in layer for v in (c[1], c[1] + c[3])], 9))
-    covered = np.zeros((max(len(ys) - 1, 0), max(len(xs) - 1, 0)), dtype=bool)
+    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
+
+    The canvas is cut at every cell border; ``covered[j]`` holds the covered grid cells of grid row ``j`` as bits.
+    """
+    xs = np.unique(np.round([v for layer in cells for c in layer for v in (c[0], c[0] + c[2])], 9)).tolist()
+    ys = np.unique(np.round([v for layer in cells for c in layer for v in (c[1], c[1] + c[3])], 9)).tolist()
+    nx, ny = max(len(xs) - 1, 0), max(len(ys) - 1, 0)
+    covered = [0] * ny
     out = [[False] * len(layer) for layer in cells]
     for index in range(len(cells) - 1, -1, -1):
         boxes = []
         for k, (x, y, w, h, _, lk) in enumerate(cells[index]):
             if not lk.visible or w * h <= 1e-12:
                 continue
-            i0, i1 = np.searchsorted(xs, round(x, 9)), np.searchsorted(xs, round(x + w, 9))
-            j0, j1 = np.searchsorted(ys, round(y, 9)), np.searchsorted(ys, round(y + h, 9))
-            if covered[j0:j1, i0:i1].all():
+            i0, i1 = (min(bisect.bisect_left(xs, round(v, 9)), nx) for v in (x, x + w))
+            j0, j1 = (min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h))
+            bits = (1 << i1) - (1 << i0) if i1 > i0 else 0
+            if all(covered[j] & bits == bits for j in range(j0, j1)):
                 out[index][k] = True
             else:
-                boxes.append((j0, j1, i0, i1))
-        for j0, j1, i0, i1 in boxes:
-            covered[j0:j1, i0:i1] = True
+                boxes.append((j0, j1, bits))
+        for j0, j1, bits in boxes:
+            for j in range(j0, j1):
+                covered[j] |= bits
     return out
 
 
