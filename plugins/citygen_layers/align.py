@@ -126,40 +126,36 @@ class _Words:
         if not found:
             return []
         targets = sorted(found)
-        # per row: for every target the substring end nearest to it, just below and just above (or epsilon)
-        near_rows, lo_rows, hi_rows, strict_rows = [], [], [], []
+        # per row, for every target: the substring end nearest to it, then the ends just below and just above
+        # it, then the nearest end if it matches the target exactly (else epsilon, where allowed)
+        choices = []
         for r in range(self.m):
             pr = p[r]
             if pr >= n[r]:
-                same = [pr] * len(targets)
-                near_rows.append(same), lo_rows.append(same), hi_rows.append(same), strict_rows.append(same)
+                choices.append([pr] * (4 * len(targets)))
                 continue
             c, b = cum[r], cum[r][pr]
             seg = [c[j] - b for j in range(pr + 1, runend[r][pr] + 1)]
             last = len(seg) - 1
-            may_eps = self.eps_ok[r][pr]
-            near_r, lo_r, hi_r, strict_r = [], [], [], []
+            first = pr + 1
+            eps = pr if self.eps_ok[r][pr] else None
+            nears, los, his, stricts = [], [], [], []
             for t in targets:
                 i = bisect.bisect_left(seg, t - tol)
-                hi = min(i, last)
-                lo = hi if i <= last and seg[hi] <= t + tol else max(i - 1, 0)
+                hi = i if i < last else last
+                lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
                 near = lo if t - seg[lo] <= seg[hi] - t else hi
-                near_r.append(pr + 1 + near)
-                lo_r.append(pr + 1 + lo)
-                hi_r.append(pr + 1 + hi)
-                exact = abs(c[pr + 1 + near] - b - t) <= tol
-                strict_r.append(pr + 1 + near if exact or not may_eps else pr)
-            near_rows.append(near_r), lo_rows.append(lo_r), hi_rows.append(hi_r), strict_rows.append(strict_r)
-        order: dict[tuple[int, ...], None] = {}
-        for rows in (near_rows, lo_rows, hi_rows, strict_rows):
-            for ends in zip(*rows):
-                order.pop(ends, None)      # a column keeps the place of its last proposal
-                order[ends] = None
-        entries = [{e: self._entry(r, p[r], e) for e in {*near_rows[r], *lo_rows[r], *hi_rows[r], *strict_rows[r]}}
-                   for r in range(self.m)]
+                nears.append(first + near)
+                los.append(first + lo)
+                his.append(first + hi)
+                stricts.append(first + near if eps is None or abs(seg[near] - t) <= tol else eps)
+            choices.append(nears + los + his + stricts)
+        # distinct columns, each in the place of its last proposal
+        columns = list(dict.fromkeys(reversed(list(zip(*choices)))))[::-1]
+        entries = [{e: self._entry(r, p[r], e) for e in set(row)} for r, row in enumerate(choices)]
         out = []
-        for ends in order:
-            column = [row[e] for row, e in zip(entries, ends)]
+        for ends in columns:
+            column = list(map(dict.__getitem__, entries, ends))
             if None not in column:
                 scored = self._column(p, ends, column)
                 if scored is not None:

@@ -95,9 +95,11 @@ class CandidateGenerator:
         self.ruleset, self.spec, self.mu = ruleset, spec, mu
         self.budget = budget      # an align.Budget: every counter assignment examined costs one unit
         self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
-        names = set().union(*(pattern_counters(ruleset.patterns[p]) for p in self.patterns))
-        self.counter_names = sorted(names)
+        self._own = {p: frozenset(pattern_counters(ruleset.patterns[p])) for p in self.patterns}
+        self.counter_names = sorted(set().union(*self._own.values()))
         self._raw_cache: dict[tuple, list[tuple[Raw, ...]]] = {}
+        self._sized_cache: dict[tuple, list[tuple[Letter, ...]]] = {}
+        self._letters: dict[tuple[Raw, float | None], Letter] = {}
         self._pinned: dict[str, float] = {}
 
     # counters ------------------------------------------------------------------------------------------------
@@ -106,7 +108,7 @@ class CandidateGenerator:
         if counter.hi is not None and counter.hi - counter.lo <= HARD_COUNT_LIMIT:
             return range(counter.lo, counter.hi + 1)
         limit = HARD_COUNT_LIMIT
-        users = [p for p in self.patterns if name in pattern_counters(self.ruleset.patterns[p])]
+        users = [p for p in self.patterns if name in self._own[p]]
         size = self._size_of
         for k in range(max(counter.lo, 0), HARD_COUNT_LIMIT + 1):
             over = False
@@ -131,12 +133,32 @@ class CandidateGenerator:
         return float(sym.size) if sym is not None and sym.size is not None else 0.0
 
     # words ---------------------------------------------------------------------------------------------------
+    def _raw_key(self, pattern: str, env: Mapping[str, int]) -> tuple:
+        own = self._own.get(pattern)
+        if own is None:
+            own = pattern_counters(self.ruleset.patterns[pattern])
+        return pattern, tuple(sorted((k, v) for k, v in env.items() if k in own))
+
     def raw_words(self, pattern: str, env: Mapping[str, int]) -> list[tuple[Raw, ...]]:
-        own = pattern_counters(self.ruleset.patterns[pattern])
-        key = (pattern, tuple(sorted((k, v) for k, v in env.items() if k in own)))
+        key = self._raw_key(pattern, env)
         if key not in self._raw_cache:
             self._raw_cache[key] = pattern_words(self.ruleset.patterns[pattern], env, self.ruleset.symbols)
         return self._raw_cache[key]
+
+    def _words(self, pattern: str, env: Mapping[str, int], lo: float) -> list[tuple[Letter, ...]]:
+        """``sized_words`` of the pattern's raw words under ``env``, memoised (many counter assignments share
+        them: only the pattern's own counters, ``lo`` and the pinned sizes matter)."""
+        key = (self._raw_key(pattern, env), lo, tuple(sorted(self._pinned.items())))
+        words = self._sized_cache.get(key)
+        if words is None:
+            words = self._sized_cache[key] = self.sized_words(pattern, self.raw_words(pattern, env), lo)
+        return words
+
+    def _letter(self, raw: Raw, size: float | None) -> Letter:
+        letter = self._letters.get((raw, size))
+        if letter is None:
+            letter = self._letters[(raw, size)] = make_letter(raw, size, self.ruleset)
+        return letter
 
     def sized_words(self, pattern: str, raws: list[tuple[Raw, ...]], lo: float) -> list[tuple[Letter, ...]]:
         """Words of ``pattern`` whose size respects Eq. 7 (``lo <= |w| <= canvas + mu``), unsized symbols sampled;
@@ -144,13 +166,13 @@ class CandidateGenerator:
         hi = self.spec.canvas + self.mu
         out: list[tuple[Letter, ...]] = []
         for raw in raws:
-            letters = [make_letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None,
-                                   self.ruleset) for r in raw]
+            letters = [self._letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None)
+                       for r in raw]
             if pattern == self.spec.floor_pattern:
                 if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
                     continue
                 if not self.spec.storeys:   # every letter is a storey: sized to the floor heights, pinned
-                    out.append(tuple(make_letter(r, h, self.ruleset) for r, h in zip(raw, self.spec.floor_heights)))
+                    out.append(tuple(self._letter(r, h) for r, h in zip(raw, self.spec.floor_heights)))
                     continue
             unsized = [i for i, letter in enumerate(letters) if letter.unsized]
             total = sum(letter.size for letter in letters)
@@ -162,7 +184,7 @@ class CandidateGenerator:
             for size in sample_sizes((lo - total) / n, (hi - total) / n, self.mu, self.ruleset.options.samples):
                 word = list(letters)
                 for i in unsized:
-                    word[i] = make_letter(raw[i], size, self.ruleset)
+                    word[i] = self._letter(raw[i], size)
                 out.append(tuple(word))
         out.sort(key=lambda w: abs(sum(letter.size for letter in w) - self.spec.canvas))
         return out
@@ -196,7 +218,7 @@ class CandidateGenerator:
                 if row.pattern in lists:
                     continue
                 lo = self.lower_bound(index, None)
-                words = self.sized_words(row.pattern, self.raw_words(row.pattern, env), lo)
+                words = self._words(row.pattern, env, lo)
                 if not words:
                     break
                 self._loose[row.pattern] = words
@@ -216,7 +238,7 @@ class CandidateGenerator:
         if floor is None or self.spec.storeys:
             return {}
         self._pinned = {}
-        words = self.sized_words(floor, self.raw_words(floor, env), 0.0)
+        words = self._words(floor, env, 0.0)
         if not words:
             return {}
         heights: dict[str, list[float]] = {}
