@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -88,18 +88,31 @@ def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
     return order[:count]
 
 
+@dataclass
+class WordMemo:
+    """What the candidate generators of one direction's solve share across tolerance rounds (none of it depends
+    on mu): raw words per pattern and counter values, letters per raw letter and size, and the lower bounds of
+    pattern measures per counter value that bound unbounded counters."""
+
+    raw: dict[tuple, list[tuple[Raw, ...]]] = field(default_factory=dict)
+    letters: dict[tuple[Raw, float | None], Letter] = field(default_factory=dict)
+    measures: dict[tuple[str, str, int], float] = field(default_factory=dict)
+
+
 class CandidateGenerator:
     """Lazily yields candidates for one direction at tolerance ``mu`` in lexicographic counter order."""
 
-    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float, budget=None) -> None:
+    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float, budget=None,
+                 memo: WordMemo | None = None) -> None:
         self.ruleset, self.spec, self.mu = ruleset, spec, mu
         self.budget = budget      # an align.Budget: every counter assignment examined costs one unit
         self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
         self._own = {p: frozenset(pattern_counters(ruleset.patterns[p])) for p in self.patterns}
         self.counter_names = sorted(set().union(*self._own.values()))
-        self._raw_cache: dict[tuple, list[tuple[Raw, ...]]] = {}
+        self._memo = memo if memo is not None else WordMemo()
+        self._raw_cache = self._memo.raw
+        self._letters = self._memo.letters
         self._sized_cache: dict[tuple, list[tuple[Letter, ...]]] = {}
-        self._letters: dict[tuple[Raw, float | None], Letter] = {}
         self._pinned: dict[str, float] = {}
 
     # counters ------------------------------------------------------------------------------------------------
@@ -109,24 +122,34 @@ class CandidateGenerator:
             return range(counter.lo, counter.hi + 1)
         limit = HARD_COUNT_LIMIT
         users = [p for p in self.patterns if name in self._own[p]]
-        size = self._size_of
         for k in range(max(counter.lo, 0), HARD_COUNT_LIMIT + 1):
             over = False
             for p in users:
-                pattern = self.ruleset.patterns[p]
                 if p == self.spec.floor_pattern:
-                    storey = self.spec.storeys
-                    over |= min_measure(pattern, {name: k}, self.spec.counters,
-                                        lambda s: 1.0 if not storey or s in storey else 0.0) > len(
-                        self.spec.floor_heights)
+                    over |= self._measure(p, name, k) > len(self.spec.floor_heights)
                 else:
-                    over |= min_measure(pattern, {name: k}, self.spec.counters, size) > self.spec.canvas + self.mu
+                    over |= self._measure(p, name, k) > self.spec.canvas + self.mu
             if over:
                 limit = k - 1
                 break
         lo = max(counter.lo, -limit)
         hi = limit if counter.hi is None else min(counter.hi, limit)
         return range(lo, max(hi, lo - 1) + 1)
+
+    def _measure(self, pattern: str, name: str, k: int) -> float:
+        """Lower bound of the pattern's size (of its storey count for the floor pattern) with counter ``name``
+        at ``k`` and the other counters free."""
+        key = (pattern, name, k)
+        value = self._memo.measures.get(key)
+        if value is None:
+            if pattern == self.spec.floor_pattern:
+                storey = self.spec.storeys
+                value = min_measure(self.ruleset.patterns[pattern], {name: k}, self.spec.counters,
+                                    lambda s: 1.0 if not storey or s in storey else 0.0)
+            else:
+                value = min_measure(self.ruleset.patterns[pattern], {name: k}, self.spec.counters, self._size_of)
+            self._memo.measures[key] = value
+        return value
 
     def _size_of(self, name: str) -> float:
         sym = self.ruleset.symbols.get(name)

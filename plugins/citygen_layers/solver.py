@@ -10,7 +10,7 @@ import numpy as np
 
 from citygen.errors import RulesetError
 from citygen_layers.align import Alignment, Budget, align, greedy_alignment
-from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, direction_spec
+from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, WordMemo, direction_spec
 from citygen_layers.model import Counter, Ruleset
 from citygen_layers.sizing import Matrix, Sizing, size_matrices
 from citygen_layers.splits import split_transparent
@@ -79,8 +79,9 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
     cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
+    memo = WordMemo()
     for _ in range(options.rounds):
-        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget)):
+        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
             if index >= options.candidates or budget.exhausted:
                 break
             fallback = fallback or (candidate, mu)
