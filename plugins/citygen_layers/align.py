@@ -249,19 +249,19 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     ``parents`` maps the parts of split transparent letters to their letter (no hole may open inside one).
     """
     fwd = _Words(words, above, parents)
-    bwd = _Words([tuple(reversed(w)) for w in words], above,
-                 None if parents is None else [tuple(reversed(p)) for p in parents])
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
-    sides = []
-    for side, origin in ((fwd, start), (bwd, start)):
-        sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},
-                      "heap": [_Entry((0.0, 0, 0, 0), origin)], "seq": [0]})
     if start == goal:
         return Alignment((), 0.0, 0.0)
     found = _descend(fwd, goal, canvas, mu, budget)
     if found is not None and found[2]:
         return found[0]
+    bwd = _Words([tuple(reversed(w)) for w in words], above,
+                 None if parents is None else [tuple(reversed(p)) for p in parents])
+    sides = []
+    for side, origin in ((fwd, start), (bwd, start)):
+        sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},
+                      "heap": [_Entry((0.0, 0, 0, 0), origin)], "seq": [0]})
     bound = mu if found is None else found[0].error - 1e-9
     best: tuple[float, tuple[int, ...]] | None = None
     turn = 0
