@@ -82,8 +82,10 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
     width, height = sx.canvas, sy.canvas
     cells: list[list[tuple[float, float, float, float, str, Look]]] = []
     looks: dict[tuple, tuple[str, Look]] = {}
+    grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
+        grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
         hole = Look(False, None, layer.depth, None, None)
         out = []
         for vs in vseg:
@@ -100,7 +102,7 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
                                          look(ruleset, layer, hs.letter, vs.letter))
                 out.append((hs.s, vs.s, hs.t - hs.s, h, *cell))
         cells.append(out)
-    occluded = _occluded(cells)
+    occluded = _occluded(cells, grids)
     children = []
     for index, layer in enumerate(ruleset.layers):
         terminals = []
@@ -117,31 +119,44 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
     return FacadeLayout(width, height, root, meta or {})
 
 
-def _occluded(cells: Sequence[Sequence[tuple]]) -> list[list[bool]]:
+def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[tuple[float, float]], ...]]
+              ) -> list[list[bool]]:
     """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
 
-    The canvas is cut at every cell border; ``covered[j]`` holds the covered grid cells of grid row ``j`` as bits.
+    A layer's cells are its grid of vertical x horizontal spans ``(start, size)`` (row-major). The canvas is cut
+    at every cell border; ``covered[j]`` holds the covered grid cells of grid row ``j`` as bits.
     """
-    xs = np.unique(np.round([v for layer in cells for c in layer for v in (c[0], c[0] + c[2])], 9)).tolist()
-    ys = np.unique(np.round([v for layer in cells for c in layer for v in (c[1], c[1] + c[3])], 9)).tolist()
+    used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
+    xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
+    ys = np.unique(np.round([v for _, yspans in used for y, h in yspans for v in (y, y + h)], 9)).tolist()
     nx, ny = max(len(xs) - 1, 0), max(len(ys) - 1, 0)
+
+    def bits(x: float, w: float) -> int:
+        i0, i1 = (min(bisect.bisect_left(xs, round(v, 9)), nx) for v in (x, x + w))
+        return (1 << i1) - (1 << i0) if i1 > i0 else 0
+
+    def rows(y: float, h: float) -> range:
+        return range(*(min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h)))
+
     covered = [0] * ny
     out = [[False] * len(layer) for layer in cells]
     for index in range(len(cells) - 1, -1, -1):
+        xspans, yspans = grids[index]
+        columns = [bits(x, w) for x, w in xspans]
         boxes = []
-        for k, (x, y, w, h, _, lk) in enumerate(cells[index]):
-            if not lk.visible or w * h <= 1e-12:
-                continue
-            i0, i1 = (min(bisect.bisect_left(xs, round(v, 9)), nx) for v in (x, x + w))
-            j0, j1 = (min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h))
-            bits = (1 << i1) - (1 << i0) if i1 > i0 else 0
-            if all(covered[j] & bits == bits for j in range(j0, j1)):
-                out[index][k] = True
-            else:
-                boxes.append((j0, j1, bits))
-        for j0, j1, bits in boxes:
-            for j in range(j0, j1):
-                covered[j] |= bits
+        k = 0
+        for y, h in yspans:
+            span = rows(y, h)
+            for (x, w), mask in zip(xspans, columns):
+                if cells[index][k][5].visible and w * h > 1e-12:
+                    if all(covered[j] & mask == mask for j in span):
+                        out[index][k] = True
+                    else:
+                        boxes.append((span, mask))
+                k += 1
+        for span, mask in boxes:
+            for j in span:
+                covered[j] |= mask
     return out
 
 
