@@ -80,19 +80,18 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
-    cells: list[list[tuple[float, float, float, float, str, Look]]] = []
+    cells: list[list[tuple[str, Look]]] = []       # per layer: (symbol, look) of its grid cells, row-major
     looks: dict[tuple, tuple[str, Look]] = {}
     grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
-        hole = Look(False, None, layer.depth, None, None)
+        hole = ("hole", Look(False, None, layer.depth, None, None))
         out = []
         for vs in vseg:
-            h = vs.t - vs.s
             for hs in hseg:
                 if hs.letter is None or vs.letter is None:
-                    out.append((hs.s, vs.s, hs.t - hs.s, h, "hole", hole))
+                    out.append(hole)
                     continue
                 key = (index, hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored,
                        vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
@@ -100,20 +99,25 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
                 if cell is None:
                     cell = looks[key] = (f"{hs.letter.name}.{vs.letter.name}",
                                          look(ruleset, layer, hs.letter, vs.letter))
-                out.append((hs.s, vs.s, hs.t - hs.s, h, *cell))
+                out.append(cell)
         cells.append(out)
     occluded = _occluded(cells, grids)
     children = []
     for index, layer in enumerate(ruleset.layers):
+        xspans, yspans = grids[index]
+        layer_cells, layer_occluded = cells[index], occluded[index]
         terminals = []
-        for k, (x, y, w, h, symbol, lk) in enumerate(cells[index]):
-            shown = lk.visible and not occluded[index][k]
-            if not shown and w * h <= 1e-12:
-                continue
-            if shown:
-                terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset, layer.name))
-            else:
-                terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
+        k = 0
+        for y, h in yspans:
+            for x, w in xspans:
+                symbol, lk = layer_cells[k]
+                shown = lk.visible and not layer_occluded[k]
+                k += 1
+                if shown:
+                    terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset,
+                                            layer.name))
+                elif w * h > 1e-12:
+                    terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
         children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
@@ -123,8 +127,9 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
               ) -> list[list[bool]]:
     """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
 
-    A layer's cells are its grid of vertical x horizontal spans ``(start, size)`` (row-major). The canvas is cut
-    at every cell border; ``covered[j]`` holds the covered grid cells of grid row ``j`` as bits.
+    A layer's cells ``(symbol, look)`` are its grid of vertical x horizontal spans ``(start, size)`` (row-major),
+    ``grids`` holds the spans. The canvas is cut at every cell border; ``covered[j]`` holds the covered grid
+    cells of grid row ``j`` as bits.
     """
     used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
     xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
@@ -148,7 +153,7 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
         for y, h in yspans:
             span = rows(y, h)
             for (x, w), mask in zip(xspans, columns):
-                if cells[index][k][5].visible and w * h > 1e-12:
+                if cells[index][k][1].visible and w * h > 1e-12:
                     if all(covered[j] & mask == mask for j in span):
                         out[index][k] = True
                     else:
