@@ -40,32 +40,28 @@ def _specs(ruleset: Ruleset, layer: Layer, h: str, v: str) -> list[ShapeSpec]:
 
 
 def look(ruleset: Ruleset, layer: Layer, h: Letter, v: Letter) -> Look:
-    specs = _specs(ruleset, layer, h.symbol, v.symbol)
-
-    def pick(attr: str):
-        value = None
-        for spec in specs:
-            if getattr(spec, attr) is not None:
-                value = getattr(spec, attr)
-        return value
-
-    hs, vs = ruleset.symbols.get(h.symbol), ruleset.symbols.get(v.symbol)
+    picked = {}      # the most specific shape spec's value of each attribute it sets
+    for spec in _specs(ruleset, layer, h.symbol, v.symbol):
+        for attr in ("visible", "label", "depth", "material", "asset"):
+            value = getattr(spec, attr)
+            if value is not None:
+                picked[attr] = value
+    symbols = [s for s in (ruleset.symbols.get(h.symbol), ruleset.symbols.get(v.symbol)) if s is not None]
     visible = not (h.transparent or v.transparent)
     if visible and layer.mask is not None:
         visible = h.symbol in layer.mask or v.symbol in layer.mask
-    override = pick("visible")
+    override = picked.get("visible")
     if override is not None and not (h.transparent or v.transparent):
         visible = override
-    label = pick("label")
+    label = picked.get("label")
     if label is None:
-        labels = [s.label for s in (hs, vs) if s is not None and s.label is not None]
+        labels = [s.label for s in symbols if s.label is not None]
         label = "wall" if not labels or "wall" in labels else labels[0]
-    depth = pick("depth")
+    depth = picked.get("depth")
     if depth is None:
-        depth = next((s.depth for s in (hs, vs) if s is not None and s.depth is not None),
-                     LABEL_DEPTH.get(label, 0.0))
-    material = pick("material") or next((s.material for s in (hs, vs) if s is not None and s.material), None)
-    asset = pick("asset") or next((s.asset for s in (hs, vs) if s is not None and s.asset), None)
+        depth = next((s.depth for s in symbols if s.depth is not None), LABEL_DEPTH.get(label, 0.0))
+    material = picked.get("material") or next((s.material for s in symbols if s.material), None)
+    asset = picked.get("asset") or next((s.asset for s in symbols if s.asset), None)
     return Look(visible, label, layer.depth + depth, material, asset)
 
 
