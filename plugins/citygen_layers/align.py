@@ -142,7 +142,7 @@ class _Words:
             nears, los, his, stricts = [], [], [], []
             for t in targets:
                 i = bisect.bisect_left(seg, t - tol)
-                hi = i if i < last else last
+                hi = min(last, i)
                 lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
                 near = lo if t - seg[lo] <= seg[hi] - t else hi
                 nears.append(first + near)
@@ -191,10 +191,7 @@ class _Words:
             if size is None:
                 needs.append(need)
                 continue
-            if size > hi:
-                hi = size
-            if size < lo:
-                lo = size
+            hi, lo = max(hi, size), min(lo, size)
             opaque |= opaque_bit
             solid |= solid_bit
             if guard:

@@ -44,7 +44,7 @@ def split_transparent(words: Sequence[Sequence[Letter]], canvas: float
         for i, letter in enumerate(w):
             a, b = bounds[r][i], bounds[r][i + 1]
             inside = [v for v in others if a + eps < v < b - eps] if letter.transparent else []
-            cuts = inside[:1] + [v for u, v in zip(inside, inside[1:]) if v - u > eps]
+            cuts = inside[:1] + [v for u, v in itertools.pairwise(inside) if v - u > eps]
             if not cuts:
                 letters.append(letter)
                 parents.append(i)
