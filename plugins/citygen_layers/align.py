@@ -10,7 +10,10 @@ symmetry, §5.2): the backward search is the forward search on the reversed word
 """
 from __future__ import annotations
 
+import bisect
 import heapq
+import itertools
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -57,116 +60,152 @@ class Alignment:
 
 
 class _Words:
-    """Padded prefix sums and flag counts of the words of one matrix (forward, or reversed for the backward
-    search), so the edges of a node are scored for all candidate columns at once."""
+    """Prefix sums and flag counts of the words of one matrix (forward, or reversed for the backward search).
+
+    Words are short and matrices have few rows, so a node's edges are built in plain Python (numpy's per-call
+    overhead dominated on such tiny arrays) and memoised per state: the depth-first search and the Dijkstra
+    search of one alignment visit many of the same nodes."""
 
     #: Letters per row whose ends propose target column sizes (longer columns come from the other rows).
     LOOKAHEAD = 2
+    TOL = 1e-9
 
     def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray,
                  parents: Sequence[Sequence[int]] | None = None) -> None:
         self.m = len(words)
-        self.n = np.array([len(w) for w in words], dtype=np.int64)
-        width = int(self.n.max(initial=0)) + 1
+        self.n = tuple(len(w) for w in words)
         parents = parents or [range(len(w)) for w in words]
 
-        def table(values, fill):
-            out = np.full((self.m, width), fill, dtype=float)
-            for r, row in enumerate(values):
-                out[r, :len(row)] = row
-                out[r, len(row):] = row[-1] if len(row) else fill
-            return out
+        def prefix(w, pred):
+            return list(itertools.accumulate((1 if pred(x) else 0 for x in w), initial=0))
 
-        def prefix(pred):
-            return table([np.concatenate([[0], np.cumsum([bool(pred(x)) for x in w])]) for w in words], 0)
-
-        self.cum = table([np.concatenate([[0.0], np.cumsum([x.size for x in w])]) for w in words], 0.0)
-        self.total = self.cum[np.arange(self.m), self.n]
-        self.nonopaque = prefix(lambda x: not x.opaque)
-        self.unocc = prefix(lambda x: x.unoccludable)
-        self.solid = prefix(lambda x: not (x.transparent or x.opaque))
-        self.clear = prefix(lambda x: x.transparent)
-        self.eps_ok = np.zeros((self.m, width), dtype=bool)
-        self.runend = np.zeros((self.m, width), dtype=np.int64)
+        self.cum = [list(itertools.accumulate((x.size for x in w), initial=0.0)) for w in words]
+        self.total = [c[-1] for c in self.cum]
+        self.nonopaque = [prefix(w, lambda x: not x.opaque) for w in words]
+        self.unocc = [prefix(w, lambda x: x.unoccludable) for w in words]
+        self.solid = [prefix(w, lambda x: not (x.transparent or x.opaque)) for w in words]
+        self.clear = [prefix(w, lambda x: x.transparent) for w in words]
+        self.eps_ok: list[list[bool]] = []
+        self.runend: list[list[int]] = []
         for r, w in enumerate(words):
             pa = list(parents[r])
             att = [x.attached for x in w]
-            for p in range(len(w) + 1):
-                # no insertion next to an attached letter, nor inside a split transparent letter (§5.2)
-                inner = 0 < p < len(w) and pa[p - 1] == pa[p]
-                self.eps_ok[r, p] = not ((p > 0 and att[p - 1]) or (p < len(w) and att[p]) or inner)
-            ends = np.arange(width)
+            # no insertion next to an attached letter, nor inside a split transparent letter (§5.2)
+            self.eps_ok.append([not ((p > 0 and att[p - 1]) or (p < len(w) and att[p]) or
+                                     (0 < p < len(w) and pa[p - 1] == pa[p])) for p in range(len(w) + 1)])
+            ends = list(range(len(w) + 1))
             for i in range(len(w) - 1, -1, -1):
                 ends[i] = ends[i + 1] if i + 1 < len(w) and w[i + 1].transparent == w[i].transparent else i + 1
-            self.runend[r] = np.minimum(ends, len(w))
-        self.above = above.astype(float)
-        self.rows = np.arange(self.m)
+            self.runend.append(ends)
+        above = np.asarray(above, dtype=bool)
+        #: per row r, the bit set of the rows above it (above[h, r])
+        self.upper = [sum(1 << h for h in range(self.m) if above[h, r]) for r in range(self.m)]
+        self._edges: dict[tuple[int, ...], list[tuple[float, int, Column, float]]] = {}
 
-    def edges(self, state: tuple[int, ...], mu: float) -> list[tuple[float, int, Column, float]]:
-        """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size)``."""
-        p = np.asarray(state, dtype=np.int64)
-        active = np.flatnonzero(p < self.n)
-        base = self.cum[self.rows, p]
-        targets = []
-        for r in active:
-            stop = min(int(self.runend[r, p[r]]), int(p[r]) + self.LOOKAHEAD)
-            targets.append(self.cum[r, p[r] + 1:stop + 1] - base[r])
-        if not targets:
+    def rest(self, state: tuple[int, ...]) -> float:
+        """The largest remaining word size after ``state`` (the size bound of the searches)."""
+        return max(t - c[p] for t, c, p in zip(self.total, self.cum, state))
+
+    def edges(self, state: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
+        """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size)`` (memoised per state)."""
+        out = self._edges.get(state)
+        if out is None:
+            out = self._edges[state] = self._build(state)
+        return out
+
+    def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
+        tol = self.TOL
+        cum, n, runend = self.cum, self.n, self.runend
+        found = set()
+        for r in range(self.m):
+            pr = p[r]
+            if pr < n[r]:
+                c, b = cum[r], cum[r][pr]
+                found.update(round((c[j] - b) * 1e9) / 1e9
+                             for j in range(pr + 1, min(runend[r][pr], pr + self.LOOKAHEAD) + 1))
+        if not found:
             return []
-        t = np.sort(np.round(np.concatenate(targets), 9))
-        t = t[np.concatenate([[True], np.diff(t) > 0])]
-        tol = 1e-9
+        targets = sorted(found)
+        # per row, for every target: the substring end nearest to it, then the ends just below and just above
+        # it, then the nearest end if it matches the target exactly (else epsilon, where allowed)
         choices = []
         for r in range(self.m):
-            if p[r] >= self.n[r]:
-                choices.append(np.tile(p[r], (3, t.size)))
+            pr = p[r]
+            if pr >= n[r]:
+                choices.append([pr] * (4 * len(targets)))
                 continue
-            seg = self.cum[r, p[r] + 1:self.runend[r, p[r]] + 1] - base[r]
-            i = np.searchsorted(seg, t - tol)
-            hi = np.minimum(i, seg.size - 1)
-            lo = np.where((i < seg.size) & (seg[hi] <= t + tol), hi, np.maximum(i - 1, 0))
-            near = np.where(t - seg[lo] <= seg[hi] - t, lo, hi)
-            choices.append(p[r] + 1 + np.stack([near, lo, hi]))
-        ends = np.stack(choices, axis=-1).reshape(-1, self.m)          # (3 * targets, m)
-        near = ends[:t.size]
-        exact = np.abs(self.cum[self.rows, near] - base - t[:, None]) <= tol
-        strict = np.where(exact | ~self.eps_ok[self.rows, p], near, p)
-        ends = np.vstack([ends, strict])
-        keep = list({row.tobytes(): k for k, row in enumerate(ends)}.values())
-        return self._score(p, ends[sorted(keep)])
+            c, b = cum[r], cum[r][pr]
+            seg = [c[j] - b for j in range(pr + 1, runend[r][pr] + 1)]
+            last = len(seg) - 1
+            first = pr + 1
+            eps = pr if self.eps_ok[r][pr] else None
+            nears, los, his, stricts = [], [], [], []
+            for t in targets:
+                i = bisect.bisect_left(seg, t - tol)
+                hi = min(last, i)
+                lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
+                near = lo if t - seg[lo] <= seg[hi] - t else hi
+                nears.append(first + near)
+                los.append(first + lo)
+                his.append(first + hi)
+                stricts.append(first + near if eps is None or abs(seg[near] - t) <= tol else eps)
+            choices.append(nears + los + his + stricts)
+        # distinct columns, each in the place of its last proposal
+        columns = list(dict.fromkeys(reversed(list(zip(*choices)))))[::-1]
+        entries = [{e: self._entry(r, p[r], e) for e in set(row)} for r, row in enumerate(choices)]
+        out = []
+        for ends in columns:
+            column = list(map(dict.__getitem__, entries, ends))
+            if None not in column:
+                scored = self._column(p, ends, column)
+                if scored is not None:
+                    out.append(scored)
+        return out
 
-    def _score(self, p: np.ndarray, ends: np.ndarray) -> list[tuple[float, int, Column, float]]:
-        """Column error Phi (Eq. 9), size and symbol count of candidate columns; drops those that break the
-        column constraints: an opaque entry in every column, epsilon only below an opaque entry of an upper
-        layer and never beside an attached letter, unoccludable letters covered only by transparent or opaque
-        entries; transparent letters separated from the others (edges() never proposes such entries)."""
-        rows = self.rows
-        eps = ends == p
-        clear = self.clear[rows, ends] - self.clear[rows, p]
-        mixed = (clear > 0) & (clear < ends - p)
-        sums = self.cum[rows, ends] - self.cum[rows, p]
-        opaque = ~eps & (self.nonopaque[rows, ends] == self.nonopaque[rows, p])
-        covered = (opaque.astype(float) @ self.above) > 0
-        ok = ~np.all(eps, axis=1) & np.any(opaque, axis=1) & ~np.any(mixed, axis=1)
-        ok &= np.all(~eps | (covered & self.eps_ok[rows, p]), axis=1)
-        unocc = ~eps & (self.unocc[rows, ends] > self.unocc[rows, p])
-        solid = ~eps & (self.solid[rows, ends] > self.solid[rows, p])
-        ok &= ~np.any(unocc & ((solid.astype(float) @ self.above) > 0), axis=1)
-        if not ok.any():
-            return []
-        ends, eps, sums = ends[ok], eps[ok], sums[ok]
-        hi = np.where(eps, -np.inf, sums).max(axis=1)
-        lo = np.where(eps, np.inf, sums).min(axis=1)
-        nsym = (ends - p).sum(axis=1)
-        return [(float(hi[k] - lo[k]), int(nsym[k]), tuple(zip(p.tolist(), ends[k].tolist())), float(hi[k]))
-                for k in range(ends.shape[0])]
+    def _entry(self, r: int, a: int, e: int) -> tuple | None:
+        """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, opaque bit, solid bit, rows one of which
+        must be opaque, rows none of which may be solid)``, size None for epsilon; None when the entry alone
+        breaks a constraint (epsilon beside an attached letter or with no upper row, transparent mixed with
+        other letters)."""
+        upper = self.upper[r]
+        if e == a:
+            return (None, 0, 0, upper, 0) if upper and self.eps_ok[r][a] else None
+        clear = self.clear[r][e] - self.clear[r][a]
+        if 0 < clear < e - a:
+            return None
+        bit = 1 << r
+        return (self.cum[r][e] - self.cum[r][a], bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
+                bit if self.solid[r][e] > self.solid[r][a] else 0, 0,
+                upper if self.unocc[r][e] > self.unocc[r][a] else 0)
+
+    @staticmethod
+    def _column(p: tuple[int, ...], ends: tuple[int, ...], column: Sequence[tuple]
+                ) -> tuple[float, int, Column, float] | None:
+        """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries, or None when it
+        breaks a column constraint: an opaque entry in every column, epsilon only below an opaque entry of an
+        upper layer, unoccludable letters covered only by transparent or opaque entries."""
+        opaque = solid = 0
+        hi, lo = -math.inf, math.inf
+        needs, guards = [], []
+        for size, opaque_bit, solid_bit, need, guard in column:
+            if size is None:
+                needs.append(need)
+                continue
+            hi, lo = max(hi, size), min(lo, size)
+            opaque |= opaque_bit
+            solid |= solid_bit
+            if guard:
+                guards.append(guard)
+        if not opaque or any(not opaque & need for need in needs) or any(solid & guard for guard in guards):
+            return None    # (no opaque entry also rejects the all-epsilon column)
+        return hi - lo, sum(ends) - sum(p), tuple(zip(p, ends)), hi
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
-        p = np.array([a for a, _ in col], dtype=np.int64)
-        ends = np.array([[b for _, b in col]], dtype=np.int64)
-        out = self._score(p, ends)
-        return (out[0][0], out[0][1], out[0][3]) if out else None
+        p, ends = tuple(a for a, _ in col), tuple(b for _, b in col)
+        column = [self._entry(r, a, e) for r, (a, e) in enumerate(col)]
+        out = None if None in column else self._column(p, ends, column)
+        return (out[0], out[1], out[3]) if out else None
 
 
 @dataclass(order=True)
@@ -185,14 +224,13 @@ def _search_step(words: _Words, heap: list, dist: dict, size: dict, parent: dict
     if not budget.spend():
         return None
     ncols = entry.key[1]
-    for phi, nsym, col, csize in words.edges(state, mu):
+    for phi, nsym, col, csize in words.edges(state):
         g = dist[state] + phi
         if g > bound + 1e-9:
             continue
         nxt = tuple(b for _, b in col)
         s = size[state] + csize
-        rest = float(np.max(words.total - words.cum[words.rows, nxt]))
-        if s + rest > canvas + mu + 1e-9:
+        if s + words.rest(nxt) > canvas + mu + 1e-9:
             continue
         if nxt not in dist or g < dist[nxt] - 1e-12:
             dist[nxt], size[nxt], parent[nxt] = g, s, (state, col)
@@ -208,19 +246,19 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     ``parents`` maps the parts of split transparent letters to their letter (no hole may open inside one).
     """
     fwd = _Words(words, above, parents)
-    bwd = _Words([tuple(reversed(w)) for w in words], above,
-                 None if parents is None else [tuple(reversed(p)) for p in parents])
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
-    sides = []
-    for side, origin in ((fwd, start), (bwd, start)):
-        sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},
-                      "heap": [_Entry((0.0, 0, 0, 0), origin)], "seq": [0]})
     if start == goal:
         return Alignment((), 0.0, 0.0)
     found = _descend(fwd, goal, canvas, mu, budget)
     if found is not None and found[2]:
         return found[0]
+    bwd = _Words([tuple(reversed(w)) for w in words], above,
+                 None if parents is None else [tuple(reversed(p)) for p in parents])
+    sides = []
+    for side, origin in ((fwd, start), (bwd, start)):
+        sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},
+                      "heap": [_Entry((0.0, 0, 0, 0), origin)], "seq": [0]})
     bound = mu if found is None else found[0].error - 1e-9
     best: tuple[float, tuple[int, ...]] | None = None
     turn = 0
@@ -246,7 +284,7 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     columns = list(forward)
     for col in reversed(back):   # reversed-word columns back to forward indices
         columns.append(tuple((int(n) - b, int(n) - a) for n, (a, b) in zip(fwd.n, col)))
-    size = sum(max(fwd.cum[r, b] - fwd.cum[r, a] for r, (a, b) in enumerate(c)) for c in columns)
+    size = sum(max(fwd.cum[r][b] - fwd.cum[r][a] for r, (a, b) in enumerate(c)) for c in columns)
     return Alignment(tuple(columns), best[0], size)
 
 
@@ -275,13 +313,13 @@ def _descend(words: _Words, goal: tuple[int, ...], canvas: float, mu: float, bud
             return
         if budget.used >= cap[0] or not budget.spend():
             raise _Stop
-        for phi, _, col, csize in sorted(words.edges(state, mu), key=lambda e: (e[0], e[1])):
+        for phi, _, col, csize in sorted(words.edges(state), key=lambda e: (e[0], e[1])):
             g2 = g + phi
             if g2 >= best[0] - 1e-12:
                 break
             nxt = tuple(b for _, b in col)
             s2 = size + csize
-            if s2 + float(np.max(words.total - words.cum[words.rows, nxt])) > canvas + mu + 1e-9:
+            if s2 + words.rest(nxt) > canvas + mu + 1e-9:
                 continue
             if table.get(nxt, np.inf) <= g2 + 1e-12:
                 continue
@@ -319,12 +357,12 @@ def greedy_alignment(words: Sequence[Sequence[Letter]], above: np.ndarray) -> Al
     violations: list[str] = []
     error = size = 0.0
     while state != goal:
-        edges = fwd.edges(state, float("inf"))
+        edges = fwd.edges(state)
         if edges:
             phi, _, col, csize = min(edges, key=lambda e: (e[0] / max(e[3], 1e-9), e[1]))
         else:
             col = tuple((p, int(n)) for p, n in zip(state, fwd.n))
-            sums = [fwd.cum[r, b] - fwd.cum[r, a] for r, (a, b) in enumerate(col) if b > a]
+            sums = [fwd.cum[r][b] - fwd.cum[r][a] for r, (a, b) in enumerate(col) if b > a]
             phi, csize = max(sums) - min(sums), max(sums)
             violations.append(f"column {len(columns)}: no column satisfies the alignment constraints; "
                               "the rest of every word forms one column")

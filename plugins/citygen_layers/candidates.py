@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -88,16 +88,31 @@ def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
     return order[:count]
 
 
+@dataclass
+class WordMemo:
+    """What the candidate generators of one direction's solve share across tolerance rounds (none of it depends
+    on mu): raw words per pattern and counter values, letters per raw letter and size, and the lower bounds of
+    pattern measures per counter value that bound unbounded counters."""
+
+    raw: dict[tuple, list[tuple[Raw, ...]]] = field(default_factory=dict)
+    letters: dict[tuple[Raw, float | None], Letter] = field(default_factory=dict)
+    measures: dict[tuple[str, str, int], float] = field(default_factory=dict)
+
+
 class CandidateGenerator:
     """Lazily yields candidates for one direction at tolerance ``mu`` in lexicographic counter order."""
 
-    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float, budget=None) -> None:
+    def __init__(self, ruleset: Ruleset, spec: DirectionSpec, mu: float, budget=None,
+                 memo: WordMemo | None = None) -> None:
         self.ruleset, self.spec, self.mu = ruleset, spec, mu
         self.budget = budget      # an align.Budget: every counter assignment examined costs one unit
         self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
-        names = set().union(*(pattern_counters(ruleset.patterns[p]) for p in self.patterns))
-        self.counter_names = sorted(names)
-        self._raw_cache: dict[tuple, list[tuple[Raw, ...]]] = {}
+        self._own = {p: frozenset(pattern_counters(ruleset.patterns[p])) for p in self.patterns}
+        self.counter_names = sorted(set().union(*self._own.values()))
+        self._memo = memo if memo is not None else WordMemo()
+        self._raw_cache = self._memo.raw
+        self._letters = self._memo.letters
+        self._sized_cache: dict[tuple, list[tuple[Letter, ...]]] = {}
         self._pinned: dict[str, float] = {}
 
     # counters ------------------------------------------------------------------------------------------------
@@ -106,19 +121,14 @@ class CandidateGenerator:
         if counter.hi is not None and counter.hi - counter.lo <= HARD_COUNT_LIMIT:
             return range(counter.lo, counter.hi + 1)
         limit = HARD_COUNT_LIMIT
-        users = [p for p in self.patterns if name in pattern_counters(self.ruleset.patterns[p])]
-        size = self._size_of
+        users = [p for p in self.patterns if name in self._own[p]]
         for k in range(max(counter.lo, 0), HARD_COUNT_LIMIT + 1):
             over = False
             for p in users:
-                pattern = self.ruleset.patterns[p]
                 if p == self.spec.floor_pattern:
-                    storey = self.spec.storeys
-                    over |= min_measure(pattern, {name: k}, self.spec.counters,
-                                        lambda s: 1.0 if not storey or s in storey else 0.0) > len(
-                        self.spec.floor_heights)
+                    over |= self._measure(p, name, k) > len(self.spec.floor_heights)
                 else:
-                    over |= min_measure(pattern, {name: k}, self.spec.counters, size) > self.spec.canvas + self.mu
+                    over |= self._measure(p, name, k) > self.spec.canvas + self.mu
             if over:
                 limit = k - 1
                 break
@@ -126,17 +136,52 @@ class CandidateGenerator:
         hi = limit if counter.hi is None else min(counter.hi, limit)
         return range(lo, max(hi, lo - 1) + 1)
 
+    def _measure(self, pattern: str, name: str, k: int) -> float:
+        """Lower bound of the pattern's size (of its storey count for the floor pattern) with counter ``name``
+        at ``k`` and the other counters free."""
+        key = (pattern, name, k)
+        value = self._memo.measures.get(key)
+        if value is None:
+            if pattern == self.spec.floor_pattern:
+                storey = self.spec.storeys
+                value = min_measure(self.ruleset.patterns[pattern], {name: k}, self.spec.counters,
+                                    lambda s: 1.0 if not storey or s in storey else 0.0)
+            else:
+                value = min_measure(self.ruleset.patterns[pattern], {name: k}, self.spec.counters, self._size_of)
+            self._memo.measures[key] = value
+        return value
+
     def _size_of(self, name: str) -> float:
         sym = self.ruleset.symbols.get(name)
         return float(sym.size) if sym is not None and sym.size is not None else 0.0
 
     # words ---------------------------------------------------------------------------------------------------
+    def _raw_key(self, pattern: str, env: Mapping[str, int]) -> tuple:
+        own = self._own.get(pattern)
+        if own is None:
+            own = pattern_counters(self.ruleset.patterns[pattern])
+        return pattern, tuple(sorted((k, v) for k, v in env.items() if k in own))
+
     def raw_words(self, pattern: str, env: Mapping[str, int]) -> list[tuple[Raw, ...]]:
-        own = pattern_counters(self.ruleset.patterns[pattern])
-        key = (pattern, tuple(sorted((k, v) for k, v in env.items() if k in own)))
+        key = self._raw_key(pattern, env)
         if key not in self._raw_cache:
             self._raw_cache[key] = pattern_words(self.ruleset.patterns[pattern], env, self.ruleset.symbols)
         return self._raw_cache[key]
+
+    def _words(self, pattern: str, env: Mapping[str, int], lo: float) -> list[tuple[Letter, ...]]:
+        """``sized_words`` of the pattern's raw words under ``env``, memoised (many counter assignments share
+        them: only the pattern's own counters, ``lo`` and the pinned sizes matter)."""
+        key = (self._raw_key(pattern, env), lo, tuple(sorted(self._pinned.items())))
+        words = self._sized_cache.get(key)
+        if words is None:
+            words = self._sized_cache[key] = self.sized_words(pattern, self.raw_words(pattern, env), lo)
+        return words
+
+    def _letter(self, raw: Raw, size: float | None) -> Letter:
+        letter = self._letters.get((raw, size))
+        if letter is None:
+            letter = self._letters[(raw, size)] = make_letter(raw, size, self.ruleset)
+        return letter
 
     def sized_words(self, pattern: str, raws: list[tuple[Raw, ...]], lo: float) -> list[tuple[Letter, ...]]:
         """Words of ``pattern`` whose size respects Eq. 7 (``lo <= |w| <= canvas + mu``), unsized symbols sampled;
@@ -144,13 +189,13 @@ class CandidateGenerator:
         hi = self.spec.canvas + self.mu
         out: list[tuple[Letter, ...]] = []
         for raw in raws:
-            letters = [make_letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None,
-                                   self.ruleset) for r in raw]
+            letters = [self._letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None)
+                       for r in raw]
             if pattern == self.spec.floor_pattern:
                 if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
                     continue
                 if not self.spec.storeys:   # every letter is a storey: sized to the floor heights, pinned
-                    out.append(tuple(make_letter(r, h, self.ruleset) for r, h in zip(raw, self.spec.floor_heights)))
+                    out.append(tuple(self._letter(r, h) for r, h in zip(raw, self.spec.floor_heights)))
                     continue
             unsized = [i for i, letter in enumerate(letters) if letter.unsized]
             total = sum(letter.size for letter in letters)
@@ -162,7 +207,7 @@ class CandidateGenerator:
             for size in sample_sizes((lo - total) / n, (hi - total) / n, self.mu, self.ruleset.options.samples):
                 word = list(letters)
                 for i in unsized:
-                    word[i] = make_letter(raw[i], size, self.ruleset)
+                    word[i] = self._letter(raw[i], size)
                 out.append(tuple(word))
         out.sort(key=lambda w: abs(sum(letter.size for letter in w) - self.spec.canvas))
         return out
@@ -196,7 +241,7 @@ class CandidateGenerator:
                 if row.pattern in lists:
                     continue
                 lo = self.lower_bound(index, None)
-                words = self.sized_words(row.pattern, self.raw_words(row.pattern, env), lo)
+                words = self._words(row.pattern, env, lo)
                 if not words:
                     break
                 self._loose[row.pattern] = words
@@ -216,7 +261,7 @@ class CandidateGenerator:
         if floor is None or self.spec.storeys:
             return {}
         self._pinned = {}
-        words = self.sized_words(floor, self.raw_words(floor, env), 0.0)
+        words = self._words(floor, env, 0.0)
         if not words:
             return {}
         heights: dict[str, list[float]] = {}

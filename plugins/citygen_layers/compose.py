@@ -3,6 +3,7 @@ depth and materials (§3.1, shape overrides per layer or pattern), masks and tra
 and shapes fully covered by upper layers are removed (§3.2, "a window fully covered by a wall can be omitted")."""
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -39,32 +40,28 @@ def _specs(ruleset: Ruleset, layer: Layer, h: str, v: str) -> list[ShapeSpec]:
 
 
 def look(ruleset: Ruleset, layer: Layer, h: Letter, v: Letter) -> Look:
-    specs = _specs(ruleset, layer, h.symbol, v.symbol)
-
-    def pick(attr: str):
-        value = None
-        for spec in specs:
-            if getattr(spec, attr) is not None:
-                value = getattr(spec, attr)
-        return value
-
-    hs, vs = ruleset.symbols.get(h.symbol), ruleset.symbols.get(v.symbol)
+    picked = {}      # the most specific shape spec's value of each attribute it sets
+    for spec in _specs(ruleset, layer, h.symbol, v.symbol):
+        for attr in ("visible", "label", "depth", "material", "asset"):
+            value = getattr(spec, attr)
+            if value is not None:
+                picked[attr] = value
+    symbols = [s for s in (ruleset.symbols.get(h.symbol), ruleset.symbols.get(v.symbol)) if s is not None]
     visible = not (h.transparent or v.transparent)
     if visible and layer.mask is not None:
         visible = h.symbol in layer.mask or v.symbol in layer.mask
-    override = pick("visible")
+    override = picked.get("visible")
     if override is not None and not (h.transparent or v.transparent):
         visible = override
-    label = pick("label")
+    label = picked.get("label")
     if label is None:
-        labels = [s.label for s in (hs, vs) if s is not None and s.label is not None]
+        labels = [s.label for s in symbols if s.label is not None]
         label = "wall" if not labels or "wall" in labels else labels[0]
-    depth = pick("depth")
+    depth = picked.get("depth")
     if depth is None:
-        depth = next((s.depth for s in (hs, vs) if s is not None and s.depth is not None),
-                     LABEL_DEPTH.get(label, 0.0))
-    material = pick("material") or next((s.material for s in (hs, vs) if s is not None and s.material), None)
-    asset = pick("asset") or next((s.asset for s in (hs, vs) if s is not None and s.asset), None)
+        depth = next((s.depth for s in symbols if s.depth is not None), LABEL_DEPTH.get(label, 0.0))
+    material = picked.get("material") or next((s.material for s in symbols if s.material), None)
+    asset = picked.get("asset") or next((s.asset for s in symbols if s.asset), None)
     return Look(visible, label, layer.depth + depth, material, asset)
 
 
@@ -79,58 +76,88 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
-    cells: list[list[tuple[float, float, float, float, str, Look]]] = []
-    looks: dict[tuple, Look] = {}
+    cells: list[list[tuple[str, Look]]] = []       # per layer: (symbol, look) of its grid cells, row-major
+    looks: dict[tuple, tuple[str, Look]] = {}
+    grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
+        grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
+        hole = ("hole", Look(False, None, layer.depth, None, None))
         out = []
         for vs in vseg:
             for hs in hseg:
-                w, h = hs.t - hs.s, vs.t - vs.s
                 if hs.letter is None or vs.letter is None:
-                    out.append((hs.s, vs.s, w, h, "hole", Look(False, None, layer.depth, None, None)))
+                    out.append(hole)
                     continue
-                key = (index, hs.letter.symbol, hs.letter.transparent, vs.letter.symbol, vs.letter.transparent)
-                if key not in looks:
-                    looks[key] = look(ruleset, layer, hs.letter, vs.letter)
-                out.append((hs.s, vs.s, w, h, f"{hs.letter.name}.{vs.letter.name}", looks[key]))
+                key = (index, hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored,
+                       vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
+                cell = looks.get(key)
+                if cell is None:
+                    cell = looks[key] = (f"{hs.letter.name}.{vs.letter.name}",
+                                         look(ruleset, layer, hs.letter, vs.letter))
+                out.append(cell)
         cells.append(out)
-    occluded = _occluded(cells)
+    occluded = _occluded(cells, grids)
     children = []
     for index, layer in enumerate(ruleset.layers):
+        xspans, yspans = grids[index]
+        layer_cells, layer_occluded = cells[index], occluded[index]
         terminals = []
-        for k, (x, y, w, h, symbol, lk) in enumerate(cells[index]):
-            shown = lk.visible and not occluded[index][k]
-            if not shown and w * h <= 1e-12:
-                continue
-            if shown:
-                terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset, layer.name))
-            else:
-                terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
+        k = 0
+        for y, h in yspans:
+            for x, w in xspans:
+                symbol, lk = layer_cells[k]
+                shown = lk.visible and not layer_occluded[k]
+                k += 1
+                if shown:
+                    terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset,
+                                            layer.name))
+                elif w * h > 1e-12:
+                    terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
         children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
 
 
-def _occluded(cells: Sequence[Sequence[tuple]]) -> list[list[bool]]:
-    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?"""
-    xs = np.unique(np.round([v for layer in cells for c in layer for v in (c[0], c[0] + c[2])], 9))
-    ys = np.unique(np.round([v for layer in cells for c in layer for v in (c[1], c[1] + c[3])], 9))
-    covered = np.zeros((max(len(ys) - 1, 0), max(len(xs) - 1, 0)), dtype=bool)
+def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[tuple[float, float]], ...]]
+              ) -> list[list[bool]]:
+    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
+
+    A layer's cells ``(symbol, look)`` are its grid of vertical x horizontal spans ``(start, size)`` (row-major),
+    ``grids`` holds the spans. The canvas is cut at every cell border; ``covered[j]`` holds the covered grid
+    cells of grid row ``j`` as bits.
+    """
+    used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
+    xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
+    ys = np.unique(np.round([v for _, yspans in used for y, h in yspans for v in (y, y + h)], 9)).tolist()
+    nx, ny = max(len(xs) - 1, 0), max(len(ys) - 1, 0)
+
+    def bits(x: float, w: float) -> int:
+        i0, i1 = (min(bisect.bisect_left(xs, round(v, 9)), nx) for v in (x, x + w))
+        return (1 << i1) - (1 << i0) if i1 > i0 else 0
+
+    def rows(y: float, h: float) -> range:
+        return range(*(min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h)))
+
+    covered = [0] * ny
     out = [[False] * len(layer) for layer in cells]
     for index in range(len(cells) - 1, -1, -1):
+        xspans, yspans = grids[index]
+        columns = [bits(x, w) for x, w in xspans]
         boxes = []
-        for k, (x, y, w, h, _, lk) in enumerate(cells[index]):
-            if not lk.visible or w * h <= 1e-12:
-                continue
-            i0, i1 = np.searchsorted(xs, round(x, 9)), np.searchsorted(xs, round(x + w, 9))
-            j0, j1 = np.searchsorted(ys, round(y, 9)), np.searchsorted(ys, round(y + h, 9))
-            if covered[j0:j1, i0:i1].all():
-                out[index][k] = True
-            else:
-                boxes.append((j0, j1, i0, i1))
-        for j0, j1, i0, i1 in boxes:
-            covered[j0:j1, i0:i1] = True
+        k = 0
+        for y, h in yspans:
+            span = rows(y, h)
+            for (x, w), mask in zip(xspans, columns):
+                if cells[index][k][1].visible and w * h > 1e-12:
+                    if all(covered[j] & mask == mask for j in span):
+                        out[index][k] = True
+                    else:
+                        boxes.append((span, mask))
+                k += 1
+        for span, mask in boxes:
+            for j in span:
+                covered[j] |= mask
     return out
 
 

@@ -1,6 +1,8 @@
 """The ``layers`` ruleset kind: registers the layer-stack generator with citygen."""
 from __future__ import annotations
 
+from collections import OrderedDict
+from collections.abc import Callable
 from pathlib import Path
 
 from citygen.entrance import enforce_entrance
@@ -13,8 +15,8 @@ from citygen_layers.compose import compose, conform, look
 from citygen_layers.explain import explain_text
 from citygen_layers.model import Pattern, Ruleset
 from citygen_layers.parser import _symbols_of, load
-from citygen_layers.solver import DirectionSolution, solve
-from citygen_layers.words import Letter
+from citygen_layers.solver import DirectionSolution, solve_axis
+from citygen_layers.words import Letter, pattern_counters
 
 
 def _visible_symbols(ruleset: Ruleset, pattern: Pattern) -> list[Letter]:
@@ -54,12 +56,56 @@ def _opening_bands(ruleset: Ruleset, axis: str, interval: tuple[float, float]):
     return bands
 
 
-def solve_request(ruleset: Ruleset, request: FacadeRequest) -> tuple[DirectionSolution, DirectionSolution]:
+#: Solved directions kept per process, most recently used last: the faces of a building share their height and
+#: floor lines (so their vertical solve), opposite faces often their width. A solve is deterministic, so a kept
+#: solution is exactly what solving again would return; solves cut by the wall clock are not kept.
+_SOLVED: OrderedDict[tuple, tuple[Ruleset, DirectionSolution]] = OrderedDict()
+KEEP_SOLVED = 256
+
+
+def clear_solved() -> None:
+    """Forget the kept direction solutions (benchmarks of cold solves, tests of the solver itself)."""
+    _SOLVED.clear()
+
+
+def _reused(ruleset: Ruleset, key: tuple, solve: Callable[[], DirectionSolution]) -> DirectionSolution:
+    key = (id(ruleset), *key)
+    kept = _SOLVED.get(key)
+    if kept is not None and kept[0] is ruleset:
+        _SOLVED.move_to_end(key)
+        return kept[1]
+    solution = solve()
+    if not solution.timed_out:
+        _SOLVED[key] = (ruleset, solution)
+        if len(_SOLVED) > KEEP_SOLVED:
+            _SOLVED.popitem(last=False)
+    return solution
+
+
+def _axis_counters(ruleset: Ruleset, axis: str) -> set[str]:
+    return set().union(*(pattern_counters(ruleset.patterns[layer.x if axis == "x" else layer.y])
+                         for layer in ruleset.layers))
+
+
+def solve_request(ruleset: Ruleset, request: FacadeRequest, reuse: bool = True
+                  ) -> tuple[DirectionSolution, DirectionSolution]:
+    """Both directions of the request; with ``reuse`` a direction solved before in this process for the same
+    ruleset, extent, floor lines, entrance (if the direction's patterns use it) and bands is taken again."""
     left, right = request.corner_widths
     x_bands = _opening_bands(ruleset, "x", (left, request.width - right)) if left or right else None
     y_bands = _opening_bands(ruleset, "y", (0.0, request.height)) if len(request.floor_lines) > 2 else None
-    return solve(ruleset, request.width, request.height, request.floor_lines, request.entrance,
-                 request.corner_widths, x_bands, y_bands)
+
+    def x() -> DirectionSolution:
+        return solve_axis(ruleset, "x", request.width, (), request.entrance, x_bands)
+
+    def y() -> DirectionSolution:
+        return solve_axis(ruleset, "y", request.height, request.floor_lines, request.entrance, y_bands)
+
+    if not reuse:
+        return x(), y()
+    door = {axis: request.entrance if "entrance" in _axis_counters(ruleset, axis) else None for axis in "xy"}
+    return (_reused(ruleset, ("x", request.width, door["x"], (left, right) if x_bands else None), x),
+            _reused(ruleset, ("y", request.height, request.floor_lines, door["y"], y_bands is not None), y))
 
 
 def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:

@@ -10,7 +10,7 @@ import numpy as np
 
 from citygen.errors import RulesetError
 from citygen_layers.align import Alignment, Budget, align, greedy_alignment
-from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, direction_spec
+from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, WordMemo, direction_spec
 from citygen_layers.model import Counter, Ruleset
 from citygen_layers.sizing import Matrix, Sizing, size_matrices
 from citygen_layers.splits import split_transparent
@@ -32,6 +32,7 @@ class DirectionSolution:
     sizing: Sizing
     expansions: int
     diagnostics: tuple[str, ...] = ()
+    timed_out: bool = False        # the wall-clock safety net cut the solve: the result depends on timing
 
 
 def _above(rows: Sequence[Row]) -> np.ndarray:
@@ -79,8 +80,9 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
     cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
+    memo = WordMemo()
     for _ in range(options.rounds):
-        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget)):
+        for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
             if index >= options.candidates or budget.exhausted:
                 break
             fallback = fallback or (candidate, mu)
@@ -103,18 +105,24 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
         mu *= options.growth
     else:
         diagnostics.append(f"{spec.axis}: no alignment within mu={mu / options.growth:.3g}; best-effort layout")
+    late = False
     if fallback is None:
-        fallback = _any_candidate(ruleset, spec, diagnostics)
+        *fallback, late = _any_candidate(ruleset, spec, diagnostics)
     candidate, mu_c = fallback
     matrices = align_candidate(candidate, spec, mu_c, budget, greedy=True)
     for m in matrices:
         diagnostics += [f"{spec.axis}/{m.group}: {v}" for v in m.alignment.violations]
-    return _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines, diagnostics)
+    solution = _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines,
+                      diagnostics)
+    return replace(solution, timed_out=True) if late else solution
 
 
-def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]) -> tuple[Candidate, float]:
-    """A candidate when none fits Eq. 7 within the rounds: a very loose tolerance, then without floor binding."""
+def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
+                   ) -> tuple[Candidate, float, bool]:
+    """A candidate when none fits Eq. 7 within the rounds: a very loose tolerance, then without floor binding.
+    The flag tells whether an attempt was cut by the wall clock."""
     big = 10.0 * spec.canvas + 1.0
+    late = False
     for attempt in (spec, replace(spec, floor_pattern=None)):
         budget = Budget(ruleset.options.expansions, time.perf_counter() + max(ruleset.options.time, 0.5))
         for candidate in CandidateGenerator(ruleset, attempt, big, budget):
@@ -122,7 +130,8 @@ def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
                 diagnostics.append(f"floor pattern {spec.floor_pattern!r} has no word with "
                                    f"{len(spec.floor_heights)} letters; floors are not bound")
             diagnostics.append(f"{spec.axis}: candidate taken at tolerance {big:.3g}")
-            return candidate, big
+            return candidate, big, late or budget.timed_out
+        late |= budget.timed_out
     names = ", ".join(dict.fromkeys(r.pattern for r in spec.rows))
     raise RulesetError(f"patterns {names} produce no word of size up to {big:.3g} in direction {spec.axis}",
                        where=ruleset.source, plugin="layers",
@@ -156,7 +165,7 @@ def _sized(ruleset: Ruleset, spec: DirectionSpec, candidate: Candidate, matrices
                            plugin="layers")
     diagnostics += [f"{spec.axis}: {r}" for r in sizing.relaxed]
     return DirectionSolution(spec.axis, spec.canvas, mu, status, candidate, matrices, sizing, budget.used,
-                             tuple(diagnostics))
+                             tuple(diagnostics), budget.timed_out)
 
 
 def _merge(a: Bands, b: Bands) -> dict:
@@ -182,20 +191,25 @@ def _floor_bands(sizing: Sizing, wanted: Bands, lines: Sequence[float]) -> dict 
     return out if straddle else None
 
 
+def solve_axis(ruleset: Ruleset, axis: str, extent: float, floor_lines: Sequence[float] = (),
+               entrance: bool = False, bands: Callable[[Candidate], Bands] | None = None) -> DirectionSolution:
+    """Solve one direction of a canvas side ``extent`` (floor lines bind the vertical direction only)."""
+    counters: dict[str, Counter] = dict(ruleset.counters)
+    counters["entrance"] = Counter("entrance", int(entrance), int(entrance))
+    options = ruleset.options
+    heights = tuple(np.diff(np.asarray(floor_lines, dtype=float))) if axis == "y" and len(floor_lines) > 1 else ()
+    budget = Budget(options.expansions, time.perf_counter() + options.time / 2)
+    return solve_direction(ruleset, direction_spec(ruleset, axis, extent, counters, heights), budget, bands,
+                           floor_lines if axis == "y" else ())
+
+
 def solve(ruleset: Ruleset, width: float, height: float, floor_lines: Sequence[float] = (),
           entrance: bool = False, corner_widths: tuple[float, float] = (0.0, 0.0),
           x_bands: Callable[[Candidate], Bands] | None = None,
           y_bands: Callable[[Candidate], Bands] | None = None) -> tuple[DirectionSolution, DirectionSolution]:
     """Solve both directions for a canvas ``width x height`` (the outer product is built by ``compose``)."""
-    counters: dict[str, Counter] = dict(ruleset.counters)
-    counters["entrance"] = Counter("entrance", int(entrance), int(entrance))
-    options = ruleset.options
-    heights = tuple(np.diff(np.asarray(floor_lines, dtype=float))) if len(floor_lines) > 1 else ()
-    sx = solve_direction(ruleset, direction_spec(ruleset, "x", width, counters),
-                         Budget(options.expansions, time.perf_counter() + options.time / 2), x_bands)
-    sy = solve_direction(ruleset, direction_spec(ruleset, "y", height, counters, heights),
-                         Budget(options.expansions, time.perf_counter() + options.time / 2), y_bands, floor_lines)
-    return sx, sy
+    return (solve_axis(ruleset, "x", width, (), entrance, x_bands),
+            solve_axis(ruleset, "y", height, floor_lines, entrance, y_bands))
 
 
-__all__ = ["Alignment", "DirectionSolution", "solve", "solve_direction"]
+__all__ = ["Alignment", "DirectionSolution", "solve", "solve_axis", "solve_direction"]

@@ -2,10 +2,9 @@
 other words have boundaries. Done as a preprocessing step on the words of one alignment matrix."""
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import replace
-
-import numpy as np
 
 from citygen_layers.words import Letter
 
@@ -21,33 +20,38 @@ def split_transparent(words: Sequence[Sequence[Letter]], canvas: float
     Returns the new words and, per word, the index of the original letter each part belongs to; parts keep
     the letter's flags and take the length of their piece as size.
     """
-    bounds = []
-    solid = []
+    bounds, touch = [], []
     for w in words:
         flags = [not x.transparent for x in w]
-        solid.append(np.array([a or b for a, b in zip(flags[:-1], flags[1:])], dtype=bool))
-        cum = np.concatenate([[0.0], np.cumsum([x.size for x in w])])
+        touch.append([a or b for a, b in zip(flags[:-1], flags[1:])])
+        cum = list(itertools.accumulate((x.size for x in w), initial=0.0))
         scale = canvas / cum[-1] if cum[-1] > 0 else 1.0
-        bounds.append(cum * scale)
+        bounds.append([c * scale for c in cum])
     out_words: list[tuple[Letter, ...]] = []
     out_parents: list[tuple[int, ...]] = []
     eps = MIN_PIECE * max(canvas, 1e-9)
     plain = [o for o, w in enumerate(words) if w and not any(x.transparent for x in w)]
     for r, w in enumerate(words):
-        sources = [o for o in (plain or range(len(words))) if o != r]
-        others = np.unique(np.concatenate([bounds[o][1:-1][solid[o]] for o in sources] or [np.zeros(0)]))
+        if not any(x.transparent for x in w):
+            out_words.append(tuple(w))
+            out_parents.append(tuple(range(len(w))))
+            continue
+        others = sorted({v for o in (plain or range(len(words))) if o != r
+                         for v, t in zip(bounds[o][1:-1], touch[o]) if t})
         scale = bounds[r][-1] / max(sum(x.size for x in w), 1e-12)
         letters: list[Letter] = []
         parents: list[int] = []
         for i, letter in enumerate(w):
             a, b = bounds[r][i], bounds[r][i + 1]
-            cuts = others[(others > a + eps) & (others < b - eps)] if letter.transparent else np.zeros(0)
-            if cuts.size > 1:
-                cuts = cuts[np.concatenate([[True], np.diff(cuts) > eps])]
-            edges = np.concatenate([[a], cuts, [b]])
+            inside = [v for v in others if a + eps < v < b - eps] if letter.transparent else []
+            cuts = inside[:1] + [v for u, v in itertools.pairwise(inside) if v - u > eps]
+            if not cuts:
+                letters.append(letter)
+                parents.append(i)
+                continue
+            edges = [a, *cuts, b]
             for lo, hi in zip(edges[:-1], edges[1:]):
-                size = (hi - lo) / scale if cuts.size else letter.size
-                letters.append(replace(letter, size=float(size)))
+                letters.append(replace(letter, size=(hi - lo) / scale))
                 parents.append(i)
         out_words.append(tuple(letters))
         out_parents.append(tuple(parents))

@@ -12,7 +12,7 @@ from citygen.registry import load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen_layers.align import _Words
 from citygen_layers.parser import load, parse
-from citygen_layers.plugin import generate, solve_request
+from citygen_layers.plugin import clear_solved, generate, solve_request
 from citygen_layers.solver import _above
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,6 +43,7 @@ def test_random_stacks(rs, width, height):
     layout = generate(rs, request)
     assert check_partition(layout) == []                          # visible regions of every layer partition it
     assert {c.layer for c in layout.root.children} == {layer.name for layer in rs.layers}
+    clear_solved()                                                # solve again, not reuse the kept directions
     assert layout.to_json() == generate(rs, request).to_json()    # deterministic
     sx, sy = solve_request(rs, request)
     for sol in (sx, sy):
@@ -139,3 +140,31 @@ def test_conform_cuts_openings_at_the_corner_strip():
     assert [(r.x, r.w) for r in windows] == [(0.5, 1.5)]
     fixed, notes = conform(layout, (0.0, 2.5), (1.5, 0.5))  # under half of the window is left: all wall
     assert fixed.count("window") == 0 and "made wall" in notes[0]
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_building_faces_reuse_directions_and_layouts_equal_fresh_solves(name):
+    """Faces of one building share height and floor lines, opposite faces their width: those directions are
+    solved once per process, and every layout equals the one of a solve from scratch."""
+    rs = load(ROOT / "rulesets" / f"{name}.layers")
+    base = FacadeRequest.preview(9.0, 10.0, floor_height=3.0, ground_height=4.0)
+    faces = [FacadeRequest(w, 10.0, base.floor_lines, i == 0, (0.375, 0.375), base.context)
+             for i, w in enumerate((9.0, 14.0, 9.0, 14.0))]
+    clear_solved()
+    reused = [generate(rs, face).to_json() for face in faces]
+    assert solve_request(rs, faces[3])[0] is solve_request(rs, faces[1])[0]
+    assert solve_request(rs, faces[3])[1] is solve_request(rs, faces[2])[1]
+    fresh = []
+    for face in faces:
+        clear_solved()
+        fresh.append(generate(rs, face).to_json())
+    assert reused == fresh
+
+
+def test_solves_cut_by_the_wall_clock_are_not_kept():
+    rs = parse("symbol A size=1 opaque\ncounter k\npattern X = A A^k\npattern Y = A A\nbudget time=0\n"
+               "layer l x=X y=Y\n")
+    request = FacadeRequest(5.0, 4.0, (0.0, 4.0))
+    first = solve_request(rs, request)
+    assert first[0].timed_out and first[0].status == "best-effort"
+    assert solve_request(rs, request)[0] is not first[0]
