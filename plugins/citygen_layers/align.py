@@ -28,7 +28,8 @@ Column = tuple[tuple[int, int], ...]
 
 @dataclass
 class Budget:
-    """Node expansions (deterministic) and a wall-clock deadline (safety net) shared by one solve."""
+    """Node expansions (deterministic) and a CPU-time deadline of this process (safety net; other processes on
+    a loaded machine do not move it) shared by one solve."""
 
     expansions: int
     deadline: float
@@ -38,7 +39,7 @@ class Budget:
     def spend(self) -> bool:
         if self.used >= self.expansions:
             return False
-        if self.used % 256 == 0 and time.perf_counter() > self.deadline:
+        if self.used % 256 == 0 and time.process_time() > self.deadline:
             self.timed_out = True
             return False
         self.used += 1

@@ -124,7 +124,7 @@ def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
     big = 10.0 * spec.canvas + 1.0
     late = False
     for attempt in (spec, replace(spec, floor_pattern=None)):
-        budget = Budget(ruleset.options.expansions, time.perf_counter() + max(ruleset.options.time, 0.5))
+        budget = Budget(ruleset.options.expansions, time.process_time() + max(ruleset.options.time, 0.5))
         for candidate in CandidateGenerator(ruleset, attempt, big, budget):
             if attempt.floor_pattern is None and spec.floor_pattern is not None:
                 diagnostics.append(f"floor pattern {spec.floor_pattern!r} has no word with "
@@ -198,7 +198,7 @@ def solve_axis(ruleset: Ruleset, axis: str, extent: float, floor_lines: Sequence
     counters["entrance"] = Counter("entrance", int(entrance), int(entrance))
     options = ruleset.options
     heights = tuple(np.diff(np.asarray(floor_lines, dtype=float))) if axis == "y" and len(floor_lines) > 1 else ()
-    budget = Budget(options.expansions, time.perf_counter() + options.time / 2)
+    budget = Budget(options.expansions, time.process_time() + options.time / 2)
     return solve_direction(ruleset, direction_spec(ruleset, axis, extent, counters, heights), budget, bands,
                            floor_lines if axis == "y" else ())
 
