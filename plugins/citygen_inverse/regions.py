@@ -218,11 +218,13 @@ class _Grid:
 
     def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
         """The two content hashes of a tiled box, translated to its corner."""
-        tables = self.hash[int(free[0]) + 2 * int(free[1])]
-        out = []
-        for lane, (ia, ib) in enumerate(self.inv):
-            out.append(_sum(tables[lane], *cell) * ia[box[0]] * ib[box[1]] & self.MASK)
-        return out[0], out[1]
+        (t, u), ((ia, ib), (ja, jb)) = self.hash[free[0] + 2 * free[1]], self.inv
+        i0, j0, i1, j1 = cell
+        ti, ui = t[i0], u[i0]
+        tk, uk = t[i1], u[i1]
+        x, y = box[0], box[1]
+        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[x] * ib[y]) & self.MASK,
+                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[x] * jb[y]) & self.MASK)
 
     def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
         """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
