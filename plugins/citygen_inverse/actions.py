@@ -98,8 +98,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
             score = np.maximum.reduceat(sym.importance[inside][order], starts).tolist()
             first: dict[bytes, int] = {}
-            for g, row in enumerate(per_group.tobytes()[i:i + m - 1] for i in range(0, per_group.size, m - 1)):
-                first.setdefault(row, g)
+            flat = per_group.tobytes()
+            for g in range(per_group.shape[0]):
+                first.setdefault(flat[g * (m - 1):(g + 1) * (m - 1)], g)
             rows = sorted(first)
             ranked = sorted(range(len(rows)), key=lambda r: -score[first[rows[r]]])
             for r in ranked[:max_groupings]:
