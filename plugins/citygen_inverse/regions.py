@@ -11,6 +11,10 @@ height). Likewise a region that is an exact periodic sequence of >= 2 tiles alon
 ``repeat`` rule whatever the count, so its signature is (axis, tile length, tile signature) (``periodic=True``;
 off by default because a writer that expands repeats to the input's count, the ``linear`` mode, cannot share
 them). With ``free_extents=False`` signatures are strictly translational (sizes included).
+
+Queries take constant time on the grid of all terminal edge lines (``_Grid``): memory and set-up grow with
+(distinct x lines) x (distinct y lines), which regularised facades keep small (CMP: at most ~2,500 cells); a
+layout beyond ``_Grid.MAX_CELLS`` is rejected.
 """
 from __future__ import annotations
 
@@ -148,6 +152,8 @@ class _Grid:
     (material, width, height), the width (height) dropped for a free-width (free-height) region.
     """
 
+    MAX_CELLS = 1_000_000  # ~15 prefix tables of this many Python ints: ~0.5 GB
+
     LANES = ((0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F), (0xD6E8FEB86659FD93, 0xA0761D6478BD642F))
     MASK = (1 << 64) - 1
 
@@ -160,6 +166,9 @@ class _Grid:
         a0, b0 = np.searchsorted(self.xs, X0), np.searchsorted(self.ys, Y0)
         a1, b1 = np.searchsorted(self.xs, X1), np.searchsorted(self.ys, Y1)
         nx, ny = len(self.xs) - 1, len(self.ys) - 1
+        if nx * ny > self.MAX_CELLS:
+            raise LayoutError(f"{len(self.xs)} x {len(self.ys)} distinct edge lines: too irregular to index",
+                              hint="regularise the layout (snap and align edges) before extraction")
         owner = np.full((nx + 2, ny + 2), -1, dtype=np.int64)  # padded by one cell on every side
         for k in range(X0.size):
             owner[a0[k] + 1:a1[k] + 1, b0[k] + 1:b1[k] + 1] = k

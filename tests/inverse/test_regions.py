@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
+from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region
-from citygen_inverse.regions import LayoutIndex
+from citygen_inverse.regions import LayoutIndex, _Grid
 
 from .helpers import random_layout
 
@@ -96,3 +97,9 @@ def test_periodic_signatures_are_smallest_identical_tiles(layout):
                 elif index.sigs[sid].period is not None:
                     assert index.sigs[sid].period[0] == 1, box
     assert periodic > 0
+
+
+def test_too_irregular_layout_is_rejected_clearly(monkeypatch):
+    monkeypatch.setattr(_Grid, "MAX_CELLS", 10)
+    with pytest.raises(LayoutError, match="too irregular"):
+        LayoutIndex([random_layout(np.random.default_rng(1), 12.0, 9.0, depth=5)])
