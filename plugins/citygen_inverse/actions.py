@@ -70,10 +70,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7)."""
     box = index.sigs[sig].box
     x0, y0, x1, y1 = box
-    inside = np.flatnonzero((sym.boxes[:, 0] >= x0) & (sym.boxes[:, 1] >= y0) & (sym.boxes[:, 2] <= x1)
-                            & (sym.boxes[:, 3] <= y1)
-                            & ~((sym.boxes[:, 0] == x0) & (sym.boxes[:, 1] == y0) & (sym.boxes[:, 2] == x1)
-                                & (sym.boxes[:, 3] == y1)))
+    c0, c1, c2, c3 = sym.columns
+    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1)
+                            & ((c0 != x0) | (c1 != y0) | (c2 != x1) | (c3 != y1)))
     inst = sym.boxes[inside]
     weight = sym.terminals[inside] / index.sigs[sig].n
     if index.sigs[sig].period is not None:
