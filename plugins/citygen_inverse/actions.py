@@ -70,10 +70,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7)."""
     box = index.sigs[sig].box
     x0, y0, x1, y1 = box
-    inside = np.flatnonzero((sym.boxes[:, 0] >= x0) & (sym.boxes[:, 1] >= y0) & (sym.boxes[:, 2] <= x1)
-                            & (sym.boxes[:, 3] <= y1)
-                            & ~((sym.boxes[:, 0] == x0) & (sym.boxes[:, 1] == y0) & (sym.boxes[:, 2] == x1)
-                                & (sym.boxes[:, 3] == y1)))
+    c0, c1, c2, c3 = sym.columns
+    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1)
+                            & ((c0 != x0) | (c1 != y0) | (c2 != x1) | (c3 != y1)))
     inst = sym.boxes[inside]
     weight = sym.terminals[inside] / index.sigs[sig].n
     if index.sigs[sig].period is not None:
@@ -90,14 +89,21 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         line = (weight @ cov).tolist() if inst.size else [0.0] * (m + 1)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
         if inst.size:
-            groups, inv = np.unique(sym.group[inside], return_inverse=True)
-            per_group = np.zeros((groups.size, m + 1), dtype=bool)
-            np.logical_or.at(per_group, inv, cov)  # keep every instance of one repeated region whole
-            score = np.zeros(groups.size)
-            np.maximum.at(score, inv, sym.importance[inside])
-            rows, first = np.unique(per_group[:, 1:m], axis=0, return_index=True)
-            for r in np.argsort(-score[first], kind="stable")[:max_groupings]:
-                groupings.add(tuple((np.flatnonzero(~rows[r]) + 1).tolist()))
+            # per repeated region (by signature), the boundaries inside any of its instances, which a grouping
+            # keeping every instance whole drops; distinct rows in lexicographic order, scored by f(a, o)
+            order = np.argsort(sym.group[inside], kind="stable")
+            grp = sym.group[inside][order]
+            starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
+            per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
+            score = np.maximum.reduceat(sym.importance[inside][order], starts).tolist()
+            first: dict[bytes, int] = {}
+            flat = per_group.tobytes()
+            for g in range(per_group.shape[0]):
+                first.setdefault(flat[g * (m - 1):(g + 1) * (m - 1)], g)
+            rows = sorted(first)
+            ranked = sorted(range(len(rows)), key=lambda r: -score[first[rows[r]]])
+            for r in ranked[:max_groupings]:
+                groupings.add(tuple(k + 1 for k, cut in enumerate(rows[r]) if not cut))
         bl = bounds.tolist()
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
@@ -184,17 +190,19 @@ def _rel(box: Box, p: Box) -> Box:
 def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int],
           model: CostModel, line: list[float]) -> Action:
     """The rule splitting ``box`` at the atom boundaries ``edges`` into children ``sigs``."""
-    pieces = [_piece(box, axis, bl[a], bl[b]) for a, b in zip(edges, edges[1:])]
-    op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], model)
+    o = box[axis]
+    span = box[3] - box[1] if axis == 0 else box[2] - box[0]
+    ends = [bl[e] - o for e in edges]
+    rels = [(a, 0, b, span) if axis == 0 else (0, a, span, b) for a, b in zip(ends, ends[1:])]
+    op, cost, k = _ops([(s, b - a) for s, a, b in zip(sigs, ends, ends[1:])], model)
     line_cost = sum(line[e] for e in edges[1:-1])
-    items = tuple((s, _rel(box, p)) for s, p in zip(sigs[:k], pieces[:k]))
-    children, seen = [], set()
-    for s, p in zip(sigs, pieces):
-        if s not in seen and index.sigs[s].n > 1:
+    children, seen, info = [], set(), index.sigs
+    for s, r in zip(sigs, rels):
+        if s not in seen and info[s].n > 1:
             seen.add(s)
-            children.append((s, _rel(box, p)))
-    return Action(op, axis, items, tuple(children), cost, model.lambda1 * cost + model.lambda2 * line_cost,
-                  tuple(bl[e] - box[axis] for e in edges[1:-1]))
+            children.append((s, r))
+    return Action(op, axis, tuple(zip(sigs[:k], rels[:k])), tuple(children), cost,
+                  model.lambda1 * cost + model.lambda2 * line_cost, tuple(ends[1:-1]))
 
 
 def _grid(index: LayoutIndex, sig: int, model: CostModel) -> Action:

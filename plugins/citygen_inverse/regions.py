@@ -11,6 +11,10 @@ height). Likewise a region that is an exact periodic sequence of >= 2 tiles alon
 ``repeat`` rule whatever the count, so its signature is (axis, tile length, tile signature) (``periodic=True``;
 off by default because a writer that expands repeats to the input's count, the ``linear`` mode, cannot share
 them). With ``free_extents=False`` signatures are strictly translational (sizes included).
+
+Queries take constant time on the grid of all terminal edge lines (``_Grid``): memory and set-up grow with
+(distinct x lines) x (distinct y lines), which regularised facades keep small (CMP: at most ~2,500 cells); a
+layout beyond ``_Grid.MAX_CELLS`` is rejected.
 """
 from __future__ import annotations
 
@@ -59,7 +63,7 @@ class LayoutIndex:
                                   hint="grammar extraction needs terminals that tile the facade exactly")
         scale = max(max(lay.width, lay.height) for lay in layouts)
         self.quantum = 10.0 ** np.floor(np.log10(1e-7 * scale))  # a decimal step: decimal inputs stay exact
-        rows, kinds, self.roots, offset = [], [], [], 0
+        edges, kinds, self.roots, offset = [], [], [], 0
         for layout in layouts:
             w, h = self.q(layout.width), self.q(layout.height)
             self.roots.append((offset, 0, offset + w, h))
@@ -67,11 +71,13 @@ class LayoutIndex:
                 if t.w <= 0 or t.h <= 0:
                     raise LayoutError(f"terminal {t.symbol} at ({t.x:g}, {t.y:g}) has zero size",
                                       hint="remove zero-size regions before extraction")
-                x0, y0 = offset + self.q(t.x), self.q(t.y)
-                rows.append((x0, y0, offset + self.q(t.x + t.w), self.q(t.y + t.h)))
+                edges.append((offset, t.x, t.y, t.x + t.w, t.y + t.h))
                 kinds.append((t.label, t.depth))
             offset += w + max(w // 10, 1)  # a gap: no region spans two facades
-        arr = np.array(rows, dtype=np.int64)
+        e = np.array(edges, dtype=float)
+        arr = np.rint(e[:, 1:] / self.quantum).astype(np.int64)  # as q(): round half to even
+        arr[:, 0::2] += e[:, :1].astype(np.int64)
+        rows = arr.tolist()
         self.X0, self.Y0, self.X1, self.Y1 = arr.T.copy()
         self.kinds: list[TerminalKind] = []
         kind_ids: dict[TerminalKind, int] = {}
@@ -86,8 +92,9 @@ class LayoutIndex:
         self.sym = np.array(sym, dtype=np.int64)
         self.material = np.array(mat, dtype=np.int64)
         self.sigs: list[SigInfo] = [SigInfo((0, 0, 0, 0), 0, None)]  # id 0: the empty dummy
-        self._sig_ids: dict[bytes, int] = {}
+        self._sig_ids: dict[tuple, int] = {}
         self._boxes: dict[Box, int] = {}
+        self._grid = _Grid(self)
 
     def q(self, v: float) -> int:
         return int(round(v / self.quantum))
@@ -101,73 +108,201 @@ class LayoutIndex:
         found = self._boxes.get(box)
         if found is not None:
             return found
-        idx = self.inside(box)
-        x0, y0, x1, y1 = box
-        area = int(np.sum((self.X1[idx] - self.X0[idx]) * (self.Y1[idx] - self.Y0[idx])))
-        if idx.size == 0 or area != (x1 - x0) * (y1 - y0):
+        g = self._grid
+        cell = g.cells(box)
+        if cell is None:
             self._boxes[box] = -1
             return -1
-        X0, Y0, X1, Y1 = self.X0[idx] - x0, self.Y0[idx] - y0, self.X1[idx] - x0, self.Y1[idx] - y0
-        free_w = self.free_extents and bool(np.all((X0 == 0) & (X1 == x1 - x0)))
-        free_h = self.free_extents and bool(np.all((Y0 == 0) & (Y1 == y1 - y0)))
-        w, h = (-1 if free_w else x1 - x0), (-1 if free_h else y1 - y0)
-        if free_w:
-            X1 = np.zeros_like(X1)
-        if free_h:
-            Y1 = np.zeros_like(Y1)
-        rel = np.stack([self.material[idx], X0, Y0, X1, Y1], axis=1)
-        period = None
-        if self.periodic and idx.size > 1:
+        i0, j0, i1, j1 = cell
+        x0, y0, x1, y1 = box
+        n = g.count(cell)
+        free_w = self.free_extents and g.interior_lines(0, cell) == 0
+        free_h = self.free_extents and g.interior_lines(1, cell) == 0
+        key = None
+        if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free else _period(rel, axis, (x1 - x0, y1 - y0)[axis])
+                p = None if free else g.period(box, cell, axis, (free_w, free_h))
                 if p is not None:
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
-                    period = (axis, p)
-                    key = np.array([-2 - axis, p, self.sig(tile)]).tobytes()
+                    key = (-2 - axis, p, self.sig(tile))
                     break
-        if period is None:
-            rel = rel[np.lexsort(rel.T[::-1])]
-            key = np.concatenate([[w, h], rel.ravel()]).tobytes()
+        if key is None:
+            key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
         sid = self._sig_ids.get(key)
         if sid is None:
             sid = len(self.sigs)
             self._sig_ids[key] = sid
-            self.sigs.append(SigInfo(box, int(idx.size), int(self.sym[idx[0]]) if idx.size == 1 else None, period))
+            self.sigs.append(SigInfo(box, n, int(self.sym[g.owner[i0][j0]]) if n == 1 else None,
+                                     None if key[0] >= 0 else (-2 - key[0], key[1])))
         self._boxes[box] = sid
         return sid
 
     def cuts(self, box: Box, axis: int) -> np.ndarray:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
-        idx = self.inside(box)
-        lo, hi = (self.X0[idx], self.X1[idx]) if axis == 0 else (self.Y0[idx], self.Y1[idx])
-        cand = np.unique(lo)
-        cand = cand[cand > box[axis]]
-        if cand.size == 0:
-            return cand
-        crossed = np.any((lo[:, None] < cand[None, :]) & (hi[:, None] > cand[None, :]), axis=0)
-        return cand[~crossed]
+        return self._grid.cuts(box, axis)
 
 
-def _period(rel: np.ndarray, axis: int, length: int) -> int | None:
-    """Smallest tile length ``p`` (``length / p >= 2``) such that the content is ``length / p`` identical tiles."""
-    lo, hi = rel[:, 1 + axis], rel[:, 3 + axis]
-    n = rel.shape[0]
-    cand = np.unique(lo[(lo > 0) & (2 * lo <= length)])
-    cand = cand[length % cand == 0]
-    if cand.size == 0:
+class _Grid:
+    """Constant-time region queries on the grid of all terminal edges (``xs`` by ``ys`` lines).
+
+    A box is exactly tiled when it covers no gap cell and a terminal edge runs along its whole boundary; edge
+    counts come from prefix sums over the edge rasters. The content of a tiled box (terminal materials, sizes
+    and positions relative to its corner) is identified by two 64-bit translation-covariant polynomial hashes
+    sum_t R(t) A^(x_t - x0) B^(y_t - y0) (mod 2^64), each a 2D prefix sum over terminal corners: R(t) hashes
+    (material, width, height), the width (height) dropped for a free-width (free-height) region.
+    """
+
+    MAX_CELLS = 1_000_000  # ~15 prefix tables of this many Python ints: ~0.5 GB
+
+    LANES = ((0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F), (0xD6E8FEB86659FD93, 0xA0761D6478BD642F))
+    MASK = (1 << 64) - 1
+
+    def __init__(self, index: LayoutIndex) -> None:
+        X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
+        self.xs = np.unique(np.concatenate([X0, X1])).tolist()
+        self.ys = np.unique(np.concatenate([Y0, Y1])).tolist()
+        self.xi = {v: i for i, v in enumerate(self.xs)}
+        self.yi = {v: j for j, v in enumerate(self.ys)}
+        a0, b0 = np.searchsorted(self.xs, X0), np.searchsorted(self.ys, Y0)
+        a1, b1 = np.searchsorted(self.xs, X1), np.searchsorted(self.ys, Y1)
+        nx, ny = len(self.xs) - 1, len(self.ys) - 1
+        if nx * ny > self.MAX_CELLS:
+            raise LayoutError(f"{len(self.xs)} x {len(self.ys)} distinct edge lines: too irregular to index",
+                              hint="regularise the layout (snap and align edges) before extraction")
+        owner = np.full((nx + 2, ny + 2), -1, dtype=np.int64)  # padded by one cell on every side
+        for k in range(X0.size):
+            owner[a0[k] + 1:a1[k] + 1, b0[k] + 1:b1[k] + 1] = k
+        self.owner = owner[1:-1, 1:-1].tolist()
+        vert = owner[1:, 1:-1] != owner[:-1, 1:-1]  # (nx + 1, ny): an edge on line x_i along row j
+        horz = owner[1:-1, 1:] != owner[1:-1, :-1]  # (nx, ny + 1)
+        self.along = (_prefix1(vert), _prefix1(horz.T))  # per line, edge count along it
+        self.interior = (_prefix2(vert), _prefix2(horz.T))  # per axis: line index, then the other axis
+        self.gap = _prefix2(owner[1:-1, 1:-1] < 0)
+        corner = np.zeros((nx, ny), dtype=np.int64)
+        corner[a0, b0] = 1
+        self.n = _prefix2(corner)
+        variants = ((0, 0), (1, 0), (0, 1), (1, 1))  # (free width, free height): the size dropped from R(t)
+        key = np.zeros(4 * X0.size, dtype=np.int64)  # (material, width, height) per variant and terminal
+        for col in (np.tile(index.material, 4), np.concatenate([(X1 - X0) * (1 - fw) for fw, _ in variants]),
+                    np.concatenate([(Y1 - Y0) * (1 - fh) for _, fh in variants])):
+            values, code = np.unique(col, return_inverse=True)
+            key = key * values.size + code
+        _, kind = np.unique(key, return_inverse=True)
+        lanes = len(self.LANES)
+        r = np.random.default_rng(20140801).integers(0, 1 << 63, (kind.max() + 1, lanes), dtype=np.uint64)
+        r = (r * np.uint64(2) + np.uint64(1))[kind].reshape(4, X0.size, lanes)
+        A, B = ([lane[axis] for lane in self.LANES] for axis in (0, 1))
+        xs, ys = np.array(self.xs, dtype=np.uint64), np.array(self.ys, dtype=np.uint64)
+        inv_x = _upow([pow(a, -1, 1 << 64) for a in A], xs).tolist()
+        inv_y = _upow([pow(b, -1, 1 << 64) for b in B], ys).tolist()
+        self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
+        place = _upow(A, xs)[:, a0] * _upow(B, ys)[:, b0]  # (lanes, terminals)
+        self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
+        for variant in range(4):
+            val = np.zeros((lanes, nx, ny), dtype=np.uint64)
+            val[:, a0, b0] = r[variant].T * place
+            self.hash.append([_prefix2(v) for v in val])
+
+    def cells(self, box: Box) -> tuple[int, int, int, int] | None:
+        """Grid indices of an exactly tiled ``box``, None when it is not tiled."""
+        i0, j0 = self.xi.get(box[0]), self.yi.get(box[1])
+        i1, j1 = self.xi.get(box[2]), self.yi.get(box[3])
+        if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
+            return None
+        if _sum(self.gap, i0, j0, i1, j1):
+            return None
+        av, ah = self.along
+        if av[i0][j1] - av[i0][j0] != j1 - j0 or av[i1][j1] - av[i1][j0] != j1 - j0 or \
+                ah[j0][i1] - ah[j0][i0] != i1 - i0 or ah[j1][i1] - ah[j1][i0] != i1 - i0:
+            return None
+        return i0, j0, i1, j1
+
+    def count(self, cell: tuple[int, int, int, int]) -> int:
+        return _sum(self.n, *cell)
+
+    def interior_lines(self, axis: int, cell: tuple[int, int, int, int]) -> int:
+        """Terminal edge segments on lines strictly inside the box, perpendicular to ``axis``."""
+        i0, j0, i1, j1 = cell if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
+        return _sum(self.interior[axis], i0 + 1, j0, i1, j1) if i1 > i0 + 1 else 0
+
+    def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
+        """The two content hashes of a tiled box, translated to its corner."""
+        (t, u), ((ia, ib), (ja, jb)) = self.hash[free[0] + 2 * free[1]], self.inv
+        i0, j0, i1, j1 = cell
+        ti, ui = t[i0], u[i0]
+        tk, uk = t[i1], u[i1]
+        x, y = box[0], box[1]
+        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[x] * ib[y]) & self.MASK,
+                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[x] * jb[y]) & self.MASK)
+
+    def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
+        """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
+        a = self.along[axis][line]
+        return a[hi] - a[lo] == hi - lo
+
+    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool]) -> int | None:
+        """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
+        along ``axis``."""
+        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
+        start, length = box[axis], box[axis + 2] - box[axis]
+        i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
+        for i in range(i0 + 1, i1):
+            p = lines[i] - start
+            if 2 * p > length:
+                return None
+            if length % p or not self.full_line(axis, i, lo, hi):
+                continue
+            tiles = []
+            for k in range(length // p + 1):
+                t = index.get(start + k * p)
+                if t is None or (0 < k < length // p and not self.full_line(axis, t, lo, hi)):
+                    break
+                tiles.append(t)
+            else:
+                first = None
+                for a, b in zip(tiles, tiles[1:]):
+                    sub = (a, lo, b, hi) if axis == 0 else (lo, a, hi, b)
+                    corner = (lines[a], box[1]) if axis == 0 else (box[0], lines[a])
+                    h = self.content((*corner, 0, 0), sub, free)
+                    if first is None:
+                        first = h
+                    elif h != first:
+                        break
+                else:
+                    return p
         return None
-    cand = cand[np.searchsorted(np.sort(lo), cand) * (length // cand) == n]  # a tile holds n / k terminals
-    for p in cand.tolist():
-        k = length // p
-        if np.any(lo // p != (hi - 1) // p):
-            continue
-        first = rel[lo < p]
-        shifted = rel.copy()
-        tile = lo // p
-        shifted[:, 1 + axis] -= tile * p
-        shifted[:, 3 + axis] -= tile * p
-        shifted = shifted[np.lexsort(shifted.T[::-1])]
-        first = np.repeat(first[np.lexsort(first.T[::-1])], k, axis=0)
-        if first.shape == shifted.shape and np.array_equal(first, shifted):
-            return int(p)
-    return None
+
+    def cuts(self, box: Box, axis: int) -> np.ndarray:
+        cell = self.cells(box)
+        i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
+        lines = self.xs if axis == 0 else self.ys
+        return np.array([lines[i] for i in range(i0 + 1, i1) if self.full_line(axis, i, lo, hi)], dtype=np.int64)
+
+
+def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
+    """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
+    out = np.ones((len(bases), exps.size), dtype=np.uint64)
+    e = exps.astype(np.uint64)
+    while e.any():
+        odd = (e & np.uint64(1)).astype(bool)
+        out[:, odd] *= np.array(bases, dtype=np.uint64)[:, None]
+        bases, e = [b * b & _Grid.MASK for b in bases], e >> np.uint64(1)
+    return out
+
+
+def _prefix1(a: np.ndarray) -> list[list[int]]:
+    """Prefix sums along the second axis with a leading zero: out[i][j] = a[i, :j].sum()."""
+    out = np.zeros((a.shape[0], a.shape[1] + 1), dtype=np.int64)
+    out[:, 1:] = np.cumsum(a, axis=1)
+    return out.tolist()
+
+
+def _prefix2(a: np.ndarray) -> list[list[int]]:
+    """2D prefix sums with a leading zero row and column (uint64 sums wrap modulo 2^64)."""
+    out = np.zeros((a.shape[0] + 1, a.shape[1] + 1), dtype=np.uint64 if a.dtype == np.uint64 else np.int64)
+    out[1:, 1:] = np.cumsum(np.cumsum(a, axis=0, dtype=out.dtype), axis=1, dtype=out.dtype)
+    return out.tolist()
+
+
+def _sum(t: list[list[int]], i0: int, j0: int, i1: int, j1: int) -> int:
+    return t[i1][j1] - t[i0][j1] - t[i1][j0] + t[i0][j0]

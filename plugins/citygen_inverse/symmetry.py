@@ -9,6 +9,7 @@ from __future__ import annotations
 from bisect import bisect_left, bisect_right
 from collections import defaultdict, deque
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -23,6 +24,11 @@ class RepeatedRegions:
     terminals: np.ndarray
     occurrences: np.ndarray
     group: np.ndarray
+
+    @cached_property
+    def columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """x0, y0, x1, y1 of the instances as contiguous arrays (fast containment tests)."""
+        return tuple(np.ascontiguousarray(self.boxes[:, k]) for k in range(4))
 
     @property
     def importance(self) -> np.ndarray:
