@@ -123,7 +123,7 @@ class SolveOptions:
     growth: float = 2.0                # mu is multiplied by this until a solution is found
     rounds: int = 8                    # mu rounds before the best-effort result is taken
     expansions: int = 3000             # ADN node expansions over the whole solve (deterministic)
-    time: float = 20.0                 # wall-clock seconds, a safety net only (far above the expansion budget)
+    time: float = 20.0                 # seconds of CPU time, a safety net only (far above the expansion budget)
     candidates: int = 48               # candidates tried per mu round
     samples: int = 3                   # sizes sampled per unsized symbol (§5.1)
 

@@ -58,7 +58,7 @@ def _opening_bands(ruleset: Ruleset, axis: str, interval: tuple[float, float]):
 
 #: Solved directions kept per process, most recently used last: the faces of a building share their height and
 #: floor lines (so their vertical solve), opposite faces often their width. A solve is deterministic, so a kept
-#: solution is exactly what solving again would return; solves cut by the wall clock are not kept.
+#: solution is exactly what solving again would return; solves cut by the CPU-time limit are not kept.
 _SOLVED: OrderedDict[tuple, tuple[Ruleset, DirectionSolution]] = OrderedDict()
 KEEP_SOLVED = 256
 

@@ -32,7 +32,7 @@ class DirectionSolution:
     sizing: Sizing
     expansions: int
     diagnostics: tuple[str, ...] = ()
-    timed_out: bool = False        # the wall-clock safety net cut the solve: the result depends on timing
+    timed_out: bool = False        # the CPU-time safety net cut the solve: the result depends on timing
 
 
 def _above(rows: Sequence[Row]) -> np.ndarray:
@@ -120,7 +120,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
 def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
                    ) -> tuple[Candidate, float, bool]:
     """A candidate when none fits Eq. 7 within the rounds: a very loose tolerance, then without floor binding.
-    The flag tells whether an attempt was cut by the wall clock."""
+    The flag tells whether an attempt was cut by the CPU-time limit."""
     big = 10.0 * spec.canvas + 1.0
     late = False
     for attempt in (spec, replace(spec, floor_pattern=None)):
