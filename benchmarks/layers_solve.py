@@ -1,6 +1,9 @@
 """Median solve times of layer stacks (ilcik2015 §6: 8 layers 0.8 s, 26 layers about 1 s on a 2015 desktop).
 
-Run: python benchmarks/layers_solve.py [--repeat N]
+Run: python benchmarks/layers_solve.py [--repeat N] [--prealign]
+
+``--prealign`` turns on the prealignment of the control patterns (§5.2 heuristic, ``budget prealign=true``) for
+every case.
 
 Times are of cold solves (kept direction solutions are forgotten before every repeat); "reused ms" is the same
 request again in the same process, when both directions are taken from the kept solutions (faces of a
@@ -9,6 +12,7 @@ building that share height and floor lines, or width).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import time
 from pathlib import Path
@@ -32,10 +36,13 @@ CASES = [
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--prealign", action="store_true", help="budget prealign=true for every case")
     args = parser.parse_args()
     print(f"{'case':34} {'median ms':>10} {'cpu ms':>8} {'expansions':>10} {'reused ms':>10}  status")
     for name, path, request in CASES:
         ruleset = load(path)
+        if args.prealign:
+            ruleset = dataclasses.replace(ruleset, options=dataclasses.replace(ruleset.options, prealign=True))
         generate(ruleset, request)   # warm-up (imports)
         wall, cpu, reused = [], [], []
         for _ in range(args.repeat):

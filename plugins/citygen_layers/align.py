@@ -72,9 +72,11 @@ class _Words:
     TOL = 1e-9
 
     def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray,
-                 parents: Sequence[Sequence[int]] | None = None) -> None:
+                 parents: Sequence[Sequence[int]] | None = None, fence: Sequence[tuple[int, ...]] = ()) -> None:
         self.m = len(words)
         self.n = tuple(len(w) for w in words)
+        #: prealigned column ends (the last is ``n``): no column of this network crosses one of them
+        self.fence = tuple(fence)
         parents = parents or [range(len(w)) for w in words]
 
         def prefix(w, pred):
@@ -114,9 +116,14 @@ class _Words:
             out = self._edges[state] = self._build(state)
         return out
 
+    def _cap(self, p: tuple[int, ...]) -> tuple[int, ...]:
+        """Where the columns leaving ``p`` must end at the latest: the end of the current prealigned column."""
+        return next((b for b in self.fence if any(x < y for x, y in zip(p, b))), self.n)
+
     def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
         tol = self.TOL
-        cum, n, runend = self.cum, self.n, self.runend
+        cum, n = self.cum, self._cap(p)
+        runend = [[min(e, n[r]) for e in ends] for r, ends in enumerate(self.runend)] if self.fence else self.runend
         found = set()
         for r in range(self.m):
             pr = p[r]
@@ -241,12 +248,15 @@ def _search_step(words: _Words, heap: list, dist: dict, size: dict, parent: dict
 
 
 def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, mu: float,
-          budget: Budget, parents: Sequence[Sequence[int]] | None = None) -> Alignment | None:
+          budget: Budget, parents: Sequence[Sequence[int]] | None = None,
+          fence: Sequence[tuple[int, ...]] = ()) -> Alignment | None:
     """Best alignment with error ``Omega <= mu`` and size ``<= canvas + mu`` (bidirectional Dijkstra), or None.
 
     ``parents`` maps the parts of split transparent letters to their letter (no hole may open inside one).
+    ``fence`` lists the ends of prealigned columns (per row, the last is the word's end): the search is then
+    restricted to columns inside them (prealignment of the control patterns, §5.2).
     """
-    fwd = _Words(words, above, parents)
+    fwd = _Words(words, above, parents, fence)
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
     if start == goal:
@@ -254,8 +264,10 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     found = _descend(fwd, goal, canvas, mu, budget)
     if found is not None and found[2]:
         return found[0]
+    back_fence = [tuple(n - b for n, b in zip(fwd.n, ends)) for ends in reversed(fence[:-1])]
     bwd = _Words([tuple(reversed(w)) for w in words], above,
-                 None if parents is None else [tuple(reversed(p)) for p in parents])
+                 None if parents is None else [tuple(reversed(p)) for p in parents],
+                 back_fence + [fwd.n] if fence else ())
     sides = []
     for side, origin in ((fwd, start), (bwd, start)):
         sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},

@@ -126,6 +126,7 @@ class SolveOptions:
     time: float = 20.0                 # seconds of CPU time, a safety net only (far above the expansion budget)
     candidates: int = 48               # candidates tried per mu round
     samples: int = 3                   # sizes sampled per unsized symbol (§5.1)
+    prealign: bool = False             # restrict alignment to prealigned control columns (§5.2 heuristic)
 
 
 @dataclass(frozen=True)

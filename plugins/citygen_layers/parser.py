@@ -168,12 +168,17 @@ class _FileParser:
 
     def _kw_budget(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         keys = {"expansions": int, "time": float, "candidates": int, "rounds": int, "samples": int,
-                "growth": float}
+                "growth": float, "prealign": bool}
         for key, value, col in self._pairs(words[1:], n):
             if key not in keys:
                 raise ParseError(f"unknown budget key {key!r}", where=self.loc(n, col),
                                  hint=f"expected one of {', '.join(keys)}")
-            self.options[key] = keys[key](_number(value, self.loc(n, col), key))
+            if keys[key] is bool:
+                if value not in ("true", "false"):
+                    raise ParseError(f"expected true or false for {key}, got {value!r}", where=self.loc(n, col))
+                self.options[key] = value == "true"
+            else:
+                self.options[key] = keys[key](_number(value, self.loc(n, col), key))
 
     def _kw_floors(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         if len(words) < 2:

@@ -12,6 +12,7 @@ from citygen.errors import RulesetError
 from citygen_layers.align import Alignment, Budget, align, greedy_alignment
 from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, WordMemo, direction_spec
 from citygen_layers.model import Counter, Ruleset
+from citygen_layers.prealign import Prealigner
 from citygen_layers.sizing import Matrix, Sizing, size_matrices
 from citygen_layers.splits import split_transparent
 
@@ -49,8 +50,10 @@ def _groups(spec: DirectionSpec) -> list[str]:
 
 
 def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget: Budget,
-                    greedy: bool = False) -> tuple[Matrix, ...] | None:
-    """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing)."""
+                    greedy: bool = False, prealigner: Prealigner | None = None) -> tuple[Matrix, ...] | None:
+    """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing).
+    With a ``prealigner`` the search is first restricted to the prealigned control columns, and searched without
+    the restriction when that finds nothing."""
     matrices = []
     for group in _groups(spec):
         rows = tuple(r for r in spec.rows if r.group == group)
@@ -64,7 +67,17 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
         if any(x.transparent for w in words for x in w):
             split, parents = split_transparent(words, spec.canvas)
             split, parents = tuple(split), tuple(parents)
-        result = align(split, above, spec.canvas, mu, budget, parents)
+        fence = None
+        if prealigner is not None:
+            fence = prealigner.fence([r.pattern for r in rows], candidate.env, words, split, parents, above,
+                                     spec.canvas, mu, budget)
+        result = None
+        if fence is not None:
+            prealigner.restricted += 1
+            result = align(split, above, spec.canvas, mu, budget, parents, fence)
+            prealigner.fallbacks += result is None
+        if result is None:
+            result = align(split, above, spec.canvas, mu, budget, parents)
         if result is None:
             return None
         matrices.append(Matrix(group, rows, split, parents, words, result))
@@ -81,6 +94,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     fallback: tuple[Candidate, float] | None = None
     cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
     memo = WordMemo()
+    prealigner = Prealigner(ruleset) if options.prealign else None
     for _ in range(options.rounds):
         for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
             if index >= options.candidates or budget.exhausted:
@@ -91,10 +105,11 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
             if matrices is None and cutoff < mu:
                 # searched with the next round's tolerance, so a failure is not repeated in that round
                 cutoff = mu * options.growth
-                matrices = align_candidate(candidate, spec, cutoff, budget)
+                matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner)
                 cache[key] = (matrices, cutoff)
             if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
                                             m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
+                _note_prealignment(spec, prealigner, diagnostics)
                 return _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
                               diagnostics)
         if budget.exhausted:
@@ -105,6 +120,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
         mu *= options.growth
     else:
         diagnostics.append(f"{spec.axis}: no alignment within mu={mu / options.growth:.3g}; best-effort layout")
+    _note_prealignment(spec, prealigner, diagnostics)
     late = False
     if fallback is None:
         *fallback, late = _any_candidate(ruleset, spec, diagnostics)
@@ -115,6 +131,13 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     solution = _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines,
                       diagnostics)
     return replace(solution, timed_out=True) if late else solution
+
+
+def _note_prealignment(spec: DirectionSpec, prealigner: Prealigner | None, diagnostics: list[str]) -> None:
+    if prealigner is not None and (prealigner.restricted or prealigner.failed):
+        diagnostics.append(f"{spec.axis}: prealignment restricted {prealigner.restricted} matrix searches, "
+                           f"{prealigner.fallbacks} found nothing and were searched unrestricted; "
+                           f"{prealigner.failed} control alignments failed")
 
 
 def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]

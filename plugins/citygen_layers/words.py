@@ -77,6 +77,32 @@ def pattern_words(pattern: Pattern, env: Mapping[str, int], symbols: Mapping[str
     return list(dict.fromkeys(out))
 
 
+def control_words(pattern: Pattern, env: Mapping[str, int], symbols: Mapping[str, Symbol]
+                  ) -> dict[tuple[Raw, ...], tuple[tuple[Raw, ...], tuple[int, ...]]]:
+    """Per raw word of a substituted pattern (as ``pattern_words`` gives them): its control word and the word
+    position where every control letter starts (plus the word's end). The first derivation of a word is kept."""
+    subs = list(pattern.substitutions)
+    contents = [expand(pattern.substitutions[name], env,
+                       lambda s: [((s, False, symbols[s].transparent),)]) for name in subs]
+    controls = expand(pattern.control, env, lambda name: [((name, False, name not in pattern.substitutions),)])
+    out: dict[tuple[Raw, ...], tuple[tuple[Raw, ...], tuple[int, ...]]] = {}
+    for choice in itertools.product(*contents):
+        table = dict(zip(subs, choice))
+        for control in controls:
+            word: list[Raw] = []
+            starts = []
+            for name, mirrored, transparent in control:
+                starts.append(len(word))
+                if name not in table:
+                    word.append((name, mirrored, transparent))
+                elif mirrored:   # a reflected substituted letter is its reflected content
+                    word.extend((s, not m, t) for s, m, t in reversed(table[name]))
+                else:
+                    word.extend(table[name])
+            out.setdefault(tuple(word), (control, (*starts, len(word))))
+    return out
+
+
 def counters_of(node: Node) -> set[str]:
     if isinstance(node, Sym):
         return set()
