@@ -168,3 +168,18 @@ def test_solves_cut_by_the_wall_clock_are_not_kept():
     first = solve_request(rs, request)
     assert first[0].timed_out and first[0].status == "best-effort"
     assert solve_request(rs, request)[0] is not first[0]
+
+
+def test_generate_leaves_the_garbage_collector_as_it_found_it():
+    import gc
+    rs = load(ROOT / "rulesets" / "residential_house.layers")
+    request = FacadeRequest(6.0, 3.0, (0.0, 1.6, 3.0), True)
+    assert gc.isenabled()
+    generate(rs, request)
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        generate(rs, request)
+        assert not gc.isenabled()  # a caller that paused it keeps it paused
+    finally:
+        gc.enable()
