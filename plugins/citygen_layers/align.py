@@ -104,6 +104,7 @@ class _Words:
         #: per row r, the bit set of the rows above it (above[h, r])
         self.upper = [sum(1 << h for h in range(self.m) if above[h, r]) for r in range(self.m)]
         self._edges: dict[tuple[int, ...], list[tuple[float, int, Column, float]]] = {}
+        self._rows: list[dict[tuple[int, int], tuple]] = [{} for _ in range(self.m)]
 
     def rest(self, state: tuple[int, ...]) -> float:
         """The largest remaining word size after ``state`` (the size bound of the searches)."""
@@ -120,59 +121,73 @@ class _Words:
         """Where the columns leaving ``p`` must end at the latest: the end of the current prealigned column."""
         return next((b for b in self.fence if any(x < y for x, y in zip(p, b))), self.n)
 
+    def _row(self, r: int, a: int, end: int) -> tuple[list[float], list[float], dict, dict]:
+        """Row ``r`` from letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target
+        sizes the row proposes, and two memos (per target: the row's four choices; per end: its entry)."""
+        key = (a, end)
+        row = self._rows[r].get(key)
+        if row is None:
+            c, b = self.cum[r], self.cum[r][a]
+            seg = [c[j] - b for j in range(a + 1, end + 1)]
+            row = self._rows[r][key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:self.LOOKAHEAD]], {}, {})
+        return row
+
     def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
         tol = self.TOL
-        cum, n = self.cum, self._cap(p)
-        runend = [[min(e, n[r]) for e in ends] for r, ends in enumerate(self.runend)] if self.fence else self.runend
+        n = self._cap(p)
+        rows = [self._row(r, p[r], min(self.runend[r][p[r]], n[r])) if p[r] < n[r] else None
+                for r in range(self.m)]
         found = set()
-        for r in range(self.m):
-            pr = p[r]
-            if pr < n[r]:
-                c, b = cum[r], cum[r][pr]
-                found.update(round((c[j] - b) * 1e9) / 1e9
-                             for j in range(pr + 1, min(runend[r][pr], pr + self.LOOKAHEAD) + 1))
+        for row in rows:
+            if row is not None:
+                found.update(row[1])
         if not found:
             return []
         targets = sorted(found)
         # per row, for every target: the substring end nearest to it, then the ends just below and just above
         # it, then the nearest end if it matches the target exactly (else epsilon, where allowed)
         choices = []
-        for r in range(self.m):
+        for r, row in enumerate(rows):
             pr = p[r]
-            if pr >= n[r]:
-                choices.append([pr] * (4 * len(targets)))
+            if row is None:
+                choices.append((pr,) * (4 * len(targets)))
                 continue
-            c, b = cum[r], cum[r][pr]
-            seg = [c[j] - b for j in range(pr + 1, runend[r][pr] + 1)]
-            last = len(seg) - 1
-            first = pr + 1
-            eps = pr if self.eps_ok[r][pr] else None
-            nears, los, his, stricts = [], [], [], []
-            for t in targets:
-                i = bisect.bisect_left(seg, t - tol)
-                hi = min(last, i)
-                lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
-                near = lo if t - seg[lo] <= seg[hi] - t else hi
-                nears.append(first + near)
-                los.append(first + lo)
-                his.append(first + hi)
-                stricts.append(first + near if eps is None or abs(seg[near] - t) <= tol else eps)
+            seg, _, picks, _ = row
+            missing = [t for t in targets if t not in picks]
+            if missing:
+                last = len(seg) - 1
+                first = pr + 1
+                eps = pr if self.eps_ok[r][pr] else None
+                for t in missing:
+                    i = bisect.bisect_left(seg, t - tol)
+                    hi = min(last, i)
+                    lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
+                    near = lo if t - seg[lo] <= seg[hi] - t else hi
+                    picks[t] = (first + near, first + lo, first + hi,
+                                first + near if eps is None or abs(seg[near] - t) <= tol else eps)
+            nears, los, his, stricts = zip(*map(picks.__getitem__, targets))
             choices.append(nears + los + his + stricts)
         # distinct columns, each in the place of its last proposal
         columns = list(dict.fromkeys(reversed(list(zip(*choices)))))[::-1]
-        entries = [{e: self._entry(r, p[r], e) for e in set(row)} for r, row in enumerate(choices)]
+        entries = []
+        for r, row in enumerate(rows):
+            known = row[3] if row is not None else {}
+            for e in set(choices[r]).difference(known):
+                known[e] = self._entry(r, p[r], e)
+            entries.append(known)
         out = []
+        before = sum(p)
         for ends in columns:
             column = list(map(dict.__getitem__, entries, ends))
             if None not in column:
-                scored = self._column(p, ends, column)
+                scored = self._column(p, before, ends, column)
                 if scored is not None:
                     out.append(scored)
         return out
 
     def _entry(self, r: int, a: int, e: int) -> tuple | None:
         """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, opaque bit, solid bit, rows one of which
-        must be opaque, rows none of which may be solid)``, size None for epsilon; None when the entry alone
+        must be opaque (-1: any), rows none of which may be solid)``, size None for epsilon; None when the entry alone
         breaks a constraint (epsilon beside an attached letter or with no upper row, transparent mixed with
         other letters)."""
         upper = self.upper[r]
@@ -183,36 +198,34 @@ class _Words:
             return None
         bit = 1 << r
         return (self.cum[r][e] - self.cum[r][a], bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
-                bit if self.solid[r][e] > self.solid[r][a] else 0, 0,
+                bit if self.solid[r][e] > self.solid[r][a] else 0, -1,
                 upper if self.unocc[r][e] > self.unocc[r][a] else 0)
 
     @staticmethod
-    def _column(p: tuple[int, ...], ends: tuple[int, ...], column: Sequence[tuple]
+    def _column(p: tuple[int, ...], before: int, ends: tuple[int, ...], column: Sequence[tuple]
                 ) -> tuple[float, int, Column, float] | None:
-        """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries, or None when it
-        breaks a column constraint: an opaque entry in every column, epsilon only below an opaque entry of an
-        upper layer, unoccludable letters covered only by transparent or opaque entries."""
-        opaque = solid = 0
-        hi, lo = -math.inf, math.inf
-        needs, guards = [], []
-        for size, opaque_bit, solid_bit, need, guard in column:
-            if size is None:
-                needs.append(need)
-                continue
-            hi, lo = max(hi, size), min(lo, size)
-            opaque |= opaque_bit
-            solid |= solid_bit
-            if guard:
-                guards.append(guard)
-        if not opaque or any(not opaque & need for need in needs) or any(solid & guard for guard in guards):
-            return None    # (no opaque entry also rejects the all-epsilon column)
-        return hi - lo, sum(ends) - sum(p), tuple(zip(p, ends)), hi
+        """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries (``before`` is
+        ``sum(p)``), or None when it breaks a column constraint: an opaque entry in every column, epsilon only
+        below an opaque entry of an upper layer, unoccludable letters covered only by transparent or opaque
+        entries."""
+        sizes, opaque_bits, solid_bits, needs, guards = zip(*column)
+        opaque = sum(opaque_bits)    # one bit per row: the sum is the union
+        # (no opaque entry also rejects the all-epsilon column)
+        if not opaque or not all(map(opaque.__and__, needs)):
+            return None
+        solid = sum(solid_bits)
+        if solid and any(map(solid.__and__, guards)):
+            return None
+        if None in sizes:
+            sizes = [x for x in sizes if x is not None]
+        hi = max(sizes)
+        return hi - min(sizes), sum(ends) - before, tuple(zip(p, ends)), hi
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
         p, ends = tuple(a for a, _ in col), tuple(b for _, b in col)
         column = [self._entry(r, a, e) for r, (a, e) in enumerate(col)]
-        out = None if None in column else self._column(p, ends, column)
+        out = None if None in column else self._column(p, sum(p), ends, column)
         return (out[0], out[1], out[3]) if out else None
 
 

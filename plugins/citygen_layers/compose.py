@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import bisect
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import MISSING, dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 
@@ -72,49 +73,64 @@ def layer_segments(solution: DirectionSolution, layer_index: int, layer: Layer) 
     return solution.sizing.segments[(group, pattern)]
 
 
+_REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
+
+
+def _region(x: float, y: float, w: float, h: float, symbol: str, **kw: Any) -> Region:
+    """A :class:`Region` built without the frozen dataclass's per-field ``object.__setattr__`` (2.5x faster;
+    equal to ``Region(...)`` in every respect). A 26-layer stack makes thousands of terminals per facade."""
+    region = object.__new__(Region)
+    region.__dict__.update(_REGION_DEFAULTS, x=x, y=y, w=w, h=h, symbol=symbol, **kw)
+    return region
+
+
 def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta: dict | None = None
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
     cells: list[list[tuple[str, Look]]] = []       # per layer: (symbol, look) of its grid cells, row-major
-    looks: dict[tuple, tuple[str, Look]] = {}
     grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
         hole = ("hole", Look(False, None, layer.depth, None, None))
+        # a shape's look depends on the symbols, transparency and mirroring of its two letters
+        hkeys = [None if hs.letter is None else (hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored)
+                 for hs in hseg]
+        looks: dict[tuple, tuple[str, Look]] = {}
         out = []
         for vs in vseg:
-            for hs in hseg:
-                if hs.letter is None or vs.letter is None:
+            if vs.letter is None:
+                out += [hole] * len(hseg)
+                continue
+            vkey = (vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
+            for hs, hkey in zip(hseg, hkeys):
+                if hkey is None:
                     out.append(hole)
                     continue
-                key = (index, hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored,
-                       vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
-                cell = looks.get(key)
+                cell = looks.get((hkey, vkey))
                 if cell is None:
-                    cell = looks[key] = (f"{hs.letter.name}.{vs.letter.name}",
-                                         look(ruleset, layer, hs.letter, vs.letter))
+                    cell = looks[hkey, vkey] = (f"{hs.letter.name}.{vs.letter.name}",
+                                                look(ruleset, layer, hs.letter, vs.letter))
                 out.append(cell)
         cells.append(out)
     occluded = _occluded(cells, grids)
     children = []
     for index, layer in enumerate(ruleset.layers):
         xspans, yspans = grids[index]
-        layer_cells, layer_occluded = cells[index], occluded[index]
+        name = layer.name
         terminals = []
         k = 0
         for y, h in yspans:
             for x, w in xspans:
-                symbol, lk = layer_cells[k]
-                shown = lk.visible and not layer_occluded[k]
-                k += 1
-                if shown:
-                    terminals.append(Region(x, y, w, h, symbol, lk.label, lk.depth, lk.material, lk.asset,
-                                            layer.name))
+                symbol, lk = cells[index][k]
+                if lk.visible and not occluded[index][k]:
+                    terminals.append(_region(x, y, w, h, symbol, label=lk.label, depth=lk.depth,
+                                             material=lk.material, asset=lk.asset, layer=name))
                 elif w * h > 1e-12:
-                    terminals.append(Region(x, y, w, h, symbol, None, 0.0, None, None, layer.name))
-        children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
+                    terminals.append(_region(x, y, w, h, symbol, layer=name))
+                k += 1
+        children.append(Region(0.0, 0.0, width, height, name, layer=name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
 
@@ -131,6 +147,8 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
     xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
     ys = np.unique(np.round([v for _, yspans in used for y, h in yspans for v in (y, y + h)], 9)).tolist()
     nx, ny = max(len(xs) - 1, 0), max(len(ys) - 1, 0)
+    xbits: dict[tuple[float, float], int] = {}     # memos: layers share spans
+    yrows: dict[tuple[float, float], range] = {}
 
     def bits(x: float, w: float) -> int:
         i0, i1 = (min(bisect.bisect_left(xs, round(v, 9)), nx) for v in (x, x + w))
@@ -143,15 +161,24 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
     out = [[False] * len(layer) for layer in cells]
     for index in range(len(cells) - 1, -1, -1):
         xspans, yspans = grids[index]
-        columns = [bits(x, w) for x, w in xspans]
+        layer_cells, layer_out = cells[index], out[index]
+        columns = []
+        for span in xspans:
+            mask = xbits.get(span)
+            if mask is None:
+                mask = xbits[span] = bits(*span)
+            columns.append(mask)
         boxes = []
         k = 0
-        for y, h in yspans:
-            span = rows(y, h)
+        for span_y in yspans:
+            span = yrows.get(span_y)
+            if span is None:
+                span = yrows[span_y] = rows(*span_y)
+            h = span_y[1]
             for (x, w), mask in zip(xspans, columns):
-                if cells[index][k][1].visible and w * h > 1e-12:
+                if layer_cells[k][1].visible and w * h > 1e-12:
                     if all(covered[j] & mask == mask for j in span):
-                        out[index][k] = True
+                        layer_out[k] = True
                     else:
                         boxes.append((span, mask))
                 k += 1
