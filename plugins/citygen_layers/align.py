@@ -359,6 +359,10 @@ def _descend(words: _Words, goal: tuple[int, ...], canvas: float, mu: float, bud
         visit(tuple(0 for _ in goal), 0.0, 0.0)
     except _Stop:
         complete = False
+    finally:
+        # the recursive closure refers to itself: without this cycle break the network and its edge memo would
+        # outlive the search until the cyclic collector runs (paused during a request, see plugin.generate)
+        del visit
     if best[1] is None:
         return None
     columns, size = best[1]

@@ -168,12 +168,15 @@ def _add(a: dict[int, float], b: dict[int, float]) -> dict[int, float]:
 
 
 def _matrix(rows: list[tuple[dict[int, float], float, str]], n: int) -> tuple[sp.csr_matrix, np.ndarray]:
-    data, ri, ci = [], [], []
-    for i, (coef, _, _) in enumerate(rows):
-        for j, v in coef.items():
+    """The rows (coefficients by variable) as a canonical CSR matrix (sorted columns, no zeros), and the rhs."""
+    indptr, indices, data = [0], [], []
+    for coef, _, _ in rows:
+        for j in sorted(coef):
+            v = coef[j]
             if v != 0.0:
-                ri.append(i)
-                ci.append(j)
+                indices.append(j)
                 data.append(v)
-    mat = sp.csr_matrix((data, (ri, ci)), shape=(len(rows), n))
+        indptr.append(len(indices))
+    mat = sp.csr_matrix((np.array(data, dtype=float), np.array(indices, dtype=np.int32),
+                         np.array(indptr, dtype=np.int32)), shape=(len(rows), n))
     return mat, np.array([rhs for _, rhs, _ in rows], dtype=float)

@@ -143,4 +143,7 @@ def min_measure(pattern: Pattern, fixed: Mapping[str, int], counters: Mapping[st
             k = abs(fixed[node.count]) if node.count in fixed else smallest(node.count)
         return k * walk(node.body)
 
-    return walk(pattern.control)
+    try:
+        return walk(pattern.control)
+    finally:
+        del walk    # the recursive closure refers to itself: break the cycle so it is freed at once

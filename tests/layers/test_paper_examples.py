@@ -80,3 +80,24 @@ def test_section4_residential_house():
     walls = [r for r in layout.terminals() if r.layer == "basic" and r.symbol == "A.P"]
     assert {round(p.x, 6) for p in pillars} <= {round(w.x, 6) for w in walls} | {0.0}   # C aligned with A
     assert layout.meta["status"] == {"x": "solved", "y": "solved"}
+
+
+def test_regression_solve_leaves_no_reference_cycles():
+    """The recursive closures of the depth-first search and of Eq. 7's bound referred to themselves, so each
+    search's network (with its edge memo, tens of thousands of tuples) stayed alive until the cyclic collector
+    ran -- which a request pauses, so its one collection at the end cost ~10 % of a 26-layer solve."""
+    import gc
+
+    rs = load(RULESETS / "tenement.layers")
+    request = FacadeRequest.preview(16, 15, 3.0, 4.0)
+    generate(rs, request)
+    gc.collect()
+    gc.disable()
+    try:
+        solve_request(rs, request, reuse=False)
+        assert gc.collect() == 0
+        words, above = _ceca()
+        align(words, above, 5.0, 0.5, Budget(1000, 1e18))
+        assert gc.collect() == 0
+    finally:
+        gc.enable()
