@@ -17,6 +17,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from operator import attrgetter, not_, or_
 
 import numpy as np
 
@@ -79,15 +80,17 @@ class _Words:
         self.fence = tuple(fence)
         parents = parents or [range(len(w)) for w in words]
 
-        def prefix(w, pred):
-            return list(itertools.accumulate((1 if pred(x) else 0 for x in w), initial=0))
+        def count(flags) -> list[int]:
+            """Prefix counts of a letter flag (C-level maps: the networks are rebuilt per candidate)."""
+            return list(itertools.accumulate(flags, initial=0))
 
-        self.cum = [list(itertools.accumulate((x.size for x in w), initial=0.0)) for w in words]
+        size, opaque, clear = attrgetter("size"), attrgetter("opaque"), attrgetter("transparent")
+        self.cum = [list(itertools.accumulate(map(size, w), initial=0.0)) for w in words]
         self.total = [c[-1] for c in self.cum]
-        self.nonopaque = [prefix(w, lambda x: not x.opaque) for w in words]
-        self.unocc = [prefix(w, lambda x: x.unoccludable) for w in words]
-        self.solid = [prefix(w, lambda x: not (x.transparent or x.opaque)) for w in words]
-        self.clear = [prefix(w, lambda x: x.transparent) for w in words]
+        self.nonopaque = [count(map(not_, map(opaque, w))) for w in words]
+        self.unocc = [count(map(attrgetter("unoccludable"), w)) for w in words]
+        self.solid = [count(map(not_, map(or_, map(clear, w), map(opaque, w)))) for w in words]
+        self.clear = [count(map(clear, w)) for w in words]
         self.eps_ok: list[list[bool]] = []
         self.runend: list[list[int]] = []
         for r, w in enumerate(words):
@@ -121,15 +124,15 @@ class _Words:
         """Where the columns leaving ``p`` must end at the latest: the end of the current prealigned column."""
         return next((b for b in self.fence if any(x < y for x, y in zip(p, b))), self.n)
 
-    def _row(self, r: int, a: int, end: int) -> tuple[list[float], list[float], dict, dict]:
+    def _row(self, r: int, a: int, end: int) -> tuple[list[float], list[float], dict]:
         """Row ``r`` from letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target
-        sizes the row proposes, and two memos (per target: the row's four choices; per end: its entry)."""
+        sizes the row proposes, and a memo of its entries per substring end."""
         key = (a, end)
         row = self._rows[r].get(key)
         if row is None:
             c, b = self.cum[r], self.cum[r][a]
             seg = [c[j] - b for j in range(a + 1, end + 1)]
-            row = self._rows[r][key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:self.LOOKAHEAD]], {}, {})
+            row = self._rows[r][key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:self.LOOKAHEAD]], {})
         return row
 
     def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
@@ -152,26 +155,26 @@ class _Words:
             if row is None:
                 choices.append((pr,) * (4 * len(targets)))
                 continue
-            seg, _, picks, _ = row
-            missing = [t for t in targets if t not in picks]
-            if missing:
-                last = len(seg) - 1
-                first = pr + 1
-                eps = pr if self.eps_ok[r][pr] else None
-                for t in missing:
-                    i = bisect.bisect_left(seg, t - tol)
-                    hi = min(last, i)
-                    lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
-                    near = lo if t - seg[lo] <= seg[hi] - t else hi
-                    picks[t] = (first + near, first + lo, first + hi,
-                                first + near if eps is None or abs(seg[near] - t) <= tol else eps)
-            nears, los, his, stricts = zip(*map(picks.__getitem__, targets))
+            seg = row[0]
+            last = len(seg) - 1
+            first = pr + 1
+            eps = pr if self.eps_ok[r][pr] else None
+            nears, los, his, stricts = [], [], [], []
+            for t in targets:
+                i = bisect.bisect_left(seg, t - tol)
+                hi = min(last, i)
+                lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
+                near = lo if t - seg[lo] <= seg[hi] - t else hi
+                nears.append(first + near)
+                los.append(first + lo)
+                his.append(first + hi)
+                stricts.append(first + near if eps is None or abs(seg[near] - t) <= tol else eps)
             choices.append(nears + los + his + stricts)
         # distinct columns, each in the place of its last proposal
         columns = list(dict.fromkeys(reversed(list(zip(*choices)))))[::-1]
         entries = []
         for r, row in enumerate(rows):
-            known = row[3] if row is not None else {}
+            known = row[2] if row is not None else {}
             for e in set(choices[r]).difference(known):
                 known[e] = self._entry(r, p[r], e)
             entries.append(known)
