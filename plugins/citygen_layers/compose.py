@@ -222,4 +222,5 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
         return replace(region, label=None, children=tuple(p for p in pieces if p is not None))
 
     root = fix(layout.root)
+    del fix    # the recursive closure refers to itself: break the cycle so it is freed at once
     return FacadeLayout(layout.width, layout.height, root, layout.meta), notes

@@ -86,7 +86,10 @@ def test_regression_solve_leaves_no_reference_cycles():
     """The recursive closures of the depth-first search and of Eq. 7's bound referred to themselves, so each
     search's network (with its edge memo, tens of thousands of tuples) stayed alive until the cyclic collector
     ran -- which a request pauses, so its one collection at the end cost ~10 % of a 26-layer solve."""
+    import dataclasses
     import gc
+
+    from citygen_layers.plugin import clear_solved
 
     rs = load(RULESETS / "tenement.layers")
     request = FacadeRequest.preview(16, 15, 3.0, 4.0)
@@ -94,7 +97,8 @@ def test_regression_solve_leaves_no_reference_cycles():
     gc.collect()
     gc.disable()
     try:
-        solve_request(rs, request, reuse=False)
+        clear_solved()
+        generate(rs, dataclasses.replace(request, corner_widths=(0.375, 0.375)))
         assert gc.collect() == 0
         words, above = _ceca()
         align(words, above, 5.0, 0.5, Budget(1000, 1e18))
