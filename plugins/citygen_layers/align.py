@@ -13,7 +13,6 @@ from __future__ import annotations
 import bisect
 import heapq
 import itertools
-import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
