@@ -12,7 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
-from citygen_inverse.regions import Box, LayoutIndex, _upow
+from citygen_inverse.regions import Box, LayoutIndex
 
 
 @dataclass(frozen=True)
@@ -41,13 +41,16 @@ class _Sides:
     far edge) and prefix sums of a translation-covariant strip hash sum_k R(material_k) P^start_k (mod 2^64)."""
 
     LANES = ((0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9), (0xD6E8FEB86659FD93, 0x94D049BB133111EB))
+    MIX = (np.array([0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D], dtype=np.uint64),
+           np.array([0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F], dtype=np.uint64))
 
     def __init__(self, index: LayoutIndex) -> None:
         X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
         self.lines = (np.unique(np.concatenate([X0, X1])), np.unique(np.concatenate([Y0, Y1])))
         self.stride = max(v.size for v in self.lines) + 1
         mat = index.material.astype(np.uint64) + np.uint64(1)
-        powers = [[(_upow([p], v)[0], _upow([pow(p, -1, 1 << 64)], v)[0]) for _, p in self.LANES] for v in self.lines]
+        powers = [[tuple(np.array([pow(b, e, 1 << 64) for e in v.tolist()], dtype=np.uint64) for b in (p, pow(p, -1, 1 << 64)))
+                   for _, p in self.LANES] for v in self.lines]
         spec = ((X0, Y0, Y1, X1), (X1, Y0, Y1, X0), (Y0, X0, X1, Y1), (Y1, X0, X1, Y0))
         self.sides = []
         for d, (line, start, end, far) in enumerate(spec):
@@ -65,29 +68,30 @@ class _Sides:
                 lanes.append((prefix, inverse[at]))
             self.sides.append((rank + at, rank + np.searchsorted(along, end), np.cumsum(new_run), line, far, lanes))
 
-    def grow(self, boxes: np.ndarray, direction: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per box (rows of ``boxes``), whether it grows by the strip of terminals adjacent to one side (the strip
-        exactly covers that side and its far edges align, Fig. 7): a mask, the grown boxes and a content key
-        (thickness, terminal count, two hash lanes) of each strip, for the boxes that grow."""
-        by_start, by_end, run, line, far, lanes = self.sides[direction]
-        across, along = self.lines[direction // 2], self.lines[1 - direction // 2]
-        side = boxes[:, (2, 0, 3, 1)[direction]]
-        a, b = (boxes[:, 1], boxes[:, 3]) if direction < 2 else (boxes[:, 0], boxes[:, 2])
-        rank = np.searchsorted(across, side) * self.stride
-        qa, qb = rank + np.searchsorted(along, a), rank + np.searchsorted(along, b)
-        i = np.minimum(np.searchsorted(by_start, qa), by_start.size - 1)
-        j = np.minimum(np.searchsorted(by_end, qb), by_end.size - 1)
-        ok = (by_start[i] == qa) & (by_end[j] == qb) & (i <= j) & (run[i] == run[j])
-        i, j, side, boxes = i[ok], j[ok], side[ok], boxes[ok]
-        f = far[i]
-        grown = boxes.copy()
-        grown[:, (2, 0, 3, 1)[direction]] = f
-        key = np.empty((i.size, 4), dtype=np.int64)
-        key[:, 0] = f - side
-        key[:, 1] = j - i
-        for k, (prefix, inverse) in enumerate(lanes):
-            key[:, 2 + k] = ((prefix[j + 1] - prefix[i]) * inverse[i]).view(np.int64)
-        return ok, grown, key
+    def grow(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+        """The rows of ``boxes`` that grow by the strip of terminals adjacent to one side (the strip exactly covers
+        that side and its far edges align, Fig. 7), in every direction: per grown box its row, its direction,
+        the grown box and two 64-bit hash lanes of (box size, strip thickness, terminal count, strip content)."""
+        ranks = [np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)]
+        size = [boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]]
+        out = []
+        for direction, (by_start, by_end, run, line, far, lanes) in enumerate(self.sides):
+            c = (2, 0, 3, 1)[direction]
+            a, b = (1, 3) if direction < 2 else (0, 2)
+            qa, qb = ranks[c] * self.stride + ranks[a], ranks[c] * self.stride + ranks[b]
+            i = np.minimum(np.searchsorted(by_start, qa), by_start.size - 1)
+            j = np.minimum(np.searchsorted(by_end, qb), by_end.size - 1)
+            rows = np.flatnonzero((by_start[i] == qa) & (by_end[j] == qb) & (i <= j) & (run[i] == run[j]))
+            i, j = i[rows], j[rows]
+            grown = boxes[rows]
+            grown[:, c] = far[i]
+            parts = np.column_stack([size[0][rows], size[1][rows], np.abs(far[i] - boxes[rows, c]), j - i])
+            hashes = [(prefix[j + 1] - prefix[i]) * inverse[i] + parts.astype(np.uint64) @ mix
+                      for (prefix, inverse), mix in zip(lanes, self.MIX)]
+            out.append((rows, np.full(rows.size, direction), grown, hashes))
+        rows, direction, grown, hashes = zip(*out)
+        return np.concatenate(rows), np.concatenate(direction), np.concatenate(grown), \
+            [np.concatenate([h[k] for h in hashes]) for k in range(2)]
 
 
 def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegions:
@@ -109,18 +113,20 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         sizes = [len(groups[s]) for s in batch]
         boxes = np.array([box for s in batch for box in groups[s]], dtype=np.int64)
         owner = np.repeat(np.arange(len(batch)), sizes)
-        found = [_same_strips(sides, boxes, owner, len(batch), direction) for direction in range(4)]
+        starts, bounds, order, grown_boxes = _same_strips(sides, boxes, owner, len(batch))
         for g, sig in enumerate(batch):
             if len(groups) >= max_groups:
                 break
-            for starts, members, grown_boxes in found:
-                grown: dict[int, list[Box]] = defaultdict(list)
-                for k in range(starts[g], starts[g + 1]):
-                    same = [tuple(grown_boxes[m]) for m in members[k]]
-                    grown[index.sig(same[0])].extend(same)
-                for new_sig, same in grown.items():
-                    if new_sig > 0 and len(same) >= 2 and new_sig not in groups:
-                        groups[new_sig] = same
+            for gd in range(4 * g, 4 * g + 4):
+                if starts[gd] == starts[gd + 1]:
+                    continue
+                grown: dict[int, list[int]] = defaultdict(list)
+                for k in range(starts[gd], starts[gd + 1]):
+                    grown[index.sig(tuple(grown_boxes[order[bounds[k][0]]]))].append(k)
+                for new_sig, ks in grown.items():
+                    if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
+                            and new_sig not in groups:
+                        groups[new_sig] = [tuple(grown_boxes[m]) for k in ks for m in order[slice(*bounds[k])]]
                         queue.append(new_sig)
     multi = groups
     boxes = [box for s in multi for box in multi[s]]
@@ -131,19 +137,21 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         group=np.array([s for s in multi for _ in multi[s]], dtype=np.int64))
 
 
-def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int, direction: int
-                 ) -> tuple[list[int], list[list[int]], list[Box]]:
-    """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in one direction, in classes of
-    equal group, size and strip content: per group the range of its classes (``starts``), per class the indices
-    of its grown boxes in instance order (classes of a group ordered by their first instance), the grown boxes."""
-    ok, grown, key = sides.grow(boxes, direction)
-    owner, boxes = owner[ok], boxes[ok]
-    cols = np.column_stack([owner, boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1], key])
-    order = np.lexsort((np.arange(owner.size), *cols.T[::-1]))  # by group and class, then instance order
-    cut = np.ones(owner.size, dtype=bool)
-    cut[1:] = np.any(cols[order[1:]] != cols[order[:-1]], axis=1)
+def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int
+                 ) -> tuple[list[int], list[tuple[int, int]], list[int], list[list[int]]]:
+    """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in every direction, in classes
+    of equal group, direction, size and strip content (by a 128-bit hash). Returns per (group, direction) the
+    range of its classes (``starts``, index ``4 group + direction``), per class the range of its members in
+    ``order`` (a class's members and a group's classes in instance order), ``order`` (indices into the grown
+    boxes) and the grown boxes."""
+    rows, direction, grown, (h0, h1) = sides.grow(boxes)
+    gd = owner[rows] * 4 + direction
+    order = np.lexsort((h1, h0, gd))  # stable: equal keys stay in instance order
+    cut = np.ones(gd.size, dtype=bool)
+    cut[1:] = (gd[order[1:]] != gd[order[:-1]]) | (h0[order[1:]] != h0[order[:-1]]) | (h1[order[1:]] != h1[order[:-1]])
     first = np.flatnonzero(cut)
-    classes = np.argsort(order[first], kind="stable")
-    starts = np.searchsorted(owner[order[first[classes]]], np.arange(groups + 1)).tolist()
-    order, bounds = order.tolist(), [*first.tolist(), owner.size]
-    return starts, [order[bounds[c]:bounds[c + 1]] for c in classes.tolist()], grown.tolist()
+    classes = np.lexsort((order[first], gd[order[first]]))
+    starts = np.searchsorted(gd[order[first[classes]]], np.arange(4 * groups + 1)).tolist()
+    ends = np.append(first[1:], gd.size)
+    bounds = list(zip(first[classes].tolist(), ends[classes].tolist()))
+    return starts, bounds, order.tolist(), grown.tolist()
