@@ -19,6 +19,8 @@ layout beyond ``_Grid.MAX_CELLS`` is rejected.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from math import gcd
 
 import numpy as np
 
@@ -121,7 +123,7 @@ class LayoutIndex:
         key = None
         if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free else g.period(box, cell, axis, (free_w, free_h))
+                p = None if free else g.period(box, cell, axis, (free_w, free_h), n)
                 if p is not None:
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
                     key = (-2 - axis, p, self.sig(tile))
@@ -240,17 +242,23 @@ class _Grid:
         a = self.along[axis][line]
         return a[hi] - a[lo] == hi - lo
 
-    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool]) -> int | None:
+    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool], n: int
+               ) -> int | None:
         """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
-        along ``axis``."""
-        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
+        along ``axis``. ``k`` identical tiles hold ``k`` times a tile's terminals, so only the tile counts ``k`` that
+        divide both the terminal count ``n`` and ``length`` are tried (the largest first: the smallest ``p`` first)."""
         start, length = box[axis], box[axis + 2] - box[axis]
+        counts = _divisors(gcd(n, length))
+        if not counts:
+            return None
+        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
         i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        for i in range(i0 + 1, i1):
-            p = lines[i] - start
-            if 2 * p > length:
-                return None
-            if length % p or not self.full_line(axis, i, lo, hi):
+        for count in counts:
+            if count > i1 - i0:
+                continue
+            p = length // count
+            i = index.get(start + p)
+            if i is None or not self.full_line(axis, i, lo, hi):
                 continue
             tiles = []
             for k in range(length // p + 1):
@@ -277,6 +285,12 @@ class _Grid:
         i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
         lines = self.xs if axis == 0 else self.ys
         return np.array([lines[i] for i in range(i0 + 1, i1) if self.full_line(axis, i, lo, hi)], dtype=np.int64)
+
+
+@lru_cache(maxsize=None)
+def _divisors(n: int) -> tuple[int, ...]:
+    """The divisors ``k >= 2`` of ``n``, largest first."""
+    return tuple(k for k in range(n, 1, -1) if n % k == 0)
 
 
 def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
