@@ -102,56 +102,55 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
     together (array operations over all their instances); their results are taken in queue order.
     """
     sides = _Sides(index)
-    table: dict[int, list[Box]] = defaultdict(list)
-    for k in range(index.X0.size):
-        box = (int(index.X0[k]), int(index.Y0[k]), int(index.X1[k]), int(index.Y1[k]))
-        table[index.sig(box)].append(box)
-    groups = {s: boxes for s, boxes in table.items() if len(boxes) >= 2}
+    terminals = np.column_stack([index.X0, index.Y0, index.X1, index.Y1])
+    table: dict[int, list[int]] = defaultdict(list)
+    for k, box in enumerate(terminals.tolist()):
+        table[index.sig(tuple(box))].append(k)
+    groups = {s: terminals[rows] for s, rows in table.items() if len(rows) >= 2}
     queue = sorted(groups)
     while queue and len(groups) < max_groups:
         batch, queue = queue, []
-        sizes = [len(groups[s]) for s in batch]
-        boxes = np.array([box for s in batch for box in groups[s]], dtype=np.int64)
-        owner = np.repeat(np.arange(len(batch)), sizes)
-        starts, bounds, order, grown_boxes = _same_strips(sides, boxes, owner, len(batch))
-        for g, sig in enumerate(batch):
+        boxes = np.concatenate([groups[s] for s in batch])
+        owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
+        starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
+        for g in range(len(batch)):
             if len(groups) >= max_groups:
                 break
             for gd in range(4 * g, 4 * g + 4):
                 if starts[gd] == starts[gd + 1]:
                     continue
-                grown: dict[int, list[int]] = defaultdict(list)
+                same: dict[int, list[int]] = defaultdict(list)
                 for k in range(starts[gd], starts[gd + 1]):
-                    grown[index.sig(tuple(grown_boxes[order[bounds[k][0]]]))].append(k)
-                for new_sig, ks in grown.items():
+                    same[index.sig(tuple(firsts[k]))].append(k)
+                for new_sig, ks in same.items():
                     if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
                             and new_sig not in groups:
-                        groups[new_sig] = [tuple(grown_boxes[m]) for k in ks for m in order[slice(*bounds[k])]]
+                        groups[new_sig] = np.concatenate([grown[slice(*bounds[k])] for k in ks])
                         queue.append(new_sig)
-    multi = groups
-    boxes = [box for s in multi for box in multi[s]]
+    sizes = [len(boxes) for boxes in groups.values()]
     return RepeatedRegions(
-        boxes=np.array(boxes, dtype=np.int64).reshape(-1, 4),
-        terminals=np.array([index.sigs[s].n for s in multi for _ in multi[s]], dtype=np.int64),
-        occurrences=np.array([len(multi[s]) for s in multi for _ in multi[s]], dtype=np.int64),
-        group=np.array([s for s in multi for _ in multi[s]], dtype=np.int64))
+        boxes=np.concatenate(list(groups.values())) if groups else np.zeros((0, 4), dtype=np.int64),
+        terminals=np.repeat(np.array([index.sigs[s].n for s in groups], dtype=np.int64), sizes),
+        occurrences=np.repeat(np.array(sizes, dtype=np.int64), sizes),
+        group=np.repeat(np.array(list(groups), dtype=np.int64), sizes))
 
 
 def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int
-                 ) -> tuple[list[int], list[tuple[int, int]], list[int], list[list[int]]]:
+                 ) -> tuple[list[int], list[tuple[int, int]], list[list[int]], np.ndarray]:
     """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in every direction, in classes
     of equal group, direction, size and strip content (by a 128-bit hash). Returns per (group, direction) the
-    range of its classes (``starts``, index ``4 group + direction``), per class the range of its members in
-    ``order`` (a class's members and a group's classes in instance order), ``order`` (indices into the grown
-    boxes) and the grown boxes."""
+    range of its classes (``starts``, index ``4 group + direction``; a group's classes in order of their first
+    instance), per class the range of its members (in instance order) in the grown boxes, which are sorted by
+    class, and per class the first member."""
     rows, direction, grown, (h0, h1) = sides.grow(boxes)
     gd = owner[rows] * 4 + direction
     order = np.lexsort((h1, h0, gd))  # stable: equal keys stay in instance order
+    gd, h0, h1, grown = gd[order], h0[order], h1[order], grown[order]
     cut = np.ones(gd.size, dtype=bool)
-    cut[1:] = (gd[order[1:]] != gd[order[:-1]]) | (h0[order[1:]] != h0[order[:-1]]) | (h1[order[1:]] != h1[order[:-1]])
+    cut[1:] = (gd[1:] != gd[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
     first = np.flatnonzero(cut)
-    classes = np.lexsort((order[first], gd[order[first]]))
-    starts = np.searchsorted(gd[order[first[classes]]], np.arange(4 * groups + 1)).tolist()
+    classes = np.lexsort((order[first], gd[first]))
+    starts = np.searchsorted(gd[first[classes]], np.arange(4 * groups + 1)).tolist()
     ends = np.append(first[1:], gd.size)
     bounds = list(zip(first[classes].tolist(), ends[classes].tolist()))
-    return starts, bounds, order.tolist(), grown.tolist()
+    return starts, bounds, grown[first[classes]].tolist(), grown
