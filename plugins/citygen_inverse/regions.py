@@ -111,19 +111,20 @@ class LayoutIndex:
         if found is not None:
             return found
         g = self._grid
-        cell = g.cells(box)
-        if cell is None:
+        found = g.region(box)
+        if found is None:
             self._boxes[box] = -1
             return -1
+        cell, n, inner_x, inner_y = found
         i0, j0, i1, j1 = cell
         x0, y0, x1, y1 = box
-        n = g.count(cell)
-        free_w = self.free_extents and g.interior_lines(0, cell) == 0
-        free_h = self.free_extents and g.interior_lines(1, cell) == 0
+        free_w = self.free_extents and inner_x == 0
+        free_h = self.free_extents and inner_y == 0
         key = None
         if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free else g.period(box, cell, axis, (free_w, free_h), n)
+                p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
+                    g.period(box, cell, axis, (free_w, free_h), n)
                 if p is not None:
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
                     key = (-2 - axis, p, self.sig(tile))
@@ -219,13 +220,19 @@ class _Grid:
             return None
         return i0, j0, i1, j1
 
-    def count(self, cell: tuple[int, int, int, int]) -> int:
-        return _sum(self.n, *cell)
-
-    def interior_lines(self, axis: int, cell: tuple[int, int, int, int]) -> int:
-        """Terminal edge segments on lines strictly inside the box, perpendicular to ``axis``."""
-        i0, j0, i1, j1 = cell if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        return _sum(self.interior[axis], i0 + 1, j0, i1, j1) if i1 > i0 + 1 else 0
+    def region(self, box: Box) -> tuple[tuple[int, int, int, int], int, int, int] | None:
+        """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
+        segments on lines strictly inside it, perpendicular to x and to y (``cells``, ``n`` and ``interior``
+        inlined: this is the signature lookup's hot path)."""
+        cell = self.cells(box)
+        if cell is None:
+            return None
+        i0, j0, i1, j1 = cell
+        n, (vx, vy) = self.n, self.interior
+        count = n[i1][j1] - n[i0][j1] - n[i1][j0] + n[i0][j0]
+        inner_x = vx[i1][j1] - vx[i0 + 1][j1] - vx[i1][j0] + vx[i0 + 1][j0] if i1 > i0 + 1 else 0
+        inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
+        return cell, count, inner_x, inner_y
 
     def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
         """The two content hashes of a tiled box, translated to its corner."""
