@@ -36,62 +36,68 @@ class RepeatedRegions:
 
 
 class _Sides:
-    """Per side (0 right, 1 left, 2 up, 3 down), the terminals touching a box side from the outside, as sorted
-    arrays keyed by (line rank, start rank) and (line rank, end rank), with *runs* (contiguous terminals with one
-    far edge) and prefix sums of a translation-covariant strip hash sum_k R(material_k) P^start_k (mod 2^64)."""
+    """The terminals touching a box side from the outside, per side (0 right, 1 left, 2 up, 3 down) and line, in
+    one table sorted by (side, line rank, start rank) with the same keys by end rank, *runs* (contiguous terminals
+    of one side and line with one far edge) and prefix sums of a translation-covariant strip content hash
+    sum_k R(material_k) P^start_k (mod 2^64, two lanes)."""
 
     LANES = ((0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9), (0xD6E8FEB86659FD93, 0x94D049BB133111EB))
-    MIX = (np.array([0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D], dtype=np.uint64),
-           np.array([0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F], dtype=np.uint64))
+    MIX = np.array([[0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D],
+                    [0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F]], dtype=np.uint64)
+    NEAR, START, END = (2, 0, 3, 1), (1, 1, 0, 0), (3, 3, 2, 2)  # per side: the box column of its line, a, b
 
     def __init__(self, index: LayoutIndex) -> None:
         X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
         self.lines = (np.unique(np.concatenate([X0, X1])), np.unique(np.concatenate([Y0, Y1])))
         self.stride = max(v.size for v in self.lines) + 1
-        mat = index.material.astype(np.uint64) + np.uint64(1)
-        powers = [[tuple(np.array([pow(b, e, 1 << 64) for e in v.tolist()], dtype=np.uint64) for b in (p, pow(p, -1, 1 << 64)))
-                   for _, p in self.LANES] for v in self.lines]
-        spec = ((X0, Y0, Y1, X1), (X1, Y0, Y1, X0), (Y0, X0, X1, Y1), (Y1, X0, X1, Y0))
-        self.sides = []
-        for d, (line, start, end, far) in enumerate(spec):
-            order = np.lexsort((start, line))
-            line, start, end, far, m = line[order], start[order], end[order], far[order], mat[order]
-            across, along = self.lines[d // 2], self.lines[1 - d // 2]
-            rank = np.searchsorted(across, line) * self.stride
-            new_run = np.ones(line.size, dtype=bool)
-            new_run[1:] = (line[1:] != line[:-1]) | (start[1:] != end[:-1]) | (far[1:] != far[:-1])
-            at = np.searchsorted(along, start)
-            lanes = []
-            for (r, p), (power, inverse) in zip(self.LANES, powers[1 - d // 2]):
-                prefix = np.zeros(line.size + 1, dtype=np.uint64)
-                np.cumsum(m * np.uint64(r) * power[at], out=prefix[1:])
-                lanes.append((prefix, inverse[at]))
-            self.sides.append((rank + at, rank + np.searchsorted(along, end), np.cumsum(new_run), line, far, lanes))
+        ranks = [np.searchsorted(self.lines[k % 2], v) for k, v in enumerate((X0, Y0, X1, Y1))]
+        powers = [np.array([[pow(b, e, 1 << 64) for e in v.tolist()] for _, p in self.LANES
+                            for b in (p, pow(p, -1, 1 << 64))], dtype=np.uint64) for v in self.lines]
+        cols = ((0, 1, 3, 2), (2, 1, 3, 0), (1, 0, 2, 3), (3, 0, 2, 1))  # per side: terminal's line, start, end, far
+        key_start, key_end, far, side, at = [], [], [], [], []
+        for d, (li, st, en, fa) in enumerate(cols):
+            base = (d * self.stride + ranks[li]) * self.stride
+            key_start.append(base + ranks[st])
+            key_end.append(base + ranks[en])
+            far.append((X0, Y0, X1, Y1)[fa])
+            side.append((X0, Y0, X1, Y1)[li])
+            at.append(ranks[st] + (d // 2) * self.lines[1].size)  # index into the along-axis powers
+        order = np.argsort(np.concatenate(key_start), kind="stable")
+        self.by_start, self.by_end = np.concatenate(key_start)[order], np.concatenate(key_end)[order]
+        self.far, line = np.concatenate(far)[order], np.concatenate(side)[order]
+        new_run = np.ones(order.size, dtype=bool)
+        new_run[1:] = (self.by_start[1:] // self.stride != self.by_start[:-1] // self.stride) | \
+            (self.by_start[1:] != self.by_end[:-1]) | (self.far[1:] != self.far[:-1])
+        self.run = np.cumsum(new_run)
+        power = np.concatenate([powers[1], powers[0]], axis=1)[:, np.concatenate(at)[order]]  # (4, terminals)
+        mat = np.tile(index.material.astype(np.uint64) + np.uint64(1), 4)[order]
+        self.prefix = np.zeros((2, order.size + 1), dtype=np.uint64)
+        for k, (r, _) in enumerate(self.LANES):
+            np.cumsum(mat * np.uint64(r) * power[2 * k], out=self.prefix[k, 1:])
+        self.inverse = power[1::2]
 
-    def grow(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    def grow(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The rows of ``boxes`` that grow by the strip of terminals adjacent to one side (the strip exactly covers
         that side and its far edges align, Fig. 7), in every direction: per grown box its row, its direction,
         the grown box and two 64-bit hash lanes of (box size, strip thickness, terminal count, strip content)."""
-        ranks = [np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)]
-        size = [boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]]
-        out = []
-        for direction, (by_start, by_end, run, line, far, lanes) in enumerate(self.sides):
-            c = (2, 0, 3, 1)[direction]
-            a, b = (1, 3) if direction < 2 else (0, 2)
-            qa, qb = ranks[c] * self.stride + ranks[a], ranks[c] * self.stride + ranks[b]
-            i = np.minimum(np.searchsorted(by_start, qa), by_start.size - 1)
-            j = np.minimum(np.searchsorted(by_end, qb), by_end.size - 1)
-            rows = np.flatnonzero((by_start[i] == qa) & (by_end[j] == qb) & (i <= j) & (run[i] == run[j]))
-            i, j = i[rows], j[rows]
-            grown = boxes[rows]
-            grown[:, c] = far[i]
-            parts = np.column_stack([size[0][rows], size[1][rows], np.abs(far[i] - boxes[rows, c]), j - i])
-            hashes = [(prefix[j + 1] - prefix[i]) * inverse[i] + parts.astype(np.uint64) @ mix
-                      for (prefix, inverse), mix in zip(lanes, self.MIX)]
-            out.append((rows, np.full(rows.size, direction), grown, hashes))
-        rows, direction, grown, hashes = zip(*out)
-        return np.concatenate(rows), np.concatenate(direction), np.concatenate(grown), \
-            [np.concatenate([h[k] for h in hashes]) for k in range(2)]
+        n = boxes.shape[0]
+        ranks = np.column_stack([np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)])
+        rows, direction = np.tile(np.arange(n), 4), np.repeat(np.arange(4), n)
+        near = np.array(self.NEAR)[direction]
+        line = (direction * self.stride + ranks[rows, near]) * self.stride
+        qa = line + ranks[rows, np.array(self.START)[direction]]
+        qb = line + ranks[rows, np.array(self.END)[direction]]
+        i = np.minimum(np.searchsorted(self.by_start, qa), self.by_start.size - 1)
+        j = np.minimum(np.searchsorted(self.by_end, qb), self.by_end.size - 1)
+        ok = np.flatnonzero((self.by_start[i] == qa) & (self.by_end[j] == qb) & (i <= j) & (self.run[i] == self.run[j]))
+        i, j, rows, direction, near = i[ok], j[ok], rows[ok], direction[ok], near[ok]
+        grown = boxes[rows]
+        f = self.far[i]
+        parts = np.column_stack([grown[:, 2] - grown[:, 0], grown[:, 3] - grown[:, 1],
+                                 np.abs(f - grown[np.arange(ok.size), near]), j - i]).astype(np.uint64)
+        grown[np.arange(ok.size), near] = f
+        hashes = (self.prefix[:, j + 1] - self.prefix[:, i]) * self.inverse[:, i] + self.MIX @ parts.T
+        return rows, direction, grown, hashes
 
 
 def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegions:
