@@ -140,6 +140,11 @@ class LayoutIndex:
         self._boxes[box] = sid
         return sid
 
+    @property
+    def grid_powers(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+        """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
+        return self._grid.powers
+
     def cuts(self, box: Box, axis: int) -> np.ndarray:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
         return self._grid.cuts(box, axis)
@@ -196,10 +201,11 @@ class _Grid:
         r = (r * np.uint64(2) + np.uint64(1))[kind].reshape(4, X0.size, lanes)
         A, B = ([lane[axis] for lane in self.LANES] for axis in (0, 1))
         xs, ys = np.array(self.xs, dtype=np.uint64), np.array(self.ys, dtype=np.uint64)
-        inv_x = _upow([pow(a, -1, 1 << 64) for a in A], xs).tolist()
-        inv_y = _upow([pow(b, -1, 1 << 64) for b in B], ys).tolist()
+        # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
+        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v)) for C, v in ((A, xs), (B, ys)))
+        inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
         self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
-        place = _upow(A, xs)[:, a0] * _upow(B, ys)[:, b0]  # (lanes, terminals)
+        place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
         self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
             val = np.zeros((lanes, nx, ny), dtype=np.uint64)
@@ -304,10 +310,11 @@ def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
     """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
     out = np.ones((len(bases), exps.size), dtype=np.uint64)
     e = exps.astype(np.uint64)
+    square = np.array(bases, dtype=np.uint64)[:, None]
+    one = np.uint64(1)
     while e.any():
-        odd = (e & np.uint64(1)).astype(bool)
-        out[:, odd] *= np.array(bases, dtype=np.uint64)[:, None]
-        bases, e = [b * b & _Grid.MASK for b in bases], e >> np.uint64(1)
+        out *= np.where(e & one, square, one)
+        square, e = square * square, e >> one
     return out
 
 

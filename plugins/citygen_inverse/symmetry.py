@@ -39,9 +39,9 @@ class _Sides:
     """The terminals touching a box side from the outside, per side (0 right, 1 left, 2 up, 3 down) and line, in
     one table sorted by (side, line rank, start rank) with the same keys by end rank, *runs* (contiguous terminals
     of one side and line with one far edge) and prefix sums of a translation-covariant strip content hash
-    sum_k R(material_k) P^start_k (mod 2^64, two lanes)."""
+    sum_k R(material_k) P^start_k (mod 2^64, two lanes; P^v of the index's grid)."""
 
-    LANES = ((0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9), (0xD6E8FEB86659FD93, 0x94D049BB133111EB))
+    MATERIAL = np.array([0xBF58476D1CE4E5B9, 0x94D049BB133111EB], dtype=np.uint64)  # R(material) per lane
     MIX = np.array([[0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D],
                     [0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F]], dtype=np.uint64)
     NEAR, START, END = (2, 0, 3, 1), (1, 1, 0, 0), (3, 3, 2, 2)  # per side: the box column of its line, a, b
@@ -51,8 +51,6 @@ class _Sides:
         self.lines = (np.unique(np.concatenate([X0, X1])), np.unique(np.concatenate([Y0, Y1])))
         self.stride = max(v.size for v in self.lines) + 1
         ranks = [np.searchsorted(self.lines[k % 2], v) for k, v in enumerate((X0, Y0, X1, Y1))]
-        powers = [np.array([[pow(b, e, 1 << 64) for e in v.tolist()] for _, p in self.LANES
-                            for b in (p, pow(p, -1, 1 << 64))], dtype=np.uint64) for v in self.lines]
         cols = ((0, 1, 3, 2), (2, 1, 3, 0), (1, 0, 2, 3), (3, 0, 2, 1))  # per side: terminal's line, start, end, far
         key_start, key_end, far, side, at = [], [], [], [], []
         for d, (li, st, en, fa) in enumerate(cols):
@@ -69,12 +67,12 @@ class _Sides:
         new_run[1:] = (self.by_start[1:] // self.stride != self.by_start[:-1] // self.stride) | \
             (self.by_start[1:] != self.by_end[:-1]) | (self.far[1:] != self.far[:-1])
         self.run = np.cumsum(new_run)
-        power = np.concatenate([powers[1], powers[0]], axis=1)[:, np.concatenate(at)[order]]  # (4, terminals)
+        (ax, inv_ax), (ay, inv_ay) = index.grid_powers  # along y for sides 0 and 1, along x for 2 and 3
+        at = np.concatenate(at)[order]
+        power, self.inverse = np.concatenate([ay, ax], axis=1)[:, at], np.concatenate([inv_ay, inv_ax], axis=1)[:, at]
         mat = np.tile(index.material.astype(np.uint64) + np.uint64(1), 4)[order]
-        self.prefix = np.zeros((2, order.size + 1), dtype=np.uint64)
-        for k, (r, _) in enumerate(self.LANES):
-            np.cumsum(mat * np.uint64(r) * power[2 * k], out=self.prefix[k, 1:])
-        self.inverse = power[1::2]
+        self.prefix = np.zeros((power.shape[0], order.size + 1), dtype=np.uint64)
+        np.cumsum(mat * self.MATERIAL[:, None] * power, axis=1, out=self.prefix[:, 1:])
 
     def grow(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The rows of ``boxes`` that grow by the strip of terminals adjacent to one side (the strip exactly covers
