@@ -12,7 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
-from citygen_inverse.regions import Box, LayoutIndex
+from citygen_inverse.regions import LayoutIndex
 
 
 @dataclass(frozen=True)
@@ -131,7 +131,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
                             and new_sig not in groups:
                         groups[new_sig] = np.concatenate([grown[slice(*bounds[k])] for k in ks])
                         queue.append(new_sig)
-    sizes = [len(boxes) for boxes in groups.values()]
+    sizes = [len(instances) for instances in groups.values()]
     return RepeatedRegions(
         boxes=np.concatenate(list(groups.values())) if groups else np.zeros((0, 4), dtype=np.int64),
         terminals=np.repeat(np.array([index.sigs[s].n for s in groups], dtype=np.int64), sizes),
