@@ -19,6 +19,8 @@ layout beyond ``_Grid.MAX_CELLS`` is rejected.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from math import gcd
 
 import numpy as np
 
@@ -109,19 +111,20 @@ class LayoutIndex:
         if found is not None:
             return found
         g = self._grid
-        cell = g.cells(box)
-        if cell is None:
+        found = g.region(box)
+        if found is None:
             self._boxes[box] = -1
             return -1
+        cell, n, inner_x, inner_y = found
         i0, j0, i1, j1 = cell
         x0, y0, x1, y1 = box
-        n = g.count(cell)
-        free_w = self.free_extents and g.interior_lines(0, cell) == 0
-        free_h = self.free_extents and g.interior_lines(1, cell) == 0
+        free_w = self.free_extents and inner_x == 0
+        free_h = self.free_extents and inner_y == 0
         key = None
         if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free else g.period(box, cell, axis, (free_w, free_h))
+                p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
+                    g.period(box, cell, axis, (free_w, free_h), n)
                 if p is not None:
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
                     key = (-2 - axis, p, self.sig(tile))
@@ -136,6 +139,11 @@ class LayoutIndex:
                                      None if key[0] >= 0 else (-2 - key[0], key[1])))
         self._boxes[box] = sid
         return sid
+
+    @property
+    def grid_powers(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+        """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
+        return self._grid.powers
 
     def cuts(self, box: Box, axis: int) -> np.ndarray:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
@@ -193,10 +201,11 @@ class _Grid:
         r = (r * np.uint64(2) + np.uint64(1))[kind].reshape(4, X0.size, lanes)
         A, B = ([lane[axis] for lane in self.LANES] for axis in (0, 1))
         xs, ys = np.array(self.xs, dtype=np.uint64), np.array(self.ys, dtype=np.uint64)
-        inv_x = _upow([pow(a, -1, 1 << 64) for a in A], xs).tolist()
-        inv_y = _upow([pow(b, -1, 1 << 64) for b in B], ys).tolist()
+        # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
+        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v)) for C, v in ((A, xs), (B, ys)))
+        inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
         self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
-        place = _upow(A, xs)[:, a0] * _upow(B, ys)[:, b0]  # (lanes, terminals)
+        place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
         self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
             val = np.zeros((lanes, nx, ny), dtype=np.uint64)
@@ -217,13 +226,19 @@ class _Grid:
             return None
         return i0, j0, i1, j1
 
-    def count(self, cell: tuple[int, int, int, int]) -> int:
-        return _sum(self.n, *cell)
-
-    def interior_lines(self, axis: int, cell: tuple[int, int, int, int]) -> int:
-        """Terminal edge segments on lines strictly inside the box, perpendicular to ``axis``."""
-        i0, j0, i1, j1 = cell if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        return _sum(self.interior[axis], i0 + 1, j0, i1, j1) if i1 > i0 + 1 else 0
+    def region(self, box: Box) -> tuple[tuple[int, int, int, int], int, int, int] | None:
+        """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
+        segments on lines strictly inside it, perpendicular to x and to y (``cells``, ``n`` and ``interior``
+        inlined: this is the signature lookup's hot path)."""
+        cell = self.cells(box)
+        if cell is None:
+            return None
+        i0, j0, i1, j1 = cell
+        n, (vx, vy) = self.n, self.interior
+        count = n[i1][j1] - n[i0][j1] - n[i1][j0] + n[i0][j0]
+        inner_x = vx[i1][j1] - vx[i0 + 1][j1] - vx[i1][j0] + vx[i0 + 1][j0] if i1 > i0 + 1 else 0
+        inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
+        return cell, count, inner_x, inner_y
 
     def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
         """The two content hashes of a tiled box, translated to its corner."""
@@ -240,17 +255,23 @@ class _Grid:
         a = self.along[axis][line]
         return a[hi] - a[lo] == hi - lo
 
-    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool]) -> int | None:
+    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool], n: int
+               ) -> int | None:
         """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
-        along ``axis``."""
-        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
+        along ``axis``. ``k`` identical tiles hold ``k`` times a tile's terminals, so only the tile counts ``k`` that
+        divide both the terminal count ``n`` and ``length`` are tried (the largest first: the smallest ``p`` first)."""
         start, length = box[axis], box[axis + 2] - box[axis]
+        counts = _divisors(gcd(n, length))
+        if not counts:
+            return None
+        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
         i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        for i in range(i0 + 1, i1):
-            p = lines[i] - start
-            if 2 * p > length:
-                return None
-            if length % p or not self.full_line(axis, i, lo, hi):
+        for count in counts:
+            if count > i1 - i0:
+                continue
+            p = length // count
+            i = index.get(start + p)
+            if i is None or not self.full_line(axis, i, lo, hi):
                 continue
             tiles = []
             for k in range(length // p + 1):
@@ -279,14 +300,21 @@ class _Grid:
         return np.array([lines[i] for i in range(i0 + 1, i1) if self.full_line(axis, i, lo, hi)], dtype=np.int64)
 
 
+@lru_cache(maxsize=None)
+def _divisors(n: int) -> tuple[int, ...]:
+    """The divisors ``k >= 2`` of ``n``, largest first."""
+    return tuple(k for k in range(n, 1, -1) if n % k == 0)
+
+
 def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
     """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
     out = np.ones((len(bases), exps.size), dtype=np.uint64)
     e = exps.astype(np.uint64)
+    square = np.array(bases, dtype=np.uint64)[:, None]
+    one = np.uint64(1)
     while e.any():
-        odd = (e & np.uint64(1)).astype(bool)
-        out[:, odd] *= np.array(bases, dtype=np.uint64)[:, None]
-        bases, e = [b * b & _Grid.MASK for b in bases], e >> np.uint64(1)
+        out *= np.where(e & one, square, one)
+        square, e = square * square, e >> one
     return out
 
 

@@ -6,14 +6,13 @@ occurs two or more times enters the hash table (signature -> instances) and is g
 """
 from __future__ import annotations
 
-from bisect import bisect_left, bisect_right
-from collections import defaultdict, deque
+from collections import defaultdict
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
-from citygen_inverse.regions import Box, LayoutIndex
+from citygen_inverse.regions import LayoutIndex
 
 
 @dataclass(frozen=True)
@@ -37,78 +36,125 @@ class RepeatedRegions:
 
 
 class _Sides:
-    """Per side (0 right, 1 left, 2 up, 3 down) and line coordinate, the terminals touching that line from the
-    outside, sorted along it: (starts, ends, far edges, materials) as lists for bisection."""
+    """The terminals touching a box side from the outside, per side (0 right, 1 left, 2 up, 3 down) and line, in
+    one table sorted by (side, line rank, start rank) with the same keys by end rank, *runs* (contiguous terminals
+    of one side and line with one far edge) and prefix sums of a translation-covariant strip content hash
+    sum_k R(material_k) P^start_k (mod 2^64, two lanes; P^v of the index's grid)."""
+
+    MATERIAL = np.array([0xBF58476D1CE4E5B9, 0x94D049BB133111EB], dtype=np.uint64)  # R(material) per lane
+    MIX = np.array([[0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D],
+                    [0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F]], dtype=np.uint64)
+    NEAR, START, END = (2, 0, 3, 1), (1, 1, 0, 0), (3, 3, 2, 2)  # per side: the box column of its line, a, b
 
     def __init__(self, index: LayoutIndex) -> None:
-        X0, Y0, X1, Y1 = (a.tolist() for a in (index.X0, index.Y0, index.X1, index.Y1))
-        mat = index.material.tolist()
-        spec = ((X0, Y0, Y1, X1), (X1, Y0, Y1, X0), (Y0, X0, X1, Y1), (Y1, X0, X1, Y0))
-        self.sides: list[dict[int, tuple[list[int], list[int], list[int], list[int]]]] = []
-        for line, start, end, far in spec:
-            by_line: dict[int, list[int]] = defaultdict(list)
-            for k, v in enumerate(line):
-                by_line[v].append(k)
-            side = {}
-            for v, ks in by_line.items():
-                ks.sort(key=start.__getitem__)
-                side[v] = ([start[k] for k in ks], [end[k] for k in ks], [far[k] for k in ks], [mat[k] for k in ks])
-            self.sides.append(side)
+        X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
+        self.lines = (np.unique(np.concatenate([X0, X1])), np.unique(np.concatenate([Y0, Y1])))
+        self.stride = max(v.size for v in self.lines) + 1
+        ranks = [np.searchsorted(self.lines[k % 2], v) for k, v in enumerate((X0, Y0, X1, Y1))]
+        cols = ((0, 1, 3, 2), (2, 1, 3, 0), (1, 0, 2, 3), (3, 0, 2, 1))  # per side: terminal's line, start, end, far
+        key_start, key_end, far, side, at = [], [], [], [], []
+        for d, (li, st, en, fa) in enumerate(cols):
+            base = (d * self.stride + ranks[li]) * self.stride
+            key_start.append(base + ranks[st])
+            key_end.append(base + ranks[en])
+            far.append((X0, Y0, X1, Y1)[fa])
+            side.append((X0, Y0, X1, Y1)[li])
+            at.append(ranks[st] + (d // 2) * self.lines[1].size)  # index into the along-axis powers
+        order = np.argsort(np.concatenate(key_start), kind="stable")
+        self.by_start, self.by_end = np.concatenate(key_start)[order], np.concatenate(key_end)[order]
+        self.far, line = np.concatenate(far)[order], np.concatenate(side)[order]
+        new_run = np.ones(order.size, dtype=bool)
+        new_run[1:] = (self.by_start[1:] // self.stride != self.by_start[:-1] // self.stride) | \
+            (self.by_start[1:] != self.by_end[:-1]) | (self.far[1:] != self.far[:-1])
+        self.run = np.cumsum(new_run)
+        (ax, inv_ax), (ay, inv_ay) = index.grid_powers  # along y for sides 0 and 1, along x for 2 and 3
+        at = np.concatenate(at)[order]
+        power, self.inverse = np.concatenate([ay, ax], axis=1)[:, at], np.concatenate([inv_ay, inv_ax], axis=1)[:, at]
+        mat = np.tile(index.material.astype(np.uint64) + np.uint64(1), 4)[order]
+        self.prefix = np.zeros((power.shape[0], order.size + 1), dtype=np.uint64)
+        np.cumsum(mat * self.MATERIAL[:, None] * power, axis=1, out=self.prefix[:, 1:])
 
-    def grow(self, box: Box, direction: int) -> tuple[Box, tuple] | None:
-        """``box`` grown by the strip of terminals adjacent to one side when the strip exactly covers that side
-        and its far edges align (Fig. 7), with a content key of the strip; None when it cannot grow."""
-        x0, y0, x1, y1 = box
-        line = (x1, x0, y1, y0)[direction]
-        a, b = (y0, y1) if direction < 2 else (x0, x1)
-        entry = self.sides[direction].get(line)
-        if entry is None:
-            return None
-        starts, ends, fars, mats = entry
-        i, j = bisect_right(ends, a), bisect_left(starts, b)
-        if i >= j or starts[i] != a or ends[j - 1] != b:
-            return None
-        f = fars[i]
-        for k in range(i + 1, j):
-            if fars[k] != f or starts[k] != ends[k - 1]:
-                return None
-        strip = (f - line, *((mats[k], starts[k] - a) for k in range(i, j)))
-        grown = ((x0, y0, f, y1), (f, y0, x1, y1), (x0, y0, x1, f), (x0, f, x1, y1))[direction]
-        return grown, strip
+    def grow(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The rows of ``boxes`` that grow by the strip of terminals adjacent to one side (the strip exactly covers
+        that side and its far edges align, Fig. 7), in every direction: per grown box its row, its direction,
+        the grown box and two 64-bit hash lanes of (box size, strip thickness, terminal count, strip content)."""
+        n = boxes.shape[0]
+        ranks = np.column_stack([np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)])
+        rows, direction = np.tile(np.arange(n), 4), np.repeat(np.arange(4), n)
+        near = np.array(self.NEAR)[direction]
+        line = (direction * self.stride + ranks[rows, near]) * self.stride
+        qa = line + ranks[rows, np.array(self.START)[direction]]
+        qb = line + ranks[rows, np.array(self.END)[direction]]
+        i = np.minimum(np.searchsorted(self.by_start, qa), self.by_start.size - 1)
+        j = np.minimum(np.searchsorted(self.by_end, qb), self.by_end.size - 1)
+        ok = np.flatnonzero((self.by_start[i] == qa) & (self.by_end[j] == qb) & (i <= j) & (self.run[i] == self.run[j]))
+        i, j, rows, direction, near = i[ok], j[ok], rows[ok], direction[ok], near[ok]
+        grown = boxes[rows]
+        f = self.far[i]
+        parts = np.column_stack([grown[:, 2] - grown[:, 0], grown[:, 3] - grown[:, 1],
+                                 np.abs(f - grown[np.arange(ok.size), near]), j - i]).astype(np.uint64)
+        grown[np.arange(ok.size), near] = f
+        hashes = (self.prefix[:, j + 1] - self.prefix[:, i]) * self.inverse[:, i] + self.MIX @ parts.T
+        return rows, direction, grown, hashes
 
 
 def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegions:
     """All repeated regions reachable by growing (capped at ``max_groups`` signatures).
 
     Instances of one group that are grown by strips of identical content (and have the same size) have identical
-    content, so only one of them is looked up in the signature table.
+    content, so only one of them is looked up in the signature table. The groups waiting in the queue are grown
+    together (array operations over all their instances); their results are taken in queue order.
     """
     sides = _Sides(index)
-    table: dict[int, list[Box]] = defaultdict(list)
-    for k in range(index.X0.size):
-        box = (int(index.X0[k]), int(index.Y0[k]), int(index.X1[k]), int(index.Y1[k]))
-        table[index.sig(box)].append(box)
-    groups = {s: boxes for s, boxes in table.items() if len(boxes) >= 2}
-    queue = deque(sorted(groups))
+    terminals = np.column_stack([index.X0, index.Y0, index.X1, index.Y1])
+    table: dict[int, list[int]] = defaultdict(list)
+    for k, box in enumerate(terminals.tolist()):
+        table[index.sig(tuple(box))].append(k)
+    groups = {s: terminals[rows] for s, rows in table.items() if len(rows) >= 2}
+    queue = sorted(groups)
     while queue and len(groups) < max_groups:
-        sig = queue.popleft()
-        for direction in range(4):
-            same: dict[tuple, list[Box]] = defaultdict(list)
-            for box in groups[sig]:
-                found = sides.grow(box, direction)
-                if found is not None:
-                    same[(box[2] - box[0], box[3] - box[1], found[1])].append(found[0])
-            grown: dict[int, list[Box]] = defaultdict(list)
-            for boxes in same.values():
-                grown[index.sig(boxes[0])].extend(boxes)
-            for new_sig, boxes in grown.items():
-                if new_sig > 0 and len(boxes) >= 2 and new_sig not in groups:
-                    groups[new_sig] = boxes
-                    queue.append(new_sig)
-    multi = groups
-    boxes = [box for s in multi for box in multi[s]]
+        batch, queue = queue, []
+        boxes = np.concatenate([groups[s] for s in batch])
+        owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
+        starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
+        for g in range(len(batch)):
+            if len(groups) >= max_groups:
+                break
+            for gd in range(4 * g, 4 * g + 4):
+                if starts[gd] == starts[gd + 1]:
+                    continue
+                same: dict[int, list[int]] = defaultdict(list)
+                for k in range(starts[gd], starts[gd + 1]):
+                    same[index.sig(tuple(firsts[k]))].append(k)
+                for new_sig, ks in same.items():
+                    if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
+                            and new_sig not in groups:
+                        groups[new_sig] = np.concatenate([grown[slice(*bounds[k])] for k in ks])
+                        queue.append(new_sig)
+    sizes = [len(instances) for instances in groups.values()]
     return RepeatedRegions(
-        boxes=np.array(boxes, dtype=np.int64).reshape(-1, 4),
-        terminals=np.array([index.sigs[s].n for s in multi for _ in multi[s]], dtype=np.int64),
-        occurrences=np.array([len(multi[s]) for s in multi for _ in multi[s]], dtype=np.int64),
-        group=np.array([s for s in multi for _ in multi[s]], dtype=np.int64))
+        boxes=np.concatenate(list(groups.values())) if groups else np.zeros((0, 4), dtype=np.int64),
+        terminals=np.repeat(np.array([index.sigs[s].n for s in groups], dtype=np.int64), sizes),
+        occurrences=np.repeat(np.array(sizes, dtype=np.int64), sizes),
+        group=np.repeat(np.array(list(groups), dtype=np.int64), sizes))
+
+
+def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int
+                 ) -> tuple[list[int], list[tuple[int, int]], list[list[int]], np.ndarray]:
+    """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in every direction, in classes
+    of equal group, direction, size and strip content (by a 128-bit hash). Returns per (group, direction) the
+    range of its classes (``starts``, index ``4 group + direction``; a group's classes in order of their first
+    instance), per class the range of its members (in instance order) in the grown boxes, which are sorted by
+    class, and per class the first member."""
+    rows, direction, grown, (h0, h1) = sides.grow(boxes)
+    gd = owner[rows] * 4 + direction
+    order = np.lexsort((h1, h0, gd))  # stable: equal keys stay in instance order
+    gd, h0, h1, grown = gd[order], h0[order], h1[order], grown[order]
+    cut = np.ones(gd.size, dtype=bool)
+    cut[1:] = (gd[1:] != gd[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
+    first = np.flatnonzero(cut)
+    classes = np.lexsort((order[first], gd[first]))
+    starts = np.searchsorted(gd[first[classes]], np.arange(4 * groups + 1)).tolist()
+    ends = np.append(first[1:], gd.size)
+    bounds = list(zip(first[classes].tolist(), ends[classes].tolist()))
+    return starts, bounds, grown[first[classes]].tolist(), grown

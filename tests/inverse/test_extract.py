@@ -161,3 +161,17 @@ def test_adp_is_deterministic_per_seed_and_not_worse_than_greedy_on_cmp(xml):
     assert a.text == extract_grammar(layout, "adp", 150, seed=7).text
     assert a.cost <= greedy.cost + 1e-9
     assert_reproduces(a.text, layout)
+
+
+def test_extraction_leaves_the_garbage_collector_as_it_found_it():
+    import gc
+    layout = import_cmp(FIXTURES[0])
+    assert gc.isenabled()
+    first = extract_grammar(layout, "greedy")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        assert extract_grammar(layout, "greedy").text == first.text
+        assert not gc.isenabled()  # a caller that paused it keeps it paused
+    finally:
+        gc.enable()
