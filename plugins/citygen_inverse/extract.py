@@ -1,12 +1,10 @@
 """Public API: extract a split grammar from one or several labelled facade layouts (wu2014 §3-§6.1)."""
 from __future__ import annotations
 
-import gc
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 
+from citygen.gcpause import cyclic_gc_paused
 from citygen.layout import FacadeLayout
 from citygen_inverse.actions import CostModel
 from citygen_inverse.emit import GrammarWriter
@@ -29,32 +27,13 @@ class Extraction:
     cpu_seconds: float = 0.0  # process time of index, symmetry detection and search (``seconds`` is wall time)
 
 
+@cyclic_gc_paused()
 def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "adp", iterations: int = 2000,
                     seed: int = 0, model: CostModel = CostModel(), time_limit: float | None = None,
                     free_extents: bool = True) -> Extraction:
     """Extract one grammar for ``layouts`` (several layouts: joint extraction, wu2014 §6.1 / Fig. 13).
 
     ``free_extents=False`` restricts shared rules to strictly translational repeats (see ``regions.py``)."""
-    with _cyclic_gc_paused():
-        return _extract(layouts, method, iterations, seed, model, time_limit, free_extents)
-
-
-@contextmanager
-def _cyclic_gc_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector during an extraction: the index, symmetry detection and search
-    allocate many short-lived tuples and lists, and the collections they trigger cost 12-20 % of a greedy run
-    (CMP facades). Reference counting still frees memory as usual; the collector resumes afterwards."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
-
-
-def _extract(layouts: FacadeLayout | list[FacadeLayout], method: str, iterations: int, seed: int,
-             model: CostModel, time_limit: float | None, free_extents: bool) -> Extraction:
     layouts = [layouts] if isinstance(layouts, FacadeLayout) else list(layouts)
     wall, cpu = time.perf_counter(), time.process_time()
     index = LayoutIndex(layouts, free_extents, periodic=free_extents)

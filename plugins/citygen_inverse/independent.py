@@ -27,6 +27,7 @@ import numpy as np
 
 import citygen_split
 from citygen.errors import LayoutError
+from citygen.gcpause import cyclic_gc_paused
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.actions import CostModel
 from citygen_inverse.emit import GrammarWriter, _num
@@ -116,6 +117,7 @@ def slab_layouts(layout: FacadeLayout) -> tuple[list[FacadeLayout], list[str]]:
     return out, names
 
 
+@cyclic_gc_paused()
 def extract_size_independent(layout: FacadeLayout, method: str = "adp", iterations: int = 2000, seed: int = 0,
                              model: CostModel = CostModel(), time_limit: float | None = None,
                              header: tuple[str, ...] = ()) -> Extraction:
