@@ -13,6 +13,7 @@ from __future__ import annotations
 import bisect
 import heapq
 import itertools
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -145,7 +146,8 @@ class _Words:
                 found.update(row[1])
         if not found:
             return []
-        targets = sorted(found)
+        # every target with its tolerance band
+        targets = [(t, t - tol, t + tol) for t in sorted(found)]
         # per row, for every target: the substring end nearest to it, then the ends just below and just above
         # it, then the nearest end if it matches the target exactly (else epsilon, where allowed)
         choices = []
@@ -159,11 +161,14 @@ class _Words:
             first = pr + 1
             eps = pr if self.eps_ok[r][pr] else None
             nears, los, his, stricts = [], [], [], []
-            for t in targets:
-                i = bisect.bisect_left(seg, t - tol)
-                hi = min(last, i)
-                lo = hi if i <= last and seg[hi] <= t + tol else (i - 1 if i > 0 else 0)
-                near = lo if t - seg[lo] <= seg[hi] - t else hi
+            for t, below, above in targets:
+                i = bisect.bisect_left(seg, below)
+                if i <= last and seg[i] <= above:    # an end within the tolerance: lo = hi = near
+                    near = lo = hi = i
+                else:
+                    hi = i if i < last else last
+                    lo = i - 1 if i > 0 else 0
+                    near = lo if t - seg[lo] <= seg[hi] - t else hi
                 nears.append(first + near)
                 los.append(first + lo)
                 his.append(first + hi)
@@ -188,18 +193,19 @@ class _Words:
         return out
 
     def _entry(self, r: int, a: int, e: int) -> tuple | None:
-        """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, opaque bit, solid bit, rows one of which
-        must be opaque (-1: any), rows none of which may be solid)``, size None for epsilon; None when the entry alone
-        breaks a constraint (epsilon beside an attached letter or with no upper row, transparent mixed with
-        other letters)."""
+        """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, size, opaque bit, solid bit, rows one of
+        which must be opaque (-1: any), rows none of which may be solid)``, the sizes -inf and inf for epsilon (so
+        that it is neither the largest nor the smallest); None when the entry alone breaks a constraint (epsilon
+        beside an attached letter or with no upper row, transparent mixed with other letters)."""
         upper = self.upper[r]
         if e == a:
-            return (None, 0, 0, upper, 0) if upper and self.eps_ok[r][a] else None
+            return (-math.inf, math.inf, 0, 0, upper, 0) if upper and self.eps_ok[r][a] else None
         clear = self.clear[r][e] - self.clear[r][a]
         if 0 < clear < e - a:
             return None
         bit = 1 << r
-        return (self.cum[r][e] - self.cum[r][a], bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
+        size = self.cum[r][e] - self.cum[r][a]
+        return (size, size, bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
                 bit if self.solid[r][e] > self.solid[r][a] else 0, -1,
                 upper if self.unocc[r][e] > self.unocc[r][a] else 0)
 
@@ -210,7 +216,7 @@ class _Words:
         ``sum(p)``), or None when it breaks a column constraint: an opaque entry in every column, epsilon only
         below an opaque entry of an upper layer, unoccludable letters covered only by transparent or opaque
         entries."""
-        sizes, opaque_bits, solid_bits, needs, guards = zip(*column)
+        tops, bottoms, opaque_bits, solid_bits, needs, guards = zip(*column)
         opaque = sum(opaque_bits)    # one bit per row: the sum is the union
         # (no opaque entry also rejects the all-epsilon column)
         if not opaque or not all(map(opaque.__and__, needs)):
@@ -218,10 +224,8 @@ class _Words:
         solid = sum(solid_bits)
         if solid and any(map(solid.__and__, guards)):
             return None
-        if None in sizes:
-            sizes = [x for x in sizes if x is not None]
-        hi = max(sizes)
-        return hi - min(sizes), sum(ends) - before, tuple(zip(p, ends)), hi
+        hi = max(tops)    # some entry is opaque, so not epsilon: hi and the smallest size are finite
+        return hi - min(bottoms), sum(ends) - before, tuple(zip(p, ends)), hi
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
