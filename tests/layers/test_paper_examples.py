@@ -58,6 +58,13 @@ def test_eq8_alignments_of_CeC_ABABA():
     assert best.error == pytest.approx(0.0)
 
 
+
+def test_column_phi_and_size_skip_epsilon_entries():
+    """Phi (Eq. 9) and the column size are over the non-empty entries: epsilon is neither largest nor smallest."""
+    net = _Words(*_ceca())
+    assert net.score(((0, 1), (0, 0))) == (0.0, 1, 1.0)    # C over epsilon
+    assert net.score(((0, 1), (0, 2))) == (1.0, 3, 2.0)    # C over AB
+
 def test_transparent_split_fAf_CeC_ABABA():
     rs = parse("symbol A size=2 opaque\nsymbol B size=3 opaque\nsymbol C size=2\n"
                "pattern F = f a f ; a := A\npattern T = c e c ; c := C\npattern L = A (B A)^2\n"
