@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import bisect
 from collections.abc import Sequence
-from dataclasses import MISSING, dataclass, fields, replace
-from typing import Any
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -73,17 +72,6 @@ def layer_segments(solution: DirectionSolution, layer_index: int, layer: Layer) 
     return solution.sizing.segments[(group, pattern)]
 
 
-_REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
-
-
-def _region(x: float, y: float, w: float, h: float, symbol: str, **kw: Any) -> Region:
-    """A :class:`Region` built without the frozen dataclass's per-field ``object.__setattr__`` (2.5x faster;
-    equal to ``Region(...)`` in every respect). A 26-layer stack makes thousands of terminals per facade."""
-    region = object.__new__(Region)
-    region.__dict__.update(_REGION_DEFAULTS, x=x, y=y, w=w, h=h, symbol=symbol, **kw)
-    return region
-
-
 def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta: dict | None = None
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
@@ -125,10 +113,10 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             for x, w in xspans:
                 symbol, lk = cells[index][k]
                 if lk.visible and not occluded[index][k]:
-                    terminals.append(_region(x, y, w, h, symbol, label=lk.label, depth=lk.depth,
+                    terminals.append(Region.fast(x, y, w, h, symbol, label=lk.label, depth=lk.depth,
                                              material=lk.material, asset=lk.asset, layer=name))
                 elif w * h > 1e-12:
-                    terminals.append(_region(x, y, w, h, symbol, layer=name))
+                    terminals.append(Region.fast(x, y, w, h, symbol, layer=name))
                 k += 1
         children.append(Region(0.0, 0.0, width, height, name, layer=name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
