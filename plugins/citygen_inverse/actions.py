@@ -65,7 +65,7 @@ def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]
 
 
 def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
-                   max_groupings: int = 24) -> list[Action]:
+                   max_groupings: int = 24) -> Candidates:
     """Candidate rules for the region signature ``sig`` (its representative box); per axis at most
     ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7)."""
     box = index.sigs[sig].box
@@ -77,7 +77,7 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     weight = sym.terminals[inside] / index.sigs[sig].n
     if index.sigs[sig].period is not None:
         return _periodic(index, sig, model, inst, weight)
-    actions: list[Action] = []
+    actions = Candidates(index, box, model)
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
         if cuts.size == 0:
@@ -116,14 +116,14 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
                 if len(e) < 3 or tuple(e) in seen:
                     continue
                 seen.add(tuple(e))
-                actions.append(_make(index, box, axis, bl, e, sg, model, line))
-    if not actions:
-        actions.append(_grid(index, sig, model))
+                actions.add(axis, bl, e, sg, line)
+    if not len(actions):
+        actions.add_action(_grid(index, sig, model))
     return actions
 
 
 def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, weight: np.ndarray
-              ) -> list[Action]:
+              ) -> Candidates:
     """A periodic region (any tile count shares its signature) only gets ``repeat`` rules: over whole tiles, or
     over the tile's atoms written inline."""
     box = index.sigs[sig].box
@@ -134,13 +134,13 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
     line = (weight @ cov).tolist() if inst.size else [0.0] * len(bl)
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
-    out = []
+    out = Candidates(index, box, model)
     for edges in (tiles, list(range(len(bl)))):
         sigs = [index.sig(_piece(box, axis, bl[a], bl[b])) for a, b in zip(edges, edges[1:])]
-        out.append(_make(index, box, axis, bl, edges, sigs, model, line))
+        out.add(axis, bl, edges, sigs, line, only="repeat")  # (always: for >= 2 tiles repeat is the cheapest)
         if len(tiles) == len(bl):
             break
-    return [a for a in out if a.op == "repeat"]  # (always: for >= 2 tiles repeat is the cheapest operator)
+    return out
 
 
 def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[int, ...]]:
@@ -187,22 +187,68 @@ def _rel(box: Box, p: Box) -> Box:
     return (p[0] - box[0], p[1] - box[1], p[2] - box[0], p[3] - box[1])
 
 
-def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int],
-          model: CostModel, line: list[float]) -> Action:
-    """The rule splitting ``box`` at the atom boundaries ``edges`` into children ``sigs``."""
-    o = box[axis]
+class Candidates:
+    """The candidate rules of one region in order: per candidate its cost C and heuristic H (Eq. 5), computed when
+    it is added; the rule object (successor boxes, children, cuts) is built on first use, since a greedy run only
+    uses the one it chooses."""
+
+    def __init__(self, index: LayoutIndex, box: Box, model: CostModel) -> None:
+        self.index, self.box, self.model = index, box, model
+        self.cost: list[float] = []
+        self.heuristic: list[float] = []
+        self._specs: list[tuple] = []
+        self._built: dict[int, Action] = {}
+
+    def __len__(self) -> int:
+        return len(self.cost)
+
+    def __getitem__(self, k: int) -> Action:
+        action = self._built.get(k)
+        if action is None:
+            action = self._built[k] = _make(self.index, self.box, *self._specs[k])
+        return action
+
+    def __iter__(self):
+        return (self[k] for k in range(len(self.cost)))
+
+    def add(self, axis: int, bl: list[int], edges: list[int], sigs: list[int], line: list[float],
+            only: str | None = None) -> None:
+        """The rule splitting the box at the atom boundaries ``edges`` (of the lines ``bl``) into ``sigs``;
+        ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``."""
+        o = bl[0]
+        op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], self.model)
+        if only is not None and op != only:
+            return
+        self.cost.append(cost)
+        self.heuristic.append(self.model.lambda1 * cost + self.model.lambda2 * sum(line[e] for e in edges[1:-1]))
+        self._specs.append((axis, [bl[e] - o for e in edges], sigs, op, cost, k, self.heuristic[-1]))
+
+    def add_action(self, action: Action) -> None:
+        self._built[len(self.cost)] = action
+        self.cost.append(action.cost)
+        self.heuristic.append(action.heuristic)
+        self._specs.append(None)
+
+    def kids(self, k: int) -> tuple[int, ...]:
+        """The distinct non-terminal successor signatures of candidate ``k`` (its rule's ``children``)."""
+        spec = self._specs[k]
+        if spec is None:
+            return tuple(c for c, _ in self[k].children)
+        info = self.index.sigs
+        return tuple(dict.fromkeys(s for s in spec[2] if info[s].n > 1))
+
+
+def _make(index: LayoutIndex, box: Box, axis: int, ends: list[int], sigs: list[int], op: str, cost: float, k: int,
+          heuristic: float) -> Action:
+    """The rule splitting ``box`` at the relative lines ``ends`` into children ``sigs``."""
     span = box[3] - box[1] if axis == 0 else box[2] - box[0]
-    ends = [bl[e] - o for e in edges]
     rels = [(a, 0, b, span) if axis == 0 else (0, a, span, b) for a, b in zip(ends, ends[1:])]
-    op, cost, k = _ops([(s, b - a) for s, a, b in zip(sigs, ends, ends[1:])], model)
-    line_cost = sum(line[e] for e in edges[1:-1])
     children, seen, info = [], set(), index.sigs
     for s, r in zip(sigs, rels):
         if s not in seen and info[s].n > 1:
             seen.add(s)
             children.append((s, r))
-    return Action(op, axis, tuple(zip(sigs[:k], rels[:k])), tuple(children), cost,
-                  model.lambda1 * cost + model.lambda2 * line_cost, tuple(ends[1:-1]))
+    return Action(op, axis, tuple(zip(sigs[:k], rels[:k])), tuple(children), cost, heuristic, tuple(ends[1:-1]))
 
 
 def _grid(index: LayoutIndex, sig: int, model: CostModel) -> Action:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from citygen.rng import derive_rng
-from citygen_inverse.actions import Action, CostModel, region_actions
+from citygen_inverse.actions import Action, Candidates, CostModel, region_actions
 from citygen_inverse.regions import LayoutIndex
 from citygen_inverse.symmetry import RepeatedRegions, detect_symmetry
 
@@ -52,7 +52,7 @@ class GrammarSearch:
         self.index = index
         self.model = model
         self.sym: RepeatedRegions = detect_symmetry(index, max_groups)
-        self._actions: dict[int, list[Action]] = {}
+        self._actions: dict[int, Candidates] = {}
         self._cost: dict[int, list[float]] = {}
         self._kids: dict[int, list[tuple[int, ...]]] = {}
         self._greedy_k: dict[int, int] = {}
@@ -69,14 +69,13 @@ class GrammarSearch:
         self._imp_boxes = self.sym.boxes[self._important]
         self._u: list[float] = []
 
-    def actions(self, sig: int) -> list[Action]:
+    def actions(self, sig: int) -> Candidates:
         acts = self._actions.get(sig)
         if acts is None:
             acts = region_actions(self.index, sig, self.sym, self.model)
             self._actions[sig] = acts
-            heur = [a.heuristic for a in acts]
-            self._cost[sig] = [a.cost for a in acts]
-            self._kids[sig] = [tuple(c for c, _ in a.children) for a in acts]
+            heur = acts.heuristic
+            self._cost[sig] = acts.cost
             self._greedy_k[sig] = int(np.argmin(heur))
             low = min(heur)
             self._weights[sig] = [math.exp(low - h) for h in heur]
@@ -170,7 +169,7 @@ class GrammarSearch:
     def _greedy(self, sig, masks, protected, rules) -> int:
         if masks is None:
             return self._greedy_k[sig]
-        heur = [a.heuristic for a in self._actions[sig]]
+        heur = self._actions[sig].heuristic
         return min((k for k in range(len(heur)) if not masks[k] & protected), key=heur.__getitem__)
 
     def _uniform(self, rng: np.random.Generator) -> float:
@@ -193,7 +192,11 @@ class GrammarSearch:
         value, sigs = self.value, self.index.sigs
         keep = self.best_action.get(sig)
         best_k, best_t = -1, math.inf
-        for k, (c, kids) in enumerate(zip(self._cost[sig], self._kids[sig])):
+        all_kids = self._kids.get(sig)
+        if all_kids is None:
+            acts = self._actions[sig]
+            all_kids = self._kids[sig] = [acts.kids(k) for k in range(len(acts))]
+        for k, (c, kids) in enumerate(zip(self._cost[sig], all_kids)):
             if masks is not None and masks[k] & protected:
                 continue
             t = c - (1e-9 if k == keep else 0.0)
