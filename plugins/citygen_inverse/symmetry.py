@@ -108,8 +108,8 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
     sides = _Sides(index)
     terminals = np.column_stack([index.X0, index.Y0, index.X1, index.Y1])
     table: dict[int, list[int]] = defaultdict(list)
-    for k, box in enumerate(terminals.tolist()):
-        table[index.sig(tuple(box))].append(k)
+    for k, s in enumerate(index.sigs_of(terminals)):
+        table[s].append(k)
     groups = {s: terminals[rows] for s, rows in table.items() if len(rows) >= 2}
     queue = sorted(groups)
     while queue and len(groups) < max_groups:
@@ -117,6 +117,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         boxes = np.concatenate([groups[s] for s in batch])
         owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
         starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
+        found = index.regions(np.array(firsts, dtype=np.int64))
         for g in range(len(batch)):
             if len(groups) >= max_groups:
                 break
@@ -125,7 +126,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
                     continue
                 same: dict[int, list[int]] = defaultdict(list)
                 for k in range(starts[gd], starts[gd + 1]):
-                    same[index.sig(tuple(firsts[k]))].append(k)
+                    same[index.sig(tuple(firsts[k]), found[k])].append(k)
                 for new_sig, ks in same.items():
                     if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
                             and new_sig not in groups:
