@@ -10,6 +10,8 @@ wu2014 §6.3) gets a ``grid`` rule over its terminals.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from operator import eq
 
 import numpy as np
 
@@ -51,8 +53,8 @@ def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]
     """Cheapest operator for a child sequence of (signature, size along the axis): (op, cost, items written)."""
     k = len(seq)
     best = ("split", model.split + k, k)
-    for p in range(1, k):
-        if k % p == 0 and seq == seq[:p] * (k // p):
+    for p in _divisors_below(k):
+        if seq[p] == seq[0] and seq == seq[:p] * (k // p):
             if model.repeat + p < best[1]:
                 best = ("repeat", model.repeat + p, p)
             break
@@ -62,6 +64,12 @@ def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]
     if k >= 3 and k % 2 == 1 and seq == seq[::-1] and model.split + (k + 1) // 2 < best[1]:
         best = ("symsplit", model.split + (k + 1) // 2, (k + 1) // 2)
     return best
+
+
+@lru_cache(maxsize=None)
+def _divisors_below(k: int) -> tuple[int, ...]:
+    """The divisors of ``k`` below ``k``, smallest first."""
+    return tuple(p for p in range(1, k) if k % p == 0)
 
 
 def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
@@ -112,7 +120,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             edges = [0, *keep, m]
             sigs = [atom_sigs[a] if b == a + 1 else index.sig(_piece(box, axis, bl[a], bl[b]))
                     for a, b in zip(edges, edges[1:])]
-            for e, sg in ((edges, sigs), _merge_runs(index, box, axis, bl, edges, sigs)):
+            merged = _merge_runs(index, box, axis, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+            for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
                 if len(e) < 3 or tuple(e) in seen:
                     continue
                 seen.add(tuple(e))
@@ -148,6 +157,7 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
     m = len(atoms)
     found: list[tuple[float, tuple[int, ...]]] = []
     for length in range(2, m // 2 + 1):
+        repeated = False
         starts: dict[tuple[int, ...], list[int]] = {}
         for i in range(m - length + 1):
             starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
@@ -160,6 +170,9 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
             if len(chosen) >= 2:
                 inner = {i + d for i in chosen for d in range(1, length)}
                 found.append(((length - 1) * (len(chosen) - 1), tuple(k for k in range(1, m) if k not in inner)))
+                repeated = True
+        if not repeated:  # a substring twice apart has its prefix twice apart: no longer one repeats either
+            break
     found.sort(key=lambda t: -t[0])
     return [keep for _, keep in found[:limit]]
 
