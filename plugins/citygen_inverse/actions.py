@@ -116,11 +116,11 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         seen = set()
+        piece = _Pieces(index, box, axis, bl, atom_sigs)
         for keep in groupings:
             edges = [0, *keep, m]
-            sigs = [atom_sigs[a] if b == a + 1 else index.sig(_piece(box, axis, bl[a], bl[b]))
-                    for a, b in zip(edges, edges[1:])]
-            merged = _merge_runs(index, box, axis, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+            sigs = [piece[ab] for ab in zip(edges, edges[1:])]
+            merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
             for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
                 if len(e) < 3 or tuple(e) in seen:
                     continue
@@ -181,8 +181,19 @@ def _piece(box: Box, axis: int, a: int, b: int) -> Box:
     return (int(a), box[1], int(b), box[3]) if axis == 0 else (box[0], int(a), box[2], int(b))
 
 
-def _merge_runs(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int]
-                ) -> tuple[list[int], list[int]]:
+class _Pieces(dict):
+    """Signatures of the pieces of ``box`` between atom boundaries ``(a, b)`` along ``axis``, each looked up once."""
+
+    def __init__(self, index: LayoutIndex, box: Box, axis: int, bl: list[int], atom_sigs: list[int]) -> None:
+        super().__init__(((k, k + 1), s) for k, s in enumerate(atom_sigs))
+        self.index, self.box, self.axis, self.bl = index, box, axis, bl
+
+    def __missing__(self, ab: tuple[int, int]) -> int:
+        s = self[ab] = self.index.sig(_piece(self.box, self.axis, self.bl[ab[0]], self.bl[ab[1]]))
+        return s
+
+
+def _merge_runs(piece: _Pieces, bl: list[int], edges: list[int], sigs: list[int]) -> tuple[list[int], list[int]]:
     """Runs of identical consecutive children merged into one child (which a repeat rule then explains)."""
     out_e, out_s, start = [edges[0]], [], 0
     n = len(sigs)
@@ -190,8 +201,7 @@ def _merge_runs(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: l
         if k == n or sigs[k] != sigs[start] or \
                 bl[edges[k + 1]] - bl[edges[k]] != bl[edges[start + 1]] - bl[edges[start]]:
             out_e.append(edges[k])
-            out_s.append(index.sig(_piece(box, axis, bl[edges[start]], bl[edges[k]])) if k - start > 1
-                         else sigs[start])
+            out_s.append(piece[edges[start], edges[k]] if k - start > 1 else sigs[start])
             start = k
     return out_e, out_s
 
@@ -228,13 +238,12 @@ class Candidates:
             only: str | None = None) -> None:
         """The rule splitting the box at the atom boundaries ``edges`` (of the lines ``bl``) into ``sigs``;
         ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``."""
-        o = bl[0]
         op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], self.model)
         if only is not None and op != only:
             return
         self.cost.append(cost)
-        self.heuristic.append(self.model.lambda1 * cost + self.model.lambda2 * sum(line[e] for e in edges[1:-1]))
-        self._specs.append((axis, [bl[e] - o for e in edges], sigs, op, cost, k, self.heuristic[-1]))
+        self.heuristic.append(self.model.lambda1 * cost + self.model.lambda2 * sum(map(line.__getitem__, edges[1:-1])))
+        self._specs.append((axis, bl, edges, sigs, op, cost, k, self.heuristic[-1]))
 
     def add_action(self, action: Action) -> None:
         self._built[len(self.cost)] = action
@@ -248,12 +257,13 @@ class Candidates:
         if spec is None:
             return tuple(c for c, _ in self[k].children)
         info = self.index.sigs
-        return tuple(dict.fromkeys(s for s in spec[2] if info[s].n > 1))
+        return tuple(dict.fromkeys(s for s in spec[3] if info[s].n > 1))
 
 
-def _make(index: LayoutIndex, box: Box, axis: int, ends: list[int], sigs: list[int], op: str, cost: float, k: int,
-          heuristic: float) -> Action:
-    """The rule splitting ``box`` at the relative lines ``ends`` into children ``sigs``."""
+def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[int], sigs: list[int], op: str,
+          cost: float, k: int, heuristic: float) -> Action:
+    """The rule splitting ``box`` at the atom boundaries ``edges`` (of the lines ``bl``) into children ``sigs``."""
+    ends = [bl[e] - bl[0] for e in edges]
     span = box[3] - box[1] if axis == 0 else box[2] - box[0]
     rels = [(a, 0, b, span) if axis == 0 else (0, a, span, b) for a, b in zip(ends, ends[1:])]
     children, seen, info = [], set(), index.sigs
