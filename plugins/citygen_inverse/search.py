@@ -77,10 +77,17 @@ class GrammarSearch:
             heur = acts.heuristic
             self._cost[sig] = acts.cost
             self._greedy_k[sig] = int(np.argmin(heur))
-            low = min(heur)
-            self._weights[sig] = [math.exp(low - h) for h in heur]
-            self._cum[sig] = list(np.cumsum(self._weights[sig]))
         return acts
+
+    def _softmax(self, sig: int) -> tuple[list[float], list[float]]:
+        """Weights exp(-H) (scaled by the best) of a region's actions and their cumulative sums."""
+        weights = self._weights.get(sig)
+        if weights is None:
+            heur = self._actions[sig].heuristic
+            low = min(heur)
+            weights = self._weights[sig] = [math.exp(low - h) for h in heur]
+            self._cum[sig] = list(np.cumsum(weights))
+        return weights, self._cum[sig]
 
     def estimate(self, sig: int) -> float:
         """V for a region never completed: an optimistic guess from its terminal count."""
@@ -179,10 +186,10 @@ class GrammarSearch:
 
     def _sample(self, rng):
         def choose(sig, masks, protected, rules) -> int:
+            weights, cum = self._softmax(sig)
             if masks is None:
-                cum = self._cum[sig]
                 return min(bisect_right(cum, self._uniform(rng) * cum[-1]), len(cum) - 1)
-            w = [0.0 if m & protected else v for v, m in zip(self._weights[sig], masks)]
+            w = [0.0 if m & protected else v for v, m in zip(weights, masks)]
             cum = list(np.cumsum(w))
             return min(bisect_right(cum, self._uniform(rng) * cum[-1]), len(cum) - 1)
         return choose
