@@ -154,12 +154,28 @@ class LayoutIndex:
         return self._grid.powers
 
     def sigs_of(self, boxes: np.ndarray) -> list[int]:
-        """``sig`` of each row of ``boxes`` in order, the region queries done in one batch."""
-        return [self.sig(tuple(b), f) for b, f in zip(np.asarray(boxes).tolist(), self.regions(boxes))]
-
-    def regions(self, boxes: np.ndarray) -> list:
-        """Batched region queries for ``sig(box, found)``: per row of ``boxes`` its ``found``."""
-        return self._grid.regions(boxes, self.free_extents)
+        """``sig`` of each row of ``boxes``, as if looked up in order: the region queries and content keys are
+        computed in one batch, and only the first box of each content is looked up (content decides the
+        signature)."""
+        boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
+        ok, cells, count, inner_x, inner_y, variant, h = self._grid.regions(boxes, self.free_extents)
+        out = np.full(boxes.shape[0], -1, dtype=np.int64)
+        rows = np.flatnonzero(ok)
+        if rows.size:
+            v, h0, h1 = variant[rows], h[0, rows], h[1, rows]
+            order = np.lexsort((h1, h0, v))  # stable: a content's first box leads its run
+            v, h0, h1 = v[order], h0[order], h1[order]
+            cut = np.ones(rows.size, dtype=bool)
+            cut[1:] = (v[1:] != v[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
+            lead = rows[order[cut]]
+            sids = np.empty(lead.size, dtype=np.int64)
+            listed = [a.tolist() for a in (boxes[lead], cells[lead], count[lead], inner_x[lead], inner_y[lead],
+                                           h[0, lead], h[1, lead])]
+            for k in np.argsort(lead, kind="stable").tolist():  # in order of first appearance
+                box, cell, n, ix, iy, a, b = (col[k] for col in listed)
+                sids[k] = self.sig(tuple(box), (tuple(cell), n, ix, iy, (a, b)))
+            out[rows[order]] = sids[np.cumsum(cut) - 1]
+        return out.tolist()
 
     def cuts(self, box: Box, axis: int) -> np.ndarray:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
@@ -261,10 +277,11 @@ class _Grid:
         inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
         return cell, count, inner_x, inner_y
 
-    def regions(self, boxes: np.ndarray, free_extents: bool) -> list:
-        """``region`` of many boxes (rows x0, y0, x1, y1) at once, with the content hashes of each box as
-        ``LayoutIndex.sig`` keys them (free width / height when ``free_extents`` and no interior edge crosses):
-        per box None (not tiled) or (cell, n, inner_x, inner_y, hashes)."""
+    def regions(self, boxes: np.ndarray, free_extents: bool) -> tuple[np.ndarray, ...]:
+        """``region`` of many boxes (rows x0, y0, x1, y1) at once, with each box's content key as
+        ``LayoutIndex.sig`` forms it before the period search (free width / height when ``free_extents`` and no
+        interior edge crosses): arrays tiled, cells (i0, j0, i1, j1), n, inner_x, inner_y, variant and
+        hashes (lanes, boxes); entries of untiled boxes are meaningless."""
         xs, ys, gap, (av, ah), (vx, vy), n, hashes = self.arrays
         b = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
         i0, j0, i1, j1 = (np.minimum(np.searchsorted(v, b[:, k]), v.size - 1)
@@ -283,9 +300,7 @@ class _Grid:
         lane = np.arange(hashes.shape[1])[:, None]
         h = (hashes[variant, lane, i1, j1] - hashes[variant, lane, i0, j1] - hashes[variant, lane, i1, j0]
              + hashes[variant, lane, i0, j0]) * (inv_x[:, i0] * inv_y[:, j0])
-        rows = zip(np.column_stack([i0, j0, i1, j1]).tolist(), count.tolist(), inner_x.tolist(), inner_y.tolist(),
-                   h.T.tolist())
-        return [(tuple(c), m, ix, iy, tuple(hk)) if good else None for good, (c, m, ix, iy, hk) in zip(ok.tolist(), rows)]
+        return ok, np.column_stack([i0, j0, i1, j1]), count, inner_x, inner_y, variant, h
 
     def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
         """The two content hashes of a tiled box, translated to its corner."""
