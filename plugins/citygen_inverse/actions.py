@@ -73,9 +73,10 @@ def _divisors_below(k: int) -> tuple[int, ...]:
 
 
 def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
-                   max_groupings: int = 24) -> Candidates:
+                   max_groupings: int = 24, best_only: bool = False) -> Candidates:
     """Candidate rules for the region signature ``sig`` (its representative box); per axis at most
-    ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7)."""
+    ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7). With
+    ``best_only``, only the first of least heuristic (see ``Candidates``)."""
     box = index.sigs[sig].box
     x0, y0, x1, y1 = box
     c0, c1, c2, c3 = sym.columns
@@ -84,8 +85,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     inst = sym.boxes[inside]
     weight = sym.terminals[inside] / index.sigs[sig].n
     if index.sigs[sig].period is not None:
-        return _periodic(index, sig, model, inst, weight)
-    actions = Candidates(index, box, model)
+        return _periodic(index, sig, model, inst, weight, best_only)
+    actions = Candidates(index, box, model, best_only)
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
         if cuts.size == 0:
@@ -131,8 +132,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     return actions
 
 
-def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, weight: np.ndarray
-              ) -> Candidates:
+def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, weight: np.ndarray,
+              best_only: bool) -> Candidates:
     """A periodic region (any tile count shares its signature) only gets ``repeat`` rules: over whole tiles, or
     over the tile's atoms written inline."""
     box = index.sigs[sig].box
@@ -143,7 +144,7 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
     line = (weight @ cov).tolist() if inst.size else [0.0] * len(bl)
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
-    out = Candidates(index, box, model)
+    out = Candidates(index, box, model, best_only)
     for edges in (tiles, list(range(len(bl)))):
         sigs = [index.sig(_piece(box, axis, bl[a], bl[b])) for a, b in zip(edges, edges[1:])]
         out.add(axis, bl, edges, sigs, line, only="repeat")  # (always: for >= 2 tiles repeat is the cheapest)
@@ -213,10 +214,16 @@ def _rel(box: Box, p: Box) -> Box:
 class Candidates:
     """The candidate rules of one region in order: per candidate its cost C and heuristic H (Eq. 5), computed when
     it is added; the rule object (successor boxes, children, cuts) is built on first use, since a greedy run only
-    uses the one it chooses."""
+    uses the one it chooses. With ``best_only`` only the first candidate of least H is kept (all a greedy run
+    needs): a candidate whose H cannot be below the best so far by a bound on its operator cost is not priced."""
 
-    def __init__(self, index: LayoutIndex, box: Box, model: CostModel) -> None:
+    def __init__(self, index: LayoutIndex, box: Box, model: CostModel, best_only: bool = False) -> None:
         self.index, self.box, self.model = index, box, model
+        # least operator cost of >= 2 children: split into 2, repeat of 1 tile (symsplit, repeatABA cost more)
+        low = min(model.split + 2, model.repeat + 1)
+        self._bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
+            else None
+        self._best_only = best_only
         self.cost: list[float] = []
         self.heuristic: list[float] = []
         self._specs: list[tuple] = []
@@ -238,12 +245,21 @@ class Candidates:
             only: str | None = None) -> None:
         """The rule splitting the box at the atom boundaries ``edges`` (of the lines ``bl``) into ``sigs``;
         ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``."""
+        line_cost = sum(map(line.__getitem__, edges[1:-1]))
+        if self._bound is not None and self.heuristic and \
+                self._bound[0] + self._bound[1] * line_cost > self.heuristic[0]:
+            return
         op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], self.model)
         if only is not None and op != only:
             return
+        heuristic = self.model.lambda1 * cost + self.model.lambda2 * line_cost
+        if self._best_only and self.heuristic:
+            if not heuristic < self.heuristic[0]:
+                return
+            self.cost.clear(), self.heuristic.clear(), self._specs.clear()
         self.cost.append(cost)
-        self.heuristic.append(self.model.lambda1 * cost + self.model.lambda2 * sum(map(line.__getitem__, edges[1:-1])))
-        self._specs.append((axis, bl, edges, sigs, op, cost, k, self.heuristic[-1]))
+        self.heuristic.append(heuristic)
+        self._specs.append((axis, bl, edges, sigs, op, cost, k, heuristic))
 
     def add_action(self, action: Action) -> None:
         self._built[len(self.cost)] = action

@@ -59,6 +59,7 @@ class GrammarSearch:
         self._cum: dict[int, list[float]] = {}
         self._weights: dict[int, list[float]] = {}
         self._masks: dict[tuple[int, int, int], list[int]] = {}
+        self._best_only = False  # a greedy run keeps only each region's greedy action
         self.value: dict[int, float] = {}
         self.best_action: dict[int, int] = {}
         self.roots = [index.sig(box) for box in index.roots]
@@ -72,7 +73,7 @@ class GrammarSearch:
     def actions(self, sig: int) -> Candidates:
         acts = self._actions.get(sig)
         if acts is None:
-            acts = region_actions(self.index, sig, self.sym, self.model)
+            acts = region_actions(self.index, sig, self.sym, self.model, best_only=self._best_only)
             self._actions[sig] = acts
             heur = acts.heuristic
             self._cost[sig] = acts.cost
@@ -220,6 +221,11 @@ class GrammarSearch:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         start = time.perf_counter()
+        if self._best_only != (method == "greedy"):  # (a search run again with another method starts afresh)
+            for table in (self._actions, self._cost, self._kids, self._greedy_k, self._cum, self._weights,
+                          self._masks, self.value, self.best_action):
+                table.clear()
+            self._best_only = method == "greedy"
         best_rules, best_cost = self.iterate(self._greedy, 0)
         history = [best_cost]
         if method == "greedy":
