@@ -106,18 +106,13 @@ class LayoutIndex:
         x0, y0, x1, y1 = box
         return np.flatnonzero((self.X0 >= x0) & (self.X1 <= x1) & (self.Y0 >= y0) & (self.Y1 <= y1))
 
-    def sig(self, box: Box, found: tuple | None = ()) -> int:
-        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not); ``found`` its
-        ``regions`` entry when computed in a batch."""
-        sid = self._boxes.get(box)
-        if sid is not None:
-            return sid
+    def sig(self, box: Box) -> int:
+        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not)."""
+        found = self._boxes.get(box)
+        if found is not None:
+            return found
         g = self._grid
-        hashes = None
-        if found == ():
-            found = g.region(box)
-        elif found is not None:
-            *found, hashes = found
+        found = g.region(box)
         if found is None:
             self._boxes[box] = -1
             return -1
@@ -126,7 +121,7 @@ class LayoutIndex:
         x0, y0, x1, y1 = box
         free_w = self.free_extents and inner_x == 0
         free_h = self.free_extents and inner_y == 0
-        key = (int(free_w) + 2 * int(free_h), *(hashes or g.content(box, cell, (free_w, free_h))))
+        key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
         if self.periodic and n > 1:
             periodic = self._periodic.get(key)  # content decides: only its first box is searched for a period
             if periodic is None:
@@ -152,30 +147,6 @@ class LayoutIndex:
     def grid_powers(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
         """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
         return self._grid.powers
-
-    def sigs_of(self, boxes: np.ndarray) -> list[int]:
-        """``sig`` of each row of ``boxes``, as if looked up in order: the region queries and content keys are
-        computed in one batch, and only the first box of each content is looked up (content decides the
-        signature)."""
-        boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
-        ok, cells, count, inner_x, inner_y, variant, h = self._grid.regions(boxes, self.free_extents)
-        out = np.full(boxes.shape[0], -1, dtype=np.int64)
-        rows = np.flatnonzero(ok)
-        if rows.size:
-            v, h0, h1 = variant[rows], h[0, rows], h[1, rows]
-            order = np.lexsort((h1, h0, v))  # stable: a content's first box leads its run
-            v, h0, h1 = v[order], h0[order], h1[order]
-            cut = np.ones(rows.size, dtype=bool)
-            cut[1:] = (v[1:] != v[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
-            lead = rows[order[cut]]
-            sids = np.empty(lead.size, dtype=np.int64)
-            listed = [a.tolist() for a in (boxes[lead], cells[lead], count[lead], inner_x[lead], inner_y[lead],
-                                           h[0, lead], h[1, lead])]
-            for k in np.argsort(lead, kind="stable").tolist():  # in order of first appearance
-                box, cell, n, ix, iy, a, b = (col[k] for col in listed)
-                sids[k] = self.sig(tuple(box), (tuple(cell), n, ix, iy, (a, b)))
-            out[rows[order]] = sids[np.cumsum(cut) - 1]
-        return out.tolist()
 
     def cuts(self, box: Box, axis: int) -> np.ndarray:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
@@ -215,15 +186,12 @@ class _Grid:
         self.owner = owner[1:-1, 1:-1].tolist()
         vert = owner[1:, 1:-1] != owner[:-1, 1:-1]  # (nx + 1, ny): an edge on line x_i along row j
         horz = owner[1:-1, 1:] != owner[1:-1, :-1]  # (nx, ny + 1)
-        along = (_prefix1(vert), _prefix1(horz.T))  # per line, edge count along it
-        interior = (_prefix2(vert), _prefix2(horz.T))  # per axis: line index, then the other axis
-        gap = _prefix2(owner[1:-1, 1:-1] < 0)
+        self.along = (_prefix1(vert), _prefix1(horz.T))  # per line, edge count along it
+        self.interior = (_prefix2(vert), _prefix2(horz.T))  # per axis: line index, then the other axis
+        self.gap = _prefix2(owner[1:-1, 1:-1] < 0)
         corner = np.zeros((nx, ny), dtype=np.int64)
         corner[a0, b0] = 1
-        n = _prefix2(corner)
-        self.along = tuple(a.tolist() for a in along)
-        self.interior = tuple(a.tolist() for a in interior)
-        self.gap, self.n = gap.tolist(), n.tolist()
+        self.n = _prefix2(corner)
         variants = ((0, 0), (1, 0), (0, 1), (1, 1))  # (free width, free height): the size dropped from R(t)
         key = np.zeros(4 * X0.size, dtype=np.int64)  # (material, width, height) per variant and terminal
         for col in (np.tile(index.material, 4), np.concatenate([(X1 - X0) * (1 - fw) for fw, _ in variants]),
@@ -241,13 +209,11 @@ class _Grid:
         inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
         self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
-        hashes = np.zeros((4, lanes, nx + 1, ny + 1), dtype=np.uint64)  # per variant (free_w + 2 free_h), lane
+        self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
             val = np.zeros((lanes, nx, ny), dtype=np.uint64)
             val[:, a0, b0] = r[variant].T * place
-            hashes[variant] = [_prefix2(v) for v in val]
-        self.hash = [[lane.tolist() for lane in variant] for variant in hashes]
-        self.arrays = (np.array(self.xs), np.array(self.ys), gap, along, interior, n, hashes)  # (``regions``)
+            self.hash.append([_prefix2(v) for v in val])
 
     def cells(self, box: Box) -> tuple[int, int, int, int] | None:
         """Grid indices of an exactly tiled ``box``, None when it is not tiled."""
@@ -276,31 +242,6 @@ class _Grid:
         inner_x = vx[i1][j1] - vx[i0 + 1][j1] - vx[i1][j0] + vx[i0 + 1][j0] if i1 > i0 + 1 else 0
         inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
         return cell, count, inner_x, inner_y
-
-    def regions(self, boxes: np.ndarray, free_extents: bool) -> tuple[np.ndarray, ...]:
-        """``region`` of many boxes (rows x0, y0, x1, y1) at once, with each box's content key as
-        ``LayoutIndex.sig`` forms it before the period search (free width / height when ``free_extents`` and no
-        interior edge crosses): arrays tiled, cells (i0, j0, i1, j1), n, inner_x, inner_y, variant and
-        hashes (lanes, boxes); entries of untiled boxes are meaningless."""
-        xs, ys, gap, (av, ah), (vx, vy), n, hashes = self.arrays
-        b = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
-        i0, j0, i1, j1 = (np.minimum(np.searchsorted(v, b[:, k]), v.size - 1)
-                          for k, v in ((0, xs), (1, ys), (2, xs), (3, ys)))
-        ok = (xs[i0] == b[:, 0]) & (ys[j0] == b[:, 1]) & (xs[i1] == b[:, 2]) & (ys[j1] == b[:, 3]) & \
-            (i1 > i0) & (j1 > j0)
-        ok &= gap[i1, j1] - gap[i0, j1] - gap[i1, j0] + gap[i0, j0] == 0
-        ok &= (av[i0, j1] - av[i0, j0] == j1 - j0) & (av[i1, j1] - av[i1, j0] == j1 - j0) & \
-            (ah[j0, i1] - ah[j0, i0] == i1 - i0) & (ah[j1, i1] - ah[j1, i0] == i1 - i0)
-        count = n[i1, j1] - n[i0, j1] - n[i1, j0] + n[i0, j0]
-        k0, l0 = np.minimum(i0 + 1, i1), np.minimum(j0 + 1, j1)  # (no interior line: the sums below are 0)
-        inner_x = vx[i1, j1] - vx[k0, j1] - vx[i1, j0] + vx[k0, j0]
-        inner_y = vy[j1, i1] - vy[l0, i1] - vy[j1, i0] + vy[l0, i0]
-        variant = ((inner_x == 0).astype(np.int64) + 2 * (inner_y == 0)) * free_extents
-        (_, inv_x), (_, inv_y) = self.powers
-        lane = np.arange(hashes.shape[1])[:, None]
-        h = (hashes[variant, lane, i1, j1] - hashes[variant, lane, i0, j1] - hashes[variant, lane, i1, j0]
-             + hashes[variant, lane, i0, j0]) * (inv_x[:, i0] * inv_y[:, j0])
-        return ok, np.column_stack([i0, j0, i1, j1]), count, inner_x, inner_y, variant, h
 
     def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
         """The two content hashes of a tiled box, translated to its corner."""
@@ -380,18 +321,18 @@ def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
     return out
 
 
-def _prefix1(a: np.ndarray) -> np.ndarray:
+def _prefix1(a: np.ndarray) -> list[list[int]]:
     """Prefix sums along the second axis with a leading zero: out[i][j] = a[i, :j].sum()."""
     out = np.zeros((a.shape[0], a.shape[1] + 1), dtype=np.int64)
     out[:, 1:] = np.cumsum(a, axis=1)
-    return out
+    return out.tolist()
 
 
-def _prefix2(a: np.ndarray) -> np.ndarray:
+def _prefix2(a: np.ndarray) -> list[list[int]]:
     """2D prefix sums with a leading zero row and column (uint64 sums wrap modulo 2^64)."""
     out = np.zeros((a.shape[0] + 1, a.shape[1] + 1), dtype=np.uint64 if a.dtype == np.uint64 else np.int64)
     out[1:, 1:] = np.cumsum(np.cumsum(a, axis=0, dtype=out.dtype), axis=1, dtype=out.dtype)
-    return out
+    return out.tolist()
 
 
 def _sum(t: list[list[int]], i0: int, j0: int, i1: int, j1: int) -> int:

@@ -108,8 +108,8 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
     sides = _Sides(index)
     terminals = np.column_stack([index.X0, index.Y0, index.X1, index.Y1])
     table: dict[int, list[int]] = defaultdict(list)
-    for k, s in enumerate(index.sigs_of(terminals)):
-        table[s].append(k)
+    for k, box in enumerate(terminals.tolist()):
+        table[index.sig(tuple(box))].append(k)
     groups = {s: terminals[rows] for s, rows in table.items() if len(rows) >= 2}
     queue = sorted(groups)
     while queue and len(groups) < max_groups:
@@ -117,19 +117,15 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         boxes = np.concatenate([groups[s] for s in batch])
         owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
         starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
-        sids: list[int] = []  # signatures of the first classes' first boxes, looked up in class order
         for g in range(len(batch)):
             if len(groups) >= max_groups:
                 break
-            lo, hi = starts[4 * g], starts[4 * g + 4]
-            if hi > len(sids):  # this group's classes and as many more as cannot add max_groups groups first
-                sids += index.sigs_of(firsts[len(sids):max(hi, lo + max_groups - len(groups))])
             for gd in range(4 * g, 4 * g + 4):
                 if starts[gd] == starts[gd + 1]:
                     continue
                 same: dict[int, list[int]] = defaultdict(list)
                 for k in range(starts[gd], starts[gd + 1]):
-                    same[sids[k]].append(k)
+                    same[index.sig(tuple(firsts[k]))].append(k)
                 for new_sig, ks in same.items():
                     if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
                             and new_sig not in groups:
