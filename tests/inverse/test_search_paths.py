@@ -1,0 +1,71 @@
+"""The fast paths of grammar search give what the full candidate lists give."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from citygen_inverse.actions import CostModel, _repeated_runs, region_actions
+from citygen_inverse.cmp import import_cmp
+from citygen_inverse.regions import LayoutIndex
+from citygen_inverse.search import GrammarSearch
+
+from .helpers import random_layout
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "inverse"
+
+
+def _layouts():
+    yield from (import_cmp(f) for f in sorted(DATA.glob("*.xml"))[:2])
+    yield from (random_layout(np.random.default_rng(s), depth=5) for s in range(6))
+
+
+@pytest.mark.parametrize("model", [CostModel(), CostModel(split=0.5, repeat=0.1, lambda2=3.0)])
+def test_best_only_candidates_are_the_first_least_heuristic_of_the_full_list(model):
+    for layout in _layouts():
+        index = LayoutIndex([layout])
+        search = GrammarSearch(index, model)
+        search.run("adp", 30, seed=3)  # visits many regions
+        for sig in list(search._actions):
+            full = region_actions(index, sig, search.sym, model)
+            best = region_actions(index, sig, search.sym, model, best_only=True)
+            assert len(best) == 1
+            assert best[0] == full[int(np.argmin(full.heuristic))]
+            assert all(full.kids(k) == tuple(c for c, _ in full[k].children) for k in range(len(full)))
+
+
+def test_search_run_again_with_another_method_matches_a_fresh_search():
+    layout = random_layout(np.random.default_rng(7), depth=5)
+    reused = GrammarSearch(LayoutIndex([layout]))
+    greedy = reused.run("greedy")
+    again = reused.run("adp", 200, seed=1)
+    fresh = GrammarSearch(LayoutIndex([layout])).run("adp", 200, seed=1)
+    assert again.rules == fresh.rules and again.cost == fresh.cost and again.history == fresh.history
+    assert greedy.cost >= fresh.cost
+
+
+def _repeated_runs_every_length(atoms, limit=16):
+    """Reference: every substring length tried (``_repeated_runs`` stops at the first length without a repeat)."""
+    m, found = len(atoms), []
+    for length in range(2, m // 2 + 1):
+        starts = {}
+        for i in range(m - length + 1):
+            starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
+        for occ in starts.values():
+            chosen, end = [], -1
+            for i in occ:
+                if i >= end:
+                    chosen.append(i)
+                    end = i + length
+            if len(chosen) >= 2:
+                inner = {i + d for i in chosen for d in range(1, length)}
+                found.append(((length - 1) * (len(chosen) - 1), tuple(k for k in range(1, m) if k not in inner)))
+    found.sort(key=lambda t: -t[0])
+    return [keep for _, keep in found[:limit]]
+
+
+def test_repeated_runs_stop_early_without_losing_a_grouping():
+    rng = np.random.default_rng(0)
+    for _ in range(400):
+        m, kinds = int(rng.integers(2, 24)), int(rng.integers(1, 5))
+        atoms = [(int(a), 1) for a in rng.integers(0, kinds, m)]
+        assert _repeated_runs(atoms) == _repeated_runs_every_length(atoms)
