@@ -80,13 +80,20 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     box = index.sigs[sig].box
     x0, y0, x1, y1 = box
     c0, c1, c2, c3 = sym.columns
-    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1)
-                            & ((c0 != x0) | (c1 != y0) | (c2 != x1) | (c3 != y1)))
+    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1))
     inst = sym.boxes[inside]
+    proper = (inst != box).any(axis=1)  # the region itself is not inside
+    inside, inst = inside[proper], inst[proper]
     weight = sym.terminals[inside] / index.sigs[sig].n
     if index.sigs[sig].period is not None:
         return _periodic(index, sig, model, inst, weight, best_only)
     actions = Candidates(index, box, model, best_only)
+    if inside.size:
+        # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
+        order = np.argsort(sym.group[inside], kind="stable")
+        grp = sym.group[inside][order]
+        starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
+        score = (-sym.importance[inside[order[starts]]]).tolist()
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
         if cuts.size == 0:
@@ -98,19 +105,15 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         line = (weight @ cov).tolist() if inst.size else [0.0] * (m + 1)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
         if inst.size:
-            # per repeated region (by signature), the boundaries inside any of its instances, which a grouping
-            # keeping every instance whole drops; distinct rows in lexicographic order, scored by f(a, o)
-            order = np.argsort(sym.group[inside], kind="stable")
-            grp = sym.group[inside][order]
-            starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
+            # per repeated region, the boundaries inside any of its instances, which a grouping keeping every
+            # instance whole drops; distinct rows in lexicographic order (the first region's score), by f(a, o)
             per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
-            score = np.maximum.reduceat(sym.importance[inside][order], starts).tolist()
             first: dict[bytes, int] = {}
             flat = per_group.tobytes()
             for g in range(per_group.shape[0]):
                 first.setdefault(flat[g * (m - 1):(g + 1) * (m - 1)], g)
             rows = sorted(first)
-            ranked = sorted(range(len(rows)), key=lambda r: -score[first[rows[r]]])
+            ranked = sorted(range(len(rows)), key=lambda r: score[first[rows[r]]])
             for r in ranked[:max_groupings]:
                 groupings.add(tuple(k + 1 for k, cut in enumerate(rows[r]) if not cut))
         bl = bounds.tolist()

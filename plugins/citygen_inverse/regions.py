@@ -96,7 +96,6 @@ class LayoutIndex:
         self.sigs: list[SigInfo] = [SigInfo((0, 0, 0, 0), 0, None)]  # id 0: the empty dummy
         self._sig_ids: dict[tuple, int] = {}
         self._boxes: dict[Box, int] = {}
-        self._periodic: dict[tuple, tuple] = {}  # content key -> signature key (itself when not periodic)
         self._grid = _Grid(self)
 
     def q(self, v: float) -> int:
@@ -121,19 +120,17 @@ class LayoutIndex:
         x0, y0, x1, y1 = box
         free_w = self.free_extents and inner_x == 0
         free_h = self.free_extents and inner_y == 0
-        key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
+        key = None
         if self.periodic and n > 1:
-            periodic = self._periodic.get(key)  # content decides: only its first box is searched for a period
-            if periodic is None:
-                periodic = self._periodic[key] = key
-                for axis, free in ((0, free_w), (1, free_h)):
-                    p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
-                        g.period(box, cell, axis, (free_w, free_h), n)
-                    if p is not None:
-                        tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
-                        periodic = self._periodic[key] = (-2 - axis, p, self.sig(tile))
-                        break
-            key = periodic
+            for axis, free in ((0, free_w), (1, free_h)):
+                p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
+                    g.period(box, cell, axis, (free_w, free_h), n)
+                if p is not None:
+                    tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
+                    key = (-2 - axis, p, self.sig(tile))
+                    break
+        if key is None:
+            key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
         sid = self._sig_ids.get(key)
         if sid is None:
             sid = len(self.sigs)
