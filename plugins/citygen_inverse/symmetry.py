@@ -29,7 +29,7 @@ class RepeatedRegions:
         """x0, y0, x1, y1 of the instances as contiguous arrays (fast containment tests)."""
         return tuple(np.ascontiguousarray(self.boxes[:, k]) for k in range(4))
 
-    @property
+    @cached_property
     def importance(self) -> np.ndarray:
         """wu2014 §4.7: f(a, o) = (a - 1)(o - 1) per instance."""
         return (self.terminals - 1) * (self.occurrences - 1)
