@@ -230,15 +230,15 @@ class Candidates:
         self.cost: list[float] = []
         self.heuristic: list[float] = []
         self._specs: list[tuple] = []
-        self._built: dict[int, Action] = {}
+        self.built: list[Action | None] = []  # per candidate its rule once built (``self[k]`` builds it)
 
     def __len__(self) -> int:
         return len(self.cost)
 
     def __getitem__(self, k: int) -> Action:
-        action = self._built.get(k)
+        action = self.built[k]
         if action is None:
-            action = self._built[k] = _make(self.index, self.box, *self._specs[k])
+            action = self.built[k] = _make(self.index, self.box, *self._specs[k])
         return action
 
     def __iter__(self):
@@ -259,13 +259,14 @@ class Candidates:
         if self._best_only and self.heuristic:
             if not heuristic < self.heuristic[0]:
                 return
-            self.cost.clear(), self.heuristic.clear(), self._specs.clear()
+            self.cost.clear(), self.heuristic.clear(), self._specs.clear(), self.built.clear()
         self.cost.append(cost)
         self.heuristic.append(heuristic)
         self._specs.append((axis, bl, edges, sigs, op, cost, k, heuristic))
+        self.built.append(None)
 
     def add_action(self, action: Action) -> None:
-        self._built[len(self.cost)] = action
+        self.built.append(action)
         self.cost.append(action.cost)
         self.heuristic.append(action.heuristic)
         self._specs.append(None)

@@ -77,18 +77,18 @@ class GrammarSearch:
             self._actions[sig] = acts
             heur = acts.heuristic
             self._cost[sig] = acts.cost
+            if not self._best_only:  # (successors for exploitation)
+                self._kids[sig] = [acts.kids(k) for k in range(len(acts))]
             self._greedy_k[sig] = int(np.argmin(heur))
         return acts
 
-    def _softmax(self, sig: int) -> tuple[list[float], list[float]]:
-        """Weights exp(-H) (scaled by the best) of a region's actions and their cumulative sums."""
-        weights = self._weights.get(sig)
-        if weights is None:
-            heur = self._actions[sig].heuristic
-            low = min(heur)
-            weights = self._weights[sig] = [math.exp(low - h) for h in heur]
-            self._cum[sig] = list(np.cumsum(weights))
-        return weights, self._cum[sig]
+    def _softmax(self, sig: int) -> list[float]:
+        """Weights exp(-H) (scaled by the best) of a region's actions; their cumulative sums go to ``_cum``."""
+        heur = self._actions[sig].heuristic
+        low = min(heur)
+        weights = self._weights[sig] = [math.exp(low - h) for h in heur]
+        self._cum[sig] = list(np.cumsum(weights))
+        return weights
 
     def estimate(self, sig: int) -> float:
         """V for a region never completed: an optimistic guess from its terminal count."""
@@ -107,14 +107,16 @@ class GrammarSearch:
             y, x, sig = heapq.heappop(heap)
             if sig in rules or sigs[sig].n <= 1:
                 continue
-            acts = self._actions.get(sig) or self.actions(sig)
+            acts = self._actions.get(sig)
+            if acts is None:
+                acts = self.actions(sig)
             masks = self._protection(sig, x, y) if protected else None
             if masks is not None and all(m & protected for m in masks):
                 masks = None  # every rule cuts a protected region: protection is dropped here
             k = choose(sig, masks, protected, rules)
             rules[sig] = k
             order.append(sig)
-            for child, rel in acts[k].children:
+            for child, rel in (acts.built[k] or acts[k]).children:
                 if child not in rules:
                     intro.setdefault(child, sig)
                     heapq.heappush(heap, (y + rel[1], x + rel[0], child))
@@ -187,7 +189,8 @@ class GrammarSearch:
 
     def _sample(self, rng):
         def choose(sig, masks, protected, rules) -> int:
-            weights, cum = self._softmax(sig)
+            weights = self._weights.get(sig) or self._softmax(sig)
+            cum = self._cum[sig]
             if masks is None:
                 return min(bisect_right(cum, self._uniform(rng) * cum[-1]), len(cum) - 1)
             w = [0.0 if m & protected else v for v, m in zip(weights, masks)]
@@ -200,11 +203,7 @@ class GrammarSearch:
         value, sigs = self.value, self.index.sigs
         keep = self.best_action.get(sig)
         best_k, best_t = -1, math.inf
-        all_kids = self._kids.get(sig)
-        if all_kids is None:
-            acts = self._actions[sig]
-            all_kids = self._kids[sig] = [acts.kids(k) for k in range(len(acts))]
-        for k, (c, kids) in enumerate(zip(self._cost[sig], all_kids)):
+        for k, (c, kids) in enumerate(zip(self._cost[sig], self._kids[sig])):
             if masks is not None and masks[k] & protected:
                 continue
             t = c - (1e-9 if k == keep else 0.0)
