@@ -21,8 +21,8 @@ def _layouts():
 
 @pytest.mark.parametrize("model", [CostModel(), CostModel(split=0.5, repeat=0.1, lambda2=3.0)])
 def test_best_only_candidates_are_the_first_least_heuristic_of_the_full_list(model):
-    for layout in _layouts():
-        index = LayoutIndex([layout])
+    for layout, periodic in ((layout, periodic) for layout in _layouts() for periodic in (False, True)):
+        index = LayoutIndex([layout], periodic=periodic)
         search = GrammarSearch(index, model)
         search.run("adp", 30, seed=3)  # visits many regions
         for sig in list(search._actions):
@@ -35,10 +35,10 @@ def test_best_only_candidates_are_the_first_least_heuristic_of_the_full_list(mod
 
 def test_search_run_again_with_another_method_matches_a_fresh_search():
     layout = random_layout(np.random.default_rng(7), depth=5)
-    reused = GrammarSearch(LayoutIndex([layout]))
+    reused = GrammarSearch(LayoutIndex([layout], periodic=True))
     greedy = reused.run("greedy")
     again = reused.run("adp", 200, seed=1)
-    fresh = GrammarSearch(LayoutIndex([layout])).run("adp", 200, seed=1)
+    fresh = GrammarSearch(LayoutIndex([layout], periodic=True)).run("adp", 200, seed=1)
     assert again.rules == fresh.rules and again.cost == fresh.cost and again.history == fresh.history
     assert greedy.cost >= fresh.cost
 
