@@ -26,6 +26,7 @@ from citygen_inverse.regions import LayoutIndex
 from citygen_inverse.symmetry import RepeatedRegions, detect_symmetry
 
 METHODS = ("greedy", "is", "adp")
+_NO_KIDS: frozenset[int] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,10 @@ class GrammarSearch:
         self._greedy_k: dict[int, int] = {}
         self._cum: dict[int, list[float]] = {}
         self._weights: dict[int, list[float]] = {}
-        self._masks: dict[tuple[int, int, int], list[int]] = {}
+        self._masks: dict[tuple[int, int, int], tuple[list[int], int]] = {}
+        self._kidset: dict[int, frozenset[int]] = {}
+        self._parents: dict[int, list[int]] = {}
+        self._exploited: dict[int, dict[frozenset[int], int]] = {}  # Eq. 4 choices, see _exploit
         self._best_only = False  # a greedy run keeps only each region's greedy action
         self.value: dict[int, float] = {}
         self.best_action: dict[int, int] = {}
@@ -78,7 +82,10 @@ class GrammarSearch:
             heur = acts.heuristic
             self._cost[sig] = acts.cost
             if not self._best_only:  # (successors for exploitation)
-                self._kids[sig] = [acts.kids(k) for k in range(len(acts))]
+                self._kids[sig] = kids = [acts.kids(k) for k in range(len(acts))]
+                self._kidset[sig] = kidset = frozenset(c for ks in kids for c in ks)
+                for kid in kidset:
+                    self._parents.setdefault(kid, []).append(sig)
             self._greedy_k[sig] = int(np.argmin(heur))
         return acts
 
@@ -99,27 +106,30 @@ class GrammarSearch:
         """One grammar, top-down; ``protected`` is a bit mask over the important repeated instances."""
         rules: dict[int, int] = {}
         intro: dict[int, int] = {}
-        heap = [(box[1], box[0], sig) for sig, box in zip(self.roots, self.index.roots)]
+        heap = [(box[1], box[0], sig) for sig, box in zip(self.roots, self.index.roots)
+                if self.index.sigs[sig].n > 1]  # (successors in rules are always non-terminal)
         heapq.heapify(heap)
         order = []
-        sigs = self.index.sigs
+        pop, push, actions = heapq.heappop, heapq.heappush, self._actions
         while heap:
-            y, x, sig = heapq.heappop(heap)
-            if sig in rules or sigs[sig].n <= 1:
+            y, x, sig = pop(heap)
+            if sig in rules:
                 continue
-            acts = self._actions.get(sig)
+            acts = actions.get(sig)
             if acts is None:
                 acts = self.actions(sig)
-            masks = self._protection(sig, x, y) if protected else None
-            if masks is not None and all(m & protected for m in masks):
-                masks = None  # every rule cuts a protected region: protection is dropped here
+            masks = None
+            if protected:
+                masks, cut = self._protection(sig, x, y)
+                if not cut & protected or all(m & protected for m in masks):
+                    masks = None  # no rule cuts a protected region, or every rule does (protection dropped here)
             k = choose(sig, masks, protected, rules)
             rules[sig] = k
             order.append(sig)
             for child, rel in (acts.built[k] or acts[k]).children:
                 if child not in rules:
                     intro.setdefault(child, sig)
-                    heapq.heappush(heap, (y + rel[1], x + rel[0], child))
+                    push(heap, (y + rel[1], x + rel[0], child))
         sub: dict[int, float] = {}
         total = 0.0
         for sig in reversed(order):
@@ -129,24 +139,28 @@ class GrammarSearch:
             parent = intro.get(sig)
             if parent is not None:
                 sub[parent] = sub.get(parent, 0.0) + sub[sig]
-        value, best = self.value, self.best_action
+        value, best, exploited, parents = self.value, self.best_action, self._exploited, self._parents
         for sig in order:
             if sub[sig] < value.get(sig, math.inf):
                 value[sig] = sub[sig]
                 best[sig] = rules[sig]
+                exploited.pop(sig, None)
+                for p in parents.get(sig, ()):
+                    exploited.pop(p, None)
         return rules, total
 
-    def _protection(self, sig: int, x: int, y: int) -> list[int]:
-        """Per action, the bit mask of important instances strictly inside the region that its lines cut."""
+    def _protection(self, sig: int, x: int, y: int) -> tuple[list[int], int]:
+        """Per action, the bit mask of important instances strictly inside the region that its lines cut; and
+        the union of those masks."""
         key = (sig, x, y)
-        masks = self._masks.get(key)
-        if masks is None:
+        found = self._masks.get(key)
+        if found is None:
             box = self.index.sigs[sig].box
             w, h = box[2] - box[0], box[3] - box[1]
             p = self._imp_boxes - np.array([x, y, x, y])
             inside = np.flatnonzero((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 2] <= w) & (p[:, 3] <= h)
                                     & ~((p[:, 0] == 0) & (p[:, 1] == 0) & (p[:, 2] == w) & (p[:, 3] == h)))
-            masks = []
+            masks, any_mask = [], 0
             for a in self._actions[sig]:
                 m = 0
                 if a.cuts and inside.size:
@@ -156,8 +170,9 @@ class GrammarSearch:
                     for i in hit.tolist():
                         m |= 1 << i
                 masks.append(m)
-            self._masks[key] = masks
-        return masks
+                any_mask |= m
+            self._masks[key] = found = (masks, any_mask)
+        return found
 
     def _protect(self, rng: np.random.Generator, count: int = 6) -> int:
         """A random non-overlapping set of important repeated-region instances (sampled by f(a, o)), as a mask."""
@@ -199,7 +214,20 @@ class GrammarSearch:
         return choose
 
     def _exploit(self, sig, masks, protected, rules) -> int:
-        """Eq. 4: min_a C(a) + sum of V over the successors that get a rule later (ties keep the best action)."""
+        """Eq. 4: min_a C(a) + sum of V over the successors that get a rule later (ties keep the best action).
+
+        Unless something is protected the choice depends only on V and on which successors have a rule, so it is
+        kept per set of those successors until V of the region or of a successor improves (``iterate`` drops it
+        then)."""
+        if masks is None:
+            kids = self._kidset[sig]
+            key = _NO_KIDS if rules.keys().isdisjoint(kids) else frozenset(rules.keys() & kids)
+            memo = self._exploited.get(sig)
+            if memo is None:
+                memo = self._exploited[sig] = {}
+            k = memo.get(key)
+            if k is not None:
+                return k
         value, sigs = self.value, self.index.sigs
         keep = self.best_action.get(sig)
         best_k, best_t = -1, math.inf
@@ -213,6 +241,8 @@ class GrammarSearch:
                     t += v if v is not None else 1.0 + 0.25 * sigs[kid].n
             if t < best_t:
                 best_k, best_t = k, t
+        if masks is None:
+            memo[key] = best_k
         return best_k
 
     def run(self, method: str = "adp", iterations: int = 2000, seed: int = 0,
@@ -222,7 +252,7 @@ class GrammarSearch:
         start = time.perf_counter()
         if self._best_only != (method == "greedy"):  # (a search run again with another method starts afresh)
             for table in (self._actions, self._cost, self._kids, self._greedy_k, self._cum, self._weights,
-                          self._masks, self.value, self.best_action):
+                          self._masks, self._kidset, self._parents, self._exploited, self.value, self.best_action):
                 table.clear()
             self._best_only = method == "greedy"
         best_rules, best_cost = self.iterate(self._greedy, 0)

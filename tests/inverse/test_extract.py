@@ -175,3 +175,26 @@ def test_extraction_leaves_the_garbage_collector_as_it_found_it():
         assert not gc.isenabled()  # a caller that paused it keeps it paused
     finally:
         gc.enable()
+
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 10_000), st.integers(0, 3))
+def test_memoised_exploitation_chooses_as_a_fresh_evaluation(layout_seed, seed):
+    """ADP keeps Eq. 4 choices per region until a V they read improves: the same grammars as recomputing."""
+    from citygen_inverse.regions import LayoutIndex
+    from citygen_inverse.search import GrammarSearch
+    layout = random_layout(np.random.default_rng(layout_seed), depth=5, pinwheel=0.1)
+
+    def run(memo: bool):
+        search = GrammarSearch(LayoutIndex([layout], True, periodic=True))
+        if not memo:
+            exploit = search._exploit
+
+            def fresh(*args):
+                search._exploited.clear()
+                return exploit(*args)
+            search._exploit = fresh
+        result = search.run("adp", 120, seed)
+        return result.cost, {s: (a.op, a.axis, a.items) for s, a in result.rules.items()}, result.history
+    assert run(True) == run(False)
