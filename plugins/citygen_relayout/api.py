@@ -9,12 +9,13 @@ from citygen_relayout.search import Constraints, RelayoutResult, Search
 
 
 def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: np.random.Generator | None = None,
-             constraints: Constraints | None = None, budget_s: float = 10.0, max_restarts: int = 12) -> RelayoutResult:
+             constraints: Constraints | None = None, budget_s: float = 10.0, backtrack_budget: int = 12000,
+             restarts: str = "luby") -> RelayoutResult:
     """One variation of ``model`` for a ``width x height`` target (bao2013 §7); never raises on infeasibility.
 
-    The search budget is counted in work (``max_restarts`` restarts of 1000 backtracks each), so results do not
-    depend on machine speed; ``budget_s`` (seconds of this process's CPU time, so a loaded machine does not
-    trigger it) is a safety net on top.
+    The search budget is counted in work (``backtrack_budget`` backtracks over all restarts; ``restarts`` is the
+    cutoff schedule, ``"luby"`` or the paper's ``"fixed"`` 1000), so results do not depend on machine speed;
+    ``budget_s`` (seconds of this process's CPU time, so a loaded machine does not trigger it) is a safety net.
     """
     if width <= 0 or height <= 0:
         return RelayoutResult(False, None, "invalid-size", f"target size {width:g} x {height:g} must be positive")
@@ -22,7 +23,8 @@ def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: n
         rng = derive_rng("relayout", model.name, seed)
         if constraints is None:
             constraints = Constraints(key_salt=(seed,))
-    return Search(model, width, height, rng, constraints, budget_s=budget_s, max_restarts=max_restarts).run()
+    return Search(model, width, height, rng, constraints, budget_s=budget_s, backtrack_budget=backtrack_budget,
+                  restarts=restarts).run()
 
 
 def variations(model: Model, width: float, height: float, count: int, *, seed: int = 0,

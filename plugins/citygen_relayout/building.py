@@ -21,11 +21,11 @@ PLUGIN_ID = "relayout"
 
 
 def solve_face(model: Model, request: FacadeRequest, shared: dict | None = None,
-               budget_s: float = 10.0, max_restarts: int = 6) -> RelayoutResult:
+               budget_s: float = 10.0, backtrack_budget: int = 6000) -> RelayoutResult:
     constraints = Constraints(floor_lines=tuple(request.floor_lines), corners=tuple(request.corner_widths),
                               doors=1 if request.entrance else 0, shared=shared, key_salt=tuple(request.seed))
     return relayout(model, request.width, request.height, rng=request.rng(PLUGIN_ID, model.name),
-                    constraints=constraints, budget_s=budget_s, max_restarts=max_restarts)
+                    constraints=constraints, budget_s=budget_s, backtrack_budget=backtrack_budget)
 
 
 def generate_face(model: Model, request: FacadeRequest, shared: dict | None = None) -> FacadeLayout:

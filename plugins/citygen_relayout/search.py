@@ -3,12 +3,16 @@
 Each composite region becomes a *frame* holding the resumable ``layout`` generator of its arrangement. When a
 frame's generator is exhausted the search backjumps (conflict-directed) to the latest earlier frame it depends
 on -- its parent (which fixed its size) or a frame that placed an alignment target or set a same-size
-reference it could not meet -- undoing everything after it. After ``max_backtracks`` (1000, as in the paper) the
-whole layout restarts from the root with fresh random choices. A wall-clock budget bounds everything; failure
-returns a :class:`RelayoutResult` naming the constraints that blocked most often.
+reference it could not meet -- undoing everything after it. After a cutoff of backtracks the whole layout
+restarts from the root with fresh random choices: 1000 in the paper (``restarts="fixed"``); by default the
+cutoffs follow the Luby sequence 100 x (1, 1, 2, 1, 1, 2, 4, ...), because a bad early choice (a band height no
+floor layout fits) is rarely repaired by backtracking and the run times are heavy-tailed. A budget of backtracks
+over all attempts bounds the work, a CPU-time limit everything; failure returns a :class:`RelayoutResult`
+naming the constraints that blocked most often.
 """
 from __future__ import annotations
 
+import itertools
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -19,6 +23,18 @@ from citygen.layout import FacadeLayout, Region
 from citygen_relayout.arrange import Solution, layout
 from citygen_relayout.compiled import PatternRef, compile_model
 from citygen_relayout.model import Model, SameSize, SizeRange
+
+
+RESTARTS = ("luby", "fixed")
+
+
+def luby(i: int) -> int:
+    """The i-th term (from 1) of the Luby et al. (1993) restart sequence 1, 1, 2, 1, 1, 2, 4, 1, 1, 2, ..."""
+    k = i.bit_length()
+    while i != (1 << k) - 1:
+        i -= (1 << (k - 1)) - 1
+        k = i.bit_length()
+    return 1 << (k - 1)
 
 
 class _Restart(Exception):
@@ -86,14 +102,17 @@ class Constraints:
 
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
-                 constraints: Constraints | None = None, budget_s: float = 10.0, max_backtracks: int = 1000,
-                 max_restarts: int = 12, accept_temperature: float = 0.0, relative: bool = True) -> None:
+                 constraints: Constraints | None = None, budget_s: float = 10.0, backtrack_budget: int = 12000,
+                 restarts: str = "luby", accept_temperature: float = 0.0, relative: bool = True) -> None:
+        if restarts not in RESTARTS:
+            raise ValueError(f"restarts must be one of {RESTARTS}, got {restarts!r}")
         self.model, self.compiled = model, compile_model(model)
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
         self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
         self.corners, self.doors, self.shared, self.key_salt = c.corners, c.doors, c.shared, c.key_salt
-        self.budget_s, self.max_backtracks, self.max_restarts = budget_s, max_backtracks, max_restarts
+        self.budget_s, self.backtrack_budget, self.restarts = budget_s, backtrack_budget, restarts
+        self.max_backtracks = 0  # cutoff of the current attempt
         self.accept_temperature = accept_temperature
         self.relative = relative  # QP on relative size deviations (x - xbar)^2 / xbar^2; False: the paper's
         self.blockers: Counter[str] = Counter()
@@ -192,7 +211,11 @@ class Search:
         self._ticks = 0
         status = "exhausted"
         restarts = root_failures = 0
-        for restarts in range(self.max_restarts):
+        for restarts in itertools.count():
+            left = self.backtrack_budget - self.total_backtracks
+            if left <= 0:
+                break
+            self.max_backtracks = min(left, 1000 if self.restarts == "fixed" else 100 * luby(restarts + 1))
             try:
                 if self._attempt():
                     return RelayoutResult(True, self._build(), "solved", "ok", restarts, self.total_backtracks,

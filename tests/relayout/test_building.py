@@ -104,3 +104,23 @@ def test_same_request_same_layout(models):
     a = KIND.generate(models["fig7_walkthrough"], req)
     b = KIND.generate(models["fig7_walkthrough"], req)
     assert a.dumps() == b.dumps()
+
+
+def test_luby_sequence():
+    from citygen_relayout.search import luby
+    assert [luby(i) for i in range(1, 16)] == [1, 1, 2, 1, 1, 2, 4, 1, 1, 2, 1, 1, 2, 4, 8]
+
+
+@pytest.mark.parametrize("width, height", [(16.0, 10.0), (12.0, 10.0), (9.0, 16.0)])
+def test_regression_low_floors_are_dressed_with_luby_restarts(models, width, height):
+    """cmp_b0035 with 2.8 m floors: restarting only every 1000 backtracks (the paper) spent the whole budget of
+    6000 on doomed early band heights and fell back to a wall face; Luby cutoffs (100, 100, 200, ...) find one."""
+    from citygen_relayout.building import solve_face
+    lines = split_floors(height, 2.8, 3.2)
+    req = FacadeRequest(width, height, lines, entrance=True, corner_widths=(0.3, 0.4),
+                        context=FaceContext("b", 0, len(lines) - 1), seed=(1, 0))
+    result = solve_face(models["cmp_b0035"], req, {})
+    assert result.success, result.message
+    assert result.backtracks < 6000
+    assert check_request(result.layout, req) == []
+    assert validate(result.layout, models["cmp_b0035"]) == []

@@ -84,7 +84,7 @@ align A.min = C.min
 """
     model = parse_model(text, "clash.relayout")
     t = time.perf_counter()
-    result = relayout(model, 6.0, 6.0, max_restarts=3)
+    result = relayout(model, 6.0, 6.0, backtrack_budget=3000)
     assert time.perf_counter() - t < 3.0
     assert not result.success
     assert "align A.min = C.min (line 12)" in result.message
