@@ -4,6 +4,7 @@ and shapes fully covered by upper layers are removed (§3.2, "a window fully cov
 from __future__ import annotations
 
 import bisect
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -76,16 +77,17 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
-    cells: list[list[tuple[str, Look]]] = []       # per layer: (symbol, look) of its grid cells, row-major
+    # per layer: its grid cells, row-major, as (symbol, look, region template if shown, template if hidden)
+    cells: list[list[tuple[str, Look, dict | None, dict]]] = []
     grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
-        hole = ("hole", Look(False, None, layer.depth, None, None))
+        hole = ("hole", Look(False, None, layer.depth, None, None), None, Region.template("hole", layer=layer.name))
         # a shape's look depends on the symbols, transparency and mirroring of its two letters
         hkeys = [None if hs.letter is None else (hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored)
                  for hs in hseg]
-        looks: dict[tuple, tuple[str, Look]] = {}
+        looks: dict[tuple, tuple[str, Look, dict | None, dict]] = {}
         out = []
         for vs in vseg:
             if vs.letter is None:
@@ -98,27 +100,30 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
                     continue
                 cell = looks.get((hkey, vkey))
                 if cell is None:
-                    cell = looks[hkey, vkey] = (f"{hs.letter.name}.{vs.letter.name}",
-                                                look(ruleset, layer, hs.letter, vs.letter))
+                    symbol = f"{hs.letter.name}.{vs.letter.name}"
+                    lk = look(ruleset, layer, hs.letter, vs.letter)
+                    shown = Region.template(symbol, label=lk.label, depth=lk.depth, material=lk.material,
+                                            asset=lk.asset, layer=layer.name) if lk.visible else None
+                    cell = looks[hkey, vkey] = (symbol, lk, shown, Region.template(symbol, layer=layer.name))
                 out.append(cell)
         cells.append(out)
     occluded = _occluded(cells, grids)
+    stamped = Region.stamped
     children = []
     for index, layer in enumerate(ruleset.layers):
         xspans, yspans = grids[index]
-        name = layer.name
+        layer_cells, layer_occluded = cells[index], occluded[index]
         terminals = []
         k = 0
         for y, h in yspans:
             for x, w in xspans:
-                symbol, lk = cells[index][k]
-                if lk.visible and not occluded[index][k]:
-                    terminals.append(Region.fast(x, y, w, h, symbol, label=lk.label, depth=lk.depth,
-                                             material=lk.material, asset=lk.asset, layer=name))
+                _, _, shown, hidden = layer_cells[k]
+                if shown is not None and not layer_occluded[k]:
+                    terminals.append(stamped(shown, x, y, w, h))
                 elif w * h > 1e-12:
-                    terminals.append(Region.fast(x, y, w, h, symbol, layer=name))
+                    terminals.append(stamped(hidden, x, y, w, h))
                 k += 1
-        children.append(Region(0.0, 0.0, width, height, name, layer=name, children=tuple(terminals)))
+        children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
 
@@ -191,8 +196,10 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
         return replace(region, label="wall", depth=region.depth - LABEL_DEPTH.get(region.label, 0.0), **kw)
 
     def fix(region: Region) -> Region:
-        if region.children:
-            return replace(region, children=tuple(fix(c) for c in region.children))
+        if region.children:    # only openings can need a repair; an unchanged subtree is kept as it is
+            children = tuple(fix(c) if c.children or c.label in FLOOR_BOUND_LABELS else c for c in region.children)
+            same = all(map(operator.is_, children, region.children))
+            return region if same else replace(region, children=children)
         if region.label not in FLOOR_BOUND_LABELS:
             return region
         cut = lines.size and np.any((lines > region.y + eps) & (lines < region.y + region.h - eps))
