@@ -61,53 +61,130 @@ class Alignment:
     violations: tuple[str, ...] = ()
 
 
+#: Letters per row whose ends propose target column sizes (longer columns come from the other rows).
+LOOKAHEAD = 2
+TOL = 1e-9
+
+
+class NetworkMemo:
+    """The rows of the alignment networks of one direction solve, shared between its searches (reusing the
+    alignment work across candidates and mu rounds, §5.2). The candidates of a direction mostly differ in a few
+    words (a counter value, a sampled size), so most rows of a matrix recur with the same word at the same index;
+    such a row's prefix sums and its memos of substrings, target choices and entries are built once."""
+
+    def __init__(self) -> None:
+        self.rows: dict[tuple, _Row] = {}
+
+
+class _Row:
+    """Row ``r`` of a network: prefix sums and flag counts of its word, where epsilon may be inserted, the ends of
+    the runs of letters of equal transparency, the rows above it (bit set), and per start letter ``a`` and bound
+    ``end`` on the substring ends: the substring sizes, the target sizes the row proposes, its entries per
+    substring end and its choices per target. Everything is a function of ``(r, word, parents, upper)``."""
+
+    __slots__ = ("bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts")
+
+    def __init__(self, r: int, word: Sequence[Letter], parents: Sequence[int], upper: int) -> None:
+        def count(flags) -> list[int]:
+            """Prefix counts of a letter flag (C-level maps: the networks are rebuilt per candidate)."""
+            return list(itertools.accumulate(flags, initial=0))
+
+        w = word
+        size, opaque, clear = attrgetter("size"), attrgetter("opaque"), attrgetter("transparent")
+        self.bit = 1 << r
+        self.upper = upper
+        self.cum = list(itertools.accumulate(map(size, w), initial=0.0))
+        self.nonopaque = count(map(not_, map(opaque, w)))
+        self.unocc = count(map(attrgetter("unoccludable"), w))
+        self.solid = count(map(not_, map(or_, map(clear, w), map(opaque, w))))
+        self.clear = count(map(clear, w))
+        pa = list(parents)
+        att = [x.attached for x in w]
+        # no insertion next to an attached letter, nor inside a split transparent letter (§5.2)
+        self.eps_ok = [not ((p > 0 and att[p - 1]) or (p < len(w) and att[p]) or
+                            (0 < p < len(w) and pa[p - 1] == pa[p])) for p in range(len(w) + 1)]
+        ends = list(range(len(w) + 1))
+        for i in range(len(w) - 1, -1, -1):
+            ends[i] = ends[i + 1] if i + 1 < len(w) and w[i + 1].transparent == w[i].transparent else i + 1
+        self.runend = ends
+        self.starts: dict[tuple[int, int], tuple[list[float], list[float], dict, dict]] = {}
+
+    def start(self, a: int, end: int) -> tuple[list[float], list[float], dict, dict]:
+        """From letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target sizes the
+        row proposes, and memos of its entries per substring end and of its choices per target."""
+        key = (a, end)
+        row = self.starts.get(key)
+        if row is None:
+            c, b = self.cum, self.cum[a]
+            seg = [c[j] - b for j in range(a + 1, end + 1)]
+            row = self.starts[key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:LOOKAHEAD]], {}, {})
+        return row
+
+    def choose(self, a: int, start: tuple, t: float) -> tuple[int, int, int, int]:
+        """For target ``t``: the substring end nearest to it, then the ends just below and just above it, then
+        the nearest end if it matches the target exactly (else epsilon, where allowed); memoised in ``start``."""
+        seg = start[0]
+        last = len(seg) - 1
+        first = a + 1
+        i = bisect.bisect_left(seg, t - TOL)
+        if i <= last and seg[i] <= t + TOL:    # an end within the tolerance: lo = hi = near
+            near = lo = hi = i
+        else:
+            hi = i if i < last else last
+            lo = i - 1 if i > 0 else 0
+            near = lo if t - seg[lo] <= seg[hi] - t else hi
+        strict = first + near if not self.eps_ok[a] or abs(seg[near] - t) <= TOL else a
+        pick = start[3][t] = (first + near, first + lo, first + hi, strict)
+        return pick
+
+    def entry(self, a: int, e: int) -> tuple | None:
+        """What entry ``(a, e)`` brings to a column: ``(size, size, opaque bit, solid bit, rows one of which
+        must be opaque (-1: any), rows none of which may be solid)``, the sizes -inf and inf for epsilon (so that
+        it is neither the largest nor the smallest); None when the entry alone breaks a constraint (epsilon beside
+        an attached letter or with no upper row, transparent mixed with other letters)."""
+        upper = self.upper
+        if e == a:
+            return (-math.inf, math.inf, 0, 0, upper, 0) if upper and self.eps_ok[a] else None
+        clear = self.clear[e] - self.clear[a]
+        if 0 < clear < e - a:
+            return None
+        bit = self.bit
+        size = self.cum[e] - self.cum[a]
+        return (size, size, bit if self.nonopaque[e] == self.nonopaque[a] else 0,
+                bit if self.solid[e] > self.solid[a] else 0, -1,
+                upper if self.unocc[e] > self.unocc[a] else 0)
+
+
 class _Words:
-    """Prefix sums and flag counts of the words of one matrix (forward, or reversed for the backward search).
+    """The alignment decision network of one matrix (forward, or on the reversed words for the backward search).
 
     Words are short and matrices have few rows, so a node's edges are built in plain Python (numpy's per-call
     overhead dominated on such tiny arrays) and memoised per state: the depth-first search and the Dijkstra
-    search of one alignment visit many of the same nodes."""
-
-    #: Letters per row whose ends propose target column sizes (longer columns come from the other rows).
-    LOOKAHEAD = 2
-    TOL = 1e-9
+    search of one alignment visit many of the same nodes. The rows (:class:`_Row`) come from ``memo`` when
+    given, so the searches of a direction solve share them."""
 
     def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray,
-                 parents: Sequence[Sequence[int]] | None = None, fence: Sequence[tuple[int, ...]] = ()) -> None:
+                 parents: Sequence[Sequence[int]] | None = None, fence: Sequence[tuple[int, ...]] = (),
+                 memo: NetworkMemo | None = None) -> None:
         self.m = len(words)
         self.n = tuple(len(w) for w in words)
         #: prealigned column ends (the last is ``n``): no column of this network crosses one of them
         self.fence = tuple(fence)
         parents = parents or [range(len(w)) for w in words]
-
-        def count(flags) -> list[int]:
-            """Prefix counts of a letter flag (C-level maps: the networks are rebuilt per candidate)."""
-            return list(itertools.accumulate(flags, initial=0))
-
-        size, opaque, clear = attrgetter("size"), attrgetter("opaque"), attrgetter("transparent")
-        self.cum = [list(itertools.accumulate(map(size, w), initial=0.0)) for w in words]
-        self.total = [c[-1] for c in self.cum]
-        self.nonopaque = [count(map(not_, map(opaque, w))) for w in words]
-        self.unocc = [count(map(attrgetter("unoccludable"), w)) for w in words]
-        self.solid = [count(map(not_, map(or_, map(clear, w), map(opaque, w)))) for w in words]
-        self.clear = [count(map(clear, w)) for w in words]
-        self.eps_ok: list[list[bool]] = []
-        self.runend: list[list[int]] = []
-        for r, w in enumerate(words):
-            pa = list(parents[r])
-            att = [x.attached for x in w]
-            # no insertion next to an attached letter, nor inside a split transparent letter (§5.2)
-            self.eps_ok.append([not ((p > 0 and att[p - 1]) or (p < len(w) and att[p]) or
-                                     (0 < p < len(w) and pa[p - 1] == pa[p])) for p in range(len(w) + 1)])
-            ends = list(range(len(w) + 1))
-            for i in range(len(w) - 1, -1, -1):
-                ends[i] = ends[i + 1] if i + 1 < len(w) and w[i + 1].transparent == w[i].transparent else i + 1
-            self.runend.append(ends)
         above = np.asarray(above, dtype=bool)
-        #: per row r, the bit set of the rows above it (above[h, r])
-        self.upper = [sum(1 << h for h in range(self.m) if above[h, r]) for r in range(self.m)]
+        shared = memo.rows if memo is not None else {}
+        self.rows: list[_Row] = []
+        for r, (word, pa) in enumerate(zip(words, parents)):
+            # per row r, the bit set of the rows above it (above[h, r])
+            upper = sum(1 << h for h in range(self.m) if above[h, r])
+            key = (r, tuple(word), tuple(pa), upper)
+            row = shared.get(key)
+            if row is None:
+                row = shared[key] = _Row(r, word, pa, upper)
+            self.rows.append(row)
+        self.cum = [row.cum for row in self.rows]
+        self.total = [c[-1] for c in self.cum]
         self._edges: dict[tuple[int, ...], list[tuple[float, int, Column, float]]] = {}
-        self._rows: list[dict[tuple[int, int], tuple]] = [{} for _ in range(self.m)]
 
     def rest(self, state: tuple[int, ...]) -> float:
         """The largest remaining word size after ``state`` (the size bound of the searches)."""
@@ -124,63 +201,33 @@ class _Words:
         """Where the columns leaving ``p`` must end at the latest: the end of the current prealigned column."""
         return next((b for b in self.fence if any(x < y for x, y in zip(p, b))), self.n)
 
-    def _row(self, r: int, a: int, end: int) -> tuple[list[float], list[float], dict]:
-        """Row ``r`` from letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target
-        sizes the row proposes, and a memo of its entries per substring end."""
-        key = (a, end)
-        row = self._rows[r].get(key)
-        if row is None:
-            c, b = self.cum[r], self.cum[r][a]
-            seg = [c[j] - b for j in range(a + 1, end + 1)]
-            row = self._rows[r][key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:self.LOOKAHEAD]], {})
-        return row
-
     def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
-        tol = self.TOL
         n = self._cap(p)
-        rows = [self._row(r, p[r], min(self.runend[r][p[r]], n[r])) if p[r] < n[r] else None
-                for r in range(self.m)]
+        starts = [row.start(a, min(row.runend[a], b)) if a < b else None for row, a, b in zip(self.rows, p, n)]
         found = set()
-        for row in rows:
-            if row is not None:
-                found.update(row[1])
+        for start in starts:
+            if start is not None:
+                found.update(start[1])
         if not found:
             return []
-        # every target with its tolerance band
-        targets = [(t, t - tol, t + tol) for t in sorted(found)]
-        # per row, for every target: the substring end nearest to it, then the ends just below and just above
-        # it, then the nearest end if it matches the target exactly (else epsilon, where allowed)
+        targets = sorted(found)
+        # per row, the choices of every target (Row.choose), all nearest ends first, then those below, above and
+        # the strict ones
         choices = []
-        for r, row in enumerate(rows):
-            pr = p[r]
-            if row is None:
-                choices.append((pr,) * (4 * len(targets)))
+        for row, a, start in zip(self.rows, p, starts):
+            if start is None:
+                choices.append((a,) * (4 * len(targets)))
                 continue
-            seg = row[0]
-            last = len(seg) - 1
-            first = pr + 1
-            eps = pr if self.eps_ok[r][pr] else None
-            nears, los, his, stricts = [], [], [], []
-            for t, below, above in targets:
-                i = bisect.bisect_left(seg, below)
-                if i <= last and seg[i] <= above:    # an end within the tolerance: lo = hi = near
-                    near = lo = hi = i
-                else:
-                    hi = i if i < last else last
-                    lo = i - 1 if i > 0 else 0
-                    near = lo if t - seg[lo] <= seg[hi] - t else hi
-                nears.append(first + near)
-                los.append(first + lo)
-                his.append(first + hi)
-                stricts.append(first + near if eps is None or abs(seg[near] - t) <= tol else eps)
-            choices.append(nears + los + his + stricts)
+            known = start[3]
+            picks = [known.get(t) or row.choose(a, start, t) for t in targets]
+            choices.append(list(itertools.chain.from_iterable(zip(*picks))))
         # distinct columns, each in the place of its last proposal
         columns = list(dict.fromkeys(reversed(list(zip(*choices)))))[::-1]
         entries = []
-        for r, row in enumerate(rows):
-            known = row[2] if row is not None else {}
-            for e in set(choices[r]).difference(known):
-                known[e] = self._entry(r, p[r], e)
+        for row, a, start, ends in zip(self.rows, p, starts, choices):
+            known = start[2] if start is not None else {}
+            for e in set(ends).difference(known):
+                known[e] = row.entry(a, e)
             entries.append(known)
         out = []
         before = sum(p)
@@ -191,23 +238,6 @@ class _Words:
                 if scored is not None:
                     out.append(scored)
         return out
-
-    def _entry(self, r: int, a: int, e: int) -> tuple | None:
-        """What row ``r``'s entry ``(a, e)`` brings to a column: ``(size, size, opaque bit, solid bit, rows one of
-        which must be opaque (-1: any), rows none of which may be solid)``, the sizes -inf and inf for epsilon (so
-        that it is neither the largest nor the smallest); None when the entry alone breaks a constraint (epsilon
-        beside an attached letter or with no upper row, transparent mixed with other letters)."""
-        upper = self.upper[r]
-        if e == a:
-            return (-math.inf, math.inf, 0, 0, upper, 0) if upper and self.eps_ok[r][a] else None
-        clear = self.clear[r][e] - self.clear[r][a]
-        if 0 < clear < e - a:
-            return None
-        bit = 1 << r
-        size = self.cum[r][e] - self.cum[r][a]
-        return (size, size, bit if self.nonopaque[r][e] == self.nonopaque[r][a] else 0,
-                bit if self.solid[r][e] > self.solid[r][a] else 0, -1,
-                upper if self.unocc[r][e] > self.unocc[r][a] else 0)
 
     @staticmethod
     def _column(p: tuple[int, ...], before: int, ends: tuple[int, ...], column: Sequence[tuple]
@@ -230,7 +260,7 @@ class _Words:
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
         p, ends = tuple(a for a, _ in col), tuple(b for _, b in col)
-        column = [self._entry(r, a, e) for r, (a, e) in enumerate(col)]
+        column = [row.entry(a, e) for row, (a, e) in zip(self.rows, col)]
         out = None if None in column else self._column(p, sum(p), ends, column)
         return (out[0], out[1], out[3]) if out else None
 
@@ -268,14 +298,15 @@ def _search_step(words: _Words, heap: list, dist: dict, size: dict, parent: dict
 
 def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, mu: float,
           budget: Budget, parents: Sequence[Sequence[int]] | None = None,
-          fence: Sequence[tuple[int, ...]] = ()) -> Alignment | None:
+          fence: Sequence[tuple[int, ...]] = (), memo: NetworkMemo | None = None) -> Alignment | None:
     """Best alignment with error ``Omega <= mu`` and size ``<= canvas + mu`` (bidirectional Dijkstra), or None.
 
     ``parents`` maps the parts of split transparent letters to their letter (no hole may open inside one).
     ``fence`` lists the ends of prealigned columns (per row, the last is the word's end): the search is then
-    restricted to columns inside them (prealignment of the control patterns, §5.2).
+    restricted to columns inside them (prealignment of the control patterns, §5.2). ``memo`` shares the
+    networks' rows with the other searches of a direction solve.
     """
-    fwd = _Words(words, above, parents, fence)
+    fwd = _Words(words, above, parents, fence, memo)
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
     if start == goal:
@@ -286,7 +317,7 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     back_fence = [tuple(n - b for n, b in zip(fwd.n, ends)) for ends in reversed(fence[:-1])]
     bwd = _Words([tuple(reversed(w)) for w in words], above,
                  None if parents is None else [tuple(reversed(p)) for p in parents],
-                 back_fence + [fwd.n] if fence else ())
+                 back_fence + [fwd.n] if fence else (), memo)
     sides = []
     for side, origin in ((fwd, start), (bwd, start)):
         sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},

@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from citygen.errors import RulesetError
-from citygen_layers.align import Alignment, Budget, align, greedy_alignment
+from citygen_layers.align import Alignment, Budget, NetworkMemo, align, greedy_alignment
 from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, WordMemo, direction_spec
 from citygen_layers.model import Counter, Ruleset
 from citygen_layers.prealign import Prealigner
@@ -50,10 +50,11 @@ def _groups(spec: DirectionSpec) -> list[str]:
 
 
 def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget: Budget,
-                    greedy: bool = False, prealigner: Prealigner | None = None) -> tuple[Matrix, ...] | None:
+                    greedy: bool = False, prealigner: Prealigner | None = None,
+                    memo: NetworkMemo | None = None) -> tuple[Matrix, ...] | None:
     """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing).
     With a ``prealigner`` the search is first restricted to the prealigned control columns, and searched without
-    the restriction when that finds nothing."""
+    the restriction when that finds nothing. ``memo`` shares network rows between the searches of a direction."""
     matrices = []
     for group in _groups(spec):
         rows = tuple(r for r in spec.rows if r.group == group)
@@ -74,10 +75,10 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
         result = None
         if fence is not None:
             prealigner.restricted += 1
-            result = align(split, above, spec.canvas, mu, budget, parents, fence)
+            result = align(split, above, spec.canvas, mu, budget, parents, fence, memo)
             prealigner.fallbacks += result is None
         if result is None:
-            result = align(split, above, spec.canvas, mu, budget, parents)
+            result = align(split, above, spec.canvas, mu, budget, parents, memo=memo)
         if result is None:
             return None
         matrices.append(Matrix(group, rows, split, parents, words, result))
@@ -94,6 +95,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     fallback: tuple[Candidate, float] | None = None
     cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
     memo = WordMemo()
+    network = NetworkMemo()
     prealigner = Prealigner(ruleset) if options.prealign else None
     for _ in range(options.rounds):
         for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
@@ -105,7 +107,7 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
             if matrices is None and cutoff < mu:
                 # searched with the next round's tolerance, so a failure is not repeated in that round
                 cutoff = mu * options.growth
-                matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner)
+                matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner, memo=network)
                 cache[key] = (matrices, cutoff)
             if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
                                             m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):

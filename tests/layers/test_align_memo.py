@@ -1,0 +1,57 @@
+"""Sharing network rows between the searches of a direction solve (NetworkMemo) is exact."""
+from pathlib import Path
+
+import numpy as np
+
+from citygen_layers.align import Budget, NetworkMemo, align
+from citygen_layers.candidates import CandidateGenerator, direction_spec
+from citygen_layers.model import Counter
+from citygen_layers.parser import load
+from citygen_layers.splits import split_transparent
+from citygen_layers.solver import _above
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _matrices(path, axis, canvas, mu, count):
+    rs = load(path)
+    counters = dict(rs.counters)
+    counters["entrance"] = Counter("entrance", 0, 0)
+    spec = direction_spec(rs, axis, canvas, counters)
+    out = []
+    for cand in list(CandidateGenerator(rs, spec, mu))[:count]:
+        words = tuple(cand.words[r.pattern] for r in spec.rows)
+        split, parents = split_transparent(words, canvas)
+        out.append((tuple(split), tuple(parents), _above(spec.rows), canvas))
+    assert out
+    return out
+
+
+def test_shared_rows_give_the_alignments_and_expansions_of_private_ones():
+    matrices = _matrices(ROOT / "benchmarks/data/layers/tonhalle26.layers", "y", 19.0, 0.4, 6)
+    matrices += _matrices(ROOT / "rulesets/tenement.layers", "x", 16.0, 3.2, 6)
+    memo = NetworkMemo()
+    found = 0
+    for mu in (0.8, 1.6, 3.2):
+        for words, parents, above, canvas in matrices:
+            private, shared = Budget(3000, 1e18), Budget(3000, 1e18)
+            expected = align(words, above, canvas, mu, private, parents)
+            assert align(words, above, canvas, mu, shared, parents, memo=memo) == expected
+            assert shared.used == private.used
+            found += expected is not None
+    assert found >= 8
+    rows = len(memo.rows)
+    words, parents, above, _ = matrices[0]
+    align(words, above, 19.0, 3.2, Budget(3000, 1e18), parents, memo=memo)
+    assert len(memo.rows) == rows                  # a repeated matrix builds no new row
+
+
+def test_rows_are_keyed_by_their_index_and_upper_rows():
+    words, parents, above, _ = _matrices(ROOT / "rulesets/tenement.layers", "x", 16.0, 3.2, 1)[0]
+    memo = NetworkMemo()
+    align(words, above, 16.0, 3.2, Budget(3000, 1e18), parents, memo=memo)
+    flipped = np.ascontiguousarray(above.T)
+    budget, private = Budget(3000, 1e18), Budget(3000, 1e18)
+    assert (align(words, flipped, 16.0, 3.2, budget, parents, memo=memo) ==
+            align(words, flipped, 16.0, 3.2, private, parents))
+    assert budget.used == private.used
