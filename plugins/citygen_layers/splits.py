@@ -2,6 +2,7 @@
 other words have boundaries. Done as a preprocessing step on the words of one alignment matrix."""
 from __future__ import annotations
 
+import bisect
 import itertools
 from collections.abc import Sequence
 from dataclasses import replace
@@ -31,19 +32,24 @@ def split_transparent(words: Sequence[Sequence[Letter]], canvas: float
     out_parents: list[tuple[int, ...]] = []
     eps = MIN_PIECE * max(canvas, 1e-9)
     plain = [o for o, w in enumerate(words) if w and not any(x.transparent for x in w)]
+    common: list[float] | None = None
     for r, w in enumerate(words):
         if not any(x.transparent for x in w):
             out_words.append(tuple(w))
             out_parents.append(tuple(range(len(w))))
             continue
-        others = sorted({v for o in (plain or range(len(words))) if o != r
-                         for v, t in zip(bounds[o][1:-1], touch[o]) if t})
+        if common is None or not plain:    # with plain words, the same for every word with transparent letters
+            common = sorted({v for o in (plain or range(len(words))) if o != r
+                             for v, t in zip(bounds[o][1:-1], touch[o]) if t})
+        others = common
         scale = bounds[r][-1] / max(sum(x.size for x in w), 1e-12)
         letters: list[Letter] = []
         parents: list[int] = []
         for i, letter in enumerate(w):
             a, b = bounds[r][i], bounds[r][i + 1]
-            inside = [v for v in others if a + eps < v < b - eps] if letter.transparent else []
+            # the cuts strictly inside (a + eps, b - eps): a slice of the sorted boundaries
+            inside = others[bisect.bisect_right(others, a + eps):bisect.bisect_left(others, b - eps)] \
+                if letter.transparent else []
             cuts = inside[:1] + [v for u, v in itertools.pairwise(inside) if v - u > eps]
             if not cuts:
                 letters.append(letter)
