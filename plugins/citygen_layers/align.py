@@ -165,8 +165,10 @@ class _Words:
 
     def __init__(self, words: Sequence[Sequence[Letter]], above: np.ndarray,
                  parents: Sequence[Sequence[int]] | None = None, fence: Sequence[tuple[int, ...]] = (),
-                 memo: NetworkMemo | None = None) -> None:
+                 memo: NetworkMemo | None = None, cutoff: float = math.inf) -> None:
         self.m = len(words)
+        #: columns with a larger Phi are left out: no search of this network could take them (see ``align``)
+        self.cutoff = cutoff
         self.n = tuple(len(w) for w in words)
         #: prealigned column ends (the last is ``n``): no column of this network crosses one of them
         self.fence = tuple(fence)
@@ -231,22 +233,27 @@ class _Words:
             entries.append(known)
         out = []
         before = sum(p)
+        cutoff = self.cutoff
         for ends in columns:
             column = list(map(dict.__getitem__, entries, ends))
             if None not in column:
-                scored = self._column(p, before, ends, column)
+                scored = self._column(p, before, ends, column, cutoff)
                 if scored is not None:
                     out.append(scored)
         return out
 
     @staticmethod
-    def _column(p: tuple[int, ...], before: int, ends: tuple[int, ...], column: Sequence[tuple]
-                ) -> tuple[float, int, Column, float] | None:
+    def _column(p: tuple[int, ...], before: int, ends: tuple[int, ...], column: Sequence[tuple],
+                cutoff: float = math.inf) -> tuple[float, int, Column, float] | None:
         """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries (``before`` is
         ``sum(p)``), or None when it breaks a column constraint: an opaque entry in every column, epsilon only
         below an opaque entry of an upper layer, unoccludable letters covered only by transparent or opaque
-        entries."""
+        entries; None too when Phi exceeds ``cutoff`` (checked first: most columns do)."""
         tops, bottoms, opaque_bits, solid_bits, needs, guards = zip(*column)
+        hi = max(tops)
+        phi = hi - min(bottoms)
+        if phi > cutoff:
+            return None
         opaque = sum(opaque_bits)    # one bit per row: the sum is the union
         # (no opaque entry also rejects the all-epsilon column)
         if not opaque or not all(map(opaque.__and__, needs)):
@@ -254,8 +261,8 @@ class _Words:
         solid = sum(solid_bits)
         if solid and any(map(solid.__and__, guards)):
             return None
-        hi = max(tops)    # some entry is opaque, so not epsilon: hi and the smallest size are finite
-        return hi - min(bottoms), sum(ends) - before, tuple(zip(p, ends)), hi
+        # some entry is opaque, so not epsilon: hi and the smallest size are finite
+        return phi, sum(ends) - before, tuple(zip(p, ends)), hi
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
@@ -306,7 +313,11 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     restricted to columns inside them (prealignment of the control patterns, §5.2). ``memo`` shares the
     networks' rows with the other searches of a direction solve.
     """
-    fwd = _Words(words, above, parents, fence, memo)
+    # Both searches skip columns with Phi > mu + 1e-9, since no path with error <= mu can take one: in the
+    # depth-first search they sort after every cheaper column, beyond its cut at the best error (at most
+    # mu + 1e-9), and the Dijkstra search drops them at its bound (at most mu) + 1e-9. So they are not built.
+    cutoff = mu + 1e-9
+    fwd = _Words(words, above, parents, fence, memo, cutoff)
     start = tuple(0 for _ in words)
     goal = tuple(int(n) for n in fwd.n)
     if start == goal:
@@ -317,7 +328,7 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     back_fence = [tuple(n - b for n, b in zip(fwd.n, ends)) for ends in reversed(fence[:-1])]
     bwd = _Words([tuple(reversed(w)) for w in words], above,
                  None if parents is None else [tuple(reversed(p)) for p in parents],
-                 back_fence + [fwd.n] if fence else (), memo)
+                 back_fence + [fwd.n] if fence else (), memo, cutoff)
     sides = []
     for side, origin in ((fwd, start), (bwd, start)):
         sides.append({"words": side, "dist": {origin: 0.0}, "size": {origin: 0.0}, "parent": {origin: None},

@@ -55,3 +55,19 @@ def test_rows_are_keyed_by_their_index_and_upper_rows():
     assert (align(words, flipped, 16.0, 3.2, budget, parents, memo=memo) ==
             align(words, flipped, 16.0, 3.2, private, parents))
     assert budget.used == private.used
+
+
+def test_cut_network_keeps_exactly_the_edges_within_the_cutoff_in_order():
+    """Columns with Phi > mu + 1e-9 are not built by the searches' networks (no path within mu can take one)."""
+    from citygen_layers.align import _Words
+
+    for words, parents, above, _ in _matrices(ROOT / "benchmarks/data/layers/tonhalle26.layers", "y", 19.0, 0.4, 2):
+        full, cut = _Words(words, above, parents), _Words(words, above, parents, cutoff=0.8 + 1e-9)
+        states = [tuple(0 for _ in words)]
+        states += [tuple(b for _, b in col) for _, _, col, _ in full.edges(states[0])]
+        dropped = 0
+        for state in states:
+            kept = [e for e in full.edges(state) if e[0] <= 0.8 + 1e-9]
+            assert cut.edges(state) == kept
+            dropped += len(full.edges(state)) - len(kept)
+        assert dropped > 0
