@@ -162,19 +162,18 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
                 mask = xbits[span] = bits(*span)
             columns.append(mask)
         boxes = []
-        k = 0
-        for span_y in yspans:
-            span = yrows.get(span_y)
-            if span is None:
-                span = yrows[span_y] = rows(*span_y)
-            h = span_y[1]
-            for (x, w), mask in zip(xspans, columns):
-                if layer_cells[k][1].visible and w * h > 1e-12:
-                    if all(covered[j] & mask == mask for j in span):
-                        layer_out[k] = True
-                    else:
-                        boxes.append((span, mask))
-                k += 1
+        for k in [k for k, cell in enumerate(layer_cells) if cell[1].visible]:    # row-major
+            row, col = divmod(k, len(xspans))
+            span_y = yspans[row]
+            if xspans[col][1] * span_y[1] > 1e-12:
+                span = yrows.get(span_y)
+                if span is None:
+                    span = yrows[span_y] = rows(*span_y)
+                mask = columns[col]
+                if all(covered[j] & mask == mask for j in span):
+                    layer_out[k] = True
+                else:
+                    boxes.append((span, mask))
         for span, mask in boxes:
             for j in span:
                 covered[j] |= mask
