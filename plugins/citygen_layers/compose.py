@@ -77,64 +77,75 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
-    # per layer: its grid cells, row-major, as (symbol, look, region template if shown, template if hidden)
-    cells: list[list[tuple[str, Look, dict | None, dict]]] = []
     grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
+    # per layer and grid row: the cells as (region template, shown), shown = the shape is visible, and the
+    # templates of the visible shapes when hidden (occluded) by column; rows of equal vertical letters share them
+    rows: list[list[tuple[list[tuple[dict, bool]], dict[int, dict]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
-        hole = ("hole", Look(False, None, layer.depth, None, None), None, Region.template("hole", layer=layer.name))
-        # a shape's look depends on the symbols, transparency and mirroring of its two letters
-        hkeys = [None if hs.letter is None else (hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored)
-                 for hs in hseg]
-        looks: dict[tuple, tuple[str, Look, dict | None, dict]] = {}
-        out = []
+        hole = (Region.template("hole", layer=layer.name), False)
+        kinds: dict[tuple | None, tuple[list[tuple[dict, bool]], dict[int, dict]]] = {None: ([hole] * len(hseg), {})}
+        layer_rows = []
         for vs in vseg:
-            if vs.letter is None:
-                out += [hole] * len(hseg)
-                continue
-            vkey = (vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
-            for hs, hkey in zip(hseg, hkeys):
-                if hkey is None:
-                    out.append(hole)
-                    continue
-                cell = looks.get((hkey, vkey))
-                if cell is None:
-                    symbol = f"{hs.letter.name}.{vs.letter.name}"
-                    lk = look(ruleset, layer, hs.letter, vs.letter)
-                    shown = Region.template(symbol, label=lk.label, depth=lk.depth, material=lk.material,
-                                            asset=lk.asset, layer=layer.name) if lk.visible else None
-                    cell = looks[hkey, vkey] = (symbol, lk, shown, Region.template(symbol, layer=layer.name))
-                out.append(cell)
-        cells.append(out)
-    occluded = _occluded(cells, grids)
+            # a shape's look depends on the symbols, transparency and mirroring of its two letters
+            vkey = None if vs.letter is None else (vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
+            kind = kinds.get(vkey)
+            if kind is None:
+                kind = kinds[vkey] = _row_cells(ruleset, layer, hseg, vs.letter, hole)
+            layer_rows.append(kind)
+        rows.append(layer_rows)
+    occluded = _occluded(grids, [[list(hidden) for _, hidden in layer_rows] for layer_rows in rows])
     stamped = Region.stamped
     children = []
     for index, layer in enumerate(ruleset.layers):
         xspans, yspans = grids[index]
-        layer_cells, layer_occluded = cells[index], occluded[index]
-        terminals = []
-        k = 0
-        for y, h in yspans:
-            for x, w in xspans:
-                _, _, shown, hidden = layer_cells[k]
-                if shown is not None and not layer_occluded[k]:
-                    terminals.append(stamped(shown, x, y, w, h))
-                elif w * h > 1e-12:
-                    terminals.append(stamped(hidden, x, y, w, h))
-                k += 1
+        terminals: list[Region] = []
+        for j, ((y, h), (cells, hidden)) in enumerate(zip(yspans, rows[index])):
+            covered = occluded[index].get(j)
+            if covered:
+                cells = [(hidden[i], False) if i in covered else cell for i, cell in enumerate(cells)]
+            terminals += [stamped(template, x, y, w, h) for (template, shown), (x, w) in zip(cells, xspans)
+                          if shown or w * h > 1e-12]
         children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
 
 
-def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[tuple[float, float]], ...]]
-              ) -> list[list[bool]]:
-    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
+def _row_cells(ruleset: Ruleset, layer: Layer, hseg: Sequence[Segment], v: Letter,
+               hole: tuple[dict, bool]) -> tuple[list[tuple[dict, bool]], dict[int, dict]]:
+    """The cells of a grid row of vertical letter ``v`` as (region template, shown), and by the column of each
+    visible shape its template when hidden."""
+    looks: dict[tuple, tuple[tuple[dict, bool], dict]] = {}
+    cells, hidden = [], {}
+    for hs in hseg:
+        h = hs.letter
+        if h is None:
+            cells.append(hole)
+            continue
+        hkey = (h.symbol, h.transparent, h.mirrored)
+        known = looks.get(hkey)
+        if known is None:
+            symbol = f"{h.name}.{v.name}"
+            lk = look(ruleset, layer, h, v)
+            plain = Region.template(symbol, layer=layer.name)
+            known = looks[hkey] = ((Region.template(symbol, label=lk.label, depth=lk.depth, material=lk.material,
+                                                    asset=lk.asset, layer=layer.name), True) if lk.visible else
+                                   (plain, False), plain)
+        if known[0][1]:
+            hidden[len(cells)] = known[1]
+        cells.append(known[0])
+    return cells, hidden
 
-    A layer's cells ``(symbol, look)`` are its grid of vertical x horizontal spans ``(start, size)`` (row-major),
-    ``grids`` holds the spans. The canvas is cut at every cell border; ``covered[j]`` holds the covered grid
-    cells of grid row ``j`` as bits.
+
+def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tuple[float, float]]]],
+              visible: Sequence[Sequence[Sequence[int]]]) -> list[dict[int, set[int]]]:
+    """Per layer, by grid row: the columns of the visible shapes fully covered by visible shapes of the layers
+    above.
+
+    ``grids`` holds each layer's horizontal and vertical spans ``(start, size)``, ``visible`` per layer and grid
+    row the columns of its visible shapes. The canvas is cut at every cell border; ``covered[j]`` holds the
+    covered grid cells of grid row ``j`` as bits.
     """
     used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
     xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
@@ -151,32 +162,28 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
         return range(*(min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h)))
 
     covered = [0] * ny
-    out = [[False] * len(layer) for layer in cells]
-    for index in range(len(cells) - 1, -1, -1):
+    out: list[dict[int, set[int]]] = [{} for _ in grids]
+    for index in range(len(grids) - 1, -1, -1):
         xspans, yspans = grids[index]
-        layer_cells, layer_out = cells[index], out[index]
-        columns = []
-        for span in xspans:
-            mask = xbits.get(span)
-            if mask is None:
-                mask = xbits[span] = bits(*span)
-            columns.append(mask)
         boxes = []
-        for k in [k for k, cell in enumerate(layer_cells) if cell[1].visible]:    # row-major
-            row, col = divmod(k, len(xspans))
-            span_y = yspans[row]
-            if xspans[col][1] * span_y[1] > 1e-12:
-                span = yrows.get(span_y)
-                if span is None:
-                    span = yrows[span_y] = rows(*span_y)
-                mask = columns[col]
-                if all(covered[j] & mask == mask for j in span):
-                    layer_out[k] = True
+        for j, (span_y, columns) in enumerate(zip(yspans, visible[index])):
+            for i in columns:
+                span = xspans[i]
+                if span[1] * span_y[1] <= 1e-12:
+                    continue
+                mask = xbits.get(span)
+                if mask is None:
+                    mask = xbits[span] = bits(*span)
+                cells = yrows.get(span_y)
+                if cells is None:
+                    cells = yrows[span_y] = rows(*span_y)
+                if all(covered[r] & mask == mask for r in cells):
+                    out[index].setdefault(j, set()).add(i)
                 else:
-                    boxes.append((span, mask))
-        for span, mask in boxes:
-            for j in span:
-                covered[j] |= mask
+                    boxes.append((cells, mask))
+        for cells, mask in boxes:
+            for r in cells:
+                covered[r] |= mask
     return out
 
 
