@@ -14,6 +14,7 @@ import bisect
 import heapq
 import itertools
 import math
+import operator
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -74,6 +75,9 @@ class NetworkMemo:
 
     def __init__(self) -> None:
         self.rows: dict[tuple, _Row] = {}
+        #: the same rows by the identities of their letters (no letter hashing for a word met before; the rows
+        #: keep their words, so the identities stay unique)
+        self.by_ids: dict[tuple, _Row] = {}
 
 
 class _Row:
@@ -82,14 +86,14 @@ class _Row:
     ``end`` on the substring ends: the substring sizes, the target sizes the row proposes, its entries per
     substring end and its choices per target. Everything is a function of ``(r, word, parents, upper)``."""
 
-    __slots__ = ("bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts")
+    __slots__ = ("word", "bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts")
 
     def __init__(self, r: int, word: Sequence[Letter], parents: Sequence[int], upper: int) -> None:
         def count(flags) -> list[int]:
             """Prefix counts of a letter flag (C-level maps: the networks are rebuilt per candidate)."""
             return list(itertools.accumulate(flags, initial=0))
 
-        w = word
+        w = self.word = tuple(word)
         size, opaque, clear = attrgetter("size"), attrgetter("opaque"), attrgetter("transparent")
         self.bit = 1 << r
         self.upper = upper
@@ -174,15 +178,20 @@ class _Words:
         self.fence = tuple(fence)
         parents = parents or [range(len(w)) for w in words]
         above = np.asarray(above, dtype=bool)
-        shared = memo.rows if memo is not None else {}
+        shared, by_ids = (memo.rows, memo.by_ids) if memo is not None else ({}, {})
         self.rows: list[_Row] = []
         for r, (word, pa) in enumerate(zip(words, parents)):
             # per row r, the bit set of the rows above it (above[h, r])
             upper = sum(1 << h for h in range(self.m) if above[h, r])
-            key = (r, tuple(word), tuple(pa), upper)
-            row = shared.get(key)
+            pa = tuple(pa)
+            ids = (r, tuple(map(id, word)), pa, upper)
+            row = by_ids.get(ids)
             if row is None:
-                row = shared[key] = _Row(r, word, pa, upper)
+                key = (r, tuple(word), pa, upper)
+                row = shared.get(key)
+                if row is None:
+                    row = shared[key] = _Row(r, word, pa, upper)
+                by_ids[(r, tuple(map(id, row.word)), pa, upper)] = row
             self.rows.append(row)
         self.cum = [row.cum for row in self.rows]
         self.total = [c[-1] for c in self.cum]
@@ -190,7 +199,7 @@ class _Words:
 
     def rest(self, state: tuple[int, ...]) -> float:
         """The largest remaining word size after ``state`` (the size bound of the searches)."""
-        return max(t - c[p] for t, c, p in zip(self.total, self.cum, state))
+        return max(map(operator.sub, self.total, map(list.__getitem__, self.cum, state)))
 
     def edges(self, state: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
         """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size)`` (memoised per state)."""
@@ -362,6 +371,10 @@ def align(words: Sequence[Sequence[Letter]], above: np.ndarray, canvas: float, m
     return Alignment(tuple(columns), best[0], size)
 
 
+#: The order of the depth-first search: cheapest column first, ties to fewer symbols.
+PHI_SYMBOLS = operator.itemgetter(0, 1)
+
+
 class _Stop(Exception):
     pass
 
@@ -387,7 +400,7 @@ def _descend(words: _Words, goal: tuple[int, ...], canvas: float, mu: float, bud
             return
         if budget.used >= cap[0] or not budget.spend():
             raise _Stop
-        for phi, _, col, csize in sorted(words.edges(state), key=lambda e: (e[0], e[1])):
+        for phi, _, col, csize in sorted(words.edges(state), key=PHI_SYMBOLS):
             g2 = g + phi
             if g2 >= best[0] - 1e-12:
                 break

@@ -71,3 +71,26 @@ def test_cut_network_keeps_exactly_the_edges_within_the_cutoff_in_order():
             assert cut.edges(state) == kept
             dropped += len(full.edges(state)) - len(kept)
         assert dropped > 0
+
+
+def test_rows_are_found_by_letter_identity_only_for_words_the_memo_keeps():
+    """Rows are looked up by the identities of their letters first. Freed letters' ids are reused by new
+    letters, so only the ids of the words the memo keeps alive may be keys; equal words made of other letter
+    objects still share the row (through the equality key)."""
+    import random
+
+    from citygen_layers.words import Letter
+
+    rng = random.Random(3)
+    memo = NetworkMemo()
+    above = np.array([[False, False], [True, False]])
+    for _ in range(50):
+        words = tuple(tuple(Letter(s, rng.choice((0.5, 1.0, 1.5)), opaque=s == "A") for s in w)
+                      for w in ("ABAB", "CDC"))
+        private = align(words, above, 4.0, 1.0, Budget(3000, 1e18))
+        assert align(words, above, 4.0, 1.0, Budget(3000, 1e18), memo=memo) == private
+        rows = len(memo.rows)
+        copies = tuple(tuple(Letter(x.symbol, x.size, opaque=x.opaque) for x in w) for w in words)
+        assert align(copies, above, 4.0, 1.0, Budget(3000, 1e18), memo=memo) == private
+        assert len(memo.rows) == rows
+    assert all(key[1] == tuple(map(id, row.word)) for key, row in memo.by_ids.items())
