@@ -177,12 +177,12 @@ class _Words:
         #: prealigned column ends (the last is ``n``): no column of this network crosses one of them
         self.fence = tuple(fence)
         parents = parents or [range(len(w)) for w in words]
-        above = np.asarray(above, dtype=bool)
+        # per row r, the bit set of the rows above it (above[h, r])
+        uppers = [sum(1 << h for h, flag in enumerate(column) if flag)
+                  for column in np.asarray(above, dtype=bool).T.tolist()]
         shared, by_ids = (memo.rows, memo.by_ids) if memo is not None else ({}, {})
         self.rows: list[_Row] = []
-        for r, (word, pa) in enumerate(zip(words, parents)):
-            # per row r, the bit set of the rows above it (above[h, r])
-            upper = sum(1 << h for h in range(self.m) if above[h, r])
+        for r, (word, pa, upper) in enumerate(zip(words, parents, uppers)):
             pa = tuple(pa)
             ids = (r, tuple(map(id, word)), pa, upper)
             row = by_ids.get(ids)

@@ -192,7 +192,7 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
     """Last-resort safety net of a best-effort solve: openings that straddle a floor line become wall, openings
     that enter a corner strip are cut at the strip line (the part in the strip becomes wall; all of it when the
     rest is under half the opening). Every repair is reported; a solved layout never needs one."""
-    lines = np.asarray(floor_lines[1:-1], dtype=float)
+    lines = [float(v) for v in floor_lines[1:-1]]
     eps = 1e-6 * max(layout.width, layout.height, 1.0)
     left, right = corner_widths
     inner = (left, layout.width - right)
@@ -203,12 +203,15 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
 
     def fix(region: Region) -> Region:
         if region.children:    # only openings can need a repair; an unchanged subtree is kept as it is
-            children = tuple(fix(c) if c.children or c.label in FLOOR_BOUND_LABELS else c for c in region.children)
-            same = all(map(operator.is_, children, region.children))
-            return region if same else replace(region, children=children)
+            kids = region.children
+            children = list(kids)
+            for i in [i for i, c in enumerate(kids) if c.children or c.label in FLOOR_BOUND_LABELS]:
+                children[i] = fix(kids[i])
+            same = all(map(operator.is_, children, kids))
+            return region if same else replace(region, children=tuple(children))
         if region.label not in FLOOR_BOUND_LABELS:
             return region
-        cut = lines.size and np.any((lines > region.y + eps) & (lines < region.y + region.h - eps))
+        cut = any(region.y + eps < v < region.y + region.h - eps for v in lines)
         x0, x1 = max(region.x, inner[0]), min(region.x + region.w, inner[1])
         if not cut and x0 <= region.x + eps and x1 >= region.x + region.w - eps:
             return region

@@ -37,12 +37,8 @@ class DirectionSolution:
 
 
 def _above(rows: Sequence[Row]) -> np.ndarray:
-    m = len(rows)
-    out = np.zeros((m, m), dtype=bool)
-    for h in range(m):
-        for r in range(m):
-            out[h, r] = min(rows[h].layers) > max(rows[r].layers)
-    return out
+    lows, highs = [min(r.layers) for r in rows], [max(r.layers) for r in rows]
+    return np.array([[low > high for high in highs] for low in lows], dtype=bool).reshape(len(rows), len(rows))
 
 
 def _groups(spec: DirectionSpec) -> list[str]:
