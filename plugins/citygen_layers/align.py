@@ -71,13 +71,16 @@ class NetworkMemo:
     """The rows of the alignment networks of one direction solve, shared between its searches (reusing the
     alignment work across candidates and mu rounds, §5.2). The candidates of a direction mostly differ in a few
     words (a counter value, a sampled size), so most rows of a matrix recur with the same word at the same index;
-    such a row's prefix sums and its memos of substrings, target choices and entries are built once."""
+    such a row's prefix sums and its memos of substrings, target choices and entries are built once, and so is
+    a word's transparent split."""
 
     def __init__(self) -> None:
         self.rows: dict[tuple, _Row] = {}
         #: the same rows by the identities of their letters (no letter hashing for a word met before; the rows
         #: keep their words, so the identities stay unique)
         self.by_ids: dict[tuple, _Row] = {}
+        #: transparent splits of the words (``splits.split_transparent``)
+        self.splits: dict[tuple, tuple] = {}
 
 
 class _Row:

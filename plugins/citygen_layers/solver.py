@@ -62,7 +62,7 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
             continue
         split, parents = words, identity
         if any(x.transparent for w in words for x in w):
-            split, parents = split_transparent(words, spec.canvas)
+            split, parents = split_transparent(words, spec.canvas, None if memo is None else memo.splits)
             split, parents = tuple(split), tuple(parents)
         fence = None
         if prealigner is not None:
