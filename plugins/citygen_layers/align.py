@@ -89,7 +89,8 @@ class _Row:
     ``end`` on the substring ends: the substring sizes, the target sizes the row proposes, its entries per
     substring end and its choices per target. Everything is a function of ``(r, word, parents, upper)``."""
 
-    __slots__ = ("word", "bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts")
+    __slots__ = ("word", "bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts",
+                 "runs")
 
     def __init__(self, r: int, word: Sequence[Letter], parents: Sequence[int], upper: int) -> None:
         def count(flags) -> list[int]:
@@ -115,6 +116,8 @@ class _Row:
             ends[i] = ends[i + 1] if i + 1 < len(w) and w[i + 1].transparent == w[i].transparent else i + 1
         self.runend = ends
         self.starts: dict[tuple[int, int], tuple[list[float], list[float], dict, dict]] = {}
+        #: per start letter, its start up to the end of its run (filled on first use); None at the word's end
+        self.runs: list = [False] * len(w) + [None]
 
     def start(self, a: int, end: int) -> tuple[list[float], list[float], dict, dict]:
         """From letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target sizes the
@@ -126,6 +129,11 @@ class _Row:
             seg = [c[j] - b for j in range(a + 1, end + 1)]
             row = self.starts[key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:LOOKAHEAD]], {}, {})
         return row
+
+    def run(self, a: int) -> tuple[list[float], list[float], dict, dict]:
+        """``start(a, runend[a])``, kept in ``runs``."""
+        start = self.runs[a] = self.start(a, self.runend[a])
+        return start
 
     def choose(self, a: int, start: tuple, t: float) -> tuple[int, int, int, int]:
         """For target ``t``: the substring end nearest to it, then the ends just below and just above it, then
@@ -197,6 +205,7 @@ class _Words:
                 by_ids[(r, tuple(map(id, row.word)), pa, upper)] = row
             self.rows.append(row)
         self.cum = [row.cum for row in self.rows]
+        self._runs = [row.runs for row in self.rows]
         self.total = [c[-1] for c in self.cum]
         self._edges: dict[tuple[int, ...], list[tuple[float, int, Column, float]]] = {}
 
@@ -217,7 +226,12 @@ class _Words:
 
     def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
         n = self._cap(p)
-        starts = [row.start(a, min(row.runend[a], b)) if a < b else None for row, a, b in zip(self.rows, p, n)]
+        if n is self.n:    # no prealigned column: every row's substrings run to the end of the run (Row.runs)
+            starts = list(map(list.__getitem__, self._runs, p))
+            if False in starts:
+                starts = [start if start is not False else row.run(a) for row, a, start in zip(self.rows, p, starts)]
+        else:
+            starts = [row.start(a, min(row.runend[a], b)) if a < b else None for row, a, b in zip(self.rows, p, n)]
         found = set()
         for start in starts:
             if start is not None:
