@@ -35,6 +35,8 @@ class Look:
 
 def _specs(ruleset: Ruleset, layer: Layer, h: str, v: str) -> list[ShapeSpec]:
     """Shape specs for ``(h, v)`` that apply to ``layer``, least specific first (later ones override)."""
+    if not ruleset.shapes:
+        return []
     hits = [s for s in ruleset.shapes if s.h == h and s.v == v
             and s.layer in (None, layer.name) and s.pattern in (None, layer.x, layer.y)]
     return sorted(hits, key=lambda s: (s.layer is not None) + (s.pattern is not None))

@@ -89,7 +89,8 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     mu = max(mu, 1e-3)
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
-    cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
+    # per hash of a candidate's words (hashed once: letters are slow to hash), [words, matrices, cutoff searched]
+    cache: dict[int, list[list]] = {}
     memo = WordMemo()
     network = NetworkMemo()
     prealigner = Prealigner(ruleset) if options.prealign else None
@@ -99,12 +100,17 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                 break
             fallback = fallback or (candidate, mu)
             key = tuple(candidate.words[r.pattern] for r in spec.rows)
-            matrices, cutoff = cache.get(key, (None, 0.0))
+            bucket = cache.setdefault(hash(key), [])
+            entry = next((e for e in bucket if e[0] == key), None)
+            if entry is None:
+                entry = [key, None, 0.0]
+                bucket.append(entry)
+            _, matrices, cutoff = entry
             if matrices is None and cutoff < mu:
                 # searched with the next round's tolerance, so a failure is not repeated in that round
                 cutoff = mu * options.growth
                 matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner, memo=network)
-                cache[key] = (matrices, cutoff)
+                entry[1:] = matrices, cutoff
             if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
                                             m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
                 _note_prealignment(spec, prealigner, diagnostics)
