@@ -26,6 +26,8 @@ from citygen_layers.words import Letter
 
 #: A column: per row ``(start, end)`` letter indices; ``start == end`` is epsilon.
 Column = tuple[tuple[int, int], ...]
+#: An edge of the ADN: ``(phi, symbols, column, size, next state)``.
+Edge = tuple[float, int, Column, float, tuple[int, ...]]
 
 
 @dataclass
@@ -207,14 +209,15 @@ class _Words:
         self.cum = [row.cum for row in self.rows]
         self._runs = [row.runs for row in self.rows]
         self.total = [c[-1] for c in self.cum]
-        self._edges: dict[tuple[int, ...], list[tuple[float, int, Column, float]]] = {}
+        self._edges: dict[tuple[int, ...], list[Edge]] = {}
 
     def rest(self, state: tuple[int, ...]) -> float:
         """The largest remaining word size after ``state`` (the size bound of the searches)."""
         return max(map(operator.sub, self.total, map(list.__getitem__, self.cum, state)))
 
-    def edges(self, state: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
-        """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size)`` (memoised per state)."""
+    def edges(self, state: tuple[int, ...]) -> list[Edge]:
+        """Valid outgoing columns of ``state`` as ``(phi, symbols, column, size, next state)`` (memoised per
+        state)."""
         out = self._edges.get(state)
         if out is None:
             out = self._edges[state] = self._build(state)
@@ -224,7 +227,7 @@ class _Words:
         """Where the columns leaving ``p`` must end at the latest: the end of the current prealigned column."""
         return next((b for b in self.fence if any(x < y for x, y in zip(p, b))), self.n)
 
-    def _build(self, p: tuple[int, ...]) -> list[tuple[float, int, Column, float]]:
+    def _build(self, p: tuple[int, ...]) -> list[Edge]:
         n = self._cap(p)
         if n is self.n:    # no prealigned column: every row's substrings run to the end of the run (Row.runs)
             starts = list(map(list.__getitem__, self._runs, p))
@@ -270,8 +273,8 @@ class _Words:
 
     @staticmethod
     def _column(p: tuple[int, ...], before: int, ends: tuple[int, ...], column: Sequence[tuple],
-                cutoff: float = math.inf) -> tuple[float, int, Column, float] | None:
-        """``(phi, symbols, column, size)``: Phi (Eq. 9) and size of a column of valid entries (``before`` is
+                cutoff: float = math.inf) -> Edge | None:
+        """``(phi, symbols, column, size, ends)``: Phi (Eq. 9) and size of a column of valid entries (``before`` is
         ``sum(p)``), or None when it breaks a column constraint: an opaque entry in every column, epsilon only
         below an opaque entry of an upper layer, unoccludable letters covered only by transparent or opaque
         entries; None too when Phi exceeds ``cutoff`` (checked first: most columns do)."""
@@ -288,7 +291,7 @@ class _Words:
         if solid and any(map(solid.__and__, guards)):
             return None
         # some entry is opaque, so not epsilon: hi and the smallest size are finite
-        return phi, sum(ends) - before, tuple(zip(p, ends)), hi
+        return phi, sum(ends) - before, tuple(zip(p, ends)), hi, ends
 
     def score(self, col: Column) -> tuple[float, int, float] | None:
         """``(phi, symbols, size)`` of one column, or None when a column constraint fails."""
@@ -314,11 +317,10 @@ def _search_step(words: _Words, heap: list, dist: dict, size: dict, parent: dict
     if not budget.spend():
         return None
     ncols = entry.key[1]
-    for phi, nsym, col, csize in words.edges(state):
+    for phi, nsym, col, csize, nxt in words.edges(state):
         g = dist[state] + phi
         if g > bound + 1e-9:
             continue
-        nxt = tuple(b for _, b in col)
         s = size[state] + csize
         if s + words.rest(nxt) > canvas + mu + 1e-9:
             continue
@@ -417,11 +419,10 @@ def _descend(words: _Words, goal: tuple[int, ...], canvas: float, mu: float, bud
             return
         if budget.used >= cap[0] or not budget.spend():
             raise _Stop
-        for phi, _, col, csize in sorted(words.edges(state), key=PHI_SYMBOLS):
+        for phi, _, col, csize, nxt in sorted(words.edges(state), key=PHI_SYMBOLS):
             g2 = g + phi
             if g2 >= best[0] - 1e-12:
                 break
-            nxt = tuple(b for _, b in col)
             s2 = size + csize
             if s2 + words.rest(nxt) > canvas + mu + 1e-9:
                 continue
@@ -467,7 +468,7 @@ def greedy_alignment(words: Sequence[Sequence[Letter]], above: np.ndarray) -> Al
     while state != goal:
         edges = fwd.edges(state)
         if edges:
-            phi, _, col, csize = min(edges, key=lambda e: (e[0] / max(e[3], 1e-9), e[1]))
+            phi, _, col, csize, _ = min(edges, key=lambda e: (e[0] / max(e[3], 1e-9), e[1]))
         else:
             col = tuple((p, int(n)) for p, n in zip(state, fwd.n))
             sums = [fwd.cum[r][b] - fwd.cum[r][a] for r, (a, b) in enumerate(col) if b > a]

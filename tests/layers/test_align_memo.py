@@ -64,7 +64,7 @@ def test_cut_network_keeps_exactly_the_edges_within_the_cutoff_in_order():
     for words, parents, above, _ in _matrices(ROOT / "benchmarks/data/layers/tonhalle26.layers", "y", 19.0, 0.4, 2):
         full, cut = _Words(words, above, parents), _Words(words, above, parents, cutoff=0.8 + 1e-9)
         states = [tuple(0 for _ in words)]
-        states += [tuple(b for _, b in col) for _, _, col, _ in full.edges(states[0])]
+        states += [nxt for _, _, _, _, nxt in full.edges(states[0])]
         dropped = 0
         for state in states:
             kept = [e for e in full.edges(state) if e[0] <= 0.8 + 1e-9]
