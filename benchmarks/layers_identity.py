@@ -13,11 +13,11 @@ import json
 import random
 from pathlib import Path
 
-from citygen.request import FacadeRequest
 from citygen_layers.parser import load, parse
 from citygen_layers.plugin import clear_solved, generate
-
 from layers_solve import CASES
+
+from citygen.request import FacadeRequest
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = {"A": 0.9, "B": 1.4, "C": 0.5, "D": 1.1, "P": 3.0, "Q": 2.6}

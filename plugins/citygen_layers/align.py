@@ -91,8 +91,8 @@ class _Row:
     ``end`` on the substring ends: the substring sizes, the target sizes the row proposes, its entries per
     substring end and its choices per target. Everything is a function of ``(r, word, parents, upper)``."""
 
-    __slots__ = ("word", "bit", "upper", "cum", "nonopaque", "unocc", "solid", "clear", "eps_ok", "runend", "starts",
-                 "runs")
+    __slots__ = ("bit", "clear", "cum", "eps_ok", "nonopaque", "runend", "runs", "solid", "starts", "unocc", "upper",
+                 "word")
 
     def __init__(self, r: int, word: Sequence[Letter], parents: Sequence[int], upper: int) -> None:
         def count(flags) -> list[int]:

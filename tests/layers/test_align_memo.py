@@ -2,13 +2,12 @@
 from pathlib import Path
 
 import numpy as np
-
 from citygen_layers.align import Budget, NetworkMemo, align
 from citygen_layers.candidates import CandidateGenerator, direction_spec
 from citygen_layers.model import Counter
 from citygen_layers.parser import load
-from citygen_layers.splits import split_transparent
 from citygen_layers.solver import _above
+from citygen_layers.splits import split_transparent
 
 ROOT = Path(__file__).resolve().parents[2]
 
