@@ -63,6 +63,24 @@ class Region:
         region.__dict__.update(_REGION_DEFAULTS, x=x, y=y, w=w, h=h, symbol=symbol, **kw)
         return region
 
+    @staticmethod
+    def template(symbol: str, **kw: Any) -> dict[str, Any]:
+        """The fields of ``Region(0, 0, 0, 0, symbol, **kw)``, for :meth:`stamped`."""
+        return {**_REGION_DEFAULTS, "x": 0.0, "y": 0.0, "w": 0.0, "h": 0.0, "symbol": symbol, **kw}
+
+    @classmethod
+    def stamped(cls, template: dict[str, Any], x: float, y: float, w: float, h: float) -> Region:
+        """``Region(x, y, w, h, symbol, **kw)`` from ``template(symbol, **kw)``: twice as fast again as
+        :meth:`fast` (no keyword dicts), for the thousands of regions of a few kinds a layer stack makes."""
+        region = object.__new__(cls)
+        fields_ = region.__dict__
+        fields_.update(template)
+        fields_["x"] = x
+        fields_["y"] = y
+        fields_["w"] = w
+        fields_["h"] = h
+        return region
+
     @property
     def is_terminal(self) -> bool:
         return not self.children

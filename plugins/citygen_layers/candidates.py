@@ -91,12 +91,13 @@ def sample_sizes(lo: float, hi: float, step: float, count: int) -> list[float]:
 @dataclass
 class WordMemo:
     """What the candidate generators of one direction's solve share across tolerance rounds (none of it depends
-    on mu): raw words per pattern and counter values, letters per raw letter and size, and the lower bounds of
-    pattern measures per counter value that bound unbounded counters."""
+    on mu): raw words per pattern and counter values, letters per raw letter and size, the lower bounds of
+    pattern measures per counter value that bound unbounded counters, and each pattern's counters."""
 
     raw: dict[tuple, list[tuple[Raw, ...]]] = field(default_factory=dict)
     letters: dict[tuple[Raw, float | None], Letter] = field(default_factory=dict)
     measures: dict[tuple[str, str, int], float] = field(default_factory=dict)
+    counters: dict[str, frozenset[str]] = field(default_factory=dict)
 
 
 class CandidateGenerator:
@@ -107,9 +108,13 @@ class CandidateGenerator:
         self.ruleset, self.spec, self.mu = ruleset, spec, mu
         self.budget = budget      # an align.Budget: every counter assignment examined costs one unit
         self.patterns = list(dict.fromkeys(r.pattern for r in spec.rows))
-        self._own = {p: frozenset(pattern_counters(ruleset.patterns[p])) for p in self.patterns}
-        self.counter_names = sorted(set().union(*self._own.values()))
         self._memo = memo if memo is not None else WordMemo()
+        known = self._memo.counters
+        for p in self.patterns:
+            if p not in known:
+                known[p] = frozenset(pattern_counters(ruleset.patterns[p]))
+        self._own = {p: known[p] for p in self.patterns}
+        self.counter_names = sorted(set().union(*self._own.values()))
         self._raw_cache = self._memo.raw
         self._letters = self._memo.letters
         self._sized_cache: dict[tuple, list[tuple[Letter, ...]]] = {}

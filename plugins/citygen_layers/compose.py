@@ -4,6 +4,7 @@ and shapes fully covered by upper layers are removed (§3.2, "a window fully cov
 from __future__ import annotations
 
 import bisect
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -34,6 +35,8 @@ class Look:
 
 def _specs(ruleset: Ruleset, layer: Layer, h: str, v: str) -> list[ShapeSpec]:
     """Shape specs for ``(h, v)`` that apply to ``layer``, least specific first (later ones override)."""
+    if not ruleset.shapes:
+        return []
     hits = [s for s in ruleset.shapes if s.h == h and s.v == v
             and s.layer in (None, layer.name) and s.pattern in (None, layer.x, layer.y)]
     return sorted(hits, key=lambda s: (s.layer is not None) + (s.pattern is not None))
@@ -76,60 +79,75 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             ) -> FacadeLayout:
     """The FacadeLayout: one subtree per layer (bottom first), terminals partitioning the canvas per layer."""
     width, height = sx.canvas, sy.canvas
-    cells: list[list[tuple[str, Look]]] = []       # per layer: (symbol, look) of its grid cells, row-major
     grids: list[tuple[list[tuple[float, float]], list[tuple[float, float]]]] = []
+    # per layer and grid row: the cells as (region template, shown), shown = the shape is visible, and the
+    # templates of the visible shapes when hidden (occluded) by column; rows of equal vertical letters share them
+    rows: list[list[tuple[list[tuple[dict, bool]], dict[int, dict]]]] = []
     for index, layer in enumerate(ruleset.layers):
         hseg, vseg = layer_segments(sx, index, layer), layer_segments(sy, index, layer)
         grids.append(([(hs.s, hs.t - hs.s) for hs in hseg], [(vs.s, vs.t - vs.s) for vs in vseg]))
-        hole = ("hole", Look(False, None, layer.depth, None, None))
-        # a shape's look depends on the symbols, transparency and mirroring of its two letters
-        hkeys = [None if hs.letter is None else (hs.letter.symbol, hs.letter.transparent, hs.letter.mirrored)
-                 for hs in hseg]
-        looks: dict[tuple, tuple[str, Look]] = {}
-        out = []
+        hole = (Region.template("hole", layer=layer.name), False)
+        kinds: dict[tuple | None, tuple[list[tuple[dict, bool]], dict[int, dict]]] = {None: ([hole] * len(hseg), {})}
+        layer_rows = []
         for vs in vseg:
-            if vs.letter is None:
-                out += [hole] * len(hseg)
-                continue
-            vkey = (vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
-            for hs, hkey in zip(hseg, hkeys):
-                if hkey is None:
-                    out.append(hole)
-                    continue
-                cell = looks.get((hkey, vkey))
-                if cell is None:
-                    cell = looks[hkey, vkey] = (f"{hs.letter.name}.{vs.letter.name}",
-                                                look(ruleset, layer, hs.letter, vs.letter))
-                out.append(cell)
-        cells.append(out)
-    occluded = _occluded(cells, grids)
+            # a shape's look depends on the symbols, transparency and mirroring of its two letters
+            vkey = None if vs.letter is None else (vs.letter.symbol, vs.letter.transparent, vs.letter.mirrored)
+            kind = kinds.get(vkey)
+            if kind is None:
+                kind = kinds[vkey] = _row_cells(ruleset, layer, hseg, vs.letter, hole)
+            layer_rows.append(kind)
+        rows.append(layer_rows)
+    occluded = _occluded(grids, [[list(hidden) for _, hidden in layer_rows] for layer_rows in rows])
+    stamped = Region.stamped
     children = []
     for index, layer in enumerate(ruleset.layers):
         xspans, yspans = grids[index]
-        name = layer.name
-        terminals = []
-        k = 0
-        for y, h in yspans:
-            for x, w in xspans:
-                symbol, lk = cells[index][k]
-                if lk.visible and not occluded[index][k]:
-                    terminals.append(Region.fast(x, y, w, h, symbol, label=lk.label, depth=lk.depth,
-                                             material=lk.material, asset=lk.asset, layer=name))
-                elif w * h > 1e-12:
-                    terminals.append(Region.fast(x, y, w, h, symbol, layer=name))
-                k += 1
-        children.append(Region(0.0, 0.0, width, height, name, layer=name, children=tuple(terminals)))
+        terminals: list[Region] = []
+        for j, ((y, h), (cells, hidden)) in enumerate(zip(yspans, rows[index])):
+            covered = occluded[index].get(j)
+            if covered:
+                cells = [(hidden[i], False) if i in covered else cell for i, cell in enumerate(cells)]
+            terminals += [stamped(template, x, y, w, h) for (template, shown), (x, w) in zip(cells, xspans)
+                          if shown or w * h > 1e-12]
+        children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
 
 
-def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[tuple[float, float]], ...]]
-              ) -> list[list[bool]]:
-    """Per layer and cell: is the visible shape fully covered by visible shapes of the layers above?
+def _row_cells(ruleset: Ruleset, layer: Layer, hseg: Sequence[Segment], v: Letter,
+               hole: tuple[dict, bool]) -> tuple[list[tuple[dict, bool]], dict[int, dict]]:
+    """The cells of a grid row of vertical letter ``v`` as (region template, shown), and by the column of each
+    visible shape its template when hidden."""
+    looks: dict[tuple, tuple[tuple[dict, bool], dict]] = {}
+    cells, hidden = [], {}
+    for hs in hseg:
+        h = hs.letter
+        if h is None:
+            cells.append(hole)
+            continue
+        hkey = (h.symbol, h.transparent, h.mirrored)
+        known = looks.get(hkey)
+        if known is None:
+            symbol = f"{h.name}.{v.name}"
+            lk = look(ruleset, layer, h, v)
+            plain = Region.template(symbol, layer=layer.name)
+            known = looks[hkey] = ((Region.template(symbol, label=lk.label, depth=lk.depth, material=lk.material,
+                                                    asset=lk.asset, layer=layer.name), True) if lk.visible else
+                                   (plain, False), plain)
+        if known[0][1]:
+            hidden[len(cells)] = known[1]
+        cells.append(known[0])
+    return cells, hidden
 
-    A layer's cells ``(symbol, look)`` are its grid of vertical x horizontal spans ``(start, size)`` (row-major),
-    ``grids`` holds the spans. The canvas is cut at every cell border; ``covered[j]`` holds the covered grid
-    cells of grid row ``j`` as bits.
+
+def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tuple[float, float]]]],
+              visible: Sequence[Sequence[Sequence[int]]]) -> list[dict[int, set[int]]]:
+    """Per layer, by grid row: the columns of the visible shapes fully covered by visible shapes of the layers
+    above.
+
+    ``grids`` holds each layer's horizontal and vertical spans ``(start, size)``, ``visible`` per layer and grid
+    row the columns of its visible shapes. The canvas is cut at every cell border; ``covered[j]`` holds the
+    covered grid cells of grid row ``j`` as bits.
     """
     used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
     xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
@@ -146,33 +164,28 @@ def _occluded(cells: Sequence[Sequence[tuple]], grids: Sequence[tuple[Sequence[t
         return range(*(min(bisect.bisect_left(ys, round(v, 9)), ny) for v in (y, y + h)))
 
     covered = [0] * ny
-    out = [[False] * len(layer) for layer in cells]
-    for index in range(len(cells) - 1, -1, -1):
+    out: list[dict[int, set[int]]] = [{} for _ in grids]
+    for index in range(len(grids) - 1, -1, -1):
         xspans, yspans = grids[index]
-        layer_cells, layer_out = cells[index], out[index]
-        columns = []
-        for span in xspans:
-            mask = xbits.get(span)
-            if mask is None:
-                mask = xbits[span] = bits(*span)
-            columns.append(mask)
         boxes = []
-        k = 0
-        for span_y in yspans:
-            span = yrows.get(span_y)
-            if span is None:
-                span = yrows[span_y] = rows(*span_y)
-            h = span_y[1]
-            for (x, w), mask in zip(xspans, columns):
-                if layer_cells[k][1].visible and w * h > 1e-12:
-                    if all(covered[j] & mask == mask for j in span):
-                        layer_out[k] = True
-                    else:
-                        boxes.append((span, mask))
-                k += 1
-        for span, mask in boxes:
-            for j in span:
-                covered[j] |= mask
+        for j, (span_y, columns) in enumerate(zip(yspans, visible[index])):
+            for i in columns:
+                span = xspans[i]
+                if span[1] * span_y[1] <= 1e-12:
+                    continue
+                mask = xbits.get(span)
+                if mask is None:
+                    mask = xbits[span] = bits(*span)
+                cells = yrows.get(span_y)
+                if cells is None:
+                    cells = yrows[span_y] = rows(*span_y)
+                if all(covered[r] & mask == mask for r in cells):
+                    out[index].setdefault(j, set()).add(i)
+                else:
+                    boxes.append((cells, mask))
+        for cells, mask in boxes:
+            for r in cells:
+                covered[r] |= mask
     return out
 
 
@@ -181,7 +194,7 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
     """Last-resort safety net of a best-effort solve: openings that straddle a floor line become wall, openings
     that enter a corner strip are cut at the strip line (the part in the strip becomes wall; all of it when the
     rest is under half the opening). Every repair is reported; a solved layout never needs one."""
-    lines = np.asarray(floor_lines[1:-1], dtype=float)
+    lines = [float(v) for v in floor_lines[1:-1]]
     eps = 1e-6 * max(layout.width, layout.height, 1.0)
     left, right = corner_widths
     inner = (left, layout.width - right)
@@ -191,11 +204,16 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
         return replace(region, label="wall", depth=region.depth - LABEL_DEPTH.get(region.label, 0.0), **kw)
 
     def fix(region: Region) -> Region:
-        if region.children:
-            return replace(region, children=tuple(fix(c) for c in region.children))
+        if region.children:    # only openings can need a repair; an unchanged subtree is kept as it is
+            kids = region.children
+            children = list(kids)
+            for i in [i for i, c in enumerate(kids) if c.children or c.label in FLOOR_BOUND_LABELS]:
+                children[i] = fix(kids[i])
+            same = all(map(operator.is_, children, kids))
+            return region if same else replace(region, children=tuple(children))
         if region.label not in FLOOR_BOUND_LABELS:
             return region
-        cut = lines.size and np.any((lines > region.y + eps) & (lines < region.y + region.h - eps))
+        cut = any(region.y + eps < v < region.y + region.h - eps for v in lines)
         x0, x1 = max(region.x, inner[0]), min(region.x + region.w, inner[1])
         if not cut and x0 <= region.x + eps and x1 >= region.x + region.w - eps:
             return region

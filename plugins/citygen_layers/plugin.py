@@ -43,15 +43,18 @@ def _opening_bands(ruleset: Ruleset, axis: str, interval: tuple[float, float]):
             pattern = layer.x if axis == "x" else layer.y
             others = _visible_symbols(ruleset, ruleset.patterns[layer.y if axis == "x" else layer.x])
             key = (layer.groups[0 if axis == "x" else 1], pattern)
+            bound: dict[Letter, bool] = {}     # a word repeats its letters
             for i, letter in enumerate(candidate.words[pattern]):
                 if letter.transparent:
                     continue
-                for other in others:
-                    h, v = (letter, other) if axis == "x" else (other, letter)
-                    lk = look(ruleset, layer, h, v)
-                    if lk.visible and lk.label in FLOOR_BOUND_LABELS:
-                        out.setdefault(key, {})[i] = interval
-                        break
+                opening = bound.get(letter)
+                if opening is None:
+                    opening = bound[letter] = any(
+                        lk.visible and lk.label in FLOOR_BOUND_LABELS
+                        for lk in (look(ruleset, layer, *((letter, other) if axis == "x" else (other, letter)))
+                                   for other in others))
+                if opening:
+                    out.setdefault(key, {})[i] = interval
         return out
 
     return bands

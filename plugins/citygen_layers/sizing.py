@@ -144,19 +144,18 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
             break
     if not result.success:
         return Sizing({}, False, result.message, tuple(relaxed))
-    x = np.clip(result.x, 0.0, canvas)
+    x = np.clip(result.x, 0.0, canvas).tolist()
     segments = {}
-    for key, spans in letter_vars.items():
-        segs = [Segment(float(x[s]), float(x[t]), None, i) for i, (s, t) in enumerate(spans)]
-        segs += [Segment(float(x[a]), float(x[b]), None) for a, b in holes[key] if x[b] - x[a] > 1e-9]
-        segments[key] = segs
     for matrix in matrices:
         for r, row in enumerate(matrix.rows):
             key = (row.group, row.pattern)
-            segments[key] = tuple(sorted(
-                (Segment(seg.s, max(seg.t, seg.s), matrix.originals[r][seg.index] if seg.index >= 0 else None,
-                         seg.index) for seg in segments[key]), key=lambda g: (g.s, g.t, g.index)))
-    borders = {g: tuple(float(x[v]) for v in vs) for g, vs in border_vars.items()}
+            # (s, t, letter index) of the letters, then of the holes (index -1), in order of (s, t, index)
+            spans = [(x[s], x[t], i) for i, (s, t) in enumerate(letter_vars[key])]
+            spans += [(x[a], x[b], -1) for a, b in holes[key] if x[b] - x[a] > 1e-9]
+            letters = matrix.originals[r]
+            segments[key] = tuple(Segment(s, t, letters[i] if i >= 0 else None, i)
+                                  for s, t, i in sorted((s, max(t, s), i) for s, t, i in spans))
+    borders = {g: tuple(x[v] for v in vs) for g, vs in border_vars.items()}
     return Sizing(segments, True, result.message, tuple(relaxed), borders)
 
 

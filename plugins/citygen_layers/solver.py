@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from citygen.errors import RulesetError
-from citygen_layers.align import Alignment, Budget, align, greedy_alignment
+from citygen_layers.align import Alignment, Budget, NetworkMemo, align, greedy_alignment
 from citygen_layers.candidates import Candidate, CandidateGenerator, DirectionSpec, Row, WordMemo, direction_spec
 from citygen_layers.model import Counter, Ruleset
 from citygen_layers.prealign import Prealigner
@@ -37,12 +37,8 @@ class DirectionSolution:
 
 
 def _above(rows: Sequence[Row]) -> np.ndarray:
-    m = len(rows)
-    out = np.zeros((m, m), dtype=bool)
-    for h in range(m):
-        for r in range(m):
-            out[h, r] = min(rows[h].layers) > max(rows[r].layers)
-    return out
+    lows, highs = [min(r.layers) for r in rows], [max(r.layers) for r in rows]
+    return np.array([[low > high for high in highs] for low in lows], dtype=bool).reshape(len(rows), len(rows))
 
 
 def _groups(spec: DirectionSpec) -> list[str]:
@@ -50,10 +46,11 @@ def _groups(spec: DirectionSpec) -> list[str]:
 
 
 def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget: Budget,
-                    greedy: bool = False, prealigner: Prealigner | None = None) -> tuple[Matrix, ...] | None:
+                    greedy: bool = False, prealigner: Prealigner | None = None,
+                    memo: NetworkMemo | None = None) -> tuple[Matrix, ...] | None:
     """Align every group of a candidate; transparent letters are split beforehand (§5.2, as preprocessing).
     With a ``prealigner`` the search is first restricted to the prealigned control columns, and searched without
-    the restriction when that finds nothing."""
+    the restriction when that finds nothing. ``memo`` shares network rows between the searches of a direction."""
     matrices = []
     for group in _groups(spec):
         rows = tuple(r for r in spec.rows if r.group == group)
@@ -65,7 +62,7 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
             continue
         split, parents = words, identity
         if any(x.transparent for w in words for x in w):
-            split, parents = split_transparent(words, spec.canvas)
+            split, parents = split_transparent(words, spec.canvas, None if memo is None else memo.splits)
             split, parents = tuple(split), tuple(parents)
         fence = None
         if prealigner is not None:
@@ -74,10 +71,10 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
         result = None
         if fence is not None:
             prealigner.restricted += 1
-            result = align(split, above, spec.canvas, mu, budget, parents, fence)
+            result = align(split, above, spec.canvas, mu, budget, parents, fence, memo)
             prealigner.fallbacks += result is None
         if result is None:
-            result = align(split, above, spec.canvas, mu, budget, parents)
+            result = align(split, above, spec.canvas, mu, budget, parents, memo=memo)
         if result is None:
             return None
         matrices.append(Matrix(group, rows, split, parents, words, result))
@@ -92,8 +89,10 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     mu = max(mu, 1e-3)
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
-    cache: dict[tuple, tuple[tuple[Matrix, ...] | None, float]] = {}
+    # per hash of a candidate's words (hashed once: letters are slow to hash), [words, matrices, cutoff searched]
+    cache: dict[int, list[list]] = {}
     memo = WordMemo()
+    network = NetworkMemo()
     prealigner = Prealigner(ruleset) if options.prealign else None
     for _ in range(options.rounds):
         for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
@@ -101,12 +100,17 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                 break
             fallback = fallback or (candidate, mu)
             key = tuple(candidate.words[r.pattern] for r in spec.rows)
-            matrices, cutoff = cache.get(key, (None, 0.0))
+            bucket = cache.setdefault(hash(key), [])
+            entry = next((e for e in bucket if e[0] == key), None)
+            if entry is None:
+                entry = [key, None, 0.0]
+                bucket.append(entry)
+            _, matrices, cutoff = entry
             if matrices is None and cutoff < mu:
                 # searched with the next round's tolerance, so a failure is not repeated in that round
                 cutoff = mu * options.growth
-                matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner)
-                cache[key] = (matrices, cutoff)
+                matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner, memo=network)
+                entry[1:] = matrices, cutoff
             if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
                                             m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
                 _note_prealignment(spec, prealigner, diagnostics)

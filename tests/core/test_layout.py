@@ -68,3 +68,14 @@ def test_partition_check_scales_to_thousands_of_regions():
     t = time.perf_counter()
     assert check_partition(layout) == []
     assert time.perf_counter() - t < 2.0  # 12100 regions; the old pairwise sweep took tens of seconds
+
+
+def test_stamped_regions_equal_constructed_ones():
+    shown = Region.template("A.B", label="window", depth=-0.25, material="glass", layer="front")
+    hidden = Region.template("hole", layer="front")
+    for template, kw in ((shown, {"label": "window", "depth": -0.25, "material": "glass", "layer": "front"}),
+                         (hidden, {"layer": "front"})):
+        region = Region.stamped(template, 1.5, 2.0, 0.9, 1.4)
+        expected = Region(1.5, 2.0, 0.9, 1.4, template["symbol"], **kw)
+        assert region == expected and vars(region) == vars(expected) and region.to_json() == expected.to_json()
+    assert Region.stamped(hidden, 0.0, 0.0, 1.0, 1.0).x == 0.0 and hidden["x"] == 0.0   # the template is not altered
