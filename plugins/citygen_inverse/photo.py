@@ -1,0 +1,186 @@
+"""A rectified facade photo -> FacadeLayout (mueller2007, "Image-based procedural modeling of facades").
+
+Pipeline (documented in ``docs/photo.md``): the photo (optionally cropped to the facade) is reduced to a working
+resolution of at most ``WORK`` pixels and converted to grayscale;
+
+1. §2.2-2.3 (``photo_symmetry``): mutual information between vertically adjacent bands gives the floor period;
+   the same on the regular floors' band, transposed, gives the tile period;
+2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
+   irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
+3. §3 (``photo_tiles``): tiles of one group (regular floors' regular tiles, an irregular floor's tiles, edge
+   columns) are subdivided in lockstep and the elements labelled window / door, the rest wall.
+
+The layout is in metres: ``width`` metres for the crop, else ``floor_height`` metres per detected floor period.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+
+from citygen.errors import LayoutError
+from citygen.layout import FacadeLayout, Region, check_partition
+from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
+from citygen_inverse.photo_symmetry import Symmetry, detect_symmetry, quantize
+from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
+
+#: Longest side (pixels) of the working image.
+WORK = 400
+#: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
+FLOOR_RANGE = (1 / 14, 1 / 2)
+TILE_RANGE = (1 / 25, 1 / 2)
+#: Depth (m along the outward normal) of the detected elements.
+DEPTH = {"window": -0.25, "door": -0.3}
+
+Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in crop pixels, y down
+
+
+@dataclass(frozen=True)
+class PhotoAnalysis:
+    """Detected structure in crop pixels (y down): floor and tile lines, element boxes and labels, layout."""
+
+    layout: FacadeLayout
+    floor_lines: tuple[float, ...]
+    tile_lines: tuple[float, ...]
+    elements: tuple[tuple[Box, str], ...]
+    floor_period: float
+    tile_period: float
+
+    def boxes(self, label: str = "window") -> list[Box]:
+        return [b for b, lab in self.elements if lab == label]
+
+
+def load_gray(path: str | Path, crop: tuple[float, float, float, float] | None = None) -> np.ndarray:
+    """The photo (cropped to ``x0 y0 x1 y1`` pixels, y down) as float grayscale in 0..1."""
+    from PIL import Image, UnidentifiedImageError
+    try:
+        with Image.open(path) as image:
+            image.load()
+            gray = image.convert("L")
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        if isinstance(exc, (FileNotFoundError, IsADirectoryError)):
+            raise
+        raise LayoutError("cannot read the image", where=str(path),
+                          hint="give a photo Pillow can read (JPEG, PNG, TIFF ...)") from None
+    if crop is not None:
+        x0, y0, x1, y1 = (float(v) for v in crop)
+        W, H = gray.size
+        if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H):
+            raise LayoutError(f"--crop {x0:g} {y0:g} {x1:g} {y1:g} is not inside the {W}x{H} image",
+                              where=str(path), hint="give x0 y0 x1 y1 in pixels, y down, x0 < x1, y0 < y1")
+        gray = gray.crop((int(round(x0)), int(round(y0)), int(round(x1)), int(round(y1))))
+    return np.asarray(gray, dtype=float) / 255.0
+
+
+def _work(gray: np.ndarray) -> tuple[np.ndarray, float]:
+    """Resample to at most ``WORK`` pixels (box filter) and blur slightly; returns the image and its pixel size
+    in crop pixels."""
+    from PIL import Image
+    H, W = gray.shape
+    f = max(H, W) / WORK
+    if f > 1:
+        size = (max(int(round(W / f)), 1), max(int(round(H / f)), 1))
+        img = Image.fromarray((gray * 255).astype(np.uint8)).resize(size, Image.Resampling.BOX)
+        gray = np.asarray(img, dtype=float) / 255.0
+    return gaussian_filter(gray, 0.7), max(f, 1.0)
+
+
+def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = None,
+            floor_height: float = 3.0, meta: dict | None = None) -> PhotoAnalysis:
+    """Run the pipeline on a grayscale crop of the facade."""
+    work, f = _work(gray)
+    H, W = work.shape
+    if min(H, W) < 4 * TAU_SIZE:
+        raise LayoutError(f"the facade is only {gray.shape[1]}x{gray.shape[0]} pixels", where=source,
+                          hint="give a larger photo or a larger --crop")
+    vsym = detect_symmetry(quantize(work), int(FLOOR_RANGE[0] * H), int(FLOOR_RANGE[1] * H))
+    if not vsym.found:
+        raise LayoutError(f"no repetition of floors detected (best/median MI {vsym.contrast:.2f})", where=source,
+                          hint="crop the photo to the facade (--crop x0 y0 x1 y1); it must be rectified and show "
+                               "at least two similar floors")
+    P = vsym.period
+    hor, ver = edge_functions(work)
+    Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(P / 4, 1.0))
+    floors = split_lines(Ver, P, 0, H, min_end=TAU_SIZE)
+    gaps = np.diff(floors)
+    regular = np.abs(gaps - P) <= GAP_TOLERANCE * P
+    band = (floors[:-1][regular].min(), floors[1:][regular].max()) if regular.any() else (0, H)
+    q = quantize(work[band[0]:band[1]]).T
+    hsym = detect_symmetry(q, int(TILE_RANGE[0] * W), int(TILE_RANGE[1] * W))
+    Q = hsym.period if hsym.found else 0
+    if Q:
+        Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(Q / 4, 1.0))
+        tiles = split_lines(Hor, Q, 0, W, min_end=TAU_SIZE)
+    else:
+        tiles = np.array([0, W])
+    groups: dict[tuple[str, str], list[tuple[int, int]]] = {}
+    for i in range(floors.size - 1):
+        fkey = "R" if regular[i] else f"F{i}"
+        for j in range(tiles.size - 1):
+            regular_tile = Q and abs(tiles[j + 1] - tiles[j] - Q) <= GAP_TOLERANCE * Q
+            groups.setdefault((fkey, "R" if regular_tile else f"C{j}"), []).append((i, j))
+    edges = EdgeImage.of(work)
+    trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
+    for g, (key, members) in enumerate(sorted(groups.items())):
+        rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
+        ground = key[0] != "R" and members[0][0] == floors.size - 2
+        node = subdivide_group(edges, rects, ground)
+        for m, ij in enumerate(members):
+            trees[ij] = (f"Tile{g + 1}", node, m)
+    scale = (width / W) if width else floor_height / P
+    layout, elements = _layout(floors, tiles, regular, trees, H, scale)
+    pixel = f * 1.0
+    meta = dict(meta or {}, importer="photo (mueller2007)", metres_per_pixel=scale / f,
+                scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
+                floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
+                floors=int(floors.size - 1), tiles_per_floor=int(tiles.size - 1),
+                mi_contrast={"floors": round(vsym.contrast, 3), "tiles": round(hsym.contrast, 3)})
+    layout = FacadeLayout(layout.width, layout.height, layout.root, meta)
+    problems = check_partition(layout)
+    if problems:
+        raise LayoutError("photo analysis did not give a partition: " + "; ".join(problems[:3]), where=source)
+    boxes = tuple(((c0 * pixel, r0 * pixel, c1 * pixel, r1 * pixel), lab) for (r0, r1, c0, c1), lab in elements)
+    return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
+                         float(P * f), float(Q * f))
+
+
+def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,
+            s: float) -> tuple[FacadeLayout, list]:
+    """Region tree in metres (y up) and the element rectangles in working pixels."""
+    elements: list = []
+
+    def region(rect, symbol, label=None, children=()):
+        r0, r1, c0, c1 = rect
+        x0, x1, y0, y1 = c0 * s, c1 * s, (H - r1) * s, (H - r0) * s
+        return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label,
+                      depth=DEPTH.get(label, 0.0), children=tuple(children))
+
+    def build(node: Node, m: int, symbol: str):
+        if node.children:
+            kids = [build(c, m, f"{symbol}_{k}") for k, c in enumerate(node.children)]
+            return region(node.rects[m], symbol, children=kids)
+        if node.label in DEPTH:
+            elements.append((node.rects[m], node.label))
+        return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall")
+
+    floor_regions = []
+    last = floors.size - 2
+    for i in range(floors.size - 1):
+        name = "Floor" if regular[i] else ("GroundFloor" if i == last else f"Floor{i}")
+        row = []
+        for j in range(tiles.size - 1):
+            symbol, node, m = trees[(i, j)]
+            row.append(build(node, m, symbol))
+        floor_regions.append(region((floors[i], floors[i + 1], tiles[0], tiles[-1]), name, children=row))
+    root = region((0, H, tiles[0], tiles[-1]), "Facade", children=reversed(floor_regions))
+    return FacadeLayout(root.w, root.h, root), elements
+
+
+def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,
+                      crop: tuple[float, float, float, float] | None = None) -> PhotoAnalysis:
+    """Read ``path`` and analyse it (see the module docstring)."""
+    gray = load_gray(path, crop)
+    meta = {"source": Path(path).name, "image_crop": list(crop) if crop else None}
+    return analyse(gray, str(path), width=width, floor_height=floor_height, meta=meta)

@@ -1,0 +1,112 @@
+"""Translational symmetry of a facade image by mutual information (mueller2007 §2.1-§2.3).
+
+``S(y, h) = MI(I(R_{y,h}), I(R_{y-h,h}))`` (Eq. 2) compares the band of rows ``[y, y+h)`` with the band right
+above it (image rows, y down). Intensities are quantised to ``bins`` equal-population levels; for one ``h`` the
+joint histograms of all ``y`` come from one ``bincount`` of the row-pair codes and a cumulative sum, so the
+exhaustive search over ``y`` and ``h`` costs O(rows x columns x heights). The horizontal direction is the same
+computation on the transposed image.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Quantisation levels of the joint histograms.
+BINS = 8
+#: Lines whose best symmetry reaches this fraction of the best score take part in the stacking (§2.3: 0.75).
+STACK_FRACTION = 0.75
+#: A repetition is detected when the best score exceeds the median score of all translates by this factor.
+MIN_CONTRAST = 1.25
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """Result of the symmetry search along one axis (pixels of the analysed image).
+
+    ``s_max[y]`` and ``h_max[y]`` are Eq. 2's best score and period per line (0 where no period fits);
+    ``period`` is the repetition the irreducible-facade stacking agrees on, ``extent`` the rows it covers and
+    ``contrast`` the best score over the median score of all translates (1 = no repetition)."""
+
+    s_max: np.ndarray
+    h_max: np.ndarray
+    period: int
+    extent: tuple[int, int]
+    contrast: float
+
+    @property
+    def found(self) -> bool:
+        return self.period > 0 and self.contrast >= MIN_CONTRAST
+
+
+def quantize(gray: np.ndarray, bins: int = BINS) -> np.ndarray:
+    """Equal-population intensity levels ``0..bins-1`` (robust to exposure and contrast)."""
+    edges = np.quantile(gray, np.linspace(0, 1, bins + 1)[1:-1])
+    return np.searchsorted(edges, gray, side="right").astype(np.int64)
+
+
+def mutual_information(joint: np.ndarray, bins: int = BINS) -> np.ndarray:
+    """Eq. 1 for stacked joint histograms ``(..., bins*bins)`` of counts, less the Miller-Madow bias
+    ``(B_ab - B_a - B_b + 1) / 2N`` of the histogram estimate (small bands would otherwise win)."""
+    n = joint.sum(axis=-1, keepdims=True)
+    p = joint / np.maximum(n, 1)
+    p3 = p.reshape(*p.shape[:-1], bins, bins)
+    pa, pb = p3.sum(axis=-1, keepdims=True), p3.sum(axis=-2, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        terms = np.where(p3 > 0, p3 * np.log(p3 / (pa * pb)), 0.0)
+    occupied = (p3 > 0).sum(axis=(-1, -2)) - (pa > 0).sum(axis=(-1, -2)) - (pb > 0).sum(axis=(-1, -2)) + 1
+    return terms.sum(axis=(-1, -2)) - occupied / (2 * np.maximum(n[..., 0], 1))
+
+
+def symmetry_scores(q: np.ndarray, heights: np.ndarray, bins: int = BINS) -> np.ndarray:
+    """``S[i, y]`` = Eq. 2 for ``h = heights[i]`` (NaN where the two bands do not fit in the image)."""
+    rows, cols = q.shape
+    k2 = bins * bins
+    scores = np.full((heights.size, rows + 1), np.nan)
+    for i, h in enumerate(heights):
+        if 2 * h > rows:
+            continue
+        codes = q[h:] * bins + q[:-h] + (np.arange(rows - h) * k2)[:, None]
+        per_row = np.bincount(codes.ravel(), minlength=(rows - h) * k2).reshape(rows - h, k2)
+        cum = np.vstack([np.zeros((1, k2)), np.cumsum(per_row, axis=0)])
+        joint = cum[h: rows - h + 1] - cum[: rows - 2 * h + 1]
+        scores[i, h: rows - h + 1] = mutual_information(joint, bins)
+    return scores
+
+
+def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmetry:
+    """Best period per line (§2.2) and the period and extent of the stacked repetition (§2.3)."""
+    rows = q.shape[0]
+    hi = min(hi, rows // 2)
+    if hi < max(lo, 2):
+        return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, (0, rows), 1.0)
+    heights = np.arange(max(lo, 2), hi + 1)
+    scores = symmetry_scores(q, heights, bins)
+    valid = np.isfinite(scores)
+    filled = np.where(valid, scores, -np.inf)
+    best = filled.argmax(axis=0)
+    s_max = np.where(valid.any(axis=0), filled.max(axis=0), 0.0)
+    h_max = np.where(valid.any(axis=0), heights[best], 0)
+    tau = float(s_max.max())
+    contrast = tau / max(float(np.median(scores[valid])), 1e-12)
+    # the period most lines agree on: the best line-averaged score (per-line maxima also catch the short
+    # self-similarity inside large windows), reduced to its fundamental
+    profile = np.where(valid.any(axis=1), np.nanmean(np.where(valid, scores, np.nan), axis=1), -np.inf)
+    period = _fundamental(profile, heights, int(heights[np.argmax(profile)]))
+    stacked = np.flatnonzero(s_max >= STACK_FRACTION * tau)
+    # rows covered by the stacked translates of period ~ ``period``
+    near = stacked[np.abs(h_max[stacked] - period) <= 0.25 * period]
+    near = near if near.size else stacked
+    extent = (int(max(near.min() - period, 0)), int(min(near.max() + period, rows)))
+    return Symmetry(s_max, h_max, period, extent, contrast)
+
+
+def _fundamental(profile: np.ndarray, heights: np.ndarray, period: int) -> int:
+    """The smallest integer fraction ``period/k`` that repeats about as well as ``period`` (MI of two floors
+    against two floors is as high as of one against one)."""
+    base = profile[period - heights[0]]
+    for k in (4, 3, 2):
+        h = int(round(period / k))
+        if h >= heights[0] and profile[h - heights[0]] >= 0.85 * base:
+            return h
+    return period
