@@ -26,11 +26,17 @@ from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, inter
 from citygen_inverse.photo_symmetry import Symmetry, detect_symmetry, quantize
 from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
 
-#: Longest side (pixels) of the working image.
-WORK = 400
+#: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
+WORK = 800
+MI_WORK = 300
 #: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
 FLOOR_RANGE = (1 / 14, 1 / 2)
 TILE_RANGE = (1 / 25, 1 / 2)
+#: Eq. 4 smoothing as a fraction of the detected period (the paper's sigma = 1 m of a 3-5.5 m floor).
+SIGMA = 0.25
+#: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
+THUMB = 16
+SIMILAR = 0.5
 #: Depth (m along the outward normal) of the detected elements.
 DEPTH = {"window": -0.25, "door": -0.3}
 
@@ -74,12 +80,12 @@ def load_gray(path: str | Path, crop: tuple[float, float, float, float] | None =
     return np.asarray(gray, dtype=float) / 255.0
 
 
-def _work(gray: np.ndarray) -> tuple[np.ndarray, float]:
-    """Resample to at most ``WORK`` pixels (box filter) and blur slightly; returns the image and its pixel size
+def _work(gray: np.ndarray, longest: int) -> tuple[np.ndarray, float]:
+    """Resample to at most ``longest`` pixels (box filter) and blur slightly; returns the image and its pixel size
     in crop pixels."""
     from PIL import Image
     H, W = gray.shape
-    f = max(H, W) / WORK
+    f = max(H, W) / longest
     if f > 1:
         size = (max(int(round(W / f)), 1), max(int(round(H / f)), 1))
         img = Image.fromarray((gray * 255).astype(np.uint8)).resize(size, Image.Resampling.BOX)
@@ -90,42 +96,39 @@ def _work(gray: np.ndarray) -> tuple[np.ndarray, float]:
 def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = None,
             floor_height: float = 3.0, meta: dict | None = None) -> PhotoAnalysis:
     """Run the pipeline on a grayscale crop of the facade."""
-    work, f = _work(gray)
+    work, f = _work(gray, WORK)
+    small, g = _work(gray, MI_WORK)
     H, W = work.shape
+    h, w = small.shape
     if min(H, W) < 4 * TAU_SIZE:
         raise LayoutError(f"the facade is only {gray.shape[1]}x{gray.shape[0]} pixels", where=source,
                           hint="give a larger photo or a larger --crop")
-    vsym = detect_symmetry(quantize(work), int(FLOOR_RANGE[0] * H), int(FLOOR_RANGE[1] * H))
+    vsym = detect_symmetry(quantize(small), int(FLOOR_RANGE[0] * h), int(FLOOR_RANGE[1] * h))
     if not vsym.found:
         raise LayoutError(f"no repetition of floors detected (best/median MI {vsym.contrast:.2f})", where=source,
                           hint="crop the photo to the facade (--crop x0 y0 x1 y1); it must be rectified and show "
                                "at least two similar floors")
-    P = vsym.period
+    P = int(round(vsym.period * g / f))
     hor, ver = edge_functions(work)
-    Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(P / 4, 1.0))
+    Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(SIGMA * P, 1.0))
     floors = split_lines(Ver, P, 0, H, min_end=TAU_SIZE)
     gaps = np.diff(floors)
     regular = np.abs(gaps - P) <= GAP_TOLERANCE * P
     band = (floors[:-1][regular].min(), floors[1:][regular].max()) if regular.any() else (0, H)
-    q = quantize(work[band[0]:band[1]]).T
-    hsym = detect_symmetry(q, int(TILE_RANGE[0] * W), int(TILE_RANGE[1] * W))
-    Q = hsym.period if hsym.found else 0
+    lo, hi = int(band[0] * f / g), max(int(np.ceil(band[1] * f / g)), int(band[0] * f / g) + 1)
+    hsym = detect_symmetry(quantize(small[lo:hi]).T, int(TILE_RANGE[0] * w), int(TILE_RANGE[1] * w))
+    Q = int(round(hsym.period * g / f)) if hsym.found else 0
     if Q:
-        Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(Q / 4, 1.0))
+        Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(SIGMA * Q, 1.0))
         tiles = split_lines(Hor, Q, 0, W, min_end=TAU_SIZE)
     else:
         tiles = np.array([0, W])
-    groups: dict[tuple[str, str], list[tuple[int, int]]] = {}
-    for i in range(floors.size - 1):
-        fkey = "R" if regular[i] else f"F{i}"
-        for j in range(tiles.size - 1):
-            regular_tile = Q and abs(tiles[j + 1] - tiles[j] - Q) <= GAP_TOLERANCE * Q
-            groups.setdefault((fkey, "R" if regular_tile else f"C{j}"), []).append((i, j))
+    groups = cluster_tiles(work, floors, tiles)
     edges = EdgeImage.of(work)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
-    for g, (key, members) in enumerate(sorted(groups.items())):
+    for g, members in enumerate(groups):
         rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
-        ground = key[0] != "R" and members[0][0] == floors.size - 2
+        ground = all(i == floors.size - 2 for i, _ in members)
         node = subdivide_group(edges, rects, ground)
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
@@ -144,6 +147,37 @@ def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = 
     boxes = tuple(((c0 * pixel, r0 * pixel, c1 * pixel, r1 * pixel), lab) for (r0, r1, c0, c1), lab in elements)
     return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
                          float(P * f), float(Q * f))
+
+
+def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray) -> list[list[tuple[int, int]]]:
+    """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
+
+    Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
+    tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
+    within the gap tolerance, else it starts a group."""
+    from PIL import Image
+    cells = [(i, j) for i in range(floors.size - 1) for j in range(tiles.size - 1)]
+    thumbs, sizes = [], []
+    for i, j in cells:
+        block = work[floors[i]:floors[i + 1], tiles[j]:tiles[j + 1]]
+        t = np.asarray(Image.fromarray(block.astype(np.float32)).resize((THUMB, THUMB), Image.Resampling.BOX))
+        t = t - t.mean()
+        thumbs.append(t.ravel() / max(float(np.linalg.norm(t)), 1e-9))
+        sizes.append(block.shape)
+    thumbs_a, sizes_a = np.array(thumbs), np.array(sizes, dtype=float)
+    similar = thumbs_a @ thumbs_a.T
+    heads: list[int] = []
+    groups: list[list[tuple[int, int]]] = []
+    for k, cell in enumerate(cells):
+        for g, head in enumerate(heads):
+            if similar[k, head] >= SIMILAR and np.all(np.abs(sizes_a[k] - sizes_a[head])
+                                                      <= GAP_TOLERANCE * sizes_a[head]):
+                groups[g].append(cell)
+                break
+        else:
+            heads.append(k)
+            groups.append([cell])
+    return groups
 
 
 def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,

@@ -27,10 +27,10 @@ def edge_functions(gray: np.ndarray, alpha: float = ALPHA) -> tuple[np.ndarray, 
     return np.maximum(gy * gy - alpha * g2, 0.0), np.maximum(gx * gx - alpha * g2, 0.0)
 
 
-def interest(along: np.ndarray, across: np.ndarray, sigma: float, beta: float = BETA) -> np.ndarray:
+def interest(along: np.ndarray, across: np.ndarray, sigma: float) -> np.ndarray:
     """Eq. 4 for one axis: ``along`` is the edge response that forbids a line there (summed over the other axis
     already), ``across`` the one that favours it."""
-    return gaussian_filter1d(along, sigma, mode="nearest") - beta * gaussian_filter1d(across, sigma, mode="nearest")
+    return gaussian_filter1d(along, sigma, mode="nearest") - BETA * gaussian_filter1d(across, sigma, mode="nearest")
 
 
 def local_minima(values: np.ndarray) -> np.ndarray:

@@ -114,10 +114,16 @@ def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate
 
 
 def _candidate(side: str, pos: int, line: np.ndarray, offset: int) -> Candidate:
+    """The edge-responding segment: the longest run of responding pixels along the line (gaps of up to
+    ``TAU_SIZE`` pixels closed)."""
     hot = np.flatnonzero(line)
     if hot.size == 0:
         return Candidate(side, pos, (0, 0), 0)
-    return Candidate(side, pos, (offset + int(hot[0]), offset + int(hot[-1]) + 1), int(hot.size))
+    breaks = np.flatnonzero(np.diff(hot) > TAU_SIZE)
+    starts, ends = np.r_[0, breaks + 1], np.r_[breaks, hot.size - 1]
+    k = int(np.argmax(hot[ends] - hot[starts]))
+    lo, hi = int(hot[starts[k]]), int(hot[ends[k]]) + 1
+    return Candidate(side, pos, (offset + lo, offset + hi), int(ends[k] - starts[k] + 1))
 
 
 def choose_split(cands: list[Candidate]) -> tuple[str, dict[str, int]]:
@@ -204,10 +210,49 @@ def _element_label(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: 
     return "door" if bottom else "window"
 
 
+def _wall_gap(edges: EdgeImage, node: Node, wall: Wall) -> tuple[str, int, int] | None:
+    """A band of wall-coloured columns (else rows) strictly inside an element region: two elements side by side
+    (windows paired in one tile) separated by wall. Returns (axis, start, end) as offsets into the region."""
+    for axis in ("LR", "TB"):
+        length = min((c1 - c0) if axis == "LR" else (r1 - r0) for r0, r1, c0, c1 in node.rects)
+        profile = np.zeros(length)
+        for r0, r1, c0, c1 in node.rects:
+            block = edges.gray[r0:r1, c0:c1]
+            profile += (block.mean(axis=0) if axis == "LR" else block.mean(axis=1))[:length]
+        profile /= len(node.rects)
+        like = np.abs(profile - wall.mean) < CONTRAST * wall.std
+        like[:TAU_SIZE], like[length - TAU_SIZE:] = False, False
+        if not like.any():
+            continue
+        idx = np.flatnonzero(like)
+        breaks = np.flatnonzero(np.diff(idx) > 1)
+        starts, ends = np.r_[0, breaks + 1], np.r_[breaks, idx.size - 1]
+        k = int(np.argmax(ends - starts))
+        if ends[k] - starts[k] + 1 >= max(2, TAU_SIZE // 2):
+            return axis, int(idx[starts[k]]), int(idx[ends[k]]) + 1
+    return None
+
+
+def _separate(edges: EdgeImage, node: Node, wall: Wall, label: str, depth: int = 3) -> Node:
+    """An element, or elements split apart at interior wall bands (:func:`_wall_gap`)."""
+    gap = _wall_gap(edges, node, wall) if depth > 0 else None
+    if gap is None:
+        return Node(node.rects, label)
+    axis, a, b = gap
+    parts = [_apply(axis, {"L" if axis == "LR" else "T": a, "R" if axis == "LR" else "B":
+                           ((r[3] - r[2]) if axis == "LR" else (r[1] - r[0])) - b}, r) for r in node.rects]
+    if any(p is None for p in parts):
+        return Node(node.rects, label)
+    first = Node(tuple(p[0] for p in parts))
+    last = Node(tuple(p[2] for p in parts))
+    return Node(node.rects, None, (_separate(edges, first, wall, label, depth - 1), Node(tuple(p[1] for p in parts),
+                                   "wall"), _separate(edges, last, wall, label, depth - 1)))
+
+
 def _split(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, ground: bool, steps: int) -> Node:
     label = _element_label(edges, node, tiles, wall, ground) if node.rects != tiles else None
     if label is not None:
-        return Node(node.rects, label)
+        return _separate(edges, node, wall, label)
     votes, offsets = Counter(), {}
     if steps > 0:
         for m, rect in enumerate(node.rects):
