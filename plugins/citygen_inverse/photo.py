@@ -192,8 +192,9 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
                       depth=DEPTH.get(label, 0.0), children=tuple(children))
 
     def build(node: Node, m: int, symbol: str):
-        if node.children:
-            kids = [build(c, m, f"{symbol}_{k}") for k, c in enumerate(node.children)]
+        if node.children:  # regions that the proportional mapping shrank to nothing are left out
+            kids = [build(c, m, f"{symbol}_{k}") for k, c in enumerate(node.children)
+                    if c.rects[m][0] < c.rects[m][1] and c.rects[m][2] < c.rects[m][3]]
             return region(node.rects[m], symbol, children=kids)
         if node.label in DEPTH:
             elements.append((node.rects[m], node.label))

@@ -80,7 +80,8 @@ def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmet
     hi = min(hi, rows // 2)
     if hi < max(lo, 2):
         return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, (0, rows), 1.0)
-    heights = np.arange(max(lo, 2), hi + 1)
+    lo = max(lo, 2)
+    heights = np.arange(max(lo // 2, 1), hi + 1)
     scores = symmetry_scores(q, heights, bins)
     valid = np.isfinite(scores)
     filled = np.where(valid, scores, -np.inf)
@@ -89,10 +90,13 @@ def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmet
     h_max = np.where(valid.any(axis=0), heights[best], 0)
     tau = float(s_max.max())
     contrast = tau / max(float(np.median(scores[valid])), 1e-12)
-    # the period most lines agree on: the best line-averaged score (per-line maxima also catch the short
-    # self-similarity inside large windows), reduced to its fundamental
+    # the period most lines agree on: the line-averaged score's most prominent peak over the trough between
+    # h/2 and h (bands shifted by half a floor differ; vertical pilasters make every small shift look alike),
+    # reduced to its fundamental
     profile = np.where(valid.any(axis=1), np.nanmean(np.where(valid, scores, np.nan), axis=1), -np.inf)
-    period = _fundamental(profile, heights, int(heights[np.argmax(profile)]))
+    prominence = np.array([profile[i] - profile[max(i - (h + 1) // 2, 0): i + 1].min() if h >= lo else -np.inf
+                           for i, h in enumerate(heights)])
+    period = _fundamental(prominence, heights, int(heights[np.argmax(prominence)]))
     stacked = np.flatnonzero(s_max >= STACK_FRACTION * tau)
     # rows covered by the stacked translates of period ~ ``period``
     near = stacked[np.abs(h_max[stacked] - period) <= 0.25 * period]

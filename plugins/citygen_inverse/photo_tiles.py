@@ -1,19 +1,21 @@
 """Subdivision of facade tiles (mueller2007 §3) and labelling of the elements.
 
-Tiles of one group (tiles the structure detection found similar) are split in lockstep. Each step finds, per
-tile and region, the first relevant edge moving inward from each side (§3.1: average directional gradient above
+The tiles of one group (similar tiles, ``photo.cluster_tiles``) are resampled to their median size and averaged:
+the group's stack of the irreducible facade (§2.3). Its subdivision is found once and mapped proportionally onto
+every member, so similar tiles are split at corresponding positions (the aim of §3.2's synchronisation). Each
+step finds the first relevant edge moving inward from each side (§3.1: average directional gradient above
 ``TAU_EDGE`` times the wall response measured in a zone along the tile boundary), drops candidates whose line
-crosses the edge-responding segment of a perpendicular candidate, keeps the longest (two opposite ones of at
-least 80 % length give a dual split), then imposes the group's most frequent split type at the median offsets
-(§3.2). A region that no longer touches its tile's boundary and whose intensity differs from the wall is an
-element: a window (a door when it stands on the ground floor's bottom edge); it is not split further.
+crosses the edge-responding segment of a perpendicular candidate and keeps the longest (two opposite ones of at
+least 80 % length give a dual split). A region that no longer touches the tile boundary and whose intensity
+differs from the wall is an element: a window (a door when it stands on the ground floor's bottom edge); it is
+not split by edges further, only separated at interior wall bands (two windows in one tile).
 """
 from __future__ import annotations
 
-from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
+from PIL import Image
 
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
 TAU_EDGE = 2.5
@@ -188,10 +190,35 @@ def wall_stats(edges: EdgeImage, tiles: list[Rect]) -> Wall:
     return Wall(np.array(thr), float(np.median(allv)), float(allv.std()) + 1e-6)
 
 
+def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
+    """The members resampled to their median size and averaged; edges are those of the average."""
+    h = int(np.median([r1 - r0 for r0, r1, _, _ in tiles]))
+    w = int(np.median([c1 - c0 for _, _, c0, c1 in tiles]))
+
+    def mean(image: np.ndarray) -> np.ndarray:
+        acc = np.zeros((h, w))
+        for r0, r1, c0, c1 in tiles:
+            block = Image.fromarray(image[r0:r1, c0:c1].astype(np.float32))
+            acc += np.asarray(block.resize((w, h), Image.Resampling.BILINEAR))
+        return acc / len(tiles)
+    return EdgeImage.of(mean(edges.gray))
+
+
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
-    """The synchronised subdivision of a group of similar tiles (one shared tree, per-member rectangles)."""
-    wall = wall_stats(edges, tiles)
-    return _split(edges, Node(tuple(tiles)), tuple(tiles), wall, ground, MAX_STEPS)
+    """The shared subdivision of a group of similar tiles, as a tree with one rectangle per member."""
+    stack = group_stack(edges, tiles)
+    h, w = stack.gray.shape
+    whole = (0, h, 0, w)
+    tree = _split(stack, Node((whole,)), (whole,), wall_stats(stack, [whole]), ground, MAX_STEPS)
+    return _members(tree, h, w, tiles)
+
+
+def _members(node: Node, h: int, w: int, tiles: list[Rect]) -> Node:
+    """Map a subdivision of the ``h x w`` stack proportionally onto every member tile."""
+    r0, r1, c0, c1 = node.rects[0]
+    rects = tuple((t0 + round(r0 * (t1 - t0) / h), t0 + round(r1 * (t1 - t0) / h),
+                   u0 + round(c0 * (u1 - u0) / w), u0 + round(c1 * (u1 - u0) / w)) for t0, t1, u0, u1 in tiles)
+    return Node(rects, node.label, tuple(_members(c, h, w, tiles) for c in node.children))
 
 
 def _touches(rects: tuple[Rect, ...], tiles: tuple[Rect, ...]) -> tuple[bool, bool]:
@@ -253,26 +280,17 @@ def _split(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, gr
     label = _element_label(edges, node, tiles, wall, ground) if node.rects != tiles else None
     if label is not None:
         return _separate(edges, node, wall, label)
-    votes, offsets = Counter(), {}
-    if steps > 0:
-        for m, rect in enumerate(node.rects):
-            kind, pos = choose_split(local_candidates(edges, rect, wall.thr[m]))
-            votes[kind] += 1
-            if kind != "none":
-                offsets.setdefault(kind, []).append(_offsets(kind, pos, rect))
-    kind = max(votes, key=lambda k: (votes[k], k != "none")) if votes else "none"
+    kind, pos = choose_split(local_candidates(edges, node.rects[0], wall.thr[0])) if steps > 0 else ("none", {})
     if kind == "none":
         return Node(node.rects, "wall")
-    off = {s: int(np.median([o[s] for o in offsets[kind]])) for s in offsets[kind][0]}
-    parts = [_apply(kind, off, rect) for rect in node.rects]
-    if any(p is None for p in parts):
+    parts = _apply(kind, _offsets(kind, pos, node.rects[0]), node.rects[0])
+    if parts is None:
         return Node(node.rects, "wall")
     children = []
-    for i in range(len(parts[0])):
-        child = Node(tuple(p[i] for p in parts))
-        r0, r1, c0, c1 = child.rects[0]
+    for rect in parts:
+        r0, r1, c0, c1 = rect
         if min(r1 - r0, c1 - c0) < TAU_SIZE:
-            children.append(Node(child.rects, "wall"))
+            children.append(Node((rect,), "wall"))
         else:
-            children.append(_split(edges, child, tiles, wall, ground, steps - 1))
+            children.append(_split(edges, Node((rect,)), tiles, wall, ground, steps - 1))
     return Node(node.rects, None, tuple(children))
