@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from citygen.errors import CitygenError
-from citygen_inverse.photo import analyse, load_gray
+from citygen_inverse.photo import analyse, load_photo
 from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
 
 DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
@@ -32,7 +32,7 @@ def evaluate(jpg: Path) -> dict:
            "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref)}
     start = time.process_time()
     try:
-        result = analyse(load_gray(jpg, crop), str(jpg), meta={"source": jpg.name})
+        result = analyse(load_photo(jpg, crop), str(jpg), meta={"source": jpg.name})
     except CitygenError as exc:
         return {**row, "error": exc.message, "cpu": time.process_time() - start}
     pred = result.boxes("window")

@@ -1,7 +1,8 @@
 """A rectified facade photo -> FacadeLayout (mueller2007, "Image-based procedural modeling of facades").
 
 Pipeline (documented in ``docs/photo.md``): the photo (optionally cropped to the facade) is reduced to a working
-resolution of at most ``WORK`` pixels and converted to grayscale;
+resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) and converted to grayscale
+(colour is kept for labelling);
 
 1. §2.2-2.3 (``photo_symmetry``): mutual information between vertically adjacent bands gives the floor period;
    the same on the regular floors' band, transposed, gives the tile period;
@@ -41,6 +42,7 @@ SIMILAR = 0.5
 DEPTH = {"window": -0.25, "door": -0.3}
 
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in crop pixels, y down
+Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 in working pixels, y down
 
 
 @dataclass(frozen=True)
@@ -58,13 +60,13 @@ class PhotoAnalysis:
         return [b for b, lab in self.elements if lab == label]
 
 
-def load_gray(path: str | Path, crop: tuple[float, float, float, float] | None = None) -> np.ndarray:
-    """The photo (cropped to ``x0 y0 x1 y1`` pixels, y down) as float grayscale in 0..1."""
+def load_photo(path: str | Path, crop: tuple[float, float, float, float] | None = None) -> np.ndarray:
+    """The photo (cropped to ``x0 y0 x1 y1`` pixels, y down) as float RGB in 0..1, shape ``(H, W, 3)``."""
     from PIL import Image, UnidentifiedImageError
     try:
         with Image.open(path) as image:
             image.load()
-            gray = image.convert("L")
+            rgb = image.convert("RGB")
     except (UnidentifiedImageError, OSError, ValueError) as exc:
         if isinstance(exc, (FileNotFoundError, IsADirectoryError)):
             raise
@@ -72,36 +74,44 @@ def load_gray(path: str | Path, crop: tuple[float, float, float, float] | None =
                           hint="give a photo Pillow can read (JPEG, PNG, TIFF ...)") from None
     if crop is not None:
         x0, y0, x1, y1 = (float(v) for v in crop)
-        W, H = gray.size
+        W, H = rgb.size
         if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H):
             raise LayoutError(f"--crop {x0:g} {y0:g} {x1:g} {y1:g} is not inside the {W}x{H} image",
                               where=str(path), hint="give x0 y0 x1 y1 in pixels, y down, x0 < x1, y0 < y1")
-        gray = gray.crop((int(round(x0)), int(round(y0)), int(round(x1)), int(round(y1))))
-    return np.asarray(gray, dtype=float) / 255.0
+        rgb = rgb.crop((int(round(x0)), int(round(y0)), int(round(x1)), int(round(y1))))
+    return np.asarray(rgb, dtype=float) / 255.0
 
 
-def _work(gray: np.ndarray, longest: int) -> tuple[np.ndarray, float]:
+def _work(image: np.ndarray, longest: int) -> tuple[np.ndarray, float]:
     """Resample to at most ``longest`` pixels (box filter) and blur slightly; returns the image and its pixel size
     in crop pixels."""
     from PIL import Image
-    H, W = gray.shape
+    H, W = image.shape[:2]
     f = max(H, W) / longest
     if f > 1:
         size = (max(int(round(W / f)), 1), max(int(round(H / f)), 1))
-        img = Image.fromarray((gray * 255).astype(np.uint8)).resize(size, Image.Resampling.BOX)
-        gray = np.asarray(img, dtype=float) / 255.0
-    return gaussian_filter(gray, 0.7), max(f, 1.0)
+        planes = image[..., None] if image.ndim == 2 else image
+        image = np.stack([np.asarray(Image.fromarray(planes[..., k].astype(np.float32)).resize(
+            size, Image.Resampling.BOX)) for k in range(planes.shape[2])], axis=-1).astype(float)
+        image = image[..., 0] if planes.shape[2] == 1 else image
+    sigma = (0.7, 0.7) if image.ndim == 2 else (0.7, 0.7, 0)
+    return gaussian_filter(image, sigma), max(f, 1.0)
 
 
-def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = None,
+def luminance(rgb: np.ndarray) -> np.ndarray:
+    return rgb if rgb.ndim == 2 else rgb @ np.array([0.299, 0.587, 0.114])
+
+
+def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None = None,
             floor_height: float = 3.0, meta: dict | None = None) -> PhotoAnalysis:
-    """Run the pipeline on a grayscale crop of the facade."""
-    work, f = _work(gray, WORK)
-    small, g = _work(gray, MI_WORK)
+    """Run the pipeline on an RGB ``(H, W, 3)`` or grayscale ``(H, W)`` crop of the facade (0..1)."""
+    colour, f = _work(image, WORK)
+    work = luminance(colour)
+    small, g = _work(luminance(image), MI_WORK)
     H, W = work.shape
     h, w = small.shape
     if min(H, W) < 4 * TAU_SIZE:
-        raise LayoutError(f"the facade is only {gray.shape[1]}x{gray.shape[0]} pixels", where=source,
+        raise LayoutError(f"the facade is only {image.shape[1]}x{image.shape[0]} pixels", where=source,
                           hint="give a larger photo or a larger --crop")
     vsym = detect_symmetry(quantize(small), int(FLOOR_RANGE[0] * h), int(FLOOR_RANGE[1] * h))
     if not vsym.found:
@@ -124,7 +134,7 @@ def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = 
     else:
         tiles = np.array([0, W])
     groups = cluster_tiles(work, floors, tiles)
-    edges = EdgeImage.of(work)
+    edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
     for g, members in enumerate(groups):
         rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
@@ -144,7 +154,8 @@ def analyse(gray: np.ndarray, source: str = "<photo>", *, width: float | None = 
     problems = check_partition(layout)
     if problems:
         raise LayoutError("photo analysis did not give a partition: " + "; ".join(problems[:3]), where=source)
-    boxes = tuple(((c0 * pixel, r0 * pixel, c1 * pixel, r1 * pixel), lab) for (r0, r1, c0, c1), lab in elements)
+    boxes = tuple(((c0 * pixel, r0 * pixel, c1 * pixel, r1 * pixel), lab)
+                  for (r0, r1, c0, c1), lab in merge_elements(elements))
     return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
                          float(P * f), float(Q * f))
 
@@ -180,6 +191,35 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray) -> li
     return groups
 
 
+def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str]]:
+    """One box per element: terminals of one label and tile that share an edge are one window (a window split at
+    its mullion, or into frame and glass, is still one window), as their bounding box."""
+    parent = list(range(len(elements)))
+
+    def find(k: int) -> int:
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+    for a, (ra, la, ta) in enumerate(elements):
+        for b in range(a + 1, len(elements)):
+            rb, lb, tb = elements[b]
+            if (la, ta) != (lb, tb):
+                continue
+            rows = min(ra[1], rb[1]) - max(ra[0], rb[0])
+            cols = min(ra[3], rb[3]) - max(ra[2], rb[2])
+            if (rows > 0 and cols == 0) or (cols > 0 and rows == 0):
+                parent[find(a)] = find(b)
+    merged: dict[int, tuple[Rect, str]] = {}
+    for k, (rect, label, _) in enumerate(elements):
+        root = find(k)
+        if root in merged:
+            (r0, r1, c0, c1), _ = merged[root]
+            rect = (min(r0, rect[0]), max(r1, rect[1]), min(c0, rect[2]), max(c1, rect[3]))
+        merged[root] = (rect, label)
+    return [merged[k] for k in sorted(merged)]
+
+
 def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,
             s: float) -> tuple[FacadeLayout, list]:
     """Region tree in metres (y up) and the element rectangles in working pixels."""
@@ -191,13 +231,13 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
         return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label,
                       depth=DEPTH.get(label, 0.0), children=tuple(children))
 
-    def build(node: Node, m: int, symbol: str):
+    def build(node: Node, m: int, symbol: str, i: int, j: int):
         if node.children:  # regions that the proportional mapping shrank to nothing are left out
-            kids = [build(c, m, f"{symbol}_{k}") for k, c in enumerate(node.children)
+            kids = [build(c, m, f"{symbol}_{k}", i, j) for k, c in enumerate(node.children)
                     if c.rects[m][0] < c.rects[m][1] and c.rects[m][2] < c.rects[m][3]]
             return region(node.rects[m], symbol, children=kids)
         if node.label in DEPTH:
-            elements.append((node.rects[m], node.label))
+            elements.append((node.rects[m], node.label, (i, j)))
         return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall")
 
     floor_regions = []
@@ -207,7 +247,7 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
         row = []
         for j in range(tiles.size - 1):
             symbol, node, m = trees[(i, j)]
-            row.append(build(node, m, symbol))
+            row.append(build(node, m, symbol, i, j))
         floor_regions.append(region((floors[i], floors[i + 1], tiles[0], tiles[-1]), name, children=row))
     root = region((0, H, tiles[0], tiles[-1]), "Facade", children=reversed(floor_regions))
     return FacadeLayout(root.w, root.h, root), elements
@@ -216,6 +256,6 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
 def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,
                       crop: tuple[float, float, float, float] | None = None) -> PhotoAnalysis:
     """Read ``path`` and analyse it (see the module docstring)."""
-    gray = load_gray(path, crop)
+    rgb = load_photo(path, crop)
     meta = {"source": Path(path).name, "image_crop": list(crop) if crop else None}
-    return analyse(gray, str(path), width=width, floor_height=floor_height, meta=meta)
+    return analyse(rgb, str(path), width=width, floor_height=floor_height, meta=meta)

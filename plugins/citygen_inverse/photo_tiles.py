@@ -18,13 +18,18 @@ import numpy as np
 from PIL import Image
 
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
-TAU_EDGE = 2.5
+TAU_EDGE = 4.0
+#: Fraction of a line over which its edge strength is averaged.
+SPAN = 0.3
 #: §3 minimum region size in pixels (the paper's 5).
 TAU_SIZE = 5
 #: A runner-up parallel to the winner with this fraction of its length makes a dual split (§3.1).
 DUAL = 0.8
 #: Element when the mean intensity differs from the wall by this many wall standard deviations.
 CONTRAST = 0.6
+#: ... or when at most this fraction of its colour histogram (``LEVELS`` per channel) is shared with the wall's.
+SHARED = 0.5
+LEVELS = 4
 #: Split steps per tile (ground-based images need 2-5, §3).
 MAX_STEPS = 6
 
@@ -56,12 +61,24 @@ class EdgeImage:
     eh: np.ndarray  # |dI/dy| where the gradient is mostly vertical (horizontal edges)
     ev: np.ndarray  # |dI/dx| where the gradient is mostly horizontal (vertical edges)
     mag: np.ndarray
+    colour: np.ndarray  # (h, w, 3) RGB, or (h, w, 1) gray
 
     @classmethod
-    def of(cls, gray: np.ndarray) -> EdgeImage:
+    def of(cls, gray: np.ndarray, colour: np.ndarray | None = None) -> EdgeImage:
         gy, gx = np.gradient(gray)
         ay, ax = np.abs(gy), np.abs(gx)
-        return cls(gray, np.where(ay > ax, ay, 0.0), np.where(ax > ay, ax, 0.0), np.hypot(gx, gy))
+        colour = gray[..., None] if colour is None or colour.ndim == 2 else colour
+        return cls(gray, np.where(ay > ax, ay, 0.0), np.where(ax > ay, ax, 0.0), np.hypot(gx, gy), colour)
+
+    def histogram(self, rect: Rect, mask: np.ndarray | None = None) -> np.ndarray:
+        """Normalised histogram of ``rect``'s colours quantised to ``LEVELS`` per channel."""
+        r0, r1, c0, c1 = rect
+        block = self.colour[r0:r1, c0:c1]
+        pixels = block.reshape(-1, block.shape[2]) if mask is None else block[mask]
+        q = np.clip((pixels * LEVELS).astype(int), 0, LEVELS - 1)
+        codes = (q * LEVELS ** np.arange(q.shape[1])).sum(axis=1)
+        hist = np.bincount(codes, minlength=LEVELS ** q.shape[1]).astype(float)
+        return hist / max(hist.sum(), 1.0)
 
 
 def wall_zone(rect: Rect) -> tuple[np.ndarray, ...]:
@@ -90,13 +107,20 @@ def _first_edge(profile: np.ndarray, thr: float, lo: int, reverse: bool) -> int 
     return lo + int(np.floor(centre + 1.0))
 
 
+def _strength(edge: np.ndarray, axis: int) -> np.ndarray:
+    """Edge strength of every line: its mean over the strongest ``SPAN`` of the line (an element's edge crosses
+    part of a tile, not all of it)."""
+    k = max(int(SPAN * edge.shape[axis]), 1)
+    return -np.mean(np.partition(-edge, k - 1, axis=axis).take(range(k), axis=axis), axis=axis)
+
+
 def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate]:
     """§3.1: the first relevant edge from each side of ``rect`` and its edge-responding segment."""
     r0, r1, c0, c1 = rect
     out = []
     if r1 - r0 >= 2 * TAU_SIZE + 1:
         eh = edges.eh[r0:r1, c0:c1]
-        rows = eh.mean(axis=1)
+        rows = _strength(eh, axis=1)
         inner = slice(TAU_SIZE - 1, r1 - r0 - TAU_SIZE)
         for side, rev in (("T", False), ("B", True)):
             pos = _first_edge(rows[inner], thr, r0 + TAU_SIZE - 1, rev)
@@ -105,7 +129,7 @@ def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate
                 out.append(_candidate(side, pos, line, c0))
     if c1 - c0 >= 2 * TAU_SIZE + 1:
         ev = edges.ev[r0:r1, c0:c1]
-        cols = ev.mean(axis=0)
+        cols = _strength(ev, axis=0)
         inner = slice(TAU_SIZE - 1, c1 - c0 - TAU_SIZE)
         for side, rev in (("L", False), ("R", True)):
             pos = _first_edge(cols[inner], thr, c0 + TAU_SIZE - 1, rev)
@@ -172,11 +196,12 @@ def _apply(kind: str, off: dict[str, int], rect: Rect) -> list[Rect] | None:
 
 @dataclass(frozen=True)
 class Wall:
-    """Per-member wall statistics from the boundary zone: edge threshold, mean and std intensity."""
+    """Per-member wall statistics from the boundary zone: edge threshold, mean and std intensity, colours."""
 
     thr: np.ndarray
     mean: float
     std: float
+    hist: np.ndarray
 
 
 def wall_stats(edges: EdgeImage, tiles: list[Rect]) -> Wall:
@@ -187,7 +212,8 @@ def wall_stats(edges: EdgeImage, tiles: list[Rect]) -> Wall:
         thr.append(TAU_EDGE * float(edges.mag[r0:r1, c0:c1][mask].mean()))
         values.append(edges.gray[r0:r1, c0:c1][mask])
     allv = np.concatenate(values)
-    return Wall(np.array(thr), float(np.median(allv)), float(allv.std()) + 1e-6)
+    hist = np.mean([edges.histogram(t, wall_zone(t)) for t in tiles], axis=0)
+    return Wall(np.array(thr), float(np.median(allv)), float(allv.std()) + 1e-6, hist)
 
 
 def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
@@ -201,7 +227,8 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
             block = Image.fromarray(image[r0:r1, c0:c1].astype(np.float32))
             acc += np.asarray(block.resize((w, h), Image.Resampling.BILINEAR))
         return acc / len(tiles)
-    return EdgeImage.of(mean(edges.gray))
+    colour = np.stack([mean(edges.colour[..., k]) for k in range(edges.colour.shape[2])], axis=-1)
+    return EdgeImage.of(mean(edges.gray), colour)
 
 
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
@@ -232,7 +259,8 @@ def _element_label(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: 
     if sides or (bottom and not ground):
         return None
     mean = float(np.mean([edges.gray[r0:r1, c0:c1].mean() for r0, r1, c0, c1 in node.rects]))
-    if abs(mean - wall.mean) < CONTRAST * wall.std:
+    shared = float(np.minimum(edges.histogram(node.rects[0]), wall.hist).sum())
+    if abs(mean - wall.mean) < CONTRAST * wall.std and shared > SHARED:
         return None
     return "door" if bottom else "window"
 
