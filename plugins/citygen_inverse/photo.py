@@ -33,6 +33,9 @@ MI_WORK = 300
 #: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
 FLOOR_RANGE = (1 / 14, 1 / 2)
 TILE_RANGE = (1 / 25, 1 / 2)
+#: Least height of the top and bottom floor and least width of the first and last tile, in periods.
+END_FLOOR = 0.35
+END_TILE = 0.2
 #: Eq. 4 smoothing as a fraction of the detected period (the paper's sigma = 1 m of a 3-5.5 m floor).
 SIGMA = 0.25
 #: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
@@ -115,13 +118,13 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
                           hint="give a larger photo or a larger --crop")
     vsym = detect_symmetry(quantize(small), int(FLOOR_RANGE[0] * h), int(FLOOR_RANGE[1] * h))
     if not vsym.found:
-        raise LayoutError(f"no repetition of floors detected (best/median MI {vsym.contrast:.2f})", where=source,
+        raise LayoutError(f"no repetition of floors detected (MI prominence {vsym.prominence:.3f})", where=source,
                           hint="crop the photo to the facade (--crop x0 y0 x1 y1); it must be rectified and show "
                                "at least two similar floors")
     P = int(round(vsym.period * g / f))
     hor, ver = edge_functions(work)
     Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(SIGMA * P, 1.0))
-    floors = split_lines(Ver, P, 0, H, min_end=TAU_SIZE)
+    floors = split_lines(Ver, P, 0, H, min_end=max(int(END_FLOOR * P), TAU_SIZE))
     gaps = np.diff(floors)
     regular = np.abs(gaps - P) <= GAP_TOLERANCE * P
     band = (floors[:-1][regular].min(), floors[1:][regular].max()) if regular.any() else (0, H)
@@ -130,10 +133,10 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     Q = int(round(hsym.period * g / f)) if hsym.found else 0
     if Q:
         Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(SIGMA * Q, 1.0))
-        tiles = split_lines(Hor, Q, 0, W, min_end=TAU_SIZE)
+        tiles = split_lines(Hor, Q, 0, W, min_end=max(int(END_TILE * Q), TAU_SIZE))
     else:
         tiles = np.array([0, W])
-    groups = cluster_tiles(work, floors, tiles)
+    groups = cluster_tiles(work, floors, tiles, regular)
     edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
     for g, members in enumerate(groups):
@@ -149,7 +152,7 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
                 scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
                 floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
                 floors=int(floors.size - 1), tiles_per_floor=int(tiles.size - 1),
-                mi_contrast={"floors": round(vsym.contrast, 3), "tiles": round(hsym.contrast, 3)})
+                mi_prominence={"floors": round(vsym.prominence, 4), "tiles": round(hsym.prominence, 4)})
     layout = FacadeLayout(layout.width, layout.height, layout.root, meta)
     problems = check_partition(layout)
     if problems:
@@ -160,10 +163,11 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
                          float(P * f), float(Q * f))
 
 
-def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray) -> list[list[tuple[int, int]]]:
+def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
+                  regular: np.ndarray) -> list[list[tuple[int, int]]]:
     """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
 
-    Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
+    Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together. Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
     tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
     within the gap tolerance, else it starts a group."""
     from PIL import Image
@@ -181,7 +185,8 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray) -> li
     groups: list[list[tuple[int, int]]] = []
     for k, cell in enumerate(cells):
         for g, head in enumerate(heads):
-            if similar[k, head] >= SIMILAR and np.all(np.abs(sizes_a[k] - sizes_a[head])
+            same_floors = (regular[cell[0]] and regular[cells[head][0]]) or cell[0] == cells[head][0]
+            if same_floors and similar[k, head] >= SIMILAR and np.all(np.abs(sizes_a[k] - sizes_a[head])
                                                       <= GAP_TOLERANCE * sizes_a[head]):
                 groups[g].append(cell)
                 break

@@ -69,7 +69,7 @@ def split_lines(values: np.ndarray, period: int, lo: int = 0, hi: int | None = N
         if np.isfinite(best).any():
             finals = np.where(end, best, np.inf)
             j = int(np.argmin(finals))
-            if np.isfinite(finals[j]) and finals[j] / k < best_mean - 1e-12:
+            if np.isfinite(finals[j]) and finals[j] / k <= best_mean + 1e-12:  # ties: more lines
                 best_mean, result = finals[j] / k, (k, j)
         trans = np.where(ok, best[:, None], np.inf)
         prev = trans.argmin(axis=0)
