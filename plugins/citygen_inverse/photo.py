@@ -28,7 +28,7 @@ from citygen_inverse.photo_symmetry import Symmetry, detect_symmetry, quantize
 from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
 
 #: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
-WORK = 800
+WORK = 400
 MI_WORK = 300
 #: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
 FLOOR_RANGE = (1 / 14, 1 / 2)
@@ -167,11 +167,13 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
                   regular: np.ndarray) -> list[list[tuple[int, int]]]:
     """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
 
-    Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together. Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
+    Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together; the ground floor
+    is never stacked with the floors above (§2.2: "the bottom and top floors often differ"). Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
     tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
     within the gap tolerance, else it starts a group."""
     from PIL import Image
     cells = [(i, j) for i in range(floors.size - 1) for j in range(tiles.size - 1)]
+    ground = floors.size - 2
     thumbs, sizes = [], []
     for i, j in cells:
         block = work[floors[i]:floors[i + 1], tiles[j]:tiles[j + 1]]
@@ -185,7 +187,8 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
     groups: list[list[tuple[int, int]]] = []
     for k, cell in enumerate(cells):
         for g, head in enumerate(heads):
-            same_floors = (regular[cell[0]] and regular[cells[head][0]]) or cell[0] == cells[head][0]
+            a, b = cell[0], cells[head][0]
+            same_floors = a == b or (regular[a] and regular[b] and ground not in (a, b))
             if same_floors and similar[k, head] >= SIMILAR and np.all(np.abs(sizes_a[k] - sizes_a[head])
                                                       <= GAP_TOLERANCE * sizes_a[head]):
                 groups[g].append(cell)

@@ -18,7 +18,7 @@ import numpy as np
 from PIL import Image
 
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
-TAU_EDGE = 4.0
+TAU_EDGE = 2.5
 #: Fraction of a line over which its edge strength is averaged.
 SPAN = 0.3
 #: §3 minimum region size in pixels (the paper's 5).
@@ -259,10 +259,20 @@ def _element_label(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: 
     if sides or (bottom and not ground):
         return None
     mean = float(np.mean([edges.gray[r0:r1, c0:c1].mean() for r0, r1, c0, c1 in node.rects]))
-    shared = float(np.minimum(edges.histogram(node.rects[0]), wall.hist).sum())
-    if abs(mean - wall.mean) < CONTRAST * wall.std and shared > SHARED:
+    if _wall_like(edges, node.rects[0], mean, wall):
         return None
-    return "door" if bottom else "window"
+    if bottom:  # a door reaches the ground; wall below an opening is split off first
+        r0, r1, c0, c1 = node.rects[0]
+        band = (r1 - max(TAU_SIZE, (r1 - r0) // 10), r1, c0, c1)
+        if _wall_like(edges, band, float(edges.gray[band[0]:r1, c0:c1].mean()), wall):
+            return None
+        return "door"
+    return "window"
+
+
+def _wall_like(edges: EdgeImage, rect: Rect, mean: float, wall: Wall) -> bool:
+    shared = float(np.minimum(edges.histogram(rect), wall.hist).sum())
+    return abs(mean - wall.mean) < CONTRAST * wall.std and shared > SHARED
 
 
 def _wall_gap(edges: EdgeImage, node: Node, wall: Wall) -> tuple[str, int, int] | None:
