@@ -136,7 +136,15 @@ def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate
             if pos is not None and c0 + TAU_SIZE <= pos <= c1 - TAU_SIZE:
                 line = np.maximum(ev[:, pos - c0 - 1], ev[:, min(pos - c0, c1 - c0 - 1)]) > thr
                 out.append(_candidate(side, pos, line, r0))
-    return [c for c in out if c.length > 0]
+    # the first edge from both sides can be the same edge (a door reaching the tile bottom): one candidate
+    seen: set[tuple[bool, int]] = set()
+    unique = []
+    for c in out:
+        key = (c.side in "TB", c.pos)
+        if c.length > 0 and key not in seen:
+            seen.add(key)
+            unique.append(c)
+    return unique
 
 
 def _candidate(side: str, pos: int, line: np.ndarray, offset: int) -> Candidate:
