@@ -8,8 +8,8 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
    the same on the regular floors' band, transposed, gives the tile period;
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
-3. §3 (``photo_tiles``): tiles of one group (regular floors' regular tiles, an irregular floor's tiles, edge
-   columns) are subdivided in lockstep and the elements labelled window / door, the rest wall.
+3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
+   and the subdivision mapped onto its members; elements are labelled window / door, the rest wall.
 
 The layout is in metres: ``width`` metres for the crop, else ``floor_height`` metres per detected floor period.
 """
@@ -24,7 +24,7 @@ from scipy.ndimage import gaussian_filter
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
-from citygen_inverse.photo_symmetry import Symmetry, detect_symmetry, quantize
+from citygen_inverse.photo_symmetry import detect_symmetry, quantize
 from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
 
 #: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
@@ -147,7 +147,6 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P
     layout, elements = _layout(floors, tiles, regular, trees, H, scale)
-    pixel = f * 1.0
     meta = dict(meta or {}, importer="photo (mueller2007)", metres_per_pixel=scale / f,
                 scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
                 floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
@@ -157,7 +156,7 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     problems = check_partition(layout)
     if problems:
         raise LayoutError("photo analysis did not give a partition: " + "; ".join(problems[:3]), where=source)
-    boxes = tuple(((c0 * pixel, r0 * pixel, c1 * pixel, r1 * pixel), lab)
+    boxes = tuple(((c0 * f, r0 * f, c1 * f, r1 * f), lab)
                   for (r0, r1, c0, c1), lab in merge_elements(elements))
     return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
                          float(P * f), float(Q * f))

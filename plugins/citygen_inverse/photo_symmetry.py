@@ -14,8 +14,6 @@ import numpy as np
 
 #: Quantisation levels of the joint histograms.
 BINS = 8
-#: Lines whose best symmetry reaches this fraction of the best score take part in the stacking (§2.3: 0.75).
-STACK_FRACTION = 0.75
 #: A repetition is detected when the period's line-averaged MI rises this much (nats) over the trough between
 #: half the period and the period.
 MIN_PROMINENCE = 0.01
@@ -26,13 +24,11 @@ class Symmetry:
     """Result of the symmetry search along one axis (pixels of the analysed image).
 
     ``s_max[y]`` and ``h_max[y]`` are Eq. 2's best score and period per line (0 where no period fits);
-    ``period`` is the repetition the lines agree on, ``extent`` the rows its stacked translates cover and
-    ``prominence`` how far its line-averaged score rises over the trough at shorter shifts (0 = no repetition)."""
+    ``period`` is the repetition the lines agree on and ``prominence`` how far its line-averaged score rises over the trough at shorter shifts (0 = no repetition)."""
 
     s_max: np.ndarray
     h_max: np.ndarray
     period: int
-    extent: tuple[int, int]
     prominence: float
 
     @property
@@ -76,20 +72,20 @@ def symmetry_scores(q: np.ndarray, heights: np.ndarray, bins: int = BINS) -> np.
 
 
 def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmetry:
-    """Best period per line (§2.2) and the period and extent of the stacked repetition (§2.3)."""
+    """Best period per line (§2.2) and the period of the repetition (our simplification of §2.3)."""
     rows = q.shape[0]
     hi = min(hi, rows // 2)
     if hi < max(lo, 2):
-        return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, (0, rows), 0.0)
+        return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, 0.0)
     lo = max(lo, 2)
     heights = np.arange(max(lo // 2, 1), hi + 1)
     scores = symmetry_scores(q, heights, bins)
     valid = np.isfinite(scores)
-    filled = np.where(valid, scores, -np.inf)
+    filled = np.where(valid & (heights >= lo)[:, None], scores, -np.inf)
     best = filled.argmax(axis=0)
-    s_max = np.where(valid.any(axis=0), filled.max(axis=0), 0.0)
-    h_max = np.where(valid.any(axis=0), heights[best], 0)
-    tau = float(s_max.max())
+    fits = np.isfinite(filled).any(axis=0)
+    s_max = np.where(fits, filled.max(axis=0), 0.0)
+    h_max = np.where(fits, heights[best], 0)
     # the period most lines agree on: the line-averaged score's most prominent peak over the trough between
     # h/2 and h (bands shifted by half a floor differ; vertical pilasters make every small shift look alike),
     # reduced to its fundamental
@@ -98,12 +94,7 @@ def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmet
                            for i, h in enumerate(heights)])
     period = _fundamental(prominence, heights, int(heights[np.argmax(prominence)]))
     rise = float(prominence[period - heights[0]])
-    stacked = np.flatnonzero(s_max >= STACK_FRACTION * tau)
-    # rows covered by the stacked translates of period ~ ``period``
-    near = stacked[np.abs(h_max[stacked] - period) <= 0.25 * period]
-    near = near if near.size else stacked
-    extent = (int(max(near.min() - period, 0)), int(min(near.max() + period, rows)))
-    return Symmetry(s_max, h_max, period, extent, rise)
+    return Symmetry(s_max, h_max, period, rise)
 
 
 def _fundamental(profile: np.ndarray, heights: np.ndarray, period: int) -> int:
