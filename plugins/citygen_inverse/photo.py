@@ -69,7 +69,7 @@ def load_photo(path: str | Path, crop: tuple[float, float, float, float] | None 
     try:
         with Image.open(path) as image:
             image.load()
-            rgb = image.convert("RGB")
+            rgb = _as_rgb(image)
     except (UnidentifiedImageError, OSError, ValueError) as exc:
         if isinstance(exc, (FileNotFoundError, IsADirectoryError)):
             raise
@@ -77,12 +77,22 @@ def load_photo(path: str | Path, crop: tuple[float, float, float, float] | None 
                           hint="give a photo Pillow can read (JPEG, PNG, TIFF ...)") from None
     if crop is not None:
         x0, y0, x1, y1 = (float(v) for v in crop)
-        W, H = rgb.size
+        H, W = rgb.shape[:2]
         if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H):
             raise LayoutError(f"--crop {x0:g} {y0:g} {x1:g} {y1:g} is not inside the {W}x{H} image",
                               where=str(path), hint="give x0 y0 x1 y1 in pixels, y down, x0 < x1, y0 < y1")
-        rgb = rgb.crop((int(round(x0)), int(round(y0)), int(round(x1)), int(round(y1))))
-    return np.asarray(rgb, dtype=float) / 255.0
+        rgb = rgb[int(round(y0)):int(round(y1)), int(round(x0)):int(round(x1))]
+    return rgb
+
+
+def _as_rgb(image) -> np.ndarray:
+    """Float RGB in 0..1; 16-bit and float grayscale keep their range (``convert("RGB")`` would clip them)."""
+    if image.mode.startswith("I;16") or image.mode in ("I", "F"):
+        gray = np.asarray(image, dtype=float)
+        lo, hi = (0.0, 65535.0) if image.mode.startswith("I;16") else (float(gray.min()), float(gray.max()))
+        gray = (gray - lo) / max(hi - lo, 1e-12)
+        return np.repeat(gray[..., None], 3, axis=2)
+    return np.asarray(image.convert("RGB"), dtype=float) / 255.0
 
 
 def _work(image: np.ndarray, longest: int) -> tuple[np.ndarray, float]:

@@ -118,6 +118,21 @@ def test_cli_from_photo(tmp_path, capsys):
     assert json.loads(out.read_text())["meta"]["floors"] == 4
 
 
+@pytest.mark.parametrize("mode", ["I;16", "RGBA", "L"])
+def test_16bit_grayscale_photo(tmp_path, mode):
+    """Regression: ``convert("RGB")`` clipped 16-bit PNGs to white ("no repetition of floors")."""
+    image, truth, _ = facade()
+    gray = image.mean(axis=2)
+    if mode == "I;16":
+        pil = Image.fromarray((gray * 65535).astype(np.uint16))
+    else:
+        pil = Image.fromarray((image * 255).astype(np.uint8)).convert(mode)
+    path = tmp_path / "facade.png"
+    pil.save(path)
+    result = layout_from_photo(path, crop=(0, 0, 300, 300))
+    assert matches(result.boxes("window"), truth) == len(truth)
+
+
 @pytest.mark.parametrize("content", [b"not an image at all", b""])
 def test_cli_refuses_a_non_image(tmp_path, capsys, content):
     path = tmp_path / "facade.jpg"
