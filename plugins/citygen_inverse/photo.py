@@ -38,6 +38,8 @@ END_FLOOR = 0.35
 END_TILE = 0.2
 #: Eq. 4 smoothing as a fraction of the detected period (the paper's sigma = 1 m of a 3-5.5 m floor).
 SIGMA = 0.25
+#: Element pieces of one tile this close (working pixels) are one element.
+MERGE_GAP = 6
 #: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
 THUMB = 16
 SIMILAR = 0.5
@@ -209,8 +211,9 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
 
 
 def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str]]:
-    """One box per element: terminals of one label and tile that share an edge are one window (a window split at
-    its mullion, or into frame and glass, is still one window), as their bounding box."""
+    """One box per element: terminals of one label and tile that share an edge, or face each other across at
+    most ``MERGE_GAP`` pixels, are one window (a window split at its mullion, or into frame and glass, is still
+    one window), as their bounding box."""
     parent = list(range(len(elements)))
 
     def find(k: int) -> int:
@@ -225,7 +228,7 @@ def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tu
                 continue
             rows = min(ra[1], rb[1]) - max(ra[0], rb[0])
             cols = min(ra[3], rb[3]) - max(ra[2], rb[2])
-            if (rows > 0 and cols == 0) or (cols > 0 and rows == 0):
+            if (rows > 0 and -MERGE_GAP <= cols <= 0) or (cols > 0 and -MERGE_GAP <= rows <= 0):
                 parent[find(a)] = find(b)
     merged: dict[int, tuple[Rect, str]] = {}
     for k, (rect, label, _) in enumerate(elements):

@@ -30,6 +30,8 @@ CONTRAST = 0.6
 #: ... or when at most this fraction of its colour histogram (``LEVELS`` per channel) is shared with the wall's.
 SHARED = 0.5
 LEVELS = 4
+#: Least area of an element as a fraction of its tile (smaller contrasting pieces are frames, bars, ornament).
+MIN_AREA = 0.1
 #: Split steps per tile (ground-based images need 2-5, §3).
 MAX_STEPS = 6
 
@@ -265,6 +267,9 @@ def _touches(rects: tuple[Rect, ...], tiles: tuple[Rect, ...]) -> tuple[bool, bo
 def _element_label(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, ground: bool) -> str | None:
     sides, bottom = _touches(node.rects, tiles)
     if sides or (bottom and not ground):
+        return None
+    (r0, r1, c0, c1), (t0, t1, u0, u1) = node.rects[0], tiles[0]
+    if (r1 - r0) * (c1 - c0) < MIN_AREA * (t1 - t0) * (u1 - u0):
         return None
     mean = float(np.mean([edges.gray[r0:r1, c0:c1].mean() for r0, r1, c0, c1 in node.rects]))
     if _wall_like(edges, node.rects[0], mean, wall):
