@@ -1,0 +1,86 @@
+"""Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
+
+    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40]
+
+DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
+facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
+detected windows with annotated ones (one-to-one, box IoU >= 0.5). Timings are CPU seconds (process_time).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from citygen.errors import CitygenError
+from citygen_inverse.photo import analyse, load_photo
+from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
+
+DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
+
+
+def evaluate(jpg: Path) -> dict:
+    from PIL import Image
+    with Image.open(jpg) as image:
+        size = image.size
+    boxes = cmp_boxes(jpg.with_suffix(".xml"), size)
+    fx0, fy0, fx1, fy1 = facade_box(boxes)
+    crop = (round(fx0), round(fy0), round(fx1), round(fy1))
+    ref = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("window", [])]
+    row = {"photo": jpg.stem, "rows": count_groups([(b[1], b[3]) for b in ref]),
+           "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref)}
+    start = time.process_time()
+    try:
+        result = analyse(load_photo(jpg, crop), str(jpg), meta={"source": jpg.name})
+    except CitygenError as exc:
+        return {**row, "error": exc.message, "cpu": time.process_time() - start}
+    pred = result.boxes("window")
+    tp = matches(pred, ref)
+    return {**row, "floors": len(result.floor_lines) - 1, "tiles": len(result.tile_lines) - 1, "pred": len(pred),
+            "tp": tp, "cpu": time.process_time() - start, "size": (crop[2] - crop[0], crop[3] - crop[1])}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", default=str(DEFAULT))
+    parser.add_argument("--first", type=int, default=1)
+    parser.add_argument("--last", type=int, default=40)
+    args = parser.parse_args(argv)
+    data = Path(args.data)
+    photos = [data / f"cmp_b{i:04d}.jpg" for i in range(args.first, args.last + 1)]
+    photos = [p for p in photos if p.is_file()]
+    if not photos:
+        print(f"error: no cmp_b*.jpg photos in {data}", file=sys.stderr)
+        return 2
+    print(f"{'photo':10} {'crop':>9} {'rows':>4} {'floors':>6} {'cols':>4} {'tiles':>5} {'ref':>4} {'pred':>4} "
+          f"{'tp':>4} {'prec':>5} {'rec':>5} {'cpu s':>6}")
+    rows = []
+    for jpg in photos:
+        r = evaluate(jpg)
+        rows.append(r)
+        if "error" in r:
+            print(f"{r['photo']:10} {'':>9} {r['rows']:4d} {'-':>6} {r['cols']:4d} {'-':>5} {r['ref']:4d} "
+                  f"error: {r['error']}")
+            continue
+        prec = r["tp"] / r["pred"] if r["pred"] else 0.0
+        rec = r["tp"] / r["ref"] if r["ref"] else 0.0
+        print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['cols']:4d} "
+              f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['cpu']:6.2f}")
+    ok = [r for r in rows if "error" not in r]
+    tp, pred, ref = (sum(r[k] for r in ok) for k in ("tp", "pred", "ref"))
+    ref_all = sum(r["ref"] for r in rows)
+    cpu = sorted(r["cpu"] for r in rows)
+    print(f"\nphotos {len(rows)}, analysed {len(ok)}, refused (no repetition) {len(rows) - len(ok)}")
+    print(f"floors == window rows: {sum(r['floors'] == r['rows'] for r in ok)}/{len(ok)}, within 1: "
+          f"{sum(abs(r['floors'] - r['rows']) <= 1 for r in ok)}/{len(ok)}")
+    print(f"tiles == window columns: {sum(r['tiles'] == r['cols'] for r in ok)}/{len(ok)}, within 1: "
+          f"{sum(abs(r['tiles'] - r['cols']) <= 1 for r in ok)}/{len(ok)}")
+    print(f"windows (IoU >= 0.5): precision {tp / max(pred, 1):.3f} ({tp}/{pred}), recall {tp / max(ref, 1):.3f} "
+          f"({tp}/{ref}) on analysed photos, {tp / max(ref_all, 1):.3f} over all {ref_all} annotated windows")
+    print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,281 @@
+"""A rectified facade photo -> FacadeLayout (mueller2007, "Image-based procedural modeling of facades").
+
+Pipeline (documented in ``docs/photo.md``): the photo (optionally cropped to the facade) is reduced to a working
+resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) and converted to grayscale
+(colour is kept for labelling);
+
+1. §2.2-2.3 (``photo_symmetry``): mutual information between vertically adjacent bands gives the floor period;
+   the same on the regular floors' band, transposed, gives the tile period;
+2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
+   irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
+3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
+   and the subdivision mapped onto its members; elements are labelled window / door, the rest wall.
+
+The layout is in metres: ``width`` metres for the crop, else ``floor_height`` metres per detected floor period.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+
+from citygen.errors import LayoutError
+from citygen.layout import FacadeLayout, Region, check_partition
+from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
+from citygen_inverse.photo_symmetry import detect_symmetry, quantize
+from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
+
+#: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
+WORK = 400
+MI_WORK = 300
+#: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
+FLOOR_RANGE = (1 / 14, 1 / 2)
+TILE_RANGE = (1 / 25, 1 / 2)
+#: Least height of the top and bottom floor and least width of the first and last tile, in periods.
+END_FLOOR = 0.35
+END_TILE = 0.2
+#: Eq. 4 smoothing as a fraction of the detected period (the paper's sigma = 1 m of a 3-5.5 m floor).
+SIGMA = 0.25
+#: Element pieces of one tile this close (working pixels) are one element.
+MERGE_GAP = 6
+#: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
+THUMB = 16
+SIMILAR = 0.5
+#: Depth (m along the outward normal) of the detected elements.
+DEPTH = {"window": -0.25, "door": -0.3}
+
+Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in crop pixels, y down
+Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 in working pixels, y down
+
+
+@dataclass(frozen=True)
+class PhotoAnalysis:
+    """Detected structure in crop pixels (y down): floor and tile lines, element boxes and labels, layout."""
+
+    layout: FacadeLayout
+    floor_lines: tuple[float, ...]
+    tile_lines: tuple[float, ...]
+    elements: tuple[tuple[Box, str], ...]
+    floor_period: float
+    tile_period: float
+
+    def boxes(self, label: str = "window") -> list[Box]:
+        return [b for b, lab in self.elements if lab == label]
+
+
+def load_photo(path: str | Path, crop: tuple[float, float, float, float] | None = None) -> np.ndarray:
+    """The photo (cropped to ``x0 y0 x1 y1`` pixels, y down) as float RGB in 0..1, shape ``(H, W, 3)``."""
+    from PIL import Image, UnidentifiedImageError
+    try:
+        with Image.open(path) as image:
+            image.load()
+            rgb = _as_rgb(image)
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        if isinstance(exc, (FileNotFoundError, IsADirectoryError)):
+            raise
+        raise LayoutError("cannot read the image", where=str(path),
+                          hint="give a photo Pillow can read (JPEG, PNG, TIFF ...)") from None
+    if crop is not None:
+        x0, y0, x1, y1 = (float(v) for v in crop)
+        H, W = rgb.shape[:2]
+        if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H):
+            raise LayoutError(f"--crop {x0:g} {y0:g} {x1:g} {y1:g} is not inside the {W}x{H} image",
+                              where=str(path), hint="give x0 y0 x1 y1 in pixels, y down, x0 < x1, y0 < y1")
+        rgb = rgb[int(round(y0)):int(round(y1)), int(round(x0)):int(round(x1))]
+    return rgb
+
+
+def _as_rgb(image) -> np.ndarray:
+    """Float RGB in 0..1; 16-bit and float grayscale keep their range (``convert("RGB")`` would clip them)."""
+    if image.mode.startswith("I;16") or image.mode in ("I", "F"):
+        gray = np.asarray(image, dtype=float)
+        lo, hi = (0.0, 65535.0) if image.mode.startswith("I;16") else (float(gray.min()), float(gray.max()))
+        gray = (gray - lo) / max(hi - lo, 1e-12)
+        return np.repeat(gray[..., None], 3, axis=2)
+    return np.asarray(image.convert("RGB"), dtype=float) / 255.0
+
+
+def _work(image: np.ndarray, longest: int) -> tuple[np.ndarray, float]:
+    """Resample to at most ``longest`` pixels (box filter) and blur slightly; returns the image and its pixel size
+    in crop pixels."""
+    from PIL import Image
+    H, W = image.shape[:2]
+    f = max(H, W) / longest
+    if f > 1:
+        size = (max(int(round(W / f)), 1), max(int(round(H / f)), 1))
+        planes = image[..., None] if image.ndim == 2 else image
+        image = np.stack([np.asarray(Image.fromarray(planes[..., k].astype(np.float32)).resize(
+            size, Image.Resampling.BOX)) for k in range(planes.shape[2])], axis=-1).astype(float)
+        image = image[..., 0] if planes.shape[2] == 1 else image
+    sigma = (0.7, 0.7) if image.ndim == 2 else (0.7, 0.7, 0)
+    return gaussian_filter(image, sigma), max(f, 1.0)
+
+
+def luminance(rgb: np.ndarray) -> np.ndarray:
+    return rgb if rgb.ndim == 2 else rgb @ np.array([0.299, 0.587, 0.114])
+
+
+def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None = None,
+            floor_height: float = 3.0, meta: dict | None = None) -> PhotoAnalysis:
+    """Run the pipeline on an RGB ``(H, W, 3)`` or grayscale ``(H, W)`` crop of the facade (0..1)."""
+    colour, f = _work(image, WORK)
+    work = luminance(colour)
+    small, g = _work(luminance(image), MI_WORK)
+    H, W = work.shape
+    h, w = small.shape
+    if min(H, W) < 4 * TAU_SIZE:
+        raise LayoutError(f"the facade is only {image.shape[1]}x{image.shape[0]} pixels", where=source,
+                          hint="give a larger photo or a larger --crop")
+    vsym = detect_symmetry(quantize(small), int(FLOOR_RANGE[0] * h), int(FLOOR_RANGE[1] * h))
+    if not vsym.found:
+        raise LayoutError(f"no repetition of floors detected (MI prominence {vsym.prominence:.3f})", where=source,
+                          hint="crop the photo to the facade (--crop x0 y0 x1 y1); it must be rectified and show "
+                               "at least two similar floors")
+    P = int(round(vsym.period * g / f))
+    hor, ver = edge_functions(work)
+    Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(SIGMA * P, 1.0))
+    floors = split_lines(Ver, P, 0, H, min_end=max(int(END_FLOOR * P), TAU_SIZE))
+    gaps = np.diff(floors)
+    regular = np.abs(gaps - P) <= GAP_TOLERANCE * P
+    band = (floors[:-1][regular].min(), floors[1:][regular].max()) if regular.any() else (0, H)
+    lo, hi = int(band[0] * f / g), max(int(np.ceil(band[1] * f / g)), int(band[0] * f / g) + 1)
+    hsym = detect_symmetry(quantize(small[lo:hi]).T, int(TILE_RANGE[0] * w), int(TILE_RANGE[1] * w))
+    Q = int(round(hsym.period * g / f)) if hsym.found else 0
+    if Q:
+        Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(SIGMA * Q, 1.0))
+        tiles = split_lines(Hor, Q, 0, W, min_end=max(int(END_TILE * Q), TAU_SIZE))
+    else:
+        tiles = np.array([0, W])
+    groups = cluster_tiles(work, floors, tiles, regular)
+    edges = EdgeImage.of(work, colour)
+    trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
+    for g, members in enumerate(groups):
+        rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
+        ground = all(i == floors.size - 2 for i, _ in members)
+        node = subdivide_group(edges, rects, ground)
+        for m, ij in enumerate(members):
+            trees[ij] = (f"Tile{g + 1}", node, m)
+    scale = (width / W) if width else floor_height / P
+    layout, elements = _layout(floors, tiles, regular, trees, H, scale)
+    meta = dict(meta or {}, importer="photo (mueller2007)", metres_per_pixel=scale / f,
+                scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
+                floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
+                floors=int(floors.size - 1), tiles_per_floor=int(tiles.size - 1),
+                mi_prominence={"floors": round(vsym.prominence, 4), "tiles": round(hsym.prominence, 4)})
+    layout = FacadeLayout(layout.width, layout.height, layout.root, meta)
+    problems = check_partition(layout)
+    if problems:
+        raise LayoutError("photo analysis did not give a partition: " + "; ".join(problems[:3]), where=source)
+    boxes = tuple(((c0 * f, r0 * f, c1 * f, r1 * f), lab)
+                  for (r0, r1, c0, c1), lab in merge_elements(elements))
+    return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
+                         float(P * f), float(Q * f))
+
+
+def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
+                  regular: np.ndarray) -> list[list[tuple[int, int]]]:
+    """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
+
+    Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together; the ground floor
+    is never stacked with the floors above (§2.2: "the bottom and top floors often differ"). Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
+    tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
+    within the gap tolerance, else it starts a group."""
+    from PIL import Image
+    cells = [(i, j) for i in range(floors.size - 1) for j in range(tiles.size - 1)]
+    ground = floors.size - 2
+    thumbs, sizes = [], []
+    for i, j in cells:
+        block = work[floors[i]:floors[i + 1], tiles[j]:tiles[j + 1]]
+        t = np.asarray(Image.fromarray(block.astype(np.float32)).resize((THUMB, THUMB), Image.Resampling.BOX))
+        t = t - t.mean()
+        thumbs.append(t.ravel() / max(float(np.linalg.norm(t)), 1e-9))
+        sizes.append(block.shape)
+    thumbs_a, sizes_a = np.array(thumbs), np.array(sizes, dtype=float)
+    similar = thumbs_a @ thumbs_a.T
+    heads: list[int] = []
+    groups: list[list[tuple[int, int]]] = []
+    for k, cell in enumerate(cells):
+        for g, head in enumerate(heads):
+            a, b = cell[0], cells[head][0]
+            same_floors = a == b or (regular[a] and regular[b] and ground not in (a, b))
+            if same_floors and similar[k, head] >= SIMILAR and np.all(np.abs(sizes_a[k] - sizes_a[head])
+                                                      <= GAP_TOLERANCE * sizes_a[head]):
+                groups[g].append(cell)
+                break
+        else:
+            heads.append(k)
+            groups.append([cell])
+    return groups
+
+
+def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str]]:
+    """One box per element: terminals of one label and tile that share an edge, or face each other across at
+    most ``MERGE_GAP`` pixels, are one window (a window split at its mullion, or into frame and glass, is still
+    one window), as their bounding box."""
+    parent = list(range(len(elements)))
+
+    def find(k: int) -> int:
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+    for a, (ra, la, ta) in enumerate(elements):
+        for b in range(a + 1, len(elements)):
+            rb, lb, tb = elements[b]
+            if (la, ta) != (lb, tb):
+                continue
+            rows = min(ra[1], rb[1]) - max(ra[0], rb[0])
+            cols = min(ra[3], rb[3]) - max(ra[2], rb[2])
+            if (rows > 0 and -MERGE_GAP <= cols <= 0) or (cols > 0 and -MERGE_GAP <= rows <= 0):
+                parent[find(a)] = find(b)
+    merged: dict[int, tuple[Rect, str]] = {}
+    for k, (rect, label, _) in enumerate(elements):
+        root = find(k)
+        if root in merged:
+            (r0, r1, c0, c1), _ = merged[root]
+            rect = (min(r0, rect[0]), max(r1, rect[1]), min(c0, rect[2]), max(c1, rect[3]))
+        merged[root] = (rect, label)
+    return [merged[k] for k in sorted(merged)]
+
+
+def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,
+            s: float) -> tuple[FacadeLayout, list]:
+    """Region tree in metres (y up) and the element rectangles in working pixels."""
+    elements: list = []
+
+    def region(rect, symbol, label=None, children=()):
+        r0, r1, c0, c1 = rect
+        x0, x1, y0, y1 = c0 * s, c1 * s, (H - r1) * s, (H - r0) * s
+        return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label,
+                      depth=DEPTH.get(label, 0.0), children=tuple(children))
+
+    def build(node: Node, m: int, symbol: str, i: int, j: int):
+        if node.children:  # regions that the proportional mapping shrank to nothing are left out
+            kids = [build(c, m, f"{symbol}_{k}", i, j) for k, c in enumerate(node.children)
+                    if c.rects[m][0] < c.rects[m][1] and c.rects[m][2] < c.rects[m][3]]
+            return region(node.rects[m], symbol, children=kids)
+        if node.label in DEPTH:
+            elements.append((node.rects[m], node.label, (i, j)))
+        return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall")
+
+    floor_regions = []
+    last = floors.size - 2
+    for i in range(floors.size - 1):
+        name = "Floor" if regular[i] else ("GroundFloor" if i == last else f"Floor{i}")
+        row = []
+        for j in range(tiles.size - 1):
+            symbol, node, m = trees[(i, j)]
+            row.append(build(node, m, symbol, i, j))
+        floor_regions.append(region((floors[i], floors[i + 1], tiles[0], tiles[-1]), name, children=row))
+    root = region((0, H, tiles[0], tiles[-1]), "Facade", children=reversed(floor_regions))
+    return FacadeLayout(root.w, root.h, root), elements
+
+
+def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,
+                      crop: tuple[float, float, float, float] | None = None) -> PhotoAnalysis:
+    """Read ``path`` and analyse it (see the module docstring)."""
+    rgb = load_photo(path, crop)
+    meta = {"source": Path(path).name, "image_crop": list(crop) if crop else None}
+    return analyse(rgb, str(path), width=width, floor_height=floor_height, meta=meta)

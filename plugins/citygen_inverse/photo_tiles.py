@@ -1,0 +1,347 @@
+"""Subdivision of facade tiles (mueller2007 §3) and labelling of the elements.
+
+The tiles of one group (similar tiles, ``photo.cluster_tiles``) are resampled to their median size and averaged:
+the group's stack of the irreducible facade (§2.3). Its subdivision is found once and mapped proportionally onto
+every member, so similar tiles are split at corresponding positions (the aim of §3.2's synchronisation). Each
+step finds the first relevant edge moving inward from each side (§3.1: average directional gradient above
+``TAU_EDGE`` times the wall response measured in a zone along the tile boundary), drops candidates whose line
+crosses the edge-responding segment of a perpendicular candidate and keeps the longest (two opposite ones of at
+least 80 % length give a dual split). A region that no longer touches the tile boundary and whose intensity
+differs from the wall is an element: a window (a door when it stands on the ground floor's bottom edge); it is
+not split by edges further, only separated at interior wall bands (two windows in one tile).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image
+
+#: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
+TAU_EDGE = 2.5
+#: Fraction of a line over which its edge strength is averaged.
+SPAN = 0.3
+#: §3 minimum region size in pixels (the paper's 5).
+TAU_SIZE = 5
+#: A runner-up parallel to the winner with this fraction of its length makes a dual split (§3.1).
+DUAL = 0.8
+#: Element when the mean intensity differs from the wall by this many wall standard deviations.
+CONTRAST = 0.6
+#: ... or when at most this fraction of its colour histogram (``LEVELS`` per channel) is shared with the wall's.
+SHARED = 0.5
+LEVELS = 4
+#: Least area of an element as a fraction of its tile (smaller contrasting pieces are frames, bars, ornament).
+MIN_AREA = 0.1
+#: Split steps per tile (ground-based images need 2-5, §3).
+MAX_STEPS = 6
+
+Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
+
+
+@dataclass(frozen=True)
+class Node:
+    """A region of the group's shared subdivision: ``rects[m]`` is its rectangle in member tile ``m``."""
+
+    rects: tuple[Rect, ...]
+    label: str | None = None
+    children: tuple[Node, ...] = ()
+
+
+@dataclass(frozen=True)
+class Candidate:
+    side: str  # L, R, T, B
+    pos: int  # split index (first row/column of the inner part)
+    seg: tuple[int, int]  # edge-responding segment along the line (absolute rows or columns)
+    length: int
+
+
+@dataclass(frozen=True)
+class EdgeImage:
+    """Directional gradient magnitudes of the whole image and the intensities."""
+
+    gray: np.ndarray
+    eh: np.ndarray  # |dI/dy| where the gradient is mostly vertical (horizontal edges)
+    ev: np.ndarray  # |dI/dx| where the gradient is mostly horizontal (vertical edges)
+    mag: np.ndarray
+    colour: np.ndarray  # (h, w, 3) RGB, or (h, w, 1) gray
+
+    @classmethod
+    def of(cls, gray: np.ndarray, colour: np.ndarray | None = None) -> EdgeImage:
+        gy, gx = np.gradient(gray)
+        ay, ax = np.abs(gy), np.abs(gx)
+        colour = gray[..., None] if colour is None or colour.ndim == 2 else colour
+        return cls(gray, np.where(ay > ax, ay, 0.0), np.where(ax > ay, ax, 0.0), np.hypot(gx, gy), colour)
+
+    def histogram(self, rect: Rect, mask: np.ndarray | None = None) -> np.ndarray:
+        """Normalised histogram of ``rect``'s colours quantised to ``LEVELS`` per channel."""
+        r0, r1, c0, c1 = rect
+        block = self.colour[r0:r1, c0:c1]
+        pixels = block.reshape(-1, block.shape[2]) if mask is None else block[mask]
+        q = np.clip((pixels * LEVELS).astype(int), 0, LEVELS - 1)
+        codes = (q * LEVELS ** np.arange(q.shape[1])).sum(axis=1)
+        hist = np.bincount(codes, minlength=LEVELS ** q.shape[1]).astype(float)
+        return hist / max(hist.sum(), 1.0)
+
+
+def wall_zone(rect: Rect) -> tuple[np.ndarray, ...]:
+    """Index masks of the zone along the tile boundary (where §2 puts wall)."""
+    r0, r1, c0, c1 = rect
+    band = max(2, int(0.08 * min(r1 - r0, c1 - c0)))
+    mask = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+    mask[:band], mask[-band:], mask[:, :band], mask[:, -band:] = True, True, True, True
+    return mask
+
+
+def _first_edge(profile: np.ndarray, thr: float, lo: int, reverse: bool) -> int | None:
+    """Split index at the first run of ``profile > thr`` met from one end (weighted centre of the run)."""
+    hot = profile > thr
+    if not hot.any():
+        return None
+    idx = np.flatnonzero(hot)
+    start = idx[-1] if reverse else idx[0]
+    run_lo = run_hi = start
+    while run_lo - 1 >= 0 and hot[run_lo - 1]:
+        run_lo -= 1
+    while run_hi + 1 < hot.size and hot[run_hi + 1]:
+        run_hi += 1
+    w = profile[run_lo: run_hi + 1]
+    centre = float(np.dot(np.arange(run_lo, run_hi + 1), w) / w.sum())
+    return lo + int(np.floor(centre + 1.0))
+
+
+def _strength(edge: np.ndarray, axis: int) -> np.ndarray:
+    """Edge strength of every line: its mean over the strongest ``SPAN`` of the line (an element's edge crosses
+    part of a tile, not all of it)."""
+    k = max(int(SPAN * edge.shape[axis]), 1)
+    return -np.mean(np.partition(-edge, k - 1, axis=axis).take(range(k), axis=axis), axis=axis)
+
+
+def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate]:
+    """§3.1: the first relevant edge from each side of ``rect`` and its edge-responding segment."""
+    r0, r1, c0, c1 = rect
+    out = []
+    if r1 - r0 >= 2 * TAU_SIZE + 1:
+        eh = edges.eh[r0:r1, c0:c1]
+        rows = _strength(eh, axis=1)
+        inner = slice(TAU_SIZE - 1, r1 - r0 - TAU_SIZE)
+        for side, rev in (("T", False), ("B", True)):
+            pos = _first_edge(rows[inner], thr, r0 + TAU_SIZE - 1, rev)
+            if pos is not None and r0 + TAU_SIZE <= pos <= r1 - TAU_SIZE:
+                line = np.maximum(eh[pos - r0 - 1], eh[min(pos - r0, r1 - r0 - 1)]) > thr
+                out.append(_candidate(side, pos, line, c0))
+    if c1 - c0 >= 2 * TAU_SIZE + 1:
+        ev = edges.ev[r0:r1, c0:c1]
+        cols = _strength(ev, axis=0)
+        inner = slice(TAU_SIZE - 1, c1 - c0 - TAU_SIZE)
+        for side, rev in (("L", False), ("R", True)):
+            pos = _first_edge(cols[inner], thr, c0 + TAU_SIZE - 1, rev)
+            if pos is not None and c0 + TAU_SIZE <= pos <= c1 - TAU_SIZE:
+                line = np.maximum(ev[:, pos - c0 - 1], ev[:, min(pos - c0, c1 - c0 - 1)]) > thr
+                out.append(_candidate(side, pos, line, r0))
+    # the first edge from both sides can be the same edge (a door reaching the tile bottom): one candidate
+    seen: set[tuple[bool, int]] = set()
+    unique = []
+    for c in out:
+        key = (c.side in "TB", c.pos)
+        if c.length > 0 and key not in seen:
+            seen.add(key)
+            unique.append(c)
+    return unique
+
+
+def _candidate(side: str, pos: int, line: np.ndarray, offset: int) -> Candidate:
+    """The edge-responding segment: the longest run of responding pixels along the line (gaps of up to
+    ``TAU_SIZE`` pixels closed)."""
+    hot = np.flatnonzero(line)
+    if hot.size == 0:
+        return Candidate(side, pos, (0, 0), 0)
+    breaks = np.flatnonzero(np.diff(hot) > TAU_SIZE)
+    starts, ends = np.r_[0, breaks + 1], np.r_[breaks, hot.size - 1]
+    k = int(np.argmax(hot[ends] - hot[starts]))
+    lo, hi = int(hot[starts[k]]), int(hot[ends[k]]) + 1
+    return Candidate(side, pos, (offset + lo, offset + hi), int(ends[k] - starts[k] + 1))
+
+
+def choose_split(cands: list[Candidate]) -> tuple[str, dict[str, int]]:
+    """§3.1: drop crossed candidates, take the longest (dual with a parallel runner-up of >= 80 %)."""
+    def crossed(c: Candidate) -> bool:
+        for o in cands:
+            if (c.side in "TB") == (o.side in "TB"):
+                continue
+            if o.seg[0] + 2 < c.pos < o.seg[1] - 2:
+                return True
+        return False
+    alive = sorted((c for c in cands if not crossed(c)), key=lambda c: -c.length)
+    if not alive:
+        return "none", {}
+    win = alive[0]
+    opposite = {"L": "R", "R": "L", "T": "B", "B": "T"}[win.side]
+    runner = next((c for c in alive[1:] if c.side in (win.side, opposite)), None)
+    if runner is not None and runner.side == opposite and runner.length >= DUAL * win.length:
+        kind = "LR" if win.side in "LR" else "TB"
+        return kind, {win.side: win.pos, runner.side: runner.pos}
+    return win.side, {win.side: win.pos}
+
+
+def _offsets(kind: str, pos: dict[str, int], rect: Rect) -> dict[str, int]:
+    r0, r1, c0, c1 = rect
+    ref = {"T": r0, "B": r1, "L": c0, "R": c1}
+    return {s: abs(p - ref[s]) for s, p in pos.items()}
+
+
+def _apply(kind: str, off: dict[str, int], rect: Rect) -> list[Rect] | None:
+    r0, r1, c0, c1 = rect
+    if kind in ("T", "B", "TB"):
+        cuts = ([r0 + off["T"]] if "T" in off else []) + ([r1 - off["B"]] if "B" in off else [])
+        edges = [r0, *cuts, r1]
+        if any(b - a < 1 for a, b in zip(edges, edges[1:])):
+            return None
+        return [(a, b, c0, c1) for a, b in zip(edges, edges[1:])]
+    cuts = ([c0 + off["L"]] if "L" in off else []) + ([c1 - off["R"]] if "R" in off else [])
+    edges = [c0, *cuts, c1]
+    if any(b - a < 1 for a, b in zip(edges, edges[1:])):
+        return None
+    return [(r0, r1, a, b) for a, b in zip(edges, edges[1:])]
+
+
+@dataclass(frozen=True)
+class Wall:
+    """Per-member wall statistics from the boundary zone: edge threshold, mean and std intensity, colours."""
+
+    thr: np.ndarray
+    mean: float
+    std: float
+    hist: np.ndarray
+
+
+def wall_stats(edges: EdgeImage, tiles: list[Rect]) -> Wall:
+    thr, values = [], []
+    for t in tiles:
+        r0, r1, c0, c1 = t
+        mask = wall_zone(t)
+        thr.append(TAU_EDGE * float(edges.mag[r0:r1, c0:c1][mask].mean()))
+        values.append(edges.gray[r0:r1, c0:c1][mask])
+    allv = np.concatenate(values)
+    hist = np.mean([edges.histogram(t, wall_zone(t)) for t in tiles], axis=0)
+    return Wall(np.array(thr), float(np.median(allv)), float(allv.std()) + 1e-6, hist)
+
+
+def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
+    """The members resampled to their median size and averaged; edges are those of the average."""
+    h = int(np.median([r1 - r0 for r0, r1, _, _ in tiles]))
+    w = int(np.median([c1 - c0 for _, _, c0, c1 in tiles]))
+
+    def mean(image: np.ndarray) -> np.ndarray:
+        acc = np.zeros((h, w))
+        for r0, r1, c0, c1 in tiles:
+            block = Image.fromarray(image[r0:r1, c0:c1].astype(np.float32))
+            acc += np.asarray(block.resize((w, h), Image.Resampling.BILINEAR))
+        return acc / len(tiles)
+    colour = np.stack([mean(edges.colour[..., k]) for k in range(edges.colour.shape[2])], axis=-1)
+    return EdgeImage.of(mean(edges.gray), colour)
+
+
+def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
+    """The shared subdivision of a group of similar tiles, as a tree with one rectangle per member."""
+    stack = group_stack(edges, tiles)
+    h, w = stack.gray.shape
+    whole = (0, h, 0, w)
+    tree = _split(stack, Node((whole,)), (whole,), wall_stats(stack, [whole]), ground, MAX_STEPS)
+    return _members(tree, h, w, tiles)
+
+
+def _members(node: Node, h: int, w: int, tiles: list[Rect]) -> Node:
+    """Map a subdivision of the ``h x w`` stack proportionally onto every member tile."""
+    r0, r1, c0, c1 = node.rects[0]
+    rects = tuple((t0 + round(r0 * (t1 - t0) / h), t0 + round(r1 * (t1 - t0) / h),
+                   u0 + round(c0 * (u1 - u0) / w), u0 + round(c1 * (u1 - u0) / w)) for t0, t1, u0, u1 in tiles)
+    return Node(rects, node.label, tuple(_members(c, h, w, tiles) for c in node.children))
+
+
+def _touches(rects: tuple[Rect, ...], tiles: tuple[Rect, ...]) -> tuple[bool, bool]:
+    """(touches any side but the bottom, touches the bottom) for the first member."""
+    (r0, r1, c0, c1), (t0, t1, u0, u1) = rects[0], tiles[0]
+    return r0 == t0 or c0 == u0 or c1 == u1, r1 == t1
+
+
+def _element_label(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, ground: bool) -> str | None:
+    sides, bottom = _touches(node.rects, tiles)
+    if sides or (bottom and not ground):
+        return None
+    (r0, r1, c0, c1), (t0, t1, u0, u1) = node.rects[0], tiles[0]
+    if (r1 - r0) * (c1 - c0) < MIN_AREA * (t1 - t0) * (u1 - u0):
+        return None
+    mean = float(np.mean([edges.gray[r0:r1, c0:c1].mean() for r0, r1, c0, c1 in node.rects]))
+    if _wall_like(edges, node.rects[0], mean, wall):
+        return None
+    if bottom:  # a door reaches the ground; wall below an opening is split off first
+        r0, r1, c0, c1 = node.rects[0]
+        band = (r1 - max(TAU_SIZE, (r1 - r0) // 10), r1, c0, c1)
+        if _wall_like(edges, band, float(edges.gray[band[0]:r1, c0:c1].mean()), wall):
+            return None
+        return "door"
+    return "window"
+
+
+def _wall_like(edges: EdgeImage, rect: Rect, mean: float, wall: Wall) -> bool:
+    shared = float(np.minimum(edges.histogram(rect), wall.hist).sum())
+    return abs(mean - wall.mean) < CONTRAST * wall.std and shared > SHARED
+
+
+def _wall_gap(edges: EdgeImage, node: Node, wall: Wall) -> tuple[str, int, int] | None:
+    """A band of wall-coloured columns (else rows) strictly inside an element region: two elements side by side
+    (windows paired in one tile) separated by wall. Returns (axis, start, end) as offsets into the region."""
+    for axis in ("LR", "TB"):
+        length = min((c1 - c0) if axis == "LR" else (r1 - r0) for r0, r1, c0, c1 in node.rects)
+        profile = np.zeros(length)
+        for r0, r1, c0, c1 in node.rects:
+            block = edges.gray[r0:r1, c0:c1]
+            profile += (block.mean(axis=0) if axis == "LR" else block.mean(axis=1))[:length]
+        profile /= len(node.rects)
+        like = np.abs(profile - wall.mean) < CONTRAST * wall.std
+        like[:TAU_SIZE], like[length - TAU_SIZE:] = False, False
+        if not like.any():
+            continue
+        idx = np.flatnonzero(like)
+        breaks = np.flatnonzero(np.diff(idx) > 1)
+        starts, ends = np.r_[0, breaks + 1], np.r_[breaks, idx.size - 1]
+        k = int(np.argmax(ends - starts))
+        if ends[k] - starts[k] + 1 >= max(2, TAU_SIZE // 2):
+            return axis, int(idx[starts[k]]), int(idx[ends[k]]) + 1
+    return None
+
+
+def _separate(edges: EdgeImage, node: Node, wall: Wall, label: str, depth: int = 3) -> Node:
+    """An element, or elements split apart at interior wall bands (:func:`_wall_gap`)."""
+    gap = _wall_gap(edges, node, wall) if depth > 0 else None
+    if gap is None:
+        return Node(node.rects, label)
+    axis, a, b = gap
+    parts = [_apply(axis, {"L" if axis == "LR" else "T": a, "R" if axis == "LR" else "B":
+                           ((r[3] - r[2]) if axis == "LR" else (r[1] - r[0])) - b}, r) for r in node.rects]
+    if any(p is None for p in parts):
+        return Node(node.rects, label)
+    first = Node(tuple(p[0] for p in parts))
+    last = Node(tuple(p[2] for p in parts))
+    return Node(node.rects, None, (_separate(edges, first, wall, label, depth - 1), Node(tuple(p[1] for p in parts),
+                                   "wall"), _separate(edges, last, wall, label, depth - 1)))
+
+
+def _split(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, ground: bool, steps: int) -> Node:
+    label = _element_label(edges, node, tiles, wall, ground) if node.rects != tiles else None
+    if label is not None:
+        return _separate(edges, node, wall, label)
+    kind, pos = choose_split(local_candidates(edges, node.rects[0], wall.thr[0])) if steps > 0 else ("none", {})
+    if kind == "none":
+        return Node(node.rects, "wall")
+    parts = _apply(kind, _offsets(kind, pos, node.rects[0]), node.rects[0])
+    if parts is None:
+        return Node(node.rects, "wall")
+    children = []
+    for rect in parts:
+        r0, r1, c0, c1 = rect
+        if min(r1 - r0, c1 - c0) < TAU_SIZE:
+            children.append(Node((rect,), "wall"))
+        else:
+            children.append(_split(edges, Node((rect,)), tiles, wall, ground, steps - 1))
+    return Node(node.rects, None, tuple(children))

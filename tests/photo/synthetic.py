@@ -1,0 +1,27 @@
+"""Synthetic facade images: a grid of dark windows on a lighter noisy wall, with the true boxes."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def facade(floors: int = 5, cols: int = 6, floor_h: int = 60, tile_w: int = 50, win: tuple[int, int] = (30, 22),
+           off: tuple[int, int] = (14, 14), noise: float = 0.04, seed: int = 0, ground_h: int = 0):
+    """RGB image in 0..1, window boxes ``(x0, y0, x1, y1)`` (pixels, y down) and the door box (None without a
+    ground floor). ``ground_h`` adds an irregular ground floor of that height with a door in its second tile."""
+    rng = np.random.default_rng(seed)
+    H, W = floors * floor_h + ground_h, cols * tile_w
+    wall = 0.7 + 0.05 * rng.standard_normal((H, W))
+    boxes = []
+    for i in range(floors):
+        for j in range(cols):
+            r0, c0 = i * floor_h + off[0], j * tile_w + off[1]
+            wall[r0:r0 + win[0], c0:c0 + win[1]] = 0.25 + 0.03 * rng.standard_normal(win)
+            boxes.append((c0, r0, c0 + win[1], r0 + win[0]))
+    door = None
+    if ground_h:
+        c0 = tile_w + (tile_w - 26) // 2
+        wall[H - ground_h + 20:, c0:c0 + 26] = 0.3 + 0.03 * rng.standard_normal((ground_h - 20, 26))
+        door = (c0, H - ground_h + 20, c0 + 26, H)
+    gray = np.clip(wall + noise * rng.standard_normal((H, W)), 0, 1)
+    tint = np.array([1.0, 0.92, 0.85])
+    return np.clip(gray[..., None] * tint, 0, 1), boxes, door

@@ -1,0 +1,177 @@
+"""``citygen layout from-photo`` (mueller2007): structure, windows, partition, grammar round trip, CLI errors."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from citygen.cli import main
+from citygen.errors import LayoutError
+from citygen.layout import FacadeLayout, check_partition
+from citygen_inverse.extract import extract_grammar
+from citygen_inverse.photo import analyse, layout_from_photo
+from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
+from citygen_inverse.photo_structure import split_lines
+from citygen_inverse.photo_symmetry import detect_symmetry, quantize
+from tests.photo.synthetic import facade
+
+CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
+
+CASES = [
+    dict(),
+    dict(floors=4, cols=8, floor_h=75, tile_w=40, win=(40, 20), off=(20, 10), seed=2),
+    dict(floors=6, cols=3, floor_h=50, tile_w=110, win=(25, 60), off=(10, 25), seed=3, noise=0.08),
+]
+
+
+def close(a, b, tol):
+    return all(abs(u - v) <= tol for u, v in zip(a, b))
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_synthetic_floors_tiles_and_windows(case):
+    image, truth, _ = facade(**case)
+    result = analyse(image)
+    floors = case.get("floors", 5)
+    cols = case.get("cols", 6)
+    assert len(result.floor_lines) - 1 == floors
+    assert len(result.tile_lines) - 1 == cols
+    assert result.floor_period == pytest.approx(case.get("floor_h", 60), abs=2)
+    assert result.tile_period == pytest.approx(case.get("tile_w", 50), abs=2)
+    boxes = sorted(result.boxes("window"), key=lambda b: (b[1], b[0]))
+    assert len(boxes) == len(truth)
+    for got, want in zip(boxes, sorted(truth, key=lambda b: (b[1], b[0]))):
+        assert close(got, want, 3), (got, want)
+    assert matches(boxes, truth) == len(truth)
+
+
+def test_layout_partitions_and_scales():
+    image, truth, _ = facade()
+    by_floor = analyse(image, floor_height=3.0).layout
+    assert check_partition(by_floor) == []
+    assert by_floor.height == pytest.approx(15.0, abs=0.6)  # 5 floors of 3 m (period 60 px)
+    assert by_floor.count("window") == len(truth)
+    by_width = analyse(image, width=18.0).layout
+    assert by_width.width == pytest.approx(18.0)
+    assert check_partition(by_width) == []
+    labels = {t.label for t in by_width.terminals()}
+    assert labels == {"wall", "window"}
+
+
+def test_irregular_ground_floor_is_its_own_floor():
+    image, truth, door = facade(ground_h=80)
+    result = analyse(image)
+    assert len(result.floor_lines) - 1 == 6
+    assert result.floor_lines[-1] - result.floor_lines[-2] == pytest.approx(80, abs=15)
+    assert matches(result.boxes("window"), truth) == len(truth)
+    assert matches(result.boxes("door"), [door]) == 1
+    assert check_partition(result.layout) == []
+
+
+def test_layout_round_trips_through_greedy_extraction():
+    image, _, _ = facade(floors=3, cols=4)
+    layout = analyse(image, width=12.0).layout
+    again = FacadeLayout.loads(layout.dumps())
+    grammar = extract_grammar(again, "greedy")
+    assert grammar.terminals == len(layout.terminals())
+    assert "Window" in grammar.text or "window" in grammar.text
+
+
+def test_symmetry_finds_the_period_and_refuses_noise():
+    image, _, _ = facade()
+    gray = image.mean(axis=2)
+    sym = detect_symmetry(quantize(gray), 20, 150)
+    assert sym.found and sym.period == 60
+    noise = np.random.default_rng(1).random((300, 300))
+    assert not detect_symmetry(quantize(noise), 20, 150).found
+
+
+def test_split_lines_follow_minima_within_the_period():
+    values = np.ones(300)
+    values[[40, 100, 160, 220, 280]] = 0.0
+    values[130] = -0.5  # a deep minimum off the lattice is not taken with 100 and 160
+    lines = split_lines(values, 60, 0, 300, min_end=5)
+    assert list(lines) == [0, 40, 100, 160, 220, 280, 300]
+
+
+def test_no_repetition_is_a_clear_error(tmp_path):
+    noise = (np.random.default_rng(0).random((200, 200)) * 255).astype(np.uint8)
+    path = tmp_path / "noise.png"
+    Image.fromarray(noise).save(path)
+    with pytest.raises(LayoutError, match="no repetition of floors"):
+        layout_from_photo(path)
+
+
+def test_cli_from_photo(tmp_path, capsys):
+    image, truth, _ = facade()
+    path = tmp_path / "facade.png"
+    Image.fromarray((image * 255).astype(np.uint8)).save(path)
+    out = tmp_path / "layout.json"
+    assert main(["layout", "from-photo", str(path), "--width", "18", "-o", str(out)]) == 0
+    layout = FacadeLayout.loads(out.read_text())
+    assert check_partition(layout) == [] and layout.count("window") == len(truth)
+    assert "5 floors x 6 tiles" in capsys.readouterr().err
+    assert main(["layout", "from-photo", str(path), "--crop", "0", "0", "300", "240", "-o", str(out)]) == 0
+    assert json.loads(out.read_text())["meta"]["floors"] == 4
+
+
+@pytest.mark.parametrize("mode", ["I;16", "RGBA", "L"])
+def test_16bit_grayscale_photo(tmp_path, mode):
+    """Regression: ``convert("RGB")`` clipped 16-bit PNGs to white ("no repetition of floors")."""
+    image, truth, _ = facade()
+    gray = image.mean(axis=2)
+    if mode == "I;16":
+        pil = Image.fromarray((gray * 65535).astype(np.uint16))
+    else:
+        pil = Image.fromarray((image * 255).astype(np.uint8)).convert(mode)
+    path = tmp_path / "facade.png"
+    pil.save(path)
+    result = layout_from_photo(path, crop=(0, 0, 300, 300))
+    assert matches(result.boxes("window"), truth) == len(truth)
+
+
+@pytest.mark.parametrize("content", [b"not an image at all", b""])
+def test_cli_refuses_a_non_image(tmp_path, capsys, content):
+    path = tmp_path / "facade.jpg"
+    path.write_bytes(content)
+    assert main(["layout", "from-photo", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and str(path) in err and "cannot read the image" in err
+    assert "Traceback" not in err
+
+
+def test_cli_errors_name_the_file(tmp_path, capsys):
+    assert main(["layout", "from-photo", str(tmp_path / "missing.png")]) == 2
+    assert "missing.png: no such file" in capsys.readouterr().err
+    image, _, _ = facade()
+    path = tmp_path / "facade.png"
+    Image.fromarray((image * 255).astype(np.uint8)).save(path)
+    assert main(["layout", "from-photo", str(path), "--crop", "0", "0", "900", "10"]) == 2
+    assert "not inside the 300x300 image" in capsys.readouterr().err
+    assert main(["layout", "from-photo", str(path), "--width", "-2"]) == 2
+    assert "--width must be positive" in capsys.readouterr().err
+    noise = tmp_path / "noise.png"
+    Image.fromarray((np.random.default_rng(0).random((200, 200)) * 255).astype(np.uint8)).save(noise)
+    assert main(["layout", "from-photo", str(noise)]) == 2
+    err = capsys.readouterr().err
+    assert "noise.png" in err and "no repetition of floors" in err and "--crop" in err
+
+
+@pytest.mark.skipif(not (CMP / "cmp_b0031.jpg").is_file(), reason="CMP photos (shared data) not available")
+def test_real_cmp_photo():
+    jpg = CMP / "cmp_b0031.jpg"
+    with Image.open(jpg) as image:
+        size = image.size
+    boxes = cmp_boxes(jpg.with_suffix(".xml"), size)
+    crop = tuple(round(v) for v in facade_box(boxes))
+    result = layout_from_photo(jpg, crop=crop, floor_height=3.2)
+    assert check_partition(result.layout) == []
+    ref = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes["window"]]
+    rows = count_groups([(b[1], b[3]) for b in ref])
+    assert abs(len(result.floor_lines) - 1 - rows) <= 1
+    found = matches(result.boxes("window"), ref)
+    assert found >= 0.5 * len(ref), (found, len(ref))
+    assert extract_grammar(result.layout, "greedy").terminals == len(result.layout.terminals())
