@@ -11,30 +11,25 @@ import argparse
 import hashlib
 import json
 import random
+import sys
 from pathlib import Path
 
-from citygen_layers.parser import load, parse
+from citygen_layers.parser import load
 from citygen_layers.plugin import clear_solved, generate
 from layers_solve import CASES
 
 from citygen.request import FacadeRequest
 
 ROOT = Path(__file__).resolve().parents[1]
-SIZES = {"A": 0.9, "B": 1.4, "C": 0.5, "D": 1.1, "P": 3.0, "Q": 2.6}
-X_PATTERNS = ["A (B A)^k", "c e c ; c := C", "y d y ; d := D", "A (B A)^k", "A (D A)^j"]
-Y_PATTERNS = ["P Q^n", "g u ; g := C Q", "P Q^n"]
+sys.path.insert(0, str(ROOT))  # the random stacks come from the layer-stack property tests
+from tests.layers.test_properties import FLAGS, X_PATTERNS, Y_PATTERNS  # noqa: E402
+from tests.layers.test_properties import random_stack as stack_of  # noqa: E402
 
 
 def random_stack(rng: random.Random):
+    """A random stack of the kind ``tests/layers/test_properties.py`` draws."""
     layers = [(rng.randrange(len(X_PATTERNS)), rng.randrange(len(Y_PATTERNS))) for _ in range(rng.randint(1, 4))]
-    flags = {s: rng.choice(["", " attached", " unoccludable"]) for s in "BCD"}
-    lines = [f"symbol {s} size={v}{' opaque' if s in 'APQ' else ''}{flags.get(s, '')}" for s, v in SIZES.items()]
-    lines += ["counter k", "counter j", "counter n in 0..", "budget expansions=3000 time=120"]
-    lines += [f"pattern X{i} = {p}" for i, p in enumerate(X_PATTERNS)]
-    lines += [f"pattern Y{i} = {p}" for i, p in enumerate(Y_PATTERNS)]
-    lines.append("layer base x=X0 y=Y0")
-    lines += [f"layer l{i} x=X{x} y=Y{y}" for i, (x, y) in enumerate(layers)]
-    return parse("\n".join(lines) + "\n", "random.layers")
+    return stack_of(layers, {s: rng.choice(FLAGS) for s in "BCD"})
 
 
 def requests():

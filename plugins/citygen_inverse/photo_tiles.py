@@ -120,24 +120,19 @@ def local_candidates(edges: EdgeImage, rect: Rect, thr: float) -> list[Candidate
     """§3.1: the first relevant edge from each side of ``rect`` and its edge-responding segment."""
     r0, r1, c0, c1 = rect
     out = []
-    if r1 - r0 >= 2 * TAU_SIZE + 1:
-        eh = edges.eh[r0:r1, c0:c1]
-        rows = _strength(eh, axis=1)
-        inner = slice(TAU_SIZE - 1, r1 - r0 - TAU_SIZE)
-        for side, rev in (("T", False), ("B", True)):
-            pos = _first_edge(rows[inner], thr, r0 + TAU_SIZE - 1, rev)
-            if pos is not None and r0 + TAU_SIZE <= pos <= r1 - TAU_SIZE:
-                line = np.maximum(eh[pos - r0 - 1], eh[min(pos - r0, r1 - r0 - 1)]) > thr
-                out.append(_candidate(side, pos, line, c0))
-    if c1 - c0 >= 2 * TAU_SIZE + 1:
-        ev = edges.ev[r0:r1, c0:c1]
-        cols = _strength(ev, axis=0)
-        inner = slice(TAU_SIZE - 1, c1 - c0 - TAU_SIZE)
-        for side, rev in (("L", False), ("R", True)):
-            pos = _first_edge(cols[inner], thr, c0 + TAU_SIZE - 1, rev)
-            if pos is not None and c0 + TAU_SIZE <= pos <= c1 - TAU_SIZE:
-                line = np.maximum(ev[:, pos - c0 - 1], ev[:, min(pos - c0, c1 - c0 - 1)]) > thr
-                out.append(_candidate(side, pos, line, r0))
+    # horizontal split lines (sides T, B) from eh along the rows, vertical ones (L, R) from ev along the columns;
+    # the vertical case is the horizontal one on the transposed block
+    for sides, edge, (a0, a1), start in (("TB", edges.eh[r0:r1, c0:c1], (r0, r1), c0),
+                                         ("LR", edges.ev[r0:r1, c0:c1].T, (c0, c1), r0)):
+        if a1 - a0 < 2 * TAU_SIZE + 1:
+            continue
+        profile = _strength(edge, axis=1)
+        inner = slice(TAU_SIZE - 1, a1 - a0 - TAU_SIZE)
+        for side, rev in zip(sides, (False, True)):
+            pos = _first_edge(profile[inner], thr, a0 + TAU_SIZE - 1, rev)
+            if pos is not None and a0 + TAU_SIZE <= pos <= a1 - TAU_SIZE:
+                line = np.maximum(edge[pos - a0 - 1], edge[min(pos - a0, a1 - a0 - 1)]) > thr
+                out.append(_candidate(side, pos, line, start))
     # the first edge from both sides can be the same edge (a door reaching the tile bottom): one candidate
     seen: set[tuple[bool, int]] = set()
     unique = []

@@ -21,11 +21,12 @@ X_PATTERNS = ["A (B A)^k", "c e c ; c := C", "y d y ; d := D", "A (B A)^k", "A (
 Y_PATTERNS = ["P Q^n", "g u ; g := C Q", "P Q^n"]
 
 
-@st.composite
-def stacks(draw):
-    layers = draw(st.lists(st.tuples(st.integers(0, len(X_PATTERNS) - 1), st.integers(0, len(Y_PATTERNS) - 1)),
-                           min_size=1, max_size=4))
-    flags = {s: draw(st.sampled_from(["", " attached", " unoccludable"])) for s in "BCD"}
+FLAGS = ("", " attached", " unoccludable")
+
+
+def random_stack(layers: list[tuple[int, int]], flags: dict[str, str]):
+    """A stack over the base layer: ``layers`` are (x pattern, y pattern) indices, ``flags`` the flag of B, C, D
+    (also used by ``benchmarks/layers_identity.py``)."""
     lines = [f"symbol {s} size={v}{' opaque' if s in 'APQ' else ''}{flags.get(s, '')}" for s, v in SIZES.items()]
     # the wall-clock limit is only a safety net: with time to spare the expansion budget decides (deterministic)
     lines += ["counter k", "counter j", "counter n in 0..", "budget expansions=3000 time=120"]
@@ -34,6 +35,13 @@ def stacks(draw):
     lines.append("layer base x=X0 y=Y0")
     lines += [f"layer l{i} x=X{x} y=Y{y}" for i, (x, y) in enumerate(layers)]
     return parse("\n".join(lines) + "\n", "random.layers")
+
+
+@st.composite
+def stacks(draw):
+    layers = draw(st.lists(st.tuples(st.integers(0, len(X_PATTERNS) - 1), st.integers(0, len(Y_PATTERNS) - 1)),
+                           min_size=1, max_size=4))
+    return random_stack(layers, {s: draw(st.sampled_from(FLAGS)) for s in "BCD"})
 
 
 @settings(max_examples=15, deadline=None)
