@@ -218,13 +218,16 @@ def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
 
 
 def _cluster(values: np.ndarray, bounds: tuple[float, float], eps: float) -> tuple[np.ndarray, np.ndarray]:
-    """Snap coordinates to clusters of width ``eps``: (cluster positions, cluster index of every value)."""
+    """Snap coordinates to clusters (sorted values, a new cluster after every gap above ``eps``): (cluster
+    positions, cluster index of every value). Every value gets the cluster it was sorted into (looking up
+    ``value + eps`` instead put a value exactly ``eps`` below the next cluster into that one)."""
     allv = np.concatenate([values.ravel(), bounds])
-    order = np.sort(allv)
-    starts = np.r_[True, np.diff(order) > eps]
-    centres = order[starts]
-    index = np.searchsorted(centres, values.ravel() + eps, side="right") - 1
-    return centres, index.reshape(values.shape)
+    order = np.argsort(allv, kind="stable")
+    ordered = allv[order]
+    starts = np.r_[True, np.diff(ordered) > eps]
+    index = np.empty(allv.size, dtype=np.int64)
+    index[order] = np.cumsum(starts) - 1
+    return ordered[starts], index[: values.size].reshape(values.shape)
 
 
 def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, x1: np.ndarray, y1: np.ndarray,

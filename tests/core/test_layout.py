@@ -79,3 +79,18 @@ def test_stamped_regions_equal_constructed_ones():
         expected = Region(1.5, 2.0, 0.9, 1.4, template["symbol"], **kw)
         assert region == expected and vars(region) == vars(expected) and region.to_json() == expected.to_json()
     assert Region.stamped(hidden, 0.0, 0.0, 1.0, 1.0).x == 0.0 and hidden["x"] == 0.0   # the template is not altered
+
+
+def test_regression_partition_check_with_a_region_exactly_eps_wide():
+    """A 1e-6 m corner strip at the right edge of a 1 m face: the strip's left edge lies exactly the tolerance below
+    the face's edge; the checker put it into the edge's cluster (by looking up ``x + eps``) while the region next
+    to it kept its own, and reported the strip's 1e-6 m2 as uncovered (found by hypothesis on house.grammar)."""
+    left = 0.12044295167792646
+    regions = (Region(0.0, 0.0, left, 1.0, "Corner", "wall"),
+               Region(left, 0.0, 0.8795560483220735, 1.0, "Wall", "wall"),
+               Region(0.999999, 0.0, 1.0000000000287557e-06, 1.0, "Corner", "wall"))
+    layout = FacadeLayout(1.0, 1.0, Region(0.0, 0.0, 1.0, 1.0, "Facade", children=regions))
+    assert check_partition(layout) == []
+    for kept in (regions[:2], (regions[0], regions[2])):  # without the strip, or without the wall: a hole
+        hole = FacadeLayout(1.0, 1.0, Region(0.0, 0.0, 1.0, 1.0, "Facade", children=kept))
+        assert any("uncovered" in p for p in check_partition(hole))

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from citygen.layout import check_partition
@@ -40,6 +40,8 @@ def requests(draw) -> FacadeRequest:
 @pytest.mark.parametrize("name", sorted(GRAMMARS))
 @settings(max_examples=40, deadline=None)
 @given(request=requests())
+@example(request=FacadeRequest(  # regression: the partition check lost a 1e-6 m corner strip (house)
+    1.0, 1.0, (0.0, 1.0), False, (0.12044295167792646, 1e-06), FaceContext("b1", 0, 1), (0,)))
 def test_partition_and_request_constraints_hold_for_any_face(name, request):
     layout = derive(GRAMMARS[name], request)
     assert check_partition(layout) == []
