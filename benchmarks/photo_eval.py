@@ -4,7 +4,8 @@
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
-detected windows with annotated ones (one-to-one, box IoU >= 0.5). Timings are CPU seconds (process_time).
+detected windows with annotated ones (one-to-one, box IoU >= 0.5). The summary is given for the development
+half (cmp_b0001-0020, the only photos to tune on), the held-out half (cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
 """
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ from citygen.errors import CitygenError
 from citygen_inverse.photo import analyse, load_photo
 from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
 
+#: Development photos (cmp_b0001-0020): tune only on these; cmp_b0021-0040 are held out.
+DEV = range(1, 21)
 DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
@@ -67,17 +70,32 @@ def main(argv: list[str] | None = None) -> int:
         rec = r["tp"] / r["ref"] if r["ref"] else 0.0
         print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['cols']:4d} "
               f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['cpu']:6.2f}")
+    for name, part in split(rows):
+        summary(name, part)
+    return 0
+
+
+def split(rows: list[dict]) -> list[tuple[str, list[dict]]]:
+    """The development photos (``DEV``, the only ones parameters may be tuned on), the held-out rest, and all."""
+    dev = [r for r in rows if int(r["photo"][5:]) in DEV]
+    held = [r for r in rows if int(r["photo"][5:]) not in DEV]
+    parts = [(f"development (cmp_b{DEV.start:04d}-{DEV.stop - 1:04d})", dev), ("held-out", held), ("total", rows)]
+    return [(name, part) for name, part in parts if part]
+
+
+def summary(name: str, rows: list[dict]) -> None:
     ok = [r for r in rows if "error" not in r]
     tp, pred, ref = (sum(r[k] for r in ok) for k in ("tp", "pred", "ref"))
     ref_all = sum(r["ref"] for r in rows)
     cpu = sorted(r["cpu"] for r in rows)
-    print(f"\nphotos {len(rows)}, analysed {len(ok)}, refused (no repetition) {len(rows) - len(ok)}")
+    print(f"\n== {name}: photos {len(rows)}, analysed {len(ok)}, refused (no repetition) {len(rows) - len(ok)}")
     print(f"floors == window rows: {sum(r['floors'] == r['rows'] for r in ok)}/{len(ok)}, within 1: "
           f"{sum(abs(r['floors'] - r['rows']) <= 1 for r in ok)}/{len(ok)}")
     print(f"tiles == window columns: {sum(r['tiles'] == r['cols'] for r in ok)}/{len(ok)}, within 1: "
           f"{sum(abs(r['tiles'] - r['cols']) <= 1 for r in ok)}/{len(ok)}")
     print(f"windows (IoU >= 0.5): precision {tp / max(pred, 1):.3f} ({tp}/{pred}), recall {tp / max(ref, 1):.3f} "
-          f"({tp}/{ref}) on analysed photos, {tp / max(ref_all, 1):.3f} over all {ref_all} annotated windows")
+          f"({tp}/{ref}) on analysed photos, {tp / max(ref_all, 1):.3f} over all {ref_all} annotated windows; "
+          f"photos without a matched window {sum(r['tp'] == 0 for r in ok)}")
     print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
     return 0
 
