@@ -34,6 +34,13 @@ LEVELS = 4
 MIN_AREA = 0.1
 #: Split steps per tile (ground-based images need 2-5, §3).
 MAX_STEPS = 6
+#: Element extent from the group's mean tile: a column (row) belongs to an element when at least this fraction
+#: of its pixels differs from the wall.
+FILL = 0.5
+#: ... and a pixel differs from the wall when its intensity is off by this many wall standard deviations or its
+#: colour is this rare in the wall zone's histogram.
+PIXEL_CONTRAST = 1.5
+RARE = 0.01
 
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
 
@@ -237,12 +244,68 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
 
 
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
-    """The shared subdivision of a group of similar tiles, as a tree with one rectangle per member."""
+    """The shared subdivision of a group of similar tiles, as a tree with one rectangle per member: §3.1's edge
+    splits on the group's mean tile; when they find no window above the ground floor, :func:`profile_split`."""
     stack = group_stack(edges, tiles)
     h, w = stack.gray.shape
     whole = (0, h, 0, w)
-    tree = _split(stack, Node((whole,)), (whole,), wall_stats(stack, [whole]), ground, MAX_STEPS)
+    wall = wall_stats(stack, [whole])
+    tree = _split(stack, Node((whole,)), (whole,), wall, ground, MAX_STEPS)
+    if not ground and not _has(tree, "window"):
+        tree = profile_split(stack, wall) or tree
     return _members(tree, h, w, tiles)
+
+
+def _has(node: Node, label: str) -> bool:
+    return node.label == label or any(_has(c, label) for c in node.children)
+
+
+def non_wall(edges: EdgeImage, wall: Wall) -> np.ndarray:
+    """Pixels that differ from the wall: intensity off by ``PIXEL_CONTRAST`` wall standard deviations, or a
+    colour that is rare (``RARE``) in the wall zone."""
+    q = np.clip((edges.colour * LEVELS).astype(int), 0, LEVELS - 1)
+    codes = (q * LEVELS ** np.arange(q.shape[2])).sum(axis=2)
+    return (np.abs(edges.gray - wall.mean) >= PIXEL_CONTRAST * wall.std) | (wall.hist[codes] < RARE)
+
+
+def _runs(flags: np.ndarray, close: int, least: int) -> list[tuple[int, int]]:
+    """Half-open runs of ``flags`` (gaps of up to ``close`` closed) at least ``least`` long."""
+    idx = np.flatnonzero(flags)
+    if idx.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) > close + 1)
+    starts, ends = idx[np.r_[0, breaks + 1]], idx[np.r_[breaks, idx.size - 1]] + 1
+    return [(int(a), int(b)) for a, b in zip(starts, ends) if b - a >= least]
+
+
+def profile_split(edges: EdgeImage, wall: Wall) -> Node | None:
+    """Windows of a mean tile by projection profiles of its non-wall pixels (our fallback where §3.1's first-edge
+    splits end in regions touching the tile boundary, e.g. at a railing spanning the tile): the element columns are the runs of columns
+    at least ``FILL`` non-wall, its rows the longest such run of rows within them. Each element is cut out by a
+    vertical split (wall | element strip | wall) and a horizontal one in its strip. None when there is none."""
+    mask = non_wall(edges, wall)
+    h, w = mask.shape
+    cols = _runs(mask.mean(axis=0) >= FILL, TAU_SIZE, max(TAU_SIZE, int(MIN_AREA * w)))
+    boxes = []
+    for c0, c1 in cols:
+        rows = _runs(mask[:, c0:c1].mean(axis=1) >= FILL, TAU_SIZE, TAU_SIZE)
+        if rows:
+            r0, r1 = max(rows, key=lambda r: r[1] - r[0])
+            if (r1 - r0) * (c1 - c0) >= MIN_AREA * h * w and (r0, r1) != (0, h):
+                boxes.append((r0, r1, c0, c1))
+    if not boxes:
+        return None
+    strips, x = [], 0
+    for r0, r1, c0, c1 in boxes:
+        if c0 > x:
+            strips.append(Node(((0, h, x, c0),), "wall"))
+        cuts = [0, *(v for v in (r0, r1) if 0 < v < h), h]
+        parts = [Node(((a, b, c0, c1),), "window" if (a, b) == (r0, r1) else "wall") for a, b in zip(cuts, cuts[1:])]
+        strips.append(Node(((0, h, c0, c1),), None, tuple(parts)))
+        x = c1
+    if x < w:
+        strips.append(Node(((0, h, x, w),), "wall"))
+    return Node(((0, h, 0, w),), None, tuple(strips))
 
 
 def _members(node: Node, h: int, w: int, tiles: list[Rect]) -> Node:
