@@ -40,6 +40,8 @@ FILL = 0.5
 #: ... and a pixel differs from the wall when its intensity is off by this many wall standard deviations or its
 #: colour is this rare in the wall zone's histogram.
 PIXEL_CONTRAST = 1.5
+#: The profile windows replace §3.1's when those cover less than this fraction of their area.
+COVER = 0.5
 RARE = 0.01
 
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
@@ -251,13 +253,18 @@ def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -
     whole = (0, h, 0, w)
     wall = wall_stats(stack, [whole])
     tree = _split(stack, Node((whole,)), (whole,), wall, ground, MAX_STEPS)
-    if not ground and not _has(tree, "window"):
-        tree = profile_split(stack, wall) or tree
+    profile = None if ground else profile_split(stack, wall)
+    if profile is not None and _area(tree, "window") < COVER * _area(profile, "window"):
+        tree = profile
     return _members(tree, h, w, tiles)
 
 
-def _has(node: Node, label: str) -> bool:
-    return node.label == label or any(_has(c, label) for c in node.children)
+def _area(node: Node, label: str) -> int:
+    """Area of the ``label`` leaves of a single-member tree."""
+    if node.children:
+        return sum(_area(c, label) for c in node.children)
+    r0, r1, c0, c1 = node.rects[0]
+    return (r1 - r0) * (c1 - c0) if node.label == label else 0
 
 
 def non_wall(edges: EdgeImage, wall: Wall) -> np.ndarray:

@@ -175,3 +175,51 @@ def test_real_cmp_photo():
     found = matches(result.boxes("window"), ref)
     assert found >= 0.5 * len(ref), (found, len(ref))
     assert extract_grammar(result.layout, "greedy").terminals == len(result.layout.terminals())
+
+
+def _leaves(node):
+    return [node] if not node.children else [leaf for c in node.children for leaf in _leaves(c)]
+
+
+def _railing_group(rows: tuple[int, int], shade: float):
+    """Two 60 x 50 tiles, each with a dark 30 x 22 window and a railing of ``shade`` across the whole tile."""
+    from citygen_inverse.photo_tiles import EdgeImage, subdivide_group
+    gray = 0.7 + 0.02 * np.random.default_rng(4).standard_normal((120, 50))
+    for top in (0, 60):
+        gray[top + 14:top + 44, 14:36] = 0.25
+        gray[top + rows[0]:top + rows[1], :] = shade
+    tree = subdivide_group(EdgeImage.of(gray), [(0, 60, 0, 50), (60, 120, 0, 50)])
+    return [n.rects for n in _leaves(tree) if n.label == "window"]
+
+
+def test_window_behind_a_railing_spanning_the_tile():
+    """Regression: a railing across the whole tile over a window's lower two thirds left §3.1's first-edge splits
+    with only regions touching the tile boundary, so no window was found; the profile fallback finds it whole."""
+    assert _railing_group((24, 44), 0.3) == [((14, 44, 14, 36), (74, 104, 14, 36))]
+
+
+def test_window_half_hidden_by_a_railing_is_found_whole():
+    """Regression: with a lighter railing §3.1 labels only the glass above it (14 of 30 rows); the profile window
+    replaces §3.1's when those cover less than ``COVER`` of its area."""
+    assert _railing_group((28, 44), 0.55) == [((14, 44, 14, 36), (74, 104, 14, 36))]
+
+
+def test_profile_split_finds_two_windows_and_partitions_the_tile():
+    """Two windows side by side in one mean tile: two element strips between wall strips, a partition."""
+    from citygen_inverse.photo_tiles import EdgeImage, profile_split, wall_stats
+    rng = np.random.default_rng(1)
+    gray = 0.7 + 0.02 * rng.standard_normal((60, 80))
+    gray[12:45, 10:30] = 0.2
+    gray[12:45, 48:70] = 0.2
+    edges = EdgeImage.of(gray)
+    leaves = _leaves(profile_split(edges, wall_stats(edges, [(0, 60, 0, 80)])))
+    windows = sorted(n.rects[0] for n in leaves if n.label == "window")
+    assert windows == [(12, 45, 10, 30), (12, 45, 48, 70)]
+    assert sum((r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in (n.rects[0] for n in leaves)) == 60 * 80
+
+
+def test_profile_split_none_on_plain_wall():
+    from citygen_inverse.photo_tiles import EdgeImage, profile_split, wall_stats
+    gray = 0.7 + 0.02 * np.random.default_rng(2).standard_normal((50, 50))
+    edges = EdgeImage.of(gray)
+    assert profile_split(edges, wall_stats(edges, [(0, 50, 0, 50)])) is None
