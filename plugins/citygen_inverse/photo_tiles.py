@@ -8,7 +8,9 @@ step finds the first relevant edge moving inward from each side (§3.1: average 
 crosses the edge-responding segment of a perpendicular candidate and keeps the longest (two opposite ones of at
 least 80 % length give a dual split). A region that no longer touches the tile boundary and whose intensity
 differs from the wall is an element: a window (a door when it stands on the ground floor's bottom edge); it is
-not split by edges further, only separated at interior wall bands (two windows in one tile).
+not split by edges further, only separated at interior wall bands (two windows in one tile). Where §3.1 labels
+(almost) no window above the ground floor -- a railing spanning the tile stops every first edge -- windows come
+from the non-wall projection profiles of the mean tile (``profile_split``, our extension).
 """
 from __future__ import annotations
 
