@@ -124,3 +124,12 @@ def test_regression_low_floors_are_dressed_with_luby_restarts(models, width, hei
     assert result.backtracks < 6000
     assert check_request(result.layout, req) == []
     assert validate(result.layout, models["cmp_b0035"]) == []
+
+
+def test_restart_schedules(models):
+    """The paper's fixed 1000-backtrack restarts stay available; an unknown schedule is refused by name."""
+    from citygen_relayout.api import relayout
+    fixed = relayout(models["townhouse"], 12.0, 9.6, seed=1, restarts="fixed")
+    assert fixed.success and validate(fixed.layout, models["townhouse"]) == []
+    with pytest.raises(ValueError, match="restarts must be one of"):
+        relayout(models["townhouse"], 12.0, 9.6, restarts="geometric")
