@@ -16,7 +16,8 @@ from pathlib import Path
 
 from citygen.errors import CitygenError
 from citygen_inverse.photo import analyse, load_photo
-from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
+from citygen_inverse.cmp import count_groups
+from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
 
 #: Development photos (cmp_b0001-0020): tune only on these; cmp_b0021-0040 are held out.
 DEV = range(1, 21)

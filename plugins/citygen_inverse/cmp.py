@@ -224,7 +224,7 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     rects: list[tuple[int, int, int, int, int]] = []
     pinwheels: list[tuple[int, int, int, int]] = []
     _decompose(grid, 0, grid.shape[0], 0, grid.shape[1], rects, pinwheels)
-    rows = _count_rows([(b.y0, b.y1) for b in parts if b.name in _ROW_LABELS])
+    rows = count_groups([(b.y0, b.y1) for b in parts if b.name in _ROW_LABELS])
     scale = width / fw if width else floor_height * max(rows, 1) / fh
     # 0.1 mm grid, rounded jointly so that sizes and pitches the QP made equal stay exactly equal
     X = np.round(integer_lines(xl * scale, xr.equal, UNIT) * UNIT, 4)
@@ -250,14 +250,14 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     return layout
 
 
-def _count_rows(intervals: list[tuple[float, float]]) -> int:
-    """Number of groups of vertically overlapping intervals (rows of openings)."""
-    rows, end = 0, -np.inf
-    for y0, y1 in sorted(intervals):
-        if y0 >= end:
-            rows += 1
-            end = y1
+def count_groups(intervals: list[tuple[float, float]]) -> int:
+    """Number of groups of overlapping intervals (rows or columns of openings)."""
+    groups, end = 0, -np.inf
+    for lo, hi in sorted(intervals):
+        if lo >= end:
+            groups += 1
+            end = hi
         else:
-            end = max(end, y1)
-    return rows
+            end = max(end, hi)
+    return groups
 

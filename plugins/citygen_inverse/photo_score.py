@@ -30,18 +30,6 @@ def facade_box(boxes: dict[str, list[Box]]) -> Box:
     return float(a[:, 0].min()), float(a[:, 1].min()), float(a[:, 2].max()), float(a[:, 3].max())
 
 
-def count_groups(intervals: list[tuple[float, float]]) -> int:
-    """Number of groups of overlapping intervals (rows or columns of windows)."""
-    groups, end = 0, -np.inf
-    for lo, hi in sorted(intervals):
-        if lo >= end:
-            groups += 1
-            end = hi
-        else:
-            end = max(end, hi)
-    return groups
-
-
 def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Pairwise intersection over union of boxes ``(n, 4)`` and ``(m, 4)``."""
     ix = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]), 0, None)

@@ -94,8 +94,8 @@ class EdgeImage:
         return hist / max(hist.sum(), 1.0)
 
 
-def wall_zone(rect: Rect) -> tuple[np.ndarray, ...]:
-    """Index masks of the zone along the tile boundary (where §2 puts wall)."""
+def wall_zone(rect: Rect) -> np.ndarray:
+    """Mask of the zone along the tile boundary (where §2 puts wall)."""
     r0, r1, c0, c1 = rect
     band = max(2, int(0.08 * min(r1 - r0, c1 - c0)))
     mask = np.zeros((r1 - r0, c1 - c0), dtype=bool)

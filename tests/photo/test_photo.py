@@ -13,7 +13,8 @@ from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, check_partition
 from citygen_inverse.extract import extract_grammar
 from citygen_inverse.photo import analyse, layout_from_photo
-from citygen_inverse.photo_score import cmp_boxes, count_groups, facade_box, matches
+from citygen_inverse.cmp import count_groups
+from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
 from citygen_inverse.photo_structure import split_lines
 from citygen_inverse.photo_symmetry import detect_symmetry, quantize
 from tests.photo.synthetic import facade
