@@ -134,32 +134,43 @@ def regularize_axis(lo: np.ndarray, hi: np.ndarray, across: np.ndarray, names: l
 
 def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int, int]]], min_gap: float
            ) -> tuple[np.ndarray, tuple[tuple[int, int, int, int], ...], str]:
-    """Least movement of ``lines`` (ends fixed) under the accepted equal-length constraints, closest first."""
+    """Least movement of ``lines`` (ends fixed) under the accepted equal-length constraints, closest first.
+
+    A constraint that the current solution already satisfies is implied (or holds by itself): it is recorded
+    without entering the QP, so the QP's rows stay linearly independent (a redundant row makes the KKT system
+    singular, and its regularised solution moves lines needlessly). A constraint is rejected when it would bring
+    two neighbouring lines closer than ``min_gap`` (or, for lines the snapping left closer, than half their
+    distance)."""
     if not candidates:
         return lines, (), "nothing to regularise"
     n = lines.size
+    gap = np.minimum(0.5 * np.diff(lines), min_gap)
+    tol = 1e-7 * max(lines[-1], 1.0)
     P, q = np.eye(n), -lines
     rows = [np.eye(n)[0], np.eye(n)[-1]]
     rhs = [lines[0], lines[-1]]
     best, rejected, seen, equal = lines, 0, set(), []
     for _, (a0, a1, b0, b1) in sorted(candidates):
         row = np.zeros(n)
-        row[[a1, b0]] += 1
-        row[[a0, b1]] -= 1
+        np.add.at(row, [a1, b0], 1.0)  # (a1 == b0 for consecutive pitches: coefficient 2)
+        np.add.at(row, [a0, b1], -1.0)
         key = row.tobytes()
         if key in seen:
             continue
         seen.add(key)
+        if abs(row @ best) <= tol:
+            equal.append((a0, a1, b0, b1))
+            continue
         result = solve_eq_qp(P, q, np.vstack([*rows, row]), np.array([*rhs, 0.0]))
-        if result.success and np.all(np.diff(result.x) >= min_gap) and np.allclose(
-                np.vstack([*rows, row]) @ result.x, [*rhs, 0.0], atol=1e-7 * max(lines[-1], 1.0)):
+        if result.success and np.all(np.diff(result.x) >= gap) and np.allclose(
+                np.vstack([*rows, row]) @ result.x, [*rhs, 0.0], atol=tol):
             rows.append(row)
             rhs.append(0.0)
             equal.append((a0, a1, b0, b1))
             best = result.x
         else:
             rejected += 1
-    return best, tuple(equal), f"{len(rows) - 2} equal-size/spacing constraints, {rejected} rejected"
+    return best, tuple(equal), f"{len(equal)} equal-size/spacing constraints, {rejected} rejected"
 
 
 def integer_lines(lines: np.ndarray, equal: tuple[tuple[int, int, int, int], ...], unit: float) -> np.ndarray:

@@ -120,3 +120,52 @@ def test_integer_lines_keep_every_equality_exact():
         for a0, a1, b0, b1 in equal:
             assert out[a1] - out[a0] == out[b1] - out[b0]
         assert np.max(np.abs(out - lines / 0.01)) <= 8
+
+
+def test_regression_lines_snapped_close_do_not_block_regularisation():
+    """cmp_b0001: two snapped lines 2.2 px apart (closer than the 2.5 px minimum gap) made the QP reject every
+    later y constraint, so its eleven window rows kept eleven heights."""
+    from citygen_inverse.regularize import _solve
+    lines = np.array([0.0, 10.0, 10.1, 20.0, 30.0, 40.0, 51.0, 60.0])
+    out, equal, status = _solve(lines, [(1.0, (3, 4, 5, 6))], min_gap=0.5)
+    assert equal == ((3, 4, 5, 6),) and status.endswith("0 rejected")
+    assert out[4] - out[3] == pytest.approx(out[6] - out[5])
+    assert np.all(np.diff(out) > 0.05)  # the close pair keeps at least half its distance
+
+
+def test_regression_consecutive_pitches_share_a_line():
+    """Equal consecutive pitches (s1 - s0 = s2 - s1) need the coefficient 2 on s1; numpy's ``row[[s1, s1]] += 1``
+    added it once, the constraint forced s1 = s0 + s2 and was always rejected, so no column of windows got an
+    equal pitch from its neighbours."""
+    from citygen_inverse.regularize import _solve
+    lines = np.array([0.0, 10.0, 20.5, 30.0, 40.0])
+    out, equal, status = _solve(lines, [(0.5, (0, 1, 1, 2))], min_gap=0.5)
+    assert equal == ((0, 1, 1, 2),) and status.endswith("0 rejected")
+    assert out[1] - out[0] == pytest.approx(out[2] - out[1])
+
+
+def test_implied_constraints_are_recorded_without_entering_the_qp():
+    """Equal sizes a = b and c = d with b = c imply a = d: the third is recorded as holding, not solved again (a
+    redundant QP row makes the KKT system singular)."""
+    from citygen_inverse.regularize import _solve
+    lines = np.array([0.0, 10.0, 11.0, 21.3, 22.0, 32.4, 40.0])
+    candidates = [(0.3, (0, 1, 2, 3)), (0.1, (2, 3, 4, 5)), (0.4, (0, 1, 4, 5))]
+    out, equal, status = _solve(lines, candidates, min_gap=0.5)
+    assert len(equal) == 3 and status == "3 equal-size/spacing constraints, 0 rejected"
+    assert out[1] - out[0] == pytest.approx(out[3] - out[2]) == pytest.approx(out[5] - out[4])
+
+
+@pytest.mark.parametrize("name, pitches", [("cmp_b0002", 1), ("cmp_b0012", 2)])
+def test_window_columns_get_one_floor_pitch(name, pitches):
+    """wu2014 §3.3 with the fixes above: in each column of windows the floor pitches (window start to start) that
+    differ by annotation noise become exactly equal (cmp_b0002 had 2.75 and 2.30 m, cmp_b0012 four pitches; its ground floor is taller)."""
+    from collections import defaultdict
+    columns = defaultdict(list)
+    for t in import_cmp(DATA / f"{name}.xml").terminals():
+        if t.label == "window":
+            columns[round(t.x, 3)].append(t.y)
+    tall = [sorted(ys) for ys in columns.values() if len(ys) >= 4]
+    assert tall
+    for ys in tall:
+        steps = np.diff(ys)
+        assert len({round(p, 4) for p in steps if p < 1.5 * steps.min()}) <= pitches  # (not a skipped floor)
