@@ -128,24 +128,29 @@ def regularize_axis(lo: np.ndarray, hi: np.ndarray, across: np.ndarray, names: l
             members = sorted({(lo_i[k], hi_i[k]) for k in sel[row == r]})
             pitches += [(a[0], b[0]) for a, b in zip(members, members[1:]) if b[0] >= a[1]]
         candidates += _candidates(lines, pitches, size, rel)
-    lines, equal, status = _solve(lines, candidates, 0.25 * snap)
-    return AxisLines(lines, lo_i, hi_i, status, equal)
+    lines, equal, status = _solve(lines, candidates, 0.25 * snap, merge=snap)
+    keep = np.concatenate([[True], np.diff(lines) > 1e-7 * max(extent, 1.0)])  # lines the QP made coincide
+    new_id = np.cumsum(keep) - 1
+    equal = tuple(tuple(int(new_id[k]) for k in e) for e in equal)
+    return AxisLines(lines[keep], new_id[lo_i], new_id[hi_i], status, equal)
 
 
-def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int, int]]], min_gap: float
-           ) -> tuple[np.ndarray, tuple[tuple[int, int, int, int], ...], str]:
+def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int, int]]], min_gap: float,
+           merge: float = 0.0) -> tuple[np.ndarray, tuple[tuple[int, int, int, int], ...], str]:
     """Least movement of ``lines`` (ends fixed) under the accepted equal-length constraints, closest first.
 
-    A constraint that the current solution already satisfies is implied (or holds by itself): it is recorded
-    without entering the QP, so the QP's rows stay linearly independent (a redundant row makes the KKT system
-    singular, and its regularised solution moves lines needlessly). A constraint is rejected when it would bring
+    A constraint implied by accepted ones is a redundant row, which the QP's dual regularisation tolerates. A
+    constraint is rejected when it would bring
     two neighbouring lines closer than ``min_gap`` (or, for lines the snapping left closer, than half their
-    distance)."""
+    distance), unless it makes them coincide and they were less than ``merge`` apart: then the equal lengths say
+    that the two edges are one line, which the snapping split only because its clusters span at most ``snap``
+    (the caller merges coincident lines)."""
     if not candidates:
         return lines, (), "nothing to regularise"
     n = lines.size
     gap = np.minimum(0.5 * np.diff(lines), min_gap)
     tol = 1e-7 * max(lines[-1], 1.0)
+    mergeable = np.diff(lines) < merge
     P, q = np.eye(n), -lines
     rows = [np.eye(n)[0], np.eye(n)[-1]]
     rhs = [lines[0], lines[-1]]
@@ -158,11 +163,8 @@ def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int,
         if key in seen:
             continue
         seen.add(key)
-        if abs(row @ best) <= tol:
-            equal.append((a0, a1, b0, b1))
-            continue
         result = solve_eq_qp(P, q, np.vstack([*rows, row]), np.array([*rhs, 0.0]))
-        if result.success and np.all(np.diff(result.x) >= gap) and np.allclose(
+        if result.success and np.all(_apart(np.diff(result.x), gap, tol, mergeable)) and np.allclose(
                 np.vstack([*rows, row]) @ result.x, [*rhs, 0.0], atol=tol):
             rows.append(row)
             rhs.append(0.0)
@@ -171,6 +173,11 @@ def _solve(lines: np.ndarray, candidates: list[tuple[float, tuple[int, int, int,
         else:
             rejected += 1
     return best, tuple(equal), f"{len(equal)} equal-size/spacing constraints, {rejected} rejected"
+
+
+def _apart(diff: np.ndarray, gap: np.ndarray, tol: float, mergeable: np.ndarray) -> np.ndarray:
+    """Per neighbouring pair of lines: at least ``gap`` apart, or coinciding where that is allowed."""
+    return (diff >= gap) | ((np.abs(diff) <= tol) & mergeable)
 
 
 def integer_lines(lines: np.ndarray, equal: tuple[tuple[int, int, int, int], ...], unit: float) -> np.ndarray:

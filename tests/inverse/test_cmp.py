@@ -144,15 +144,48 @@ def test_regression_consecutive_pitches_share_a_line():
     assert out[1] - out[0] == pytest.approx(out[2] - out[1])
 
 
-def test_implied_constraints_are_recorded_without_entering_the_qp():
-    """Equal sizes a = b and c = d with b = c imply a = d: the third is recorded as holding, not solved again (a
-    redundant QP row makes the KKT system singular)."""
+def test_implied_constraints_are_accepted():
+    """Equal sizes a = b and c = d with b = c imply a = d: a redundant row in the QP, accepted, not rejected."""
     from citygen_inverse.regularize import _solve
     lines = np.array([0.0, 10.0, 11.0, 21.3, 22.0, 32.4, 40.0])
     candidates = [(0.3, (0, 1, 2, 3)), (0.1, (2, 3, 4, 5)), (0.4, (0, 1, 4, 5))]
     out, equal, status = _solve(lines, candidates, min_gap=0.5)
     assert len(equal) == 3 and status == "3 equal-size/spacing constraints, 0 rejected"
     assert out[1] - out[0] == pytest.approx(out[3] - out[2]) == pytest.approx(out[5] - out[4])
+
+
+def test_regularisation_keeps_every_recorded_equality(monkeypatch):
+    """Every equality the regulariser reports holds for its final lines. A constraint that the current solution
+    satisfies by chance must still enter the QP, or a later constraint breaks it (tried once as a shortcut: the
+    rounding then put cmp_b0067's lines out of order)."""
+    from citygen_inverse.regularize import _solve
+    lines = np.array([0.0, 10.0, 20.0, 30.0, 41.0, 50.0])
+    out, equal, _ = _solve(lines, [(0.0, (0, 1, 1, 2)), (1.0, (1, 2, 3, 4))], min_gap=0.5)
+    assert len(equal) == 2
+    for a0, a1, b0, b1 in equal:
+        assert out[a1] - out[a0] == pytest.approx(out[b1] - out[b0])
+    import citygen_inverse.cmp as cmp_module
+    regularize, seen = cmp_module.regularize_axis, []
+    monkeypatch.setattr(cmp_module, "regularize_axis", lambda *a, **k: seen.append(regularize(*a, **k)) or seen[-1])
+    for name in ("cmp_b0002", "cmp_b0005", "cmp_b0009", "cmp_b0012"):
+        import_cmp(DATA / f"{name}.xml")
+    assert sum(len(r.equal) for r in seen) > 40
+    for r in seen:
+        assert np.all(np.diff(r.lines) > 0)
+        for a0, a1, b0, b1 in r.equal:
+            assert r.lines[a1] - r.lines[a0] == pytest.approx(r.lines[b1] - r.lines[b0], abs=1e-6)
+
+
+def test_edges_that_equal_sizes_make_one_line_are_merged():
+    """Lines closer than the snap distance that the equal-size constraints force together become one line (the
+    snapping split them only because a cluster spans at most ``snap``); farther lines keep the rejection."""
+    from citygen_inverse.regularize import _solve
+    lines = np.array([0.0, 10.0, 20.0, 20.3, 30.2, 40.0])
+    candidates = [(0.2, (0, 1, 2, 4)), (0.3, (0, 1, 3, 4))]  # together: line 2 == line 3
+    out, equal, status = _solve(lines, candidates, min_gap=0.25, merge=1.0)
+    assert len(equal) == 2 and out[3] - out[2] == pytest.approx(0.0, abs=1e-9)
+    _, equal, status = _solve(lines, candidates, min_gap=0.25, merge=0.2)
+    assert len(equal) == 1 and status.endswith("1 rejected")
 
 
 @pytest.mark.parametrize("name, pitches", [("cmp_b0002", 1), ("cmp_b0012", 2)])
