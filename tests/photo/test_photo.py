@@ -16,7 +16,7 @@ from citygen_inverse.photo import analyse, layout_from_photo
 from citygen_inverse.cmp import count_groups
 from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
 from citygen_inverse.photo_structure import split_lines
-from citygen_inverse.photo_symmetry import detect_symmetry, quantize
+from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
 from tests.photo.synthetic import facade
 
 CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
@@ -88,6 +88,47 @@ def test_symmetry_finds_the_period_and_refuses_noise():
     assert sym.found and sym.period == 60
     noise = np.random.default_rng(1).random((300, 300))
     assert not detect_symmetry(quantize(noise), 20, 150).found
+
+
+def test_irreducible_facade_stacks_the_floors():
+    """§2.3: the collage keeps every original row exactly once; the first stacking shifts by one floor, every
+    stacking by whole floors, and the six floors collapse into one stack of corresponding rows."""
+    image, _, _ = facade(floors=6)
+    sym = detect_symmetry(quantize(image.mean(axis=2)), 20, 180)
+    stack = irreducible(sym)
+    assert sorted(y for line in stack.lines for y in line) == list(range(360))
+    assert stack.period == 60 and all(h % 60 == 0 for _, h, _ in stack.steps)
+    assert len(stack.lines) == 60
+    assert all(len(line) == 6 and len({y % 60 for y in line}) == 1 for line in stack.lines)
+    assert validated_period(sym, stack) == 60
+
+
+def test_floor_period_spanning_several_floors_is_recovered():
+    """Regression (cmp_b0009): when every fourth floor has a cornice and a balcony slab the line-averaged MI
+    prefers four floors (240 px) and the facade came out as 2 floors with 20-35 of 40 windows; the irreducible
+    facade's first stacking is one floor apart, so the period is one floor."""
+    image, truth, _ = facade(floors=8, cols=5, accent=4)
+    gray = image.mean(axis=2)
+    sym = detect_symmetry(quantize(gray), 34, 240)
+    assert sym.period == 240
+    assert validated_period(sym, irreducible(sym)) == 60
+    result = analyse(image)
+    assert result.floor_period == pytest.approx(60, abs=2)
+    assert len(result.floor_lines) - 1 == 8
+    assert matches(result.boxes("window"), truth) == len(truth)
+
+
+@pytest.mark.parametrize("stripe", [12, 15, 20])
+def test_striped_floor_does_not_shorten_the_floor_period(stripe):
+    """A floor-high band of horizontal stripes (a roller shutter) stacks best at a fraction of the floor (24-30 px
+    of 60) but repeats only there: the period stays one floor and the windows of the other floors are found."""
+    image, truth, _ = facade()
+    rows = np.arange(120, 180)
+    image[120:180] = np.where((rows // (stripe // 2)) % 2 == 0, 0.3, 0.8)[:, None, None]
+    result = analyse(image)
+    assert result.floor_period == pytest.approx(60, abs=2)
+    outside = [b for b in truth if not 120 <= b[1] < 180]
+    assert matches(result.boxes("window"), outside) == len(outside) == 24
 
 
 def test_split_lines_follow_minima_within_the_period():
