@@ -26,7 +26,7 @@ from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
 from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
-from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
+from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
 
 #: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
 WORK = 400
@@ -152,10 +152,10 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     groups = cluster_tiles(work, floors, tiles, regular)
     edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
-    for g, members in enumerate(groups):
-        rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
-        ground = all(i == floors.size - 2 for i, _ in members)
-        node = subdivide_group(edges, rects, ground)
+    rects = [[(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
+             for members in groups]
+    grounds = [all(i == floors.size - 2 for i, _ in members) for members in groups]
+    for g, (members, node) in enumerate(zip(groups, subdivide_groups(edges, rects, grounds))):
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P

@@ -246,6 +246,37 @@ def test_window_half_hidden_by_a_railing_is_found_whole():
     assert _railing_group((28, 44), 0.55) == [((14, 44, 14, 36), (74, 104, 14, 36))]
 
 
+def test_split_distances_are_synchronised_across_groups():
+    """§3.2 global synchronisation: two groups whose windows differ by 1-2 px (imperfect symmetry: tops 14 / 16 px
+    below the tile top, left sides 14 / 13 px from the tile side) are split separately, then every split distance
+    takes its facade-wide cluster's median, so both groups' windows get the same offsets in their tiles."""
+    from citygen_inverse.photo_tiles import EdgeImage, stack_tree, subdivide_groups
+    gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
+    for top in (0, 60):
+        gray[top + 14:top + 44, 14:36] = 0.25
+        gray[top + 16:top + 44, 63:86] = 0.25
+    edges = EdgeImage.of(gray)
+    groups = [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+    alone = [[n.rects[0] for n in _leaves(stack_tree(edges, g, False)) if n.label == "window"] for g in groups]
+    assert alone == [[(14, 44, 14, 36)], [(16, 44, 13, 36)]]
+    trees = subdivide_groups(edges, groups, [False, False])
+    synced = [[n.rects for n in _leaves(t) if n.label == "window"] for t in trees]
+    assert synced == [[((16, 44, 14, 36), (76, 104, 14, 36))], [((16, 44, 64, 86), (76, 104, 64, 86))]]
+
+
+def test_synchronised_split_that_no_longer_fits_is_mapped():
+    """Regression: a split moved by synchronisation can leave a child region too small for the child's own split
+    (distance 30 in a region now 20 high); ``_resync`` crashed on it (seen with ``SYNC`` = 0.2 on the CMP photos).
+    It maps that subtree proportionally, and the leaves still tile the region."""
+    from citygen_inverse.photo_tiles import Node, _resync
+    lower = Node(((20, 60, 0, 50),), None, (Node(((20, 30, 0, 50),), "wall"), Node(((30, 60, 0, 50),), "window")),
+                 (("B", 30),))
+    tree = Node(((0, 60, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), lower), (("T", 20),))
+    again = _resync(tree, (0, 60, 0, 50), {(True, 20): 40, (True, 30): 30})
+    rects = [n.rects[0] for n in _leaves(again)]
+    assert rects == [(0, 40, 0, 50), (40, 45, 0, 50), (45, 60, 0, 50)]
+
+
 def test_profile_split_finds_two_windows_and_partitions_the_tile():
     """Two windows side by side in one mean tile: two element strips between wall strips, a partition."""
     from citygen_inverse.photo_tiles import EdgeImage, profile_split, wall_stats
