@@ -45,6 +45,11 @@ PIXEL_CONTRAST = 1.5
 #: The profile windows replace §3.1's when those cover less than this fraction of their area.
 COVER = 0.5
 RARE = 0.01
+#: A door is at least this many times as high as wide (CMP doors: 1.2-2.3, a few double doors 0.8-0.9) ...
+DOOR_ASPECT = 1.2
+#: ... and stands in a group of at most this many ground-floor tiles (a door repeated in every tile of a longer
+#: row is a row of shop fronts or an arcade).
+MAX_DOORS = 2
 #: §3.2 global synchronisation: split distances of one orientation within this fraction (plus a pixel) of a
 #: cluster's smallest are one size.
 SYNC = 0.1
@@ -255,7 +260,8 @@ def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[b
     """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
     edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
     whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members."""
-    stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
+    stacks = [plausible_doors(stack_tree(edges, tiles, ground), len(tiles))
+              for tiles, ground in zip(groups, grounds)]
     sizes = synchronised(stacks)
     return [_members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles)
             for tree, tiles in zip(stacks, groups)]
@@ -278,6 +284,18 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
     if profile is not None and _area(tree, "window") < COVER * _area(profile, "window"):
         tree = profile
     return tree
+
+
+def plausible_doors(node: Node, members: int) -> Node:
+    """Door leaves of a group's tree that are no plausible door -- lower than ``DOOR_ASPECT`` times their width,
+    or in a group of more than ``MAX_DOORS`` tiles -- become wall (shop fronts are not modelled; as windows they
+    cost window precision on the CMP development photos, where they are annotated as shops)."""
+    if node.children:
+        return Node(node.rects, node.label, tuple(plausible_doors(c, members) for c in node.children), node.cuts)
+    r0, r1, c0, c1 = node.rects[0]
+    if node.label == "door" and (members > MAX_DOORS or r1 - r0 < DOOR_ASPECT * (c1 - c0)):
+        return Node(node.rects, "wall")
+    return node
 
 
 def synchronised(trees: list[Node]) -> dict[tuple[bool, int], int]:

@@ -72,6 +72,33 @@ def test_irregular_ground_floor_is_its_own_floor():
     assert check_partition(result.layout) == []
 
 
+@pytest.mark.parametrize("shop", [(36, 30), (40, 35)])
+def test_shop_fronts_are_not_doors(shop):
+    """Regression: every contrasting ground-floor region reaching the ground was a door, so a ground floor with
+    five low, wide shop fronts (40 x 35 px) beside one door gave 6 doors. Shop fronts are lower than
+    ``DOOR_ASPECT`` times their width and repeat in a group of more than ``MAX_DOORS`` tiles: only the door is."""
+    image, truth, door = facade(ground_h=80)
+    wide, high = shop
+    for j in (0, 2, 3, 4, 5):
+        c0 = j * 50 + (50 - wide) // 2
+        image[-high:, c0:c0 + wide] = 0.3 * np.array([1.0, 0.92, 0.85])
+    result = analyse(image)
+    assert len(result.boxes("door")) == 1 and matches(result.boxes("door"), [door]) == 1
+    assert matches(result.boxes("window"), truth) == len(truth)
+    assert check_partition(result.layout) == []
+
+
+def test_plausible_doors_limits():
+    """A door stays a door in a group of up to ``MAX_DOORS`` tiles when at least ``DOOR_ASPECT`` times as high as
+    wide; otherwise it becomes wall."""
+    from citygen_inverse.photo_tiles import Node, plausible_doors
+    tree = Node(((0, 80, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), Node(((20, 80, 0, 50),), "door")))
+    assert [c.label for c in plausible_doors(tree, 2).children] == ["wall", "door"]  # 60 x 50: 1.2
+    assert [c.label for c in plausible_doors(tree, 3).children] == ["wall", "wall"]
+    wide = Node(((0, 80, 0, 51),), None, (Node(((0, 20, 0, 51),), "wall"), Node(((20, 80, 0, 51),), "door")))
+    assert [c.label for c in plausible_doors(wide, 1).children] == ["wall", "wall"]
+
+
 def test_layout_round_trips_through_greedy_extraction():
     image, _, _ = facade(floors=3, cols=4)
     layout = analyse(image, width=12.0).layout
