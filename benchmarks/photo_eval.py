@@ -4,7 +4,7 @@
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
-detected windows with annotated ones (one-to-one, box IoU >= 0.5). The summary is given for the development
+detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5). The summary is given for the development
 half (cmp_b0001-0020, the only photos to tune on), the held-out half (cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
 """
 from __future__ import annotations
@@ -32,8 +32,9 @@ def evaluate(jpg: Path) -> dict:
     fx0, fy0, fx1, fy1 = facade_box(boxes)
     crop = (round(fx0), round(fy0), round(fx1), round(fy1))
     ref = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("window", [])]
+    doors = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("door", [])]
     row = {"photo": jpg.stem, "rows": count_groups([(b[1], b[3]) for b in ref]),
-           "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref)}
+           "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref), "door_ref": len(doors)}
     start = time.process_time()
     try:
         result = analyse(load_photo(jpg, crop), str(jpg), meta={"source": jpg.name})
@@ -41,8 +42,9 @@ def evaluate(jpg: Path) -> dict:
         return {**row, "error": exc.message, "cpu": time.process_time() - start}
     pred = result.boxes("window")
     tp = matches(pred, ref)
+    door_pred = result.boxes("door")
     return {**row, "floors": len(result.floor_lines) - 1, "tiles": len(result.tile_lines) - 1, "pred": len(pred),
-            "tp": tp, "cpu": time.process_time() - start, "size": (crop[2] - crop[0], crop[3] - crop[1])}
+            "tp": tp, "door_pred": len(door_pred), "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start, "size": (crop[2] - crop[0], crop[3] - crop[1])}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -58,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: no cmp_b*.jpg photos in {data}", file=sys.stderr)
         return 2
     print(f"{'photo':10} {'crop':>9} {'rows':>4} {'floors':>6} {'cols':>4} {'tiles':>5} {'ref':>4} {'pred':>4} "
-          f"{'tp':>4} {'prec':>5} {'rec':>5} {'cpu s':>6}")
+          f"{'tp':>4} {'prec':>5} {'rec':>5} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
     rows = []
     for jpg in photos:
         r = evaluate(jpg)
@@ -70,7 +72,8 @@ def main(argv: list[str] | None = None) -> int:
         prec = r["tp"] / r["pred"] if r["pred"] else 0.0
         rec = r["tp"] / r["ref"] if r["ref"] else 0.0
         print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['cols']:4d} "
-              f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['cpu']:6.2f}")
+              f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['door_ref']:5d} "
+              f"{r['door_pred']:4d} {r['door_tp']:3d} {r['cpu']:6.2f}")
     for name, part in split(rows):
         summary(name, part)
     return 0
@@ -97,6 +100,9 @@ def summary(name: str, rows: list[dict]) -> None:
     print(f"windows (IoU >= 0.5): precision {tp / max(pred, 1):.3f} ({tp}/{pred}), recall {tp / max(ref, 1):.3f} "
           f"({tp}/{ref}) on analysed photos, {tp / max(ref_all, 1):.3f} over all {ref_all} annotated windows; "
           f"photos without a matched window {sum(r['tp'] == 0 for r in ok)}")
+    dtp, dpred, dref = (sum(r[k] for r in ok) for k in ("door_tp", "door_pred", "door_ref"))
+    print(f"doors (IoU >= 0.5): precision {dtp / max(dpred, 1):.3f} ({dtp}/{dpred}), recall {dtp / max(dref, 1):.3f} "
+          f"({dtp}/{dref}); photos with more detected than annotated doors {sum(r['door_pred'] > r['door_ref'] for r in ok)}")
     print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
     return 0
 

@@ -4,7 +4,8 @@ Pipeline (documented in ``docs/photo.md``): the photo (optionally cropped to the
 resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) and converted to grayscale
 (colour is kept for labelling);
 
-1. §2.2-2.3 (``photo_symmetry``): mutual information between vertically adjacent bands gives the floor period;
+1. §2.2-2.3 (``photo_symmetry``): mutual information between vertically adjacent bands gives the floor period,
+   checked against the irreducible facade's first stacking (a period spanning several floors is reduced to one);
    the same on the regular floors' band, transposed, gives the tile period;
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
@@ -24,8 +25,8 @@ from scipy.ndimage import gaussian_filter
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
-from citygen_inverse.photo_symmetry import detect_symmetry, quantize
-from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_group
+from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
+from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
 
 #: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
 WORK = 400
@@ -133,7 +134,7 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
         raise LayoutError(f"no repetition of floors detected (MI prominence {vsym.prominence:.3f})", where=source,
                           hint="crop the photo to the facade (--crop x0 y0 x1 y1); it must be rectified and show "
                                "at least two similar floors")
-    P = int(round(vsym.period * g / f))
+    P = int(round(validated_period(vsym, irreducible(vsym)) * g / f))
     hor, ver = edge_functions(work)
     Ver = interest(ver.sum(axis=1), hor.sum(axis=1), max(SIGMA * P, 1.0))
     floors = split_lines(Ver, P, 0, H, min_end=max(int(END_FLOOR * P), TAU_SIZE))
@@ -142,7 +143,7 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     band = (floors[:-1][regular].min(), floors[1:][regular].max()) if regular.any() else (0, H)
     lo, hi = int(band[0] * f / g), max(int(np.ceil(band[1] * f / g)), int(band[0] * f / g) + 1)
     hsym = detect_symmetry(quantize(small[lo:hi]).T, int(TILE_RANGE[0] * w), int(TILE_RANGE[1] * w))
-    Q = int(round(hsym.period * g / f)) if hsym.found else 0
+    Q = int(round(validated_period(hsym, irreducible(hsym)) * g / f)) if hsym.found else 0
     if Q:
         Hor = interest(hor[band[0]:band[1]].sum(axis=0), ver[band[0]:band[1]].sum(axis=0), max(SIGMA * Q, 1.0))
         tiles = split_lines(Hor, Q, 0, W, min_end=max(int(END_TILE * Q), TAU_SIZE))
@@ -151,10 +152,10 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     groups = cluster_tiles(work, floors, tiles, regular)
     edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
-    for g, members in enumerate(groups):
-        rects = [(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
-        ground = all(i == floors.size - 2 for i, _ in members)
-        node = subdivide_group(edges, rects, ground)
+    rects = [[(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
+             for members in groups]
+    grounds = [all(i == floors.size - 2 for i, _ in members) for members in groups]
+    for g, (members, node) in enumerate(zip(groups, subdivide_groups(edges, rects, grounds))):
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P

@@ -1,10 +1,11 @@
-"""Translational symmetry of a facade image by mutual information (mueller2007 §2.1-§2.3).
+"""Translational symmetry of a facade image by mutual information and the irreducible facade (mueller2007 §2.1-§2.3).
 
 ``S(y, h) = MI(I(R_{y,h}), I(R_{y-h,h}))`` (Eq. 2) compares the band of rows ``[y, y+h)`` with the band right
 above it (image rows, y down). Intensities are quantised to ``bins`` equal-population levels; for one ``h`` the
 joint histograms of all ``y`` come from one ``bincount`` of the row-pair codes and a cumulative sum, so the
 exhaustive search over ``y`` and ``h`` costs O(rows x columns x heights). The horizontal direction is the same
-computation on the transposed image.
+computation on the transposed image. The irreducible facade (:func:`irreducible`) stacks the symmetric bands
+along one axis as §2.3 describes; it validates the period of the line-averaged scores (:func:`validated_period`).
 """
 from __future__ import annotations
 
@@ -17,19 +18,30 @@ BINS = 8
 #: A repetition is detected when the period's line-averaged MI rises this much (nats) over the trough between
 #: half the period and the period.
 MIN_PROMINENCE = 0.01
+#: §2.3: stacking stops when no line's ``S_max`` exceeds this fraction of the best score ``tau_max``.
+STOP = 0.75
+#: A period ``k`` times the irreducible facade's first stacking shift (k = 2..4) within this fraction is ``k``
+#: floors (tiles) taken as one.
+MULTIPLE = 0.1
+#: ... provided the shift's line-averaged rise is at least this fraction of the period's.
+SUPPORT = 0.55
 
 
 @dataclass(frozen=True)
 class Symmetry:
     """Result of the symmetry search along one axis (pixels of the analysed image).
 
-    ``s_max[y]`` and ``h_max[y]`` are Eq. 2's best score and period per line (0 where no period fits);
-    ``period`` is the repetition the lines agree on and ``prominence`` how far its line-averaged score rises over the trough at shorter shifts (0 = no repetition)."""
+    ``s_max[y]`` and ``h_max[y]`` are Eq. 2's best score and period per line over the shifts where ``S(y, .)``
+    peaks (0 where no period fits);
+    ``period`` is the repetition the lines agree on and ``prominence`` how far its line-averaged score rises over
+    the trough at shorter shifts (0 = no repetition); ``rises[h]`` is that rise for every shift ``h`` searched
+    (-inf elsewhere)."""
 
     s_max: np.ndarray
     h_max: np.ndarray
     period: int
     prominence: float
+    rises: np.ndarray
 
     @property
     def found(self) -> bool:
@@ -76,12 +88,17 @@ def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmet
     rows = q.shape[0]
     hi = min(hi, rows // 2)
     if hi < max(lo, 2):
-        return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, 0.0)
+        return Symmetry(np.zeros(rows + 1), np.zeros(rows + 1, dtype=int), 0, 0.0, np.full(1, -np.inf))
     lo = max(lo, 2)
     heights = np.arange(max(lo // 2, 1), hi + 1)
     scores = symmetry_scores(q, heights, bins)
     valid = np.isfinite(scores)
-    filled = np.where(valid & (heights >= lo)[:, None], scores, -np.inf)
+    # a line's period is a peak of S(y, .): the range's lower bound cuts the slope that vertical pilasters give
+    # every small shift (the paper's 3-5.5 m range has no such bound; ours is in fractions of the photo)
+    both = np.where(valid, scores, -np.inf)
+    peak = np.zeros_like(valid)
+    peak[1:-1] = (both[1:-1] >= both[:-2]) & (both[1:-1] >= both[2:])
+    filled = np.where(peak & valid & (heights >= lo)[:, None], scores, -np.inf)
     best = filled.argmax(axis=0)
     fits = np.isfinite(filled).any(axis=0)
     s_max = np.where(fits, filled.max(axis=0), 0.0)
@@ -94,7 +111,8 @@ def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmet
                            for i, h in enumerate(heights)])
     period = _fundamental(prominence, heights, int(heights[np.argmax(prominence)]))
     rise = float(prominence[period - heights[0]])
-    return Symmetry(s_max, h_max, period, rise)
+    rises = np.concatenate([np.full(heights[0], -np.inf), prominence])
+    return Symmetry(s_max, h_max, period, rise, rises)
 
 
 def _fundamental(profile: np.ndarray, heights: np.ndarray, period: int) -> int:
@@ -106,3 +124,58 @@ def _fundamental(profile: np.ndarray, heights: np.ndarray, period: int) -> int:
         if h >= heights[0] and profile[h - heights[0]] >= 0.85 * base:
             return h
     return period
+
+
+@dataclass(frozen=True)
+class Stacking:
+    """The irreducible facade along one axis (§2.3): ``lines[k]`` are the original lines (rows or columns)
+    stacked at line ``k`` of the collage, ``steps`` the ``(y, h, S_max)`` of each stacking in order (``y`` an
+    original line)."""
+
+    lines: tuple[tuple[int, ...], ...]
+    steps: tuple[tuple[int, int, float], ...]
+
+    @property
+    def period(self) -> int:
+        """The shift of the first (most similar) stacking, 0 when nothing was stacked."""
+        return self.steps[0][1] if self.steps else 0
+
+
+def irreducible(sym: Symmetry, stop: float = STOP) -> Stacking:
+    """§2.3: starting from the image, repeatedly take the line ``y = argmax S_max(y)`` and shift the band
+    ``R(y - h_max(y), h_max(y))`` over ``R(y, h_max(y))`` (its lines join the stacks below; the collage shrinks by
+    ``h``); a stacked line keeps the minimum ``S_max`` (and its ``h_max``) of the two. Stops when no line whose
+    bands fit in the collage exceeds ``stop * tau_max``."""
+    n = sym.s_max.size - 1
+    lines = [(y,) for y in range(n)]
+    score, shift = list(sym.s_max[:n]), list(sym.h_max[:n])
+    floor = stop * max(score, default=0.0)
+    steps = []
+    while True:
+        fits = [k for k in range(len(lines)) if shift[k] > 0 and shift[k] <= k and k + shift[k] <= len(lines)
+                and score[k] > floor]
+        if not fits:
+            return Stacking(tuple(lines), tuple(steps))
+        k = max(fits, key=lambda j: score[j])
+        h = int(shift[k])
+        steps.append((lines[k][0], h, float(score[k])))
+        for j in range(k, k + h):
+            lines[j] = lines[j] + lines[j - h]
+            if score[j - h] < score[j]:
+                score[j], shift[j] = score[j - h], shift[j - h]
+        del lines[k - h:k], score[k - h:k], shift[k - h:k]
+
+
+def validated_period(sym: Symmetry, stack: Stacking) -> int:
+    """The repetition's period checked against the irreducible facade: a prominence period ``k`` times (k = 2..4,
+    within ``MULTIPLE``) the first stacking's shift spans ``k`` floors (tiles) and is replaced by that shift
+    (a facade whose floors differ in detail repeats best over several of them on average, while its most similar
+    pair of adjacent bands is one floor apart) -- provided the shift repeats across the facade too: its
+    line-averaged rise is at least ``SUPPORT`` times the period's (the stripes of a roller shutter or blind stack
+    best at a fraction of the floor but repeat only where they are)."""
+    h = stack.period
+    if 0 < h < sym.rises.size and sym.rises[h] >= SUPPORT * sym.prominence:
+        for k in (2, 3, 4):
+            if abs(sym.period - k * h) <= MULTIPLE * sym.period:
+                return h
+    return sym.period

@@ -45,6 +45,14 @@ PIXEL_CONTRAST = 1.5
 #: The profile windows replace §3.1's when those cover less than this fraction of their area.
 COVER = 0.5
 RARE = 0.01
+#: A door is at least this many times as high as wide (CMP doors: 1.2-2.3, a few double doors 0.8-0.9) ...
+DOOR_ASPECT = 1.2
+#: ... and stands in a group of at most this many ground-floor tiles (a door repeated in every tile of a longer
+#: row is a row of shop fronts or an arcade).
+MAX_DOORS = 2
+#: §3.2 global synchronisation: split distances of one orientation within this fraction (plus a pixel) of a
+#: cluster's smallest are one size.
+SYNC = 0.1
 
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
 
@@ -56,6 +64,7 @@ class Node:
     rects: tuple[Rect, ...]
     label: str | None = None
     children: tuple[Node, ...] = ()
+    cuts: tuple[tuple[str, int], ...] = ()  # §3.1 split of this region: (side, distance of its line from the side)
 
 
 @dataclass(frozen=True)
@@ -247,9 +256,25 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
     return EdgeImage.of(mean(edges.gray), colour)
 
 
+def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool]) -> list[Node]:
+    """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
+    edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
+    whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members."""
+    stacks = [plausible_doors(stack_tree(edges, tiles, ground), len(tiles))
+              for tiles, ground in zip(groups, grounds)]
+    sizes = synchronised(stacks)
+    return [_members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles)
+            for tree, tiles in zip(stacks, groups)]
+
+
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
-    """The shared subdivision of a group of similar tiles, as a tree with one rectangle per member: §3.1's edge
-    splits on the group's mean tile; when they find no window above the ground floor, :func:`profile_split`."""
+    """:func:`subdivide_groups` for one group."""
+    return subdivide_groups(edges, [tiles], [ground])[0]
+
+
+def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
+    """The subdivision of a group's mean tile ``(0, h, 0, w)``: §3.1's edge splits; when they find no window above
+    the ground floor, :func:`profile_split`."""
     stack = group_stack(edges, tiles)
     h, w = stack.gray.shape
     whole = (0, h, 0, w)
@@ -258,7 +283,63 @@ def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -
     profile = None if ground else profile_split(stack, wall)
     if profile is not None and _area(tree, "window") < COVER * _area(profile, "window"):
         tree = profile
-    return _members(tree, h, w, tiles)
+    return tree
+
+
+def plausible_doors(node: Node, members: int) -> Node:
+    """Door leaves of a group's tree that are no plausible door -- lower than ``DOOR_ASPECT`` times their width,
+    or in a group of more than ``MAX_DOORS`` tiles -- become wall (shop fronts are not modelled; as windows they
+    cost window precision on the CMP development photos, where they are annotated as shops)."""
+    if node.children:
+        return Node(node.rects, node.label, tuple(plausible_doors(c, members) for c in node.children), node.cuts)
+    r0, r1, c0, c1 = node.rects[0]
+    if node.label == "door" and (members > MAX_DOORS or r1 - r0 < DOOR_ASPECT * (c1 - c0)):
+        return Node(node.rects, "wall")
+    return node
+
+
+def synchronised(trees: list[Node]) -> dict[tuple[bool, int], int]:
+    """§3.2: "there are only a limited set of element sizes on each facade" -- the distances of all split lines
+    from the side they were found from, over all groups, clustered per orientation (sorted; a value more than
+    ``SYNC`` plus a pixel above its cluster's smallest starts a new cluster). Maps (horizontal line, distance) to
+    its cluster's median."""
+    values: dict[bool, list[int]] = {True: [], False: []}
+
+    def collect(node: Node) -> None:
+        for side, d in node.cuts:
+            values[side in "TB"].append(d)
+        for c in node.children:
+            collect(c)
+    for tree in trees:
+        collect(tree)
+    sizes = {}
+    for horizontal, found in values.items():
+        clusters: list[list[int]] = []
+        for d in sorted(found):
+            if clusters and d <= clusters[-1][0] * (1 + SYNC) + 1:
+                clusters[-1].append(d)
+            else:
+                clusters.append([d])
+        sizes.update({(horizontal, d): int(round(float(np.median(c)))) for c in clusters for d in c})
+    return sizes
+
+
+def _resync(node: Node, rect: Rect, sizes: dict[tuple[bool, int], int]) -> Node:
+    """The subdivision rebuilt in ``rect`` with the synchronised split distances (a split that no longer fits
+    keeps its own); regions split otherwise (wall bands between elements, profile windows), and splits whose own
+    distances no longer fit the region either, are mapped proportionally."""
+    if not node.children:
+        return Node((rect,), node.label)
+    kind = "TB" if node.cuts and node.cuts[0][0] in "TB" else "LR"
+    parts = None
+    for off in ({s: sizes[(s in "TB", d)] for s, d in node.cuts}, dict(node.cuts)) if node.cuts else ():
+        parts = _apply(kind, off, rect)
+        if parts is not None and len(parts) == len(node.children):
+            break
+        parts = None
+    if parts is None:
+        return _members(node, node.rects[0], [rect])
+    return Node((rect,), node.label, tuple(_resync(c, p, sizes) for c, p in zip(node.children, parts)), node.cuts)
 
 
 def _area(node: Node, label: str) -> int:
@@ -317,12 +398,15 @@ def profile_split(edges: EdgeImage, wall: Wall) -> Node | None:
     return Node(((0, h, 0, w),), None, tuple(strips))
 
 
-def _members(node: Node, h: int, w: int, tiles: list[Rect]) -> Node:
-    """Map a subdivision of the ``h x w`` stack proportionally onto every member tile."""
+def _members(node: Node, source: Rect, tiles: list[Rect]) -> Node:
+    """Map a subdivision of the rectangle ``source`` proportionally onto every rectangle of ``tiles``."""
+    s0, s1, z0, z1 = source
+    h, w = s1 - s0, z1 - z0
     r0, r1, c0, c1 = node.rects[0]
-    rects = tuple((t0 + round(r0 * (t1 - t0) / h), t0 + round(r1 * (t1 - t0) / h),
-                   u0 + round(c0 * (u1 - u0) / w), u0 + round(c1 * (u1 - u0) / w)) for t0, t1, u0, u1 in tiles)
-    return Node(rects, node.label, tuple(_members(c, h, w, tiles) for c in node.children))
+    rects = tuple((t0 + round((r0 - s0) * (t1 - t0) / h), t0 + round((r1 - s0) * (t1 - t0) / h),
+                   u0 + round((c0 - z0) * (u1 - u0) / w), u0 + round((c1 - z0) * (u1 - u0) / w))
+                  for t0, t1, u0, u1 in tiles)
+    return Node(rects, node.label, tuple(_members(c, source, tiles) for c in node.children), node.cuts)
 
 
 def _touches(rects: tuple[Rect, ...], tiles: tuple[Rect, ...]) -> tuple[bool, bool]:
@@ -401,7 +485,8 @@ def _split(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, gr
     kind, pos = choose_split(local_candidates(edges, node.rects[0], wall.thr[0])) if steps > 0 else ("none", {})
     if kind == "none":
         return Node(node.rects, "wall")
-    parts = _apply(kind, _offsets(kind, pos, node.rects[0]), node.rects[0])
+    off = _offsets(kind, pos, node.rects[0])
+    parts = _apply(kind, off, node.rects[0])
     if parts is None:
         return Node(node.rects, "wall")
     children = []
@@ -411,4 +496,4 @@ def _split(edges: EdgeImage, node: Node, tiles: tuple[Rect, ...], wall: Wall, gr
             children.append(Node((rect,), "wall"))
         else:
             children.append(_split(edges, Node((rect,)), tiles, wall, ground, steps - 1))
-    return Node(node.rects, None, tuple(children))
+    return Node(node.rects, None, tuple(children), tuple(sorted(off.items())))

@@ -16,7 +16,7 @@ from citygen_inverse.photo import analyse, layout_from_photo
 from citygen_inverse.cmp import count_groups
 from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
 from citygen_inverse.photo_structure import split_lines
-from citygen_inverse.photo_symmetry import detect_symmetry, quantize
+from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
 from tests.photo.synthetic import facade
 
 CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
@@ -72,6 +72,33 @@ def test_irregular_ground_floor_is_its_own_floor():
     assert check_partition(result.layout) == []
 
 
+@pytest.mark.parametrize("shop", [(36, 30), (40, 35)])
+def test_shop_fronts_are_not_doors(shop):
+    """Regression: every contrasting ground-floor region reaching the ground was a door, so a ground floor with
+    five low, wide shop fronts (40 x 35 px) beside one door gave 6 doors. Shop fronts are lower than
+    ``DOOR_ASPECT`` times their width and repeat in a group of more than ``MAX_DOORS`` tiles: only the door is."""
+    image, truth, door = facade(ground_h=80)
+    wide, high = shop
+    for j in (0, 2, 3, 4, 5):
+        c0 = j * 50 + (50 - wide) // 2
+        image[-high:, c0:c0 + wide] = 0.3 * np.array([1.0, 0.92, 0.85])
+    result = analyse(image)
+    assert len(result.boxes("door")) == 1 and matches(result.boxes("door"), [door]) == 1
+    assert matches(result.boxes("window"), truth) == len(truth)
+    assert check_partition(result.layout) == []
+
+
+def test_plausible_doors_limits():
+    """A door stays a door in a group of up to ``MAX_DOORS`` tiles when at least ``DOOR_ASPECT`` times as high as
+    wide; otherwise it becomes wall."""
+    from citygen_inverse.photo_tiles import Node, plausible_doors
+    tree = Node(((0, 80, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), Node(((20, 80, 0, 50),), "door")))
+    assert [c.label for c in plausible_doors(tree, 2).children] == ["wall", "door"]  # 60 x 50: 1.2
+    assert [c.label for c in plausible_doors(tree, 3).children] == ["wall", "wall"]
+    wide = Node(((0, 80, 0, 51),), None, (Node(((0, 20, 0, 51),), "wall"), Node(((20, 80, 0, 51),), "door")))
+    assert [c.label for c in plausible_doors(wide, 1).children] == ["wall", "wall"]
+
+
 def test_layout_round_trips_through_greedy_extraction():
     image, _, _ = facade(floors=3, cols=4)
     layout = analyse(image, width=12.0).layout
@@ -88,6 +115,47 @@ def test_symmetry_finds_the_period_and_refuses_noise():
     assert sym.found and sym.period == 60
     noise = np.random.default_rng(1).random((300, 300))
     assert not detect_symmetry(quantize(noise), 20, 150).found
+
+
+def test_irreducible_facade_stacks_the_floors():
+    """§2.3: the collage keeps every original row exactly once; the first stacking shifts by one floor, every
+    stacking by whole floors, and the six floors collapse into one stack of corresponding rows."""
+    image, _, _ = facade(floors=6)
+    sym = detect_symmetry(quantize(image.mean(axis=2)), 20, 180)
+    stack = irreducible(sym)
+    assert sorted(y for line in stack.lines for y in line) == list(range(360))
+    assert stack.period == 60 and all(h % 60 == 0 for _, h, _ in stack.steps)
+    assert len(stack.lines) == 60
+    assert all(len(line) == 6 and len({y % 60 for y in line}) == 1 for line in stack.lines)
+    assert validated_period(sym, stack) == 60
+
+
+def test_floor_period_spanning_several_floors_is_recovered():
+    """Regression (cmp_b0009): when every fourth floor has a cornice and a balcony slab the line-averaged MI
+    prefers four floors (240 px) and the facade came out as 2 floors with 20-35 of 40 windows; the irreducible
+    facade's first stacking is one floor apart, so the period is one floor."""
+    image, truth, _ = facade(floors=8, cols=5, accent=4)
+    gray = image.mean(axis=2)
+    sym = detect_symmetry(quantize(gray), 34, 240)
+    assert sym.period == 240
+    assert validated_period(sym, irreducible(sym)) == 60
+    result = analyse(image)
+    assert result.floor_period == pytest.approx(60, abs=2)
+    assert len(result.floor_lines) - 1 == 8
+    assert matches(result.boxes("window"), truth) == len(truth)
+
+
+@pytest.mark.parametrize("stripe", [12, 15, 20])
+def test_striped_floor_does_not_shorten_the_floor_period(stripe):
+    """A floor-high band of horizontal stripes (a roller shutter) stacks best at a fraction of the floor (24-30 px
+    of 60) but repeats only there: the period stays one floor and the windows of the other floors are found."""
+    image, truth, _ = facade()
+    rows = np.arange(120, 180)
+    image[120:180] = np.where((rows // (stripe // 2)) % 2 == 0, 0.3, 0.8)[:, None, None]
+    result = analyse(image)
+    assert result.floor_period == pytest.approx(60, abs=2)
+    outside = [b for b in truth if not 120 <= b[1] < 180]
+    assert matches(result.boxes("window"), outside) == len(outside) == 24
 
 
 def test_split_lines_follow_minima_within_the_period():
@@ -203,6 +271,37 @@ def test_window_half_hidden_by_a_railing_is_found_whole():
     """Regression: with a lighter railing §3.1 labels only the glass above it (14 of 30 rows); the profile window
     replaces §3.1's when those cover less than ``COVER`` of its area."""
     assert _railing_group((28, 44), 0.55) == [((14, 44, 14, 36), (74, 104, 14, 36))]
+
+
+def test_split_distances_are_synchronised_across_groups():
+    """§3.2 global synchronisation: two groups whose windows differ by 1-2 px (imperfect symmetry: tops 14 / 16 px
+    below the tile top, left sides 14 / 13 px from the tile side) are split separately, then every split distance
+    takes its facade-wide cluster's median, so both groups' windows get the same offsets in their tiles."""
+    from citygen_inverse.photo_tiles import EdgeImage, stack_tree, subdivide_groups
+    gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
+    for top in (0, 60):
+        gray[top + 14:top + 44, 14:36] = 0.25
+        gray[top + 16:top + 44, 63:86] = 0.25
+    edges = EdgeImage.of(gray)
+    groups = [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+    alone = [[n.rects[0] for n in _leaves(stack_tree(edges, g, False)) if n.label == "window"] for g in groups]
+    assert alone == [[(14, 44, 14, 36)], [(16, 44, 13, 36)]]
+    trees = subdivide_groups(edges, groups, [False, False])
+    synced = [[n.rects for n in _leaves(t) if n.label == "window"] for t in trees]
+    assert synced == [[((16, 44, 14, 36), (76, 104, 14, 36))], [((16, 44, 64, 86), (76, 104, 64, 86))]]
+
+
+def test_synchronised_split_that_no_longer_fits_is_mapped():
+    """Regression: a split moved by synchronisation can leave a child region too small for the child's own split
+    (distance 30 in a region now 20 high); ``_resync`` crashed on it (seen with ``SYNC`` = 0.2 on the CMP photos).
+    It maps that subtree proportionally, and the leaves still tile the region."""
+    from citygen_inverse.photo_tiles import Node, _resync
+    lower = Node(((20, 60, 0, 50),), None, (Node(((20, 30, 0, 50),), "wall"), Node(((30, 60, 0, 50),), "window")),
+                 (("B", 30),))
+    tree = Node(((0, 60, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), lower), (("T", 20),))
+    again = _resync(tree, (0, 60, 0, 50), {(True, 20): 40, (True, 30): 30})
+    rects = [n.rects[0] for n in _leaves(again)]
+    assert rects == [(0, 40, 0, 50), (40, 45, 0, 50), (45, 60, 0, 50)]
 
 
 def test_profile_split_finds_two_windows_and_partitions_the_tile():
