@@ -109,6 +109,18 @@ class LayoutCommand(Command):
         return 0
 
 
+def verified(text: str, layouts: list, paths: list[str]) -> str:
+    """Check that an exact grammar regenerates its one layout; a mismatch is a bug, reported as an error."""
+    if len(layouts) > 1:
+        return "(joint grammar: not re-derived)"
+    from citygen_inverse.verify import mismatches
+    problems = mismatches(text, layouts[0])
+    if problems:
+        raise CitygenError("the extracted grammar does not regenerate the layout: " + "; ".join(problems),
+                           where=paths[0], hint="this is a bug in citygen: please report it with the layout file")
+    return "exact: re-derived"
+
+
 class GrammarCommand(Command):
     name = "grammar"
     help = "extract a split grammar from a layout (wu2014) or score a grammar file"
@@ -158,11 +170,14 @@ class GrammarCommand(Command):
                                 "--size-independent"])
             result = extract_size_independent(layouts[0], args.method, args.iterations, args.seed, model,
                                               header=(f"made by: {command}",))
+            check = ""
         else:
             result = extract_grammar(layouts, args.method, args.iterations, args.seed, model)
+            check = "  " + verified(result.text, layouts, args.layouts)
         write_text(args.output, result.text)
         print(f"cost {result.cost:.2f}  rules {result.rules}  terminals {result.terminals}  "
-              f"time {result.seconds:.3f} s  ({result.method}, {result.iterations} iterations)", file=sys.stderr)
+              f"time {result.seconds:.3f} s  ({result.method}, {result.iterations} iterations){check}",
+              file=sys.stderr)
         return 0
 
     def _cost(self, args: argparse.Namespace) -> int:

@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-import citygen_split
 from citygen.layout import FacadeLayout, Region
-from citygen.request import FacadeRequest
+from citygen_inverse.verify import mismatches
 
 LABELS = ("wall", "window", "sill", "door")
 
@@ -61,16 +60,5 @@ def random_layout(rng: np.random.Generator, width: float = 12.0, height: float =
 
 def assert_reproduces(text: str, layout: FacadeLayout) -> None:
     """Deriving ``text`` at the layout's size gives every terminal rectangle and label (tol 1e-6 of the size)."""
-    grammar = citygen_split.parse(text, "extracted.grammar")
-    out = citygen_split.derive(grammar, FacadeRequest.preview(layout.width, layout.height))
-    tol = 1e-6 * max(layout.width, layout.height)
-
-    a, b = layout.terminals(), out.terminals()
-    assert len(a) == len(b), f"{len(a)} terminals in, {len(b)} derived"
-    rb = np.array([(t.x, t.y, t.w, t.h) for t in b])
-    lb = np.array([str(t.label) for t in b])
-    used = np.zeros(len(b), dtype=bool)
-    for t in a:
-        hit = np.flatnonzero(np.all(np.abs(rb - (t.x, t.y, t.w, t.h)) <= tol, axis=1) & (lb == str(t.label)) & ~used)
-        assert hit.size, f"input terminal {t.label} at {(t.x, t.y, t.w, t.h)} is not derived"
-        used[hit[0]] = True
+    problems = mismatches(text, layout)
+    assert not problems, "; ".join(problems)

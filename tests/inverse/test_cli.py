@@ -40,6 +40,7 @@ def test_extract_each_method(layout_json, tmp_path, capsys, method):
     assert main(["grammar", "extract", str(layout_json), "--method", method, "--iterations", "15", "--seed", "3",
                  "-o", str(out)]) == 0
     err = capsys.readouterr().err
+    assert "exact: re-derived" in err
     cost = float(err.split()[1])
     assert main(["grammar", "cost", str(out)]) == 0
     assert float(capsys.readouterr().out.split()[1]) == pytest.approx(cost, abs=0.005)
@@ -132,3 +133,35 @@ def test_bad_layout_and_grammar_files(tmp_path, capsys):
 def test_size_independent_takes_one_layout(layout_json, capsys):
     _fails(capsys, ["grammar", "extract", str(layout_json), str(layout_json), "--size-independent"],
            "one layout")
+
+
+def test_extract_refuses_a_grammar_that_does_not_regenerate_its_layout(layout_json, tmp_path, capsys, monkeypatch):
+    """The CLI re-derives every exact grammar; a mismatch (an extractor bug) is an error naming the layout and the
+    first terminals missing, and no grammar file is written."""
+    import dataclasses
+
+    import citygen_inverse.extract as extract_module
+    real = extract_module.extract_grammar
+
+    def broken(*args, **kwargs):
+        result = real(*args, **kwargs)
+        return dataclasses.replace(result, text=result.text.replace("terminal(window", "terminal(wall"))
+    monkeypatch.setattr(extract_module, "extract_grammar", broken)
+    out = tmp_path / "broken.grammar"
+    assert main(["grammar", "extract", str(layout_json), "--method", "greedy", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "does not regenerate the layout" in err and str(layout_json) in err and "is not derived" in err
+    assert not out.exists()
+
+
+def test_mismatches_names_what_is_not_derived(layout_json):
+    from citygen_inverse.extract import extract_grammar
+    from citygen_inverse.verify import mismatches
+    layout = FacadeLayout.loads(layout_json.read_text())
+    text = extract_grammar(layout, "greedy").text
+    assert mismatches(text, layout) == []
+    other = FacadeLayout(layout.width, layout.height,
+                         Region(0.0, 0.0, layout.width, layout.height, "Facade",
+                                children=(Region(0.0, 0.0, layout.width, layout.height, "Wall", "wall"),)))
+    problems = mismatches(text, other)
+    assert problems[0].endswith("derived") and "1 terminals in the layout" in problems[0]
