@@ -84,9 +84,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     inst = sym.boxes[inside]
     proper = (inst != box).any(axis=1)  # the region itself is not inside
     inside, inst = inside[proper], inst[proper]
-    weight = sym.terminals[inside] / index.sigs[sig].n
+    terms = sym.terminals[inside]
     if index.sigs[sig].period is not None:
-        return _periodic(index, sig, model, inst, weight, best_only)
+        return _periodic(index, sig, model, inst, terms, best_only)
     actions = Candidates(index, box, model, best_only)
     if inside.size:
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
@@ -102,7 +102,7 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         m = bounds.size - 1
         # cov[i, k]: boundary k lies strictly inside repeated instance i; line[k]: Eq. 5 cost of cutting there
         cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-        line = (weight @ cov).tolist() if inst.size else [0.0] * (m + 1)
+        line = _line_costs(terms, index.sigs[sig].n, cov)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
         if inst.size:
             # per repeated region, the boundaries inside any of its instances, which a grouping keeping every
@@ -135,7 +135,14 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     return actions
 
 
-def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, weight: np.ndarray,
+def _line_costs(terms: np.ndarray, n: int, cov: np.ndarray) -> list[float]:
+    """Eq. 5's cost of cutting at each boundary: the terminals of the repeated instances it crosses (``cov``, one
+    row per instance) over the region's ``n``. The integer sum is exact in any order (a float product of a bool
+    matrix takes numpy's slow mixed-type loop)."""
+    return ((terms @ cov) / n).tolist() if terms.size else [0.0] * cov.shape[1]
+
+
+def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, terms: np.ndarray,
               best_only: bool) -> Candidates:
     """A periodic region (any tile count shares its signature) only gets ``repeat`` rules: over whole tiles, or
     over the tile's atoms written inline."""
@@ -145,7 +152,7 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     bl = [box[axis], *cuts.tolist(), box[axis + 2]]
     bounds = np.array(bl)
     cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-    line = (weight @ cov).tolist() if inst.size else [0.0] * len(bl)
+    line = _line_costs(terms, index.sigs[sig].n, cov)
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
     out = Candidates(index, box, model, best_only)
     for edges in (tiles, list(range(len(bl)))):
