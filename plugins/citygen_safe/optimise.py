@@ -1,0 +1,257 @@
+"""Spatial optimisation (dang2014 §5, Eq. 1): new leaf widths by a quadratic program.
+
+``minimise ||W (x - x*)||^2  s.t.  x > 0, C_h x = 0, C_a x = d_a, C_s x = 0`` plus the target width and any
+floor lines, with ``W`` the inverse leaf area normalised by the facade area (capped at 10). ``x`` holds one
+width per *variable node* after the variable reduction of Fig. 9. Heights are the same problem on the
+transposed facade. Width and left edge of a node are linear in ``x``: ``w = alpha' x`` and ``l = beta' x``.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.linalg as sla
+
+from citygen.qp import solve_qp
+from citygen_safe.grids import FacadeGrid
+from citygen_safe.leaves import EPS, Facade
+from citygen_safe.tree import GROUP, X, Node
+
+WEIGHT_CAP = 10.0
+MIN_SIZE = 1e-3  #: the bound standing for x > 0 (metres)
+SAME_SIZE_TOL = 0.01  #: grid elements of one label whose widths agree within this fraction have the same size
+
+
+@dataclass(frozen=True)
+class SpatialResult:
+    """Outcome of one sizing QP: the resized ``facade`` (valid only when ``success``), ``objective`` E(x),
+    the number of variables and the constraint groups that had to be dropped to stay feasible."""
+
+    facade: Facade
+    success: bool
+    objective: float
+    variables: int
+    dropped: tuple[str, ...] = ()
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class Lines:
+    """Positions ``at`` that the left edges of tree nodes ``nodes`` must take (floor lines in the height problem)."""
+
+    nodes: tuple[Node, ...]
+    at: tuple[float, ...]
+
+
+class _System:
+    """alpha and beta vectors of the tree's nodes over the reduced variables."""
+
+    def __init__(self, root: Node, constrained: set[int]) -> None:
+        self.alpha: dict[int, np.ndarray] = {}
+        self.beta: dict[int, np.ndarray] = {}
+        self.var_nodes: list[Node] = []
+        self.hierarchy: list[np.ndarray] = []
+        reduced = self._reduced(root, constrained, {})
+        self._assign(root, reduced)
+        n = len(self.var_nodes)
+        self.alpha = {k: _dense(v, n) for k, v in self.alpha.items()}
+        self.hierarchy = [_dense(v, n) for v in self.hierarchy]
+        self._beta(root, np.zeros(n))
+
+    def _reduced(self, node: Node, constrained: set[int], memo: dict[int, bool]) -> dict[int, bool]:
+        for child in node.children:
+            self._reduced(child, constrained, memo)
+        below = any(id(d) in constrained for c in node.children for d in c.walk())
+        memo[id(node)] = (node.is_leaf or not below
+                          or (node.split != X and all(memo[id(c)] for c in node.children)))
+        return memo
+
+    def _assign(self, node: Node, reduced: dict[int, bool]) -> dict[int, float]:
+        if reduced[id(node)]:
+            vec = {len(self.var_nodes): 1.0}
+            self.var_nodes.append(node)
+            self._share(node, vec)
+            return vec
+        vecs = [self._assign(c, reduced) for c in node.children]
+        if node.split == X:
+            vec: dict[int, float] = {}
+            for v in vecs:
+                for k, a in v.items():
+                    vec[k] = vec.get(k, 0.0) + a
+        else:
+            vec = vecs[0]
+            for a, b in zip(vecs, vecs[1:]):
+                self.hierarchy.append({k: a.get(k, 0.0) - b.get(k, 0.0) for k in set(a) | set(b)})
+        self.alpha[id(node)] = vec
+        return vec
+
+    def _share(self, node: Node, vec: dict[int, float]) -> None:
+        """Nodes below a variable node through transverse splits have its width."""
+        self.alpha[id(node)] = vec
+        if node.split not in (X, GROUP):
+            for c in node.children:
+                self._share(c, vec)
+
+    def _beta(self, node: Node, beta: np.ndarray) -> None:
+        self.beta[id(node)] = beta
+        offset = beta
+        for c in node.children:
+            if id(c) not in self.alpha:
+                continue
+            self._beta(c, offset)
+            if node.split == X:
+                offset = offset + self.alpha[id(c)]
+
+
+def _dense(vec: dict[int, float], n: int) -> np.ndarray:
+    out = np.zeros(n)
+    for k, a in vec.items():
+        out[k] = a
+    return out
+
+
+def _anchor_eps(facade: Facade, column: Sequence[int]) -> float:
+    """epsilon of the anchor point set (left 0, centre 0.5, right 1) of least x variance in a column."""
+    lefts = np.array([facade.leaves[i].x for i in column])
+    widths = np.array([facade.leaves[i].w for i in column])
+    return min((0.0, 0.5, 1.0), key=lambda e: (float(np.var(lefts + e * widths)), abs(e - 0.5)))
+
+
+def _same_size_pairs(facade: Facade, grids: Sequence[FacadeGrid]) -> list[tuple[int, int]]:
+    pairs = []
+    for grid in grids:
+        by_label: dict[str | None, list[int]] = {}
+        for i in grid.elements:
+            by_label.setdefault(facade.leaves[i].label, []).append(i)
+        for members in by_label.values():
+            members.sort(key=lambda i: facade.leaves[i].w)
+            for a, b in zip(members, members[1:]):
+                wa, wb = facade.leaves[a].w, facade.leaves[b].w
+                if wb - wa <= SAME_SIZE_TOL * wb:
+                    pairs.append((a, b))
+    return pairs
+
+
+def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], target: float,
+                    lines: Lines | None = None, corners: tuple[float, float] = (0.0, 0.0),
+                    corner_labels: frozenset[str] = frozenset(), alignment: bool = True,
+                    symmetry: bool = True) -> SpatialResult:
+    """Solve Eq. 1 for the widths of ``facade`` (tree ``root``) at width ``target``."""
+    leaf_node = {n.leaves[0]: n for n in root.walk() if n.split is None}
+    columns = [[i for i in grid.column(c) if i is not None and i in leaf_node]
+               for grid in grids for c in range(len(grid.columns))] if alignment else []
+    pairs = [(a, b) for a, b in _same_size_pairs(facade, grids) if a in leaf_node and b in leaf_node] if symmetry \
+        else []
+    cornered = [i for i, f in enumerate(facade.leaves) if f.label in corner_labels and i in leaf_node] \
+        if any(corners) else []
+    constrained = {id(leaf_node[i]) for col in columns for i in col} | {id(leaf_node[i]) for p in pairs for i in p}
+    constrained |= {id(leaf_node[i]) for i in cornered} | {id(node) for node in (lines.nodes if lines else ())}
+    sys_ = _System(root, constrained)
+    n = len(sys_.var_nodes)
+    alpha = lambda i: sys_.alpha[id(leaf_node[i])]  # noqa: E731
+    beta = lambda i: sys_.beta[id(leaf_node[i])]  # noqa: E731
+    groups: dict[str, tuple[list[np.ndarray], list[float]]] = {"hierarchy": (sys_.hierarchy, [0.0] * len(sys_.hierarchy))}
+    size_rows = [sys_.alpha[id(root)]]
+    size_rhs = [target]
+    if lines is not None:
+        size_rows += [sys_.beta[id(node)] for node in lines.nodes]
+        size_rhs += list(lines.at)
+    groups["size"] = (size_rows, size_rhs)
+    rows_a, rhs_a = [], []
+    for col in columns:
+        eps = _anchor_eps(facade, col)
+        for a, b in zip(col, col[1:]):
+            fa, fb = facade.leaves[a], facade.leaves[b]
+            rows_a.append(beta(a) + eps * alpha(a) - beta(b) - eps * alpha(b))
+            rhs_a.append((fa.x + eps * fa.w) - (fb.x + eps * fb.w))
+    groups["alignment"] = (rows_a, rhs_a)
+    groups["symmetry"] = ([alpha(a) - alpha(b) for a, b in pairs], [0.0] * len(pairs))
+    x_star = np.array([v.w for v in sys_.var_nodes])
+    area = np.array([v.w * v.h for v in sys_.var_nodes])
+    weight = np.minimum(facade.width * facade.height / np.maximum(area, EPS), WEIGHT_CAP)
+    G_rows, h_rows = [-np.eye(n)], [-np.full(n, MIN_SIZE)]
+    for i in cornered:
+        G_rows += [-beta(i)[None], (beta(i) + alpha(i))[None]]
+        h_rows += [np.array([-corners[0]]), np.array([target - corners[1]])]
+    G, h = np.vstack(G_rows), np.concatenate(h_rows)
+    P, q = np.diag(2 * weight**2), -2 * weight**2 * x_star
+    dropped: list[str] = []
+    for drop in ((), ("symmetry",), ("symmetry", "alignment")):
+        if dropped and not drop:
+            continue
+        A, b = _independent([r for k, (rows, _) in groups.items() if k not in drop for r in rows],
+                            [v for k, (_, rhs) in groups.items() if k not in drop for v in rhs], n)
+        if A is None:
+            dropped = list(drop) or ["(inconsistent)"]
+            continue
+        result = solve_qp(P, q, A, b, G, h)
+        if result.success and np.all(np.isfinite(result.x)):
+            x = result.x
+            objective = float(np.sum((weight * (x - x_star)) ** 2))
+            return SpatialResult(_place(facade, root, sys_, x, target), True, objective, n, tuple(drop))
+        dropped = list(drop)
+    return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
+
+
+def _independent(rows: list[np.ndarray], rhs: list[float], n: int) -> tuple[np.ndarray | None, np.ndarray]:
+    """Linearly independent rows of ``A x = b`` (quadprog needs them), or None when the system is inconsistent."""
+    if not rows:
+        return np.zeros((0, n)), np.zeros(0)
+    A, b = np.vstack(rows), np.asarray(rhs, dtype=float)
+    _, R, piv = sla.qr(A.T, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(R))
+    rank = int(np.sum(diag > 1e-9 * max(1.0, diag.max(initial=0.0))))
+    keep = np.sort(piv[:rank])
+    x0 = np.linalg.lstsq(A[keep], b[keep], rcond=None)[0]
+    if np.max(np.abs(A @ x0 - b), initial=0.0) > 1e-6 * (1.0 + np.max(np.abs(b))):
+        return None, b
+    return A[keep], b[keep]
+
+
+def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float) -> Facade:
+    """Leaf x and w from the solution: variable nodes get their width; collapsed subtrees share the change."""
+    var_width = {id(v): float(x[k]) for k, v in enumerate(sys_.var_nodes)}
+    lefts: dict[int, tuple[float, float]] = {}
+
+    def width(node: Node) -> float:
+        if id(node) in var_width:
+            return var_width[id(node)]
+        ws = [width(c) for c in node.children]
+        return sum(ws) if node.split == X else ws[0]
+
+    def place(node: Node, left: float, w: float, collapsed: bool = False) -> None:
+        collapsed = collapsed or id(node) in var_width
+        if node.split is None:
+            lefts[node.leaves[0]] = (left, w)
+        elif node.split == GROUP:
+            scale = w / node.w if node.w > EPS else 0.0
+            for i in node.leaves:
+                f = facade.leaves[i]
+                lefts[i] = (left + (f.x - node.x) * scale, f.w * scale)
+        elif node.split == X:
+            if collapsed:
+                widths = _share_evenly([c.w for c in node.children], w)
+            else:
+                widths = [width(c) for c in node.children]
+            for c, cw in zip(node.children, widths):
+                place(c, left, cw, collapsed)
+                left += cw
+        else:
+            for c in node.children:
+                place(c, left, w, collapsed)
+
+    place(root, 0.0, target)
+    leaves = tuple(replace(f, x=lefts[i][0], w=lefts[i][1]) for i, f in enumerate(facade.leaves))
+    return replace(facade, width=target, leaves=leaves)
+
+
+def _share_evenly(widths: list[float], total: float) -> list[float]:
+    """The change of a collapsed node spread evenly over its children, proportionally where even would make a
+    child non-positive."""
+    delta = (total - sum(widths)) / len(widths)
+    even = [w + delta for w in widths]
+    if min(even) > MIN_SIZE:
+        return even
+    s = sum(widths)
+    return [w * total / s for w in widths] if s > EPS else [total / len(widths)] * len(widths)
