@@ -199,6 +199,12 @@ def _independent(rows: list[np.ndarray], rhs: list[float], n: int) -> tuple[np.n
     if not rows:
         return np.zeros((0, n)), np.zeros(0)
     A, b = np.vstack(rows), np.asarray(rhs, dtype=float)
+    nonzero = np.any(np.abs(A) > 1e-12, axis=1)
+    if np.any(np.abs(b[~nonzero]) > 1e-6 * (1.0 + np.max(np.abs(b)))):
+        return None, b
+    A, b = A[nonzero], b[nonzero]
+    _, first = np.unique(np.round(np.column_stack([A, b]), 9), axis=0, return_index=True)
+    A, b = A[np.sort(first)], b[np.sort(first)]
     _, R, piv = sla.qr(A.T, mode="economic", pivoting=True)
     diag = np.abs(np.diag(R))
     rank = int(np.sum(diag > 1e-9 * max(1.0, diag.max(initial=0.0))))

@@ -58,7 +58,7 @@ def _tokens(line: str, source: str, lineno: int) -> list[tuple[str, int]]:
             break
         text = m.group(2) if m.group(2) is not None else m.group(3)
         if text is not None:
-            out.append((text, (m.start(2) if m.group(2) is not None else m.start(3)) + 1))
+            out.append((text, m.start(2) if m.group(2) is not None else m.start(3) + 1))  # a string: its quote
         pos = m.end()
     return out
 
