@@ -1,33 +1,41 @@
-"""Choosing topological jumps for a target size (dang2014 §4-5, made non-interactive).
+"""Choosing topological jumps for a target size (dang2014 §4-5, made non-interactive and bounded in cost).
 
 The paper proposes variations and lets the user pick. For a target width we try column counts around the one
-the grid's pitch suggests (one fewer, that one, one more); each count is reached by jumps chosen greedily (a
-small beam) among every source column at every position of every active grid (insertions) or every column
-(removals), each candidate scored by the spatial optimisation's objective at the target width. The variations
-are listed best first; a generator picks one of the near-best from the seed. Heights do the same with floors:
-the request's floor count fixes how many floor bands (rows of openings) the facade must have.
+the grid's pitch suggests (one fewer, that one, one more). The counts lie on one greedy path of jumps: each step
+ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
+width mismatch it leaves, an analytic estimate of its distortion; jumps of equal width change count as one, and
+the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
+states at the counts are the variations. Jumps apply to the natural (unsized)
+facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every jump.
+Each call has a CPU budget: once spent, steps take the estimate's best jump unscored, and the facade resized
+without jumps is always a variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from citygen.layout import FLOOR_BOUND_LABELS
 from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
-from citygen_safe.jump import Jump, insert_column, remove_column, source_columns
+from citygen_safe.jump import (Jump, insert_slab, insertion_gap, merge_leaves, remove_slab, removal_slab,
+                               source_columns)
 from citygen_safe.leaves import EPS, Facade
-from citygen_safe.optimise import Lines, optimise_widths
+from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.tree import Node, decompose
 
-BEAM = 1
+FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
+BUDGET_S = 2.0  #: default CPU seconds per generated facade
 
 
 @dataclass(frozen=True)
 class Settings:
     """How an edit is solved: active grid specs, constraint switches, labels never duplicated or removed (the
-    door, whose budget the building coordinator owns), corner strips and the labels kept out of them."""
+    door, whose budget the building coordinator owns), corner strips and the labels kept out of them, and the
+    CPU budget in seconds."""
 
     active: tuple[GridSpec, ...]
     alignment: bool = True
@@ -35,6 +43,12 @@ class Settings:
     keep: frozenset[str] = frozenset({"door"})
     corners: tuple[float, float] = (0.0, 0.0)
     corner_labels: frozenset[str] = frozenset()
+    budget: float = BUDGET_S
+
+    @property
+    def fixed(self) -> frozenset[str]:
+        """Labels whose leaves are never merged: grid elements and floor-bound openings."""
+        return FLOOR_BOUND_LABELS | self.keep | {label for spec in self.active for label in spec.labels}
 
 
 @dataclass(frozen=True)
@@ -47,41 +61,107 @@ class Variation:
     dropped: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class Candidate:
+    """A single jump of a facade: the size change ``delta`` it makes, the distance ``offset`` of its place from the
+    facade's middle, the ``slabs`` it copies (insertion) or cuts out (removal) and how to apply it."""
+
+    jump: Jump
+    delta: float
+    offset: float
+    slabs: tuple[tuple[float, float], ...]
+    apply: Callable[[], Facade]
+
+    def changes(self, facade: Facade, labels: frozenset[str]) -> bool:
+        """Whether the jump would copy or remove a leaf with one of ``labels`` (tested before applying it)."""
+        if self.jump.op == "insert":
+            return any(f.label in labels and f.x < hi - EPS and f.right > lo + EPS
+                       for f in facade.leaves for lo, hi in self.slabs)
+        return any(f.label in labels and f.x >= lo - EPS and f.right <= hi + EPS
+                   for f in facade.leaves for lo, hi in self.slabs)
+
+
+@dataclass(frozen=True)
+class Path:
+    """A state of a greedy path: the natural (unsized) facade after ``jumps`` and its decomposition tree."""
+
+    facade: Facade
+    root: Node
+    jumps: tuple[Jump, ...] = ()
+
+
 def grids_of(facade: Facade, specs: Sequence[GridSpec]) -> list[FacadeGrid]:
     return [g for g in (detect_grid(facade, s) for s in specs) if g is not None]
 
 
-def size(facade: Facade, settings: Settings, target: float, lines: Lines | None = None, root: Node | None = None):
+def size(facade: Facade, settings: Settings, target: float, lines: Lines | None = None,
+         root: Node | None = None) -> SpatialResult:
     """The spatial optimisation of ``facade`` at width ``target`` (``lines`` refer to nodes of ``root``)."""
     return optimise_widths(facade, root or decompose(facade), grids_of(facade, settings.active), target, lines=lines,
                            corners=settings.corners, corner_labels=settings.corner_labels,
                            alignment=settings.alignment, symmetry=settings.symmetry)
 
 
-def _holds(facade: Facade, slab: tuple[float, float], labels: frozenset[str]) -> bool:
-    return any(f.label in labels and f.x < slab[1] - EPS and f.right > slab[0] + EPS for f in facade.leaves)
-
-
-def _kept(facade: Facade, labels: frozenset[str]) -> int:
+def kept(facade: Facade, labels: frozenset[str]) -> int:
     return sum(1 for f in facade.leaves if f.label in labels)
 
 
-def _column_jumps(facade: Facade, settings: Settings, grow: bool) -> list[tuple[Jump, Facade]]:
-    """Every single jump of the active grids; none may duplicate or remove a kept label (the door)."""
-    out = []
-    kept = _kept(facade, settings.keep)
+def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Candidate]:
+    """Every single jump of the active grids with its width change."""
+    out, middle = [], 0.5 * facade.width
     for spec in settings.active:
         grid = detect_grid(facade, spec)
         if grid is None or len(grid.columns) < 2:
             continue
         if grow:
-            candidates = [(Jump("insert", spec.name, "x", s, p), insert_column(facade, grid, s, p))
-                          for s in source_columns(facade, grid) for p in range(1, len(grid.columns))]
+            for s in source_columns(facade, grid):
+                slab = grid.columns[s]
+                for p in range(1, len(grid.columns)):
+                    gap = insertion_gap(grid, p)
+                    if gap is not None:
+                        out.append(Candidate(Jump("insert", spec.name, "x", s, p),
+                                             gap[1] - gap[0] + slab[1] - slab[0], abs(gap[0] - middle), (gap, slab),
+                                             lambda gap=gap, slab=slab: insert_slab(facade, gap, slab)))
         else:
-            candidates = [(Jump("remove", spec.name, "x", c), remove_column(facade, grid, c))
-                          for c in range(len(grid.columns))]
-        out += [(j, new) for j, new in candidates if new is not None and _kept(new, settings.keep) == kept]
+            for c in range(len(grid.columns)):
+                cut = removal_slab(grid, c)
+                if cut is not None:
+                    out.append(Candidate(Jump("remove", spec.name, "x", c), cut[0] - cut[1],
+                                         abs(0.5 * (cut[0] + cut[1]) - middle), (cut,),
+                                         lambda cut=cut: remove_slab(facade, cut)))
     return out
+
+
+def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float
+                ) -> tuple[Path, SpatialResult | None] | None:
+    """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
+    mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
+    equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
+    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the CPU ``deadline`` has passed).
+    None when no jump is possible."""
+    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + c.delta - target), 2),
+                                              round(c.offset, 2), str(c.jump)))
+    want = kept(path.facade, settings.keep)
+    finalists: list[Candidate] = []
+    seen: set[float] = set()
+    for cand in order:
+        if round(cand.delta, 2) in seen or cand.changes(path.facade, settings.keep):
+            continue
+        new = cand.apply()
+        if kept(new, settings.keep) == want:
+            seen.add(round(cand.delta, 2))
+            finalists.append(replace(cand, apply=lambda new=new: new))
+            if len(finalists) == FINALISTS:
+                break
+    best: tuple[float, Path, SpatialResult | None] | None = None
+    for cand in finalists:
+        state = Path(*merge_leaves(cand.apply(), settings.fixed), path.jumps + (cand.jump,))
+        if len(finalists) == 1 or time.process_time() > deadline:
+            return (state, None) if best is None else best[1:]
+        res = size(state.facade, settings, target, root=state.root)
+        if res.success and (best is None or res.objective < best[0]):
+            best = (res.objective, state, res)
+    return None if best is None else best[1:]
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
@@ -92,32 +172,37 @@ def pitch(facade: Facade, settings: Settings) -> float | None:
     return None
 
 
-def width_variations(facade: Facade, settings: Settings, target: float, limit: int = 8) -> list[Variation]:
-    """Variations of ``facade`` at width ``target``, least distortion first (ties by jump description)."""
+def width_variations(facade: Facade, settings: Settings, target: float, limit: int = 8,
+                     deadline: float = float("inf"), notes: list[str] | None = None) -> list[Variation]:
+    """Variations of ``facade`` at width ``target``, least distortion first (ties by jump description).
+
+    The resized facade without jumps is always among them (the fallback when the budget is spent); budget cuts
+    are appended to ``notes``."""
+    notes = notes if notes is not None else []
+    start = Path(*merge_leaves(facade, settings.fixed))
+    facade = start.facade
+    found: list[Variation] = []
+    res = size(facade, settings, target, root=start.root)
+    if res.success:
+        found.append(Variation((), res.facade, res.objective, res.dropped))
     step = pitch(facade, settings)
     best_k = 0 if step is None else int(round((target - facade.width) / step))
-    counts = sorted({best_k - 1, best_k, best_k + 1} if step is not None else {0})
-    found: list[Variation] = []
-    for k in counts:
-        states = [Variation((), facade, 0.0)]
-        for _ in range(abs(k)):
-            scored = []
-            for state in states:
-                for jump, new in _column_jumps(state.facade, settings, grow=k > 0):
-                    res = size(new, settings, target)
-                    if res.success:
-                        scored.append(Variation(state.jumps + (jump,), res.facade, res.objective, res.dropped))
-            scored.sort(key=lambda v: (v.objective, [str(j) for j in v.jumps]))
-            states = scored[:BEAM]
-            if not states:
+    counts = {best_k - 1, best_k, best_k + 1} - {0} if step is not None else set()
+    for sign in (1, -1):
+        wanted = sorted(abs(k) for k in counts if k * sign > 0)
+        path, res = start, None
+        for n in range(1, max(wanted, default=0) + 1):
+            if time.process_time() > deadline:
+                notes.append(f"CPU budget {settings.budget:g} s spent after {n - 1} of {max(wanted)} column jumps")
+                if path.jumps and len(path.jumps) not in wanted:  # the partial path: fewer jumps, one more QP
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
                 break
-        for state in states:
-            if not state.jumps:
-                res = size(facade, settings, target)
-                if res.success:
-                    found.append(Variation((), res.facade, res.objective, res.dropped))
-            else:
-                found.append(state)
+            nxt = greedy_step(path, column_candidates(path.facade, settings, sign > 0), settings, target, deadline)
+            if nxt is None:
+                break
+            path, res = nxt
+            if n in wanted:
+                _add(found, path, res or size(path.facade, settings, target, root=path.root))
     found.sort(key=lambda v: (v.objective, [str(j) for j in v.jumps]))
     unique, seen = [], set()
     for v in found:
@@ -126,6 +211,11 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
             seen.add(key)
             unique.append(v)
     return unique[:limit]
+
+
+def _add(found: list[Variation], path: Path, res: SpatialResult) -> None:
+    if res.success:
+        found.append(Variation(path.jumps, res.facade, res.objective, res.dropped))
 
 
 def pick(variations: Sequence[Variation], rng: np.random.Generator) -> Variation:

@@ -1,20 +1,22 @@
 """Floors of an edited facade: the request's floor count by row jumps, its floor lines as QP constraints.
 
 A *floor band* is a maximal y range of overlapping openings (windows, doors): a ground floor's tall windows and
-the transom over its door are one band. To reach the request's floor count, bands are inserted (a copy of an
-upper band with the content between two bands, as a row insertion of §4) or removed, greedily by least height
-distortion; the band holding the door is never copied or removed. Each floor line then pins the lowest-cost
+the transom over its door are one band. To reach the request's floor count, bands are inserted (a copy of a
+band with the content between two bands, as a row insertion of §4) or removed, greedily as the columns are (the
+height mismatch ranks the jumps, the QP scores the finalists); the band holding the door is never copied or
+removed. Each floor line then pins the lowest-cost
 full-width cut between two bands (the cut whose scaled position is nearest the line).
 """
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
-from citygen_safe.edit import Settings, Variation, _kept, size
-from citygen_safe.jump import Jump, insert_slab, remove_slab
+from citygen_safe.edit import Candidate, Path, Settings, greedy_step, size
+from citygen_safe.jump import Jump, insert_slab, merge_leaves, remove_slab
 from citygen_safe.leaves import EPS, Facade, transpose
 from citygen_safe.optimise import Lines, SpatialResult
-from citygen_safe.tree import Node, decompose
+from citygen_safe.tree import Node
 
 OPENINGS = frozenset({"window", "door"})
 
@@ -31,44 +33,50 @@ def floor_bands(facade: Facade) -> list[tuple[float, float]]:
     return bands
 
 
-def _band_jumps(facade: Facade, settings: Settings, grow: bool) -> list[tuple[Jump, Facade]]:
+def band_candidates(facade: Facade) -> tuple[list[Candidate], list[Candidate]]:
+    """Row jumps of the floor bands of the transposed ``facade``: (insertions, removals)."""
     bands = floor_bands(facade)
-    kept = _kept(facade, settings.keep)
-    out = []
+    middle = 0.5 * facade.width
+    grow, shrink = [], []
     for s, band in enumerate(bands):
-        if grow:
-            for p in range(1, len(bands)):
-                gap = (bands[p - 1][1], max(bands[p - 1][1], bands[p][0]))
-                out.append((Jump("insert", "floors", "y", s, p), insert_slab(facade, gap, band)))
-        elif len(bands) > 1:
+        for p in range(1, len(bands)):
+            gap = (bands[p - 1][1], max(bands[p - 1][1], bands[p][0]))
+            grow.append(Candidate(Jump("insert", "floors", "y", s, p), gap[1] - gap[0] + band[1] - band[0],
+                                  abs(gap[0] - middle), (gap, band),
+                                  lambda gap=gap, band=band: insert_slab(facade, gap, band)))
+        if len(bands) > 1:
             slab = (band[0], bands[s + 1][0]) if s < len(bands) - 1 else (bands[s - 1][1], band[1])
-            out.append((Jump("remove", "floors", "y", s), remove_slab(facade, slab)))
-    return [(j, f) for j, f in out if _kept(f, settings.keep) == kept]
+            shrink.append(Candidate(Jump("remove", "floors", "y", s), slab[0] - slab[1],
+                                    abs(0.5 * (slab[0] + slab[1]) - middle), (slab,),
+                                    lambda slab=slab: remove_slab(facade, slab)))
+    return grow, shrink
 
 
-def fit_floors(facade: Facade, settings: Settings, floor_lines: tuple[float, ...]) -> tuple[Variation, SpatialResult]:
+def fit_floors(facade: Facade, settings: Settings, floor_lines: tuple[float, ...], deadline: float = float("inf"),
+               notes: list[str] | None = None) -> tuple[Path, SpatialResult]:
     """Jump ``facade`` (upright) to the request's floor count and size its heights to ``floor_lines``.
 
-    Returns the jumped variation (transposed) and the height QP's result (its facade is upright)."""
-    t = transpose(facade)
+    Returns the jumped path (transposed, natural sizes) and the height QP's result (its facade is upright).
+    A count that cannot be reached (no band to copy or remove) or a spent CPU budget is noted in ``notes``."""
+    notes = notes if notes is not None else []
+    settings = replace(settings, corners=(0.0, 0.0), corner_labels=frozenset())  # corner strips are widths
     target = floor_lines[-1]
-    state = Variation((), t, 0.0)
+    path = Path(*merge_leaves(transpose(facade), settings.fixed))
     want = len(floor_lines) - 1
-    while len(floor_bands(state.facade)) != want and floor_bands(state.facade):
-        grow = len(floor_bands(state.facade)) < want
-        scored = []
-        for jump, new in _band_jumps(state.facade, settings, grow):
-            res = size(new, settings, target)
-            if res.success:
-                scored.append(Variation(state.jumps + (jump,), new, res.objective))
-        if not scored:
+    while len(floor_bands(path.facade)) != want and floor_bands(path.facade):
+        if time.process_time() > deadline:
+            notes.append(f"CPU budget {settings.budget:g} s spent at {len(floor_bands(path.facade))} of {want} floors")
             break
-        state = min(scored, key=lambda v: (v.objective, [str(j) for j in v.jumps]))
-    root = decompose(state.facade)
-    res = size(state.facade, settings, target, _floor_cuts(state.facade, root, floor_lines), root)
+        grow, shrink = band_candidates(path.facade)
+        nxt = greedy_step(path, grow if len(floor_bands(path.facade)) < want else shrink, settings, target, deadline)
+        if nxt is None:
+            notes.append(f"{len(floor_bands(path.facade))} floor bands, no row jump reaches {want} floors")
+            break
+        path = nxt[0]
+    res = size(path.facade, settings, target, _floor_cuts(path.facade, path.root, floor_lines), path.root)
     if not res.success:
-        res = size(state.facade, settings, target)
-    return state, replace(res, facade=transpose(res.facade))
+        res = size(path.facade, settings, target, root=path.root)
+    return path, replace(res, facade=transpose(res.facade))
 
 
 def _floor_cuts(t: Facade, root: Node, floor_lines: tuple[float, ...]) -> Lines | None:

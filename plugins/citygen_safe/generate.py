@@ -3,12 +3,21 @@
 Door budget: jumps never copy or remove the door. A face that must carry no entrance shows its doors as closed
 wall panels (label ``wall``, depth 0); an entrance face keeps the input's door. Floor-bound elements are kept out
 of the request's corner strips by inequality rows of the width QP.
+
+Every call has a CPU budget (``Settings.budget``): floor jumps stop at 40 % of it, column jumps at 80 %; a spent budget
+means fewer jumps (the facade resized without jumps is always available) and a note in ``meta.diagnostics``.
+When the edit cannot meet the request (a floor count no row jump reaches, an element in a corner strip, a door
+outside the ground floor), the face falls back like the other kinds: a misplaced door becomes wall and
+:func:`citygen.entrance.enforce_entrance` carves one; any other problem gives plain wall floors with the reason in
+``meta.fallback`` (which the pipeline reports), again with a carved door on the entrance face.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, replace
 
-from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
+from citygen.entrance import enforce_entrance
+from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region
 from citygen.request import FacadeRequest, check_request
 from citygen_safe.compose import to_layout
 from citygen_safe.edit import Settings, Variation, pick, width_variations
@@ -17,37 +26,80 @@ from citygen_safe.leaves import Facade
 from citygen_safe.ruleset import SafeRuleset
 
 PLUGIN_ID = "safe"
+FLOORS_SHARE, JUMPS_SHARE = 0.4, 0.8  #: budget shares by which floor and column jumps stop (the rest: final QPs)
 
 
 @dataclass(frozen=True)
 class Edit:
-    """The result of editing a ruleset's facade for one request: the chosen variation and what else was on offer."""
+    """The result of editing a ruleset's facade for one request: the chosen variation and what else was on offer,
+    the diagnostics (budget cuts, repairs) and the request's problems left in ``layout`` (empty unless even the
+    fallback could not meet it)."""
 
     layout: FacadeLayout
     chosen: Variation
     variations: tuple[Variation, ...]
     floor_jumps: tuple[str, ...]
     problems: tuple[str, ...]
+    diagnostics: tuple[str, ...] = ()
 
 
 def settings_for(ruleset: SafeRuleset, request: FacadeRequest | None = None) -> Settings:
     corners = request.corner_widths if request is not None else (0.0, 0.0)
     return Settings(ruleset.active, ruleset.alignment, ruleset.symmetry, corners=corners,
-                    corner_labels=FLOOR_BOUND_LABELS if any(corners) else frozenset())
+                    corner_labels=FLOOR_BOUND_LABELS if any(corners) else frozenset(), budget=ruleset.budget)
 
 
 def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = 8) -> Edit:
     settings = settings_for(ruleset, request)
-    state, heights = fit_floors(ruleset.facade, settings, tuple(request.floor_lines))
+    start = time.process_time()
+    notes: list[str] = []
+    path, heights = fit_floors(ruleset.facade, settings, tuple(request.floor_lines),
+                               start + FLOORS_SHARE * settings.budget, notes)
     facade = heights.facade if heights.success else ruleset.facade
-    variations = width_variations(facade, settings, request.width, limit)
+    deadline = start + JUMPS_SHARE * settings.budget
+    variations = width_variations(facade, settings, request.width, limit, deadline, notes)
     if not variations:
         variations = width_variations(facade, replace(settings, alignment=False, symmetry=False), request.width,
-                                      limit)
+                                      limit, deadline, notes)
+    floor_jumps = [str(j) for j in path.jumps]
     chosen = pick(variations, request.rng(PLUGIN_ID, ruleset.name)) if variations else Variation((), facade, 0.0)
-    layout = _finish(chosen.facade, request, ruleset, chosen, [str(j) for j in state.jumps])
-    return Edit(layout, chosen, tuple(variations), tuple(str(j) for j in state.jumps),
-                tuple(check_request(layout, request)))
+    layout = _finish(chosen.facade, request, ruleset, chosen, floor_jumps)
+    if not heights.success or not variations:
+        notes.append("no feasible sizing")
+    layout = _checked(layout, request, notes)
+    return Edit(layout, chosen, tuple(variations), tuple(floor_jumps), tuple(check_request(layout, request)),
+                tuple(notes))
+
+
+def _checked(layout: FacadeLayout, request: FacadeRequest, notes: list[str]) -> FacadeLayout:
+    """``layout`` if it meets ``request``, else repaired (door) or replaced by the fallback; notes in meta."""
+    problems = check_request(layout, request) if layout.width > 0 else ["empty layout"]
+    if any("door" not in p for p in problems) or "no feasible sizing" in notes:
+        layout = fallback_layout(request, "; ".join(problems[:2] or notes[-1:]), layout.meta)
+    elif problems:  # only the door: a misplaced one becomes wall, enforce_entrance carves one where it fits
+        layout = replace(layout, root=_doors_to_wall(layout.root))
+        notes.append(f"door turned into wall: {problems[0]}")
+    layout, note = enforce_entrance(layout, request)
+    if note:
+        notes.append(note)
+    if notes:
+        layout = replace(layout, meta={**layout.meta, "diagnostics": list(notes)})
+    return layout
+
+
+def _doors_to_wall(region: Region) -> Region:
+    if region.children:
+        return replace(region, children=tuple(_doors_to_wall(c) for c in region.children))
+    return replace(region, label="wall", symbol="Wall", depth=0.0, asset=None) if region.label == "door" else region
+
+
+def fallback_layout(request: FacadeRequest, reason: str, meta: dict | None = None) -> FacadeLayout:
+    """Plain wall, one region per floor (``enforce_entrance`` carves the door), with ``reason`` in meta."""
+    lines = request.floor_lines
+    bands = tuple(Region(0.0, y0, request.width, y1 - y0, "FallbackWall", "wall") for y0, y1 in zip(lines, lines[1:]))
+    root = Region(0.0, 0.0, request.width, request.height, "Fallback", None, children=bands)
+    return FacadeLayout(request.width, request.height, root,
+                        meta={**(meta or {}), "kind": PLUGIN_ID, "fallback": reason})
 
 
 def _finish(facade: Facade, request: FacadeRequest, ruleset: SafeRuleset, chosen: Variation,

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.tree import GROUP, X, Node, decompose
 
 
 @dataclass(frozen=True)
@@ -61,12 +62,8 @@ def source_columns(facade: Facade, grid: FacadeGrid, exclude: frozenset[str] = f
 def insert_column(facade: Facade, grid: FacadeGrid, source: int, position: int) -> Facade | None:
     """Insert a copy of column ``source`` between anchor columns ``position - 1`` and ``position``; None when
     the anchors overlap (no gap to open the band in)."""
-    if not 0 < position < len(grid.columns):
-        return None
-    c0, c1 = grid.columns[position - 1][1], grid.columns[position][0]
-    if c1 < c0 - EPS:
-        return None
-    return insert_slab(facade, (c0, max(c0, c1)), grid.columns[source])
+    gap = insertion_gap(grid, position)
+    return None if gap is None else insert_slab(facade, gap, grid.columns[source])
 
 
 def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, float]) -> Facade:
@@ -89,8 +86,17 @@ def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, flo
     return replace(facade, width=facade.width + delta, leaves=_merge(facade, pieces))
 
 
-def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | None:
-    """Remove column ``column`` with the gap to its right neighbour (the last column: to its left neighbour)."""
+def insertion_gap(grid: FacadeGrid, position: int) -> tuple[float, float] | None:
+    """The gap between anchor columns ``position - 1`` and ``position``; None when they overlap."""
+    if not 0 < position < len(grid.columns):
+        return None
+    c0, c1 = grid.columns[position - 1][1], grid.columns[position][0]
+    return None if c1 < c0 - EPS else (c0, max(c0, c1))
+
+
+def removal_slab(grid: FacadeGrid, column: int) -> tuple[float, float] | None:
+    """The slab removing column ``column``: to the next column's left edge (the last column: from the previous
+    column's right edge); None when there is nothing to cut."""
     n = len(grid.columns)
     if n < 2 or not 0 <= column < n:
         return None
@@ -98,7 +104,13 @@ def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | Non
         a, b = grid.columns[column][0], grid.columns[column + 1][0]
     else:
         a, b = grid.columns[column - 1][1], grid.columns[column][1]
-    return remove_slab(facade, (a, b)) if b - a > EPS else None
+    return (a, b) if b - a > EPS else None
+
+
+def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | None:
+    """Remove column ``column`` with the gap to its right neighbour (the last column: to its left neighbour)."""
+    slab = removal_slab(grid, column)
+    return None if slab is None else remove_slab(facade, slab)
 
 
 def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
@@ -114,6 +126,55 @@ def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
         if x1 - x0 > EPS:
             leaves.append(replace(f, x=x0, w=x1 - x0))
     return replace(facade, width=facade.width - cut, leaves=tuple(leaves))
+
+
+def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
+    """``facade`` with adjacent sibling leaves of its decomposition tree that show the same region (label, symbol,
+    material, ...) merged into one leaf, except labels in ``fixed`` (grid elements, floor-bound openings), and the
+    tree of the result. Jumps cut leaves at the copied slabs' edges; merging the pieces back keeps the leaf count
+    growing only with the copied content. Siblings only, so the partition stays guillotine (merging arbitrary
+    neighbours could close a pinwheel); leaves come in tree order."""
+    out: list[Leaf] = []
+
+    def same(a: Leaf, b: Leaf) -> bool:
+        return a.label not in fixed and replace(a.region, x=0.0, y=0.0, w=0.0, h=0.0) == replace(
+            b.region, x=0.0, y=0.0, w=0.0, h=0.0)
+
+    def runs(node: Node) -> list[Leaf | Node]:
+        """The node's children as merged leaves (not yet numbered) or finished subtrees."""
+        items: list[Leaf | Node] = []
+        for child in node.children:
+            item = visit(child)
+            if isinstance(item, Leaf) and items and isinstance(items[-1], Leaf) and same(items[-1], item):
+                a = items[-1]
+                items[-1] = replace(a, w=item.right - a.x) if node.split == X else replace(a, h=item.top - a.y)
+            else:
+                items.append(item)
+        return items
+
+    def visit(node: Node) -> Leaf | Node:
+        if node.split is None:
+            return facade.leaves[node.leaves[0]]
+        if node.split == GROUP:
+            first = len(out)
+            out.extend(facade.leaves[i] for i in node.leaves)
+            return replace(node, leaves=tuple(range(first, len(out))))
+        items = runs(node)
+        if len(items) == 1 and isinstance(items[0], Leaf):
+            return items[0]
+        children = tuple(_numbered(item, out) for item in items)
+        return replace(node, children=children, leaves=tuple(i for c in children for i in c.leaves))
+
+    root = _numbered(visit(decompose(facade)), out)
+    return replace(facade, leaves=tuple(out)), root
+
+
+def _numbered(item: Leaf | Node, out: list[Leaf]) -> Node:
+    """A leaf node for a merged leaf (appended to ``out``), or the finished subtree."""
+    if isinstance(item, Node):
+        return item
+    out.append(item)
+    return Node(item.x, item.y, item.w, item.h, None, (), (len(out) - 1,))
 
 
 def _merge(facade: Facade, pieces: list[tuple[float, float, int]]) -> tuple[Leaf, ...]:

@@ -10,10 +10,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
+import daqp
 import numpy as np
-import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
-from citygen.qp import solve_qp
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.tree import GROUP, X, Node
@@ -21,6 +22,10 @@ from citygen_safe.tree import GROUP, X, Node
 WEIGHT_CAP = 10.0
 MIN_SIZE = 1e-3  #: the bound standing for x > 0 (metres)
 SAME_SIZE_TOL = 0.01  #: grid elements of one label whose widths agree within this fraction have the same size
+ACTIVE_SET_ROUNDS = 12  #: KKT solves before the DAQP fallback
+DAQP_EQUALITY = 5  #: DAQP constraint sense ACTIVE | IMMUTABLE
+KKT_REG = 1e-9
+REFINEMENTS = 4  #: iterative refinement steps of the regularised KKT solve
 
 
 @dataclass(frozen=True)
@@ -159,7 +164,7 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
         size_rhs += list(lines.at)
     groups["size"] = (size_rows, size_rhs)
     rows_a, rhs_a = [], []
-    for col in columns:
+    for col in (c for c in columns if len(c) > 1):
         eps = _anchor_eps(facade, col)
         for a, b in zip(col, col[1:]):
             fa, fb = facade.leaves[a], facade.leaves[b]
@@ -175,44 +180,88 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
         G_rows += [-beta(i)[None], (beta(i) + alpha(i))[None]]
         h_rows += [np.array([-corners[0]]), np.array([target - corners[1]])]
     G, h = np.vstack(G_rows), np.concatenate(h_rows)
-    P, q = np.diag(2 * weight**2), -2 * weight**2 * x_star
     dropped: list[str] = []
     for drop in ((), ("symmetry",), ("symmetry", "alignment")):
-        if dropped and not drop:
-            continue
-        A, b = _independent([r for k, (rows, _) in groups.items() if k not in drop for r in rows],
-                            [v for k, (_, rhs) in groups.items() if k not in drop for v in rhs], n)
-        if A is None:
-            dropped = list(drop) or ["(inconsistent)"]
-            continue
-        result = solve_qp(P, q, A, b, G, h)
-        if result.success and np.all(np.isfinite(result.x)):
-            x = result.x
+        rows = [r for k, (rs, _) in groups.items() if k not in drop for r in rs]
+        rhs = [v for k, (_, vs) in groups.items() if k not in drop for v in vs]
+        x = _solve(weight, x_star, rows, rhs, G, h)
+        if x is not None:
             objective = float(np.sum((weight * (x - x_star)) ** 2))
             return SpatialResult(_place(facade, root, sys_, x, target), True, objective, n, tuple(drop))
-        dropped = list(drop)
+        dropped = list(drop) or ["(inconsistent)"]
     return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
 
 
-def _independent(rows: list[np.ndarray], rhs: list[float], n: int) -> tuple[np.ndarray | None, np.ndarray]:
-    """Linearly independent rows of ``A x = b`` (quadprog needs them), or None when the system is inconsistent."""
-    if not rows:
-        return np.zeros((0, n)), np.zeros(0)
-    A, b = np.vstack(rows), np.asarray(rhs, dtype=float)
-    nonzero = np.any(np.abs(A) > 1e-12, axis=1)
-    if np.any(np.abs(b[~nonzero]) > 1e-6 * (1.0 + np.max(np.abs(b)))):
-        return None, b
-    A, b = A[nonzero], b[nonzero]
-    _, first = np.unique(np.round(np.column_stack([A, b]), 9), axis=0, return_index=True)
-    A, b = A[np.sort(first)], b[np.sort(first)]
-    _, R, piv = sla.qr(A.T, mode="economic", pivoting=True)
-    diag = np.abs(np.diag(R))
-    rank = int(np.sum(diag > 1e-9 * max(1.0, diag.max(initial=0.0))))
-    keep = np.sort(piv[:rank])
-    x0 = np.linalg.lstsq(A[keep], b[keep], rcond=None)[0]
-    if np.max(np.abs(A @ x0 - b), initial=0.0) > 1e-6 * (1.0 + np.max(np.abs(b))):
-        return None, b
-    return A[keep], b[keep]
+def _solve(weight: np.ndarray, x_star: np.ndarray, rows: list[np.ndarray], rhs: list[float], G: np.ndarray,
+           h: np.ndarray) -> np.ndarray | None:
+    """Eq. 1 with equality rows ``rows`` and inequality rows ``G x <= h``; None when infeasible.
+
+    Active-set loop on the sparse KKT system, which tolerates redundant equality rows (so no rank test): violated
+    inequality rows join the active set, active rows whose multiplier has the wrong sign leave it. When the loop
+    does not settle (adding every violated row at once can over-constrain), DAQP's dual active set, which also
+    copes with dependent rows, solves the dense problem."""
+    n = x_star.size
+    P = 2 * weight**2
+    q = -P * x_star
+    A = np.vstack(rows) if rows else np.zeros((0, n))
+    b = np.asarray(rhs, dtype=float)
+    scale = 1.0 + float(np.max(np.abs(np.concatenate([b, h])), initial=0.0))
+    active: list[int] = []
+    for _ in range(ACTIVE_SET_ROUNDS):
+        solved = _kkt(P, q, np.vstack([A, G[active]]), np.concatenate([b, h[active]]), scale)
+        if solved is None:
+            if not active:
+                return None  # the equality rows alone are inconsistent
+            break
+        x, y = solved
+        mu = y[len(b):]
+        if active and mu.min() < -1e-9 * scale:
+            active.pop(int(np.argmin(mu)))
+            continue
+        slack = G @ x - h
+        violated = [int(i) for i in np.flatnonzero(slack > 1e-9 * scale) if int(i) not in active]
+        if not violated:
+            return x
+        active += violated
+    return _dual_active_set(P, q, A, b, G, h)
+
+
+def _dual_active_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray, G: np.ndarray,
+                     h: np.ndarray) -> np.ndarray | None:
+    """DAQP on ``A x = b, G x <= h`` (``P`` diagonal); None unless it reports an optimum."""
+    rows = np.ascontiguousarray(np.vstack([A, G]))
+    upper = np.concatenate([b, h])
+    lower = np.concatenate([b, np.full(h.size, -1e30)])
+    sense = np.zeros(upper.size, dtype=np.int32)
+    sense[:b.size] = DAQP_EQUALITY
+    x, _, flag, _ = daqp.solve(np.diag(P), q, rows, upper, lower, sense)
+    return np.asarray(x) if flag == 1 and np.all(np.isfinite(x)) else None
+
+
+def _kkt(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray, scale: float
+         ) -> tuple[np.ndarray, np.ndarray] | None:
+    """``x`` and multipliers ``y`` of ``min 1/2 x'Px + q'x s.t. A x = b`` (``P`` diagonal) from the sparse KKT
+    system with a small dual regularisation, refined against the exact system (so redundant rows are harmless
+    and the rows hold to rounding); None when the rows are inconsistent."""
+    n, m = P.size, A.shape[0]
+    As = sp.csr_matrix(A)
+    K = sp.bmat([[sp.diags(P + KKT_REG), As.T], [As, -KKT_REG * sp.identity(m)]], format="csc")
+    try:
+        lu = spla.splu(K)
+    except RuntimeError:
+        return None
+    rhs = np.concatenate([-q, b])
+    sol = lu.solve(rhs)
+    for _ in range(REFINEMENTS):
+        x, y = sol[:n], sol[n:]
+        residual = rhs - np.concatenate([P * x + As.T @ y, As @ x])
+        if np.max(np.abs(residual)) <= 1e-12 * scale:
+            break
+        sol = sol + lu.solve(residual)
+    x = sol[:n]
+    if not np.all(np.isfinite(sol)) or np.max(np.abs(As @ x - b), initial=0.0) > 1e-7 * scale:
+        return None
+    return x, sol[n:]
 
 
 def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float) -> Facade:

@@ -34,7 +34,7 @@ class SafeKind(RulesetKind):
         for k, v in enumerate(result.variations):
             mark = "*" if v is result.chosen else " "
             lines.append(f"{mark} variation {k}: E={v.objective:.4g} {'; '.join(map(str, v.jumps)) or 'resize only'}")
-        lines += [f"problem: {p}" for p in result.problems]
+        lines += [f"note: {d}" for d in result.diagnostics] + [f"problem: {p}" for p in result.problems]
         return "\n".join(lines)
 
 

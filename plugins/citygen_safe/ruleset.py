@@ -7,6 +7,7 @@
     active NAME...                  grids whose columns/rows topological jumps insert or remove
     alignment on|off                alignment constraints C_a (default on)
     symmetry on|off                 same-size constraints C_s (default on)
+    budget SECONDS                  CPU seconds per generated facade (default 2)
 
 Without ``grid`` statements the grids are detected from labels (``window``, ``door``, ``window+door``, ...);
 without ``active`` the ``window`` grid is active. Errors name file:line:column and what was expected.
@@ -19,6 +20,7 @@ from pathlib import Path
 
 from citygen.errors import CitygenError, ParseError, SourceLocation
 from citygen.layout import FacadeLayout
+from citygen_safe.edit import BUDGET_S
 from citygen_safe.grids import GridSpec, auto_specs
 from citygen_safe.leaves import Facade, facade_from_layout
 
@@ -27,7 +29,8 @@ _TOKEN = re.compile(r'\s*(?:(#.*)|"([^"]*)"|([^\s"#]+)|(")|$)')
 
 @dataclass(frozen=True)
 class SafeRuleset:
-    """A parsed ``.safe`` file: the input facade, its grid specs, the active ones and the constraint switches."""
+    """A parsed ``.safe`` file: the input facade, its grid specs, the active ones, the constraint switches and the
+    CPU budget per facade (seconds)."""
 
     name: str
     source: str
@@ -36,6 +39,7 @@ class SafeRuleset:
     active: tuple[GridSpec, ...]
     alignment: bool = True
     symmetry: bool = True
+    budget: float = BUDGET_S
 
 
 def load_ruleset(path: Path | str) -> SafeRuleset:
@@ -69,6 +73,7 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
     grids: dict[str, GridSpec] = {}
     active: list[tuple[str, int, int]] = []
     switches = {"alignment": True, "symmetry": True}
+    budget = BUDGET_S
     last = (1, 1)
     for lineno, line in enumerate(text.splitlines(), 1):
         toks = _tokens(line, source, lineno)
@@ -99,12 +104,15 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
         elif head == "active":
             need("one or more grid names", len(args) >= 1)
             active += [(a, lineno, c) for a, c in args]
+        elif head == "budget":
+            need("a positive number of seconds", len(args) == 1 and _positive(args[0][0]))
+            budget = float(args[0][0])
         elif head in switches:
             need("on or off", len(args) == 1 and args[0][0] in ("on", "off"))
             switches[head] = args[0][0] == "on"
         else:
             raise ParseError(f"unknown statement '{head}'", where=where,
-                             hint="expected one of safe, layout, grid, active, alignment, symmetry")
+                             hint="expected one of safe, layout, grid, active, alignment, symmetry, budget")
     if name is None:
         raise ParseError("empty ruleset", where=SourceLocation(source, 1, 1), hint="start with 'safe NAME'")
     if layout is None:
@@ -124,4 +132,11 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
                              hint="grids: " + ", ".join(sorted(specs)))
     chosen = tuple(specs[a] for a, _, _ in active) or tuple(s for s in specs.values() if s.name == "window")
     return SafeRuleset(name, source, facade, tuple(specs.values()), chosen, switches["alignment"],
-                       switches["symmetry"])
+                       switches["symmetry"], budget)
+
+
+def _positive(text: str) -> bool:
+    try:
+        return 0.0 < float(text) < float("inf")
+    except ValueError:
+        return False

@@ -9,9 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.leaves import EPS, Facade
 
 X, Y, GROUP = "x", "y", "group"
 
@@ -43,31 +41,36 @@ class Node:
 
 def decompose(facade: Facade) -> Node:
     """The decomposition tree of ``facade`` (y cuts tried before x cuts at every node)."""
-    arr = np.array([(f.x, f.y, f.w, f.h) for f in facade.leaves], dtype=float).reshape(-1, 4)
-    return _node(arr, np.arange(len(facade.leaves)), facade.leaves)
+    boxes = [(f.x, f.y, f.right, f.top) for f in facade.leaves]
+    return _node(boxes, list(range(len(boxes))))
 
 
-def _cuts(lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:
-    """Groups of indices separated by lines that no interval ``[lo, hi]`` crosses, in increasing order."""
-    order = np.argsort(lo, kind="stable")
-    reach = np.maximum.accumulate(hi[order])
-    breaks = np.flatnonzero(lo[order][1:] >= reach[:-1] - EPS) + 1
-    return np.split(order, breaks)
+def _cuts(boxes: list[tuple[float, float, float, float]], idx: list[int], axis: int) -> list[list[int]]:
+    """Groups of ``idx`` separated by lines across ``axis`` that no box crosses, in increasing order (plain
+    Python: the nodes are small, numpy's per-call cost dominated)."""
+    groups: list[list[int]] = []
+    reach = float("-inf")
+    for i in sorted(idx, key=lambda i: boxes[i][axis]):
+        if not groups or boxes[i][axis] >= reach - EPS:
+            groups.append([])
+        groups[-1].append(i)
+        reach = max(reach, boxes[i][axis + 2])
+    return groups
 
 
-def _node(arr: np.ndarray, idx: np.ndarray, leaves: tuple[Leaf, ...]) -> Node:
-    sub = arr[idx]
-    x0, y0 = float(sub[:, 0].min()), float(sub[:, 1].min())
-    x1, y1 = float((sub[:, 0] + sub[:, 2]).max()), float((sub[:, 1] + sub[:, 3]).max())
+def _node(boxes: list[tuple[float, float, float, float]], idx: list[int]) -> Node:
+    x0 = min(boxes[i][0] for i in idx)
+    y0 = min(boxes[i][1] for i in idx)
+    x1 = max(boxes[i][2] for i in idx)
+    y1 = max(boxes[i][3] for i in idx)
     if len(idx) == 1:
-        return Node(x0, y0, x1 - x0, y1 - y0, None, (), (int(idx[0]),))
+        return Node(x0, y0, x1 - x0, y1 - y0, None, (), (idx[0],))
     for split, axis in ((Y, 1), (X, 0)):
-        groups = _cuts(sub[:, axis], sub[:, axis] + sub[:, axis + 2])
+        groups = _cuts(boxes, idx, axis)
         if len(groups) > 1:
-            children = tuple(_node(arr, idx[np.sort(g)], leaves) for g in groups)
-            return Node(x0, y0, x1 - x0, y1 - y0, split, children,
-                        tuple(i for c in children for i in c.leaves))
-    return Node(x0, y0, x1 - x0, y1 - y0, GROUP, (), tuple(int(i) for i in idx))
+            children = tuple(_node(boxes, sorted(g)) for g in groups)
+            return Node(x0, y0, x1 - x0, y1 - y0, split, children, tuple(i for c in children for i in c.leaves))
+    return Node(x0, y0, x1 - x0, y1 - y0, GROUP, (), tuple(idx))
 
 
 def common_parent(root: Node, members: set[int]) -> Node:
