@@ -3,7 +3,8 @@
     .venv/bin/python benchmarks/safe_edit.py [--repeats 3]
 
 Prints, per target size, the median process time of ``edit`` (floors + width variations + QP) and of one
-spatial optimisation (resizing without topology change), the jumps chosen and the resulting leaf count.
+spatial optimisation (resizing without topology change), the number of jumps chosen, the resulting leaf count and
+any budget note (the ruleset's CPU budget is 2 s).
 """
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ from citygen_safe.generate import edit, settings_for
 from citygen_safe.ruleset import load_ruleset
 
 RULESET = Path(__file__).resolve().parents[1] / "rulesets" / "cmp_b0035.safe"
-SIZES = ((15.6125, 12.0), (10.0, 12.0), (20.0, 12.0), (15.6125, 6.0), (22.0, 15.0))
+SIZES = ((15.6125, 12.0), (10.0, 12.0), (20.0, 12.0), (15.6125, 6.0), (22.0, 15.0), (25.0, 18.0), (5.0, 30.0),
+         (40.0, 30.0), (60.0, 30.0))
 
 
 def main() -> None:
@@ -41,7 +43,8 @@ def main() -> None:
             qp.append(time.process_time() - t0)
         print(f"{width:7.3f} x {height:5.1f}: edit {statistics.median(times):7.3f} s, one QP "
               f"{statistics.median(qp) * 1000:6.1f} ms, {len(result.layout.leaves):4d} leaves, "
-              f"{len(result.variations)} variations, jumps: {'; '.join(result.layout.meta['jumps']) or '-'}")
+              f"{len(result.variations)} variations, {len(result.layout.meta['jumps'])} jumps"
+              + (f"; {'; '.join(result.diagnostics)}" if result.diagnostics else ""))
 
 
 if __name__ == "__main__":
