@@ -124,7 +124,7 @@ def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
     for f in facade.leaves:
         x0, x1 = shift(f.x), shift(f.right)
         if x1 - x0 > EPS:
-            leaves.append(replace(f, x=x0, w=x1 - x0))
+            leaves.append(Leaf(x0, f.y, x1 - x0, f.h, f.region, f.origin))
     return replace(facade, width=facade.width - cut, leaves=tuple(leaves))
 
 
@@ -136,9 +136,16 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     neighbours could close a pinwheel); leaves come in tree order."""
     out: list[Leaf] = []
 
+    keys: dict[int, object] = {}
+
+    def key(leaf: Leaf) -> object:
+        """The leaf's region without its geometry (cached: copies share their region object)."""
+        if id(leaf.region) not in keys:
+            keys[id(leaf.region)] = replace(leaf.region, x=0.0, y=0.0, w=0.0, h=0.0)
+        return keys[id(leaf.region)]
+
     def same(a: Leaf, b: Leaf) -> bool:
-        return a.label not in fixed and replace(a.region, x=0.0, y=0.0, w=0.0, h=0.0) == replace(
-            b.region, x=0.0, y=0.0, w=0.0, h=0.0)
+        return a.label not in fixed and (a.region is b.region or key(a) == key(b))
 
     def runs(node: Node) -> list[Leaf | Node]:
         """The node's children as merged leaves (not yet numbered) or finished subtrees."""
@@ -147,7 +154,8 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
             item = visit(child)
             if isinstance(item, Leaf) and items and isinstance(items[-1], Leaf) and same(items[-1], item):
                 a = items[-1]
-                items[-1] = replace(a, w=item.right - a.x) if node.split == X else replace(a, h=item.top - a.y)
+                items[-1] = (Leaf(a.x, a.y, item.right - a.x, a.h, a.region, a.origin) if node.split == X
+                             else Leaf(a.x, a.y, a.w, item.top - a.y, a.region, a.origin))
             else:
                 items.append(item)
         return items
@@ -197,4 +205,4 @@ def _merge(facade: Facade, pieces: list[tuple[float, float, int]]) -> tuple[Leaf
 
 def _leaf(facade: Facade, run: list) -> Leaf:
     f = facade.leaves[run[2]]
-    return replace(f, x=run[0], w=run[1] - run[0])
+    return Leaf(run[0], f.y, run[1] - run[0], f.h, f.region, f.origin)

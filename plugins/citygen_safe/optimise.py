@@ -16,7 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from citygen_safe.grids import FacadeGrid
-from citygen_safe.leaves import EPS, Facade
+from citygen_safe.leaves import EPS, Facade, Leaf
 from citygen_safe.tree import GROUP, X, Node
 
 WEIGHT_CAP = 10.0
@@ -57,20 +57,23 @@ class _System:
         self.beta: dict[int, np.ndarray] = {}
         self.var_nodes: list[Node] = []
         self.hierarchy: list[np.ndarray] = []
-        reduced = self._reduced(root, constrained, {})
+        reduced: dict[int, bool] = {}
+        self._reduced(root, constrained, reduced)
         self._assign(root, reduced)
         n = len(self.var_nodes)
         self.alpha = {k: _dense(v, n) for k, v in self.alpha.items()}
         self.hierarchy = [_dense(v, n) for v in self.hierarchy]
         self._beta(root, np.zeros(n))
 
-    def _reduced(self, node: Node, constrained: set[int], memo: dict[int, bool]) -> dict[int, bool]:
+    def _reduced(self, node: Node, constrained: set[int], memo: dict[int, bool]) -> bool:
+        """Fill ``memo`` (node -> collapses to one variable); returns whether the subtree holds a constrained
+        node."""
+        below = False
         for child in node.children:
-            self._reduced(child, constrained, memo)
-        below = any(id(d) in constrained for c in node.children for d in c.walk())
+            below = self._reduced(child, constrained, memo) or below
         memo[id(node)] = (node.is_leaf or not below
                           or (node.split != X and all(memo[id(c)] for c in node.children)))
-        return memo
+        return below or id(node) in constrained
 
     def _assign(self, node: Node, reduced: dict[int, bool]) -> dict[int, float]:
         if reduced[id(node)]:
@@ -297,7 +300,7 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
                 place(c, left, w, collapsed)
 
     place(root, 0.0, target)
-    leaves = tuple(replace(f, x=lefts[i][0], w=lefts[i][1]) for i, f in enumerate(facade.leaves))
+    leaves = tuple(Leaf(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin) for i, f in enumerate(facade.leaves))
     return replace(facade, width=target, leaves=leaves)
 
 
