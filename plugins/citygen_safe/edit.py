@@ -29,6 +29,7 @@ from citygen_safe.tree import Node, decompose
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
 BUDGET_S = 2.0  #: default CPU seconds per generated facade
+MAX_LEAVES = 2000  #: column jumps stop before a facade would have more leaves
 
 
 @dataclass(frozen=True)
@@ -64,13 +65,14 @@ class Variation:
 @dataclass(frozen=True)
 class Candidate:
     """A single jump of a facade: the size change ``delta`` it makes, the distance ``offset`` of its place from the
-    facade's middle, the ``slabs`` it copies (insertion) or cuts out (removal) and how to apply it."""
+    facade's middle, the ``slabs`` it copies (insertion) or cuts out (removal) and how to apply it ``copies``
+    times (insertions; removals once)."""
 
     jump: Jump
     delta: float
     offset: float
     slabs: tuple[tuple[float, float], ...]
-    apply: Callable[[], Facade]
+    apply: Callable[[int], Facade]
 
     def changes(self, facade: Facade, labels: frozenset[str]) -> bool:
         """Whether the jump would copy or remove a leaf with one of ``labels`` (tested before applying it)."""
@@ -121,25 +123,27 @@ def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Ca
                     if gap is not None:
                         out.append(Candidate(Jump("insert", spec.name, "x", s, p),
                                              gap[1] - gap[0] + slab[1] - slab[0], abs(gap[0] - middle), (gap, slab),
-                                             lambda gap=gap, slab=slab: insert_slab(facade, gap, slab)))
+                                             lambda m, gap=gap, slab=slab: insert_slab(facade, gap, slab, m)))
         else:
             for c in range(len(grid.columns)):
                 cut = removal_slab(grid, c)
                 if cut is not None:
                     out.append(Candidate(Jump("remove", spec.name, "x", c), cut[0] - cut[1],
                                          abs(0.5 * (cut[0] + cut[1]) - middle), (cut,),
-                                         lambda cut=cut: remove_slab(facade, cut)))
+                                         lambda m, cut=cut: remove_slab(facade, cut)))
     return out
 
 
-def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float
-                ) -> tuple[Path, SpatialResult | None] | None:
+def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
     """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
     mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
     equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
     is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the CPU ``deadline`` has passed).
-    None when no jump is possible."""
-    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + c.delta - target), 2),
+    ``copies`` > 1 repeats an insertion that many times in one step (far targets): the finalists are scored as
+    single copies at the per-copy share of the size change, and the winner is repeated unscored. None when no
+    jump is possible."""
+    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + copies * c.delta - target), 2),
                                               round(c.offset, 2), str(c.jump)))
     want = kept(path.facade, settings.keep)
     finalists: list[Candidate] = []
@@ -147,21 +151,28 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
     for cand in order:
         if round(cand.delta, 2) in seen or cand.changes(path.facade, settings.keep):
             continue
-        new = cand.apply()
+        new = cand.apply(1)
         if kept(new, settings.keep) == want:
             seen.add(round(cand.delta, 2))
-            finalists.append(replace(cand, apply=lambda new=new: new))
+            finalists.append(replace(cand, apply=lambda m, new=new, cand=cand: new if m == 1 else cand.apply(m)))
             if len(finalists) == FINALISTS:
                 break
-    best: tuple[float, Path, SpatialResult | None] | None = None
+    scout = path.facade.width + (target - path.facade.width) / copies
+    best: tuple[float, Candidate, Path, SpatialResult | None] | None = None
     for cand in finalists:
-        state = Path(*merge_leaves(cand.apply(), settings.fixed), path.jumps + (cand.jump,))
+        state = Path(*merge_leaves(cand.apply(1), settings.fixed), path.jumps + (cand.jump,))
         if len(finalists) == 1 or time.process_time() > deadline:
-            return (state, None) if best is None else best[1:]
-        res = size(state.facade, settings, target, root=state.root)
+            best = best or (0.0, cand, state, None)
+            break
+        res = size(state.facade, settings, scout, root=state.root)
         if res.success and (best is None or res.objective < best[0]):
-            best = (res.objective, state, res)
-    return None if best is None else best[1:]
+            best = (res.objective, cand, state, res)
+    if best is None:
+        return None
+    _, cand, state, res = best
+    if copies == 1:
+        return state, res
+    return Path(*merge_leaves(cand.apply(copies), settings.fixed), path.jumps + (cand.jump,) * copies), None
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
@@ -179,10 +190,12 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     The resized facade without jumps is always among them (the fallback when the budget is spent); budget cuts
     are appended to ``notes``."""
     notes = notes if notes is not None else []
+    t0 = time.process_time()
     start = Path(*merge_leaves(facade, settings.fixed))
     facade = start.facade
     found: list[Variation] = []
     res = size(facade, settings, target, root=start.root)
+    rate = (time.process_time() - t0) / max(1, len(facade.leaves))  # CPU s per leaf of a merge + QP
     if res.success:
         found.append(Variation((), res.facade, res.objective, res.dropped))
     step = pitch(facade, settings)
@@ -191,17 +204,27 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     for sign in (1, -1):
         wanted = sorted(abs(k) for k in counts if k * sign > 0)
         path, res = start, None
-        for n in range(1, max(wanted, default=0) + 1):
+        while wanted and len(path.jumps) < wanted[-1]:
             if time.process_time() > deadline:
-                notes.append(f"CPU budget {settings.budget:g} s spent after {n - 1} of {max(wanted)} column jumps")
+                notes.append(f"CPU budget {settings.budget:g} s spent after {len(path.jumps)} of {wanted[-1]} "
+                             "column jumps")
                 if path.jumps and len(path.jumps) not in wanted:  # the partial path: fewer jumps, one more QP
                     _add(found, path, res or size(path.facade, settings, target, root=path.root))
                 break
-            nxt = greedy_step(path, column_candidates(path.facade, settings, sign > 0), settings, target, deadline)
+            ahead = min(k for k in wanted if k > len(path.jumps)) - len(path.jumps)
+            copies = _affordable(path, ahead if sign > 0 else 1, rate, deadline, settings)
+            if copies == 0:
+                notes.append(f"CPU budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
+                             f"of {wanted[-1]} column jumps")
+                if path.jumps and len(path.jumps) not in wanted:
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
+                break
+            nxt = greedy_step(path, column_candidates(path.facade, settings, sign > 0), settings, target, deadline,
+                              copies)
             if nxt is None:
                 break
             path, res = nxt
-            if n in wanted:
+            if len(path.jumps) in wanted:
                 _add(found, path, res or size(path.facade, settings, target, root=path.root))
     found.sort(key=lambda v: (v.objective, [str(j) for j in v.jumps]))
     unique, seen = [], set()
@@ -211,6 +234,18 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
             seen.add(key)
             unique.append(v)
     return unique[:limit]
+
+
+def _affordable(path: Path, copies: int, rate: float, deadline: float, settings: Settings) -> int:
+    """How many of ``copies`` column copies the next step can make before ``deadline``: its finalists and the
+    final sizing each cost ``rate`` per leaf, a copy adds about one column's share of the leaves, and the facade
+    stays within ``MAX_LEAVES`` (the QP's dense rows grow quadratically beyond). 0: none."""
+    grids = grids_of(path.facade, settings.active)
+    columns = max((len(g.columns) for g in grids), default=1)
+    n = len(path.facade.leaves)
+    per_copy = max(1.0, n / max(1, columns))
+    left = min((deadline - time.process_time()) / (rate * (FINALISTS + 1)), MAX_LEAVES)
+    return max(0, min(copies, int((left - n) // per_copy)))
 
 
 def _add(found: list[Variation], path: Path, res: SpatialResult) -> None:

@@ -43,12 +43,12 @@ def band_candidates(facade: Facade) -> tuple[list[Candidate], list[Candidate]]:
             gap = (bands[p - 1][1], max(bands[p - 1][1], bands[p][0]))
             grow.append(Candidate(Jump("insert", "floors", "y", s, p), gap[1] - gap[0] + band[1] - band[0],
                                   abs(gap[0] - middle), (gap, band),
-                                  lambda gap=gap, band=band: insert_slab(facade, gap, band)))
+                                  lambda m, gap=gap, band=band: insert_slab(facade, gap, band, m)))
         if len(bands) > 1:
             slab = (band[0], bands[s + 1][0]) if s < len(bands) - 1 else (bands[s - 1][1], band[1])
             shrink.append(Candidate(Jump("remove", "floors", "y", s), slab[0] - slab[1],
                                     abs(0.5 * (slab[0] + slab[1]) - middle), (slab,),
-                                    lambda slab=slab: remove_slab(facade, slab)))
+                                    lambda m, slab=slab: remove_slab(facade, slab)))
     return grow, shrink
 
 
@@ -68,7 +68,8 @@ def fit_floors(facade: Facade, settings: Settings, floor_lines: tuple[float, ...
             notes.append(f"CPU budget {settings.budget:g} s spent at {len(floor_bands(path.facade))} of {want} floors")
             break
         grow, shrink = band_candidates(path.facade)
-        nxt = greedy_step(path, grow if len(floor_bands(path.facade)) < want else shrink, settings, target, deadline)
+        have = len(floor_bands(path.facade))
+        nxt = greedy_step(path, grow if have < want else shrink, settings, target, deadline, max(1, want - have))
         if nxt is None:
             notes.append(f"{len(floor_bands(path.facade))} floor bands, no row jump reaches {want} floors")
             break

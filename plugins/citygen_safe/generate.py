@@ -27,6 +27,8 @@ from citygen_safe.ruleset import SafeRuleset
 
 PLUGIN_ID = "safe"
 FLOORS_SHARE, JUMPS_SHARE = 0.4, 0.8  #: budget shares by which floor and column jumps stop (the rest: final QPs)
+FLOOR_CACHE_SIZE = 32
+_FLOOR_CACHE: dict[tuple, tuple] = {}
 
 
 @dataclass(frozen=True)
@@ -53,8 +55,9 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = 8) -> Edit:
     settings = settings_for(ruleset, request)
     start = time.process_time()
     notes: list[str] = []
-    path, heights = fit_floors(ruleset.facade, settings, tuple(request.floor_lines),
-                               start + FLOORS_SHARE * settings.budget, notes)
+    path, heights, floor_notes = _floors(ruleset, settings, tuple(request.floor_lines),
+                                         start + FLOORS_SHARE * settings.budget)
+    notes += floor_notes
     facade = heights.facade if heights.success else ruleset.facade
     deadline = start + JUMPS_SHARE * settings.budget
     variations = width_variations(facade, settings, request.width, limit, deadline, notes)
@@ -69,6 +72,21 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = 8) -> Edit:
     layout = _checked(layout, request, notes)
     return Edit(layout, chosen, tuple(variations), tuple(floor_jumps), tuple(check_request(layout, request)),
                 tuple(notes))
+
+
+def _floors(ruleset: SafeRuleset, settings: Settings, floor_lines: tuple[float, ...], deadline: float):
+    """:func:`fit_floors`, remembered per ruleset and floor lines: the faces of a building share their floor lines
+    (and floors ignore the corner strips), so only the first face pays for the row jumps."""
+    key = (id(ruleset), floor_lines)
+    hit = _FLOOR_CACHE.get(key)
+    if hit is not None and hit[0] is ruleset:
+        return hit[1:]
+    notes: list[str] = []
+    path, heights = fit_floors(ruleset.facade, settings, floor_lines, deadline, notes)
+    if len(_FLOOR_CACHE) >= FLOOR_CACHE_SIZE:
+        _FLOOR_CACHE.pop(next(iter(_FLOOR_CACHE)))
+    _FLOOR_CACHE[key] = (ruleset, path, heights, tuple(notes))
+    return path, heights, tuple(notes)
 
 
 def _checked(layout: FacadeLayout, request: FacadeRequest, notes: list[str]) -> FacadeLayout:

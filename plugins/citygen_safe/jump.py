@@ -66,11 +66,13 @@ def insert_column(facade: Facade, grid: FacadeGrid, source: int, position: int) 
     return None if gap is None else insert_slab(facade, gap, grid.columns[source])
 
 
-def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, float]) -> Facade:
-    """Open a band at ``gap[0]`` holding a copy of ``gap`` followed by a copy of ``slab``."""
+def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int = 1) -> Facade:
+    """Open a band at ``gap[0]`` holding a copy of ``gap`` followed by a copy of ``slab``, ``copies`` times (the
+    same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy)."""
     c0, c1 = gap
     s0, s1 = slab
-    width_gap, delta = c1 - c0, (c1 - c0) + (s1 - s0)
+    width_gap, pitch = c1 - c0, (c1 - c0) + (s1 - s0)
+    delta = copies * pitch
     pieces: list[tuple[float, float, int]] = []  # (x0, x1, leaf index)
     for k, f in enumerate(facade.leaves):
         if f.right <= c0 + EPS:
@@ -82,7 +84,7 @@ def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, flo
         for lo, hi, at in ((c0, c1, c0), (s0, s1, c0 + width_gap)):
             a, b = max(f.x, lo), min(f.right, hi)
             if b - a > EPS:
-                pieces.append((at + a - lo, at + b - lo, k))
+                pieces += [(at + a - lo + c * pitch, at + b - lo + c * pitch, k) for c in range(copies)]
     return replace(facade, width=facade.width + delta, leaves=_merge(facade, pieces))
 
 

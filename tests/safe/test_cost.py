@@ -94,7 +94,7 @@ def test_budget_bounds_a_huge_face_and_says_so(tmp_path):
     t0 = time.process_time()
     result = edit(ruleset, request)
     assert time.process_time() - t0 < 1.2
-    assert any("CPU budget 0.3 s spent" in d for d in result.diagnostics)
+    assert any("CPU budget 0.3 s" in d for d in result.diagnostics)
     assert result.layout.meta["diagnostics"] == list(result.diagnostics)
     assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
 
