@@ -125,3 +125,17 @@ def test_budget_statement_is_checked(tmp_path):
     with pytest.raises(ParseError) as exc:
         parse_ruleset('safe f\nlayout "f.layout.json"\nbudget 0\n', "f.safe", base=tmp_path)
     assert "f.safe:3:8" in str(exc.value) and "positive number of seconds" in str(exc.value)
+
+
+def test_faces_of_a_building_share_their_floor_jumps(monkeypatch):
+    import citygen_safe.generate as generate
+    ruleset = load_ruleset(ROOT / "rulesets" / "cmp_b0035.safe")
+    calls = []
+    fit = generate.fit_floors
+    monkeypatch.setattr(generate, "fit_floors", lambda *a: calls.append(1) or fit(*a))
+    a = edit(ruleset, FacadeRequest.preview(12.0, 15.0, 3.0))
+    b = edit(ruleset, FacadeRequest.preview(20.0, 15.0, 3.0, entrance=False))
+    assert len(calls) == 1 and a.floor_jumps == b.floor_jumps
+    fresh = edit(load_ruleset(ROOT / "rulesets" / "cmp_b0035.safe"), FacadeRequest.preview(20.0, 15.0, 3.0,
+                                                                                           entrance=False))
+    assert fresh.layout.dumps() == b.layout.dumps()  # remembered floors give the same bytes

@@ -87,3 +87,17 @@ def test_overlapping_anchors_give_no_insertion():
 def test_source_columns_are_unique_kinds():
     f = facade_from_layout(regular(4, 2))
     assert source_columns(f, detect_grid(f, WIN)) == [0]
+
+
+def test_band_of_k_copies_is_the_insertion_repeated():
+    from citygen_safe.jump import insert_slab, insertion_gap, merge_leaves
+    f = facade_from_layout(regular(3, 2))
+    grid = detect_grid(f, WIN)
+    once = insert_column(f, grid, 0, 1)
+    twice = insert_column(once, detect_grid(once, WIN), 0, 1)
+    bulk = insert_slab(f, insertion_gap(grid, 1), grid.columns[0], copies=2)
+    fixed = frozenset({"window"})
+    shape = lambda g: sorted((round(x.x, 9), round(x.y, 9), round(x.w, 9), x.label)  # noqa: E731
+                             for x in merge_leaves(g, fixed)[0].leaves)
+    assert bulk.width == twice.width == f.width + 2 * 3.0 and shape(bulk) == shape(twice)
+    assert check_partition(to_layout(bulk)) == []
