@@ -72,7 +72,7 @@ class Candidate:
     delta: float
     offset: float
     slabs: tuple[tuple[float, float], ...]
-    apply: Callable[[int], Facade]
+    apply: Callable[[int], Facade | None]
 
     def changes(self, facade: Facade, labels: frozenset[str]) -> bool:
         """Whether the jump would copy or remove a leaf with one of ``labels`` (tested before applying it)."""
@@ -130,8 +130,16 @@ def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Ca
                 if cut is not None:
                     out.append(Candidate(Jump("remove", spec.name, "x", c), cut[0] - cut[1],
                                          abs(0.5 * (cut[0] + cut[1]) - middle), (cut,),
-                                         lambda m, cut=cut: remove_slab(facade, cut)))
+                                         _remover(facade, grid, c)))
     return out
+
+
+def _remover(facade: Facade, grid: FacadeGrid, column: int) -> Callable[[int], Facade | None]:
+    """Remove ``column`` ``m`` times (None when that would leave no column)."""
+    def apply(m: int) -> Facade | None:
+        slab = removal_slab(grid, column, m)
+        return None if slab is None else remove_slab(facade, slab)
+    return apply
 
 
 def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
@@ -140,9 +148,9 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
     mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
     equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
     is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the CPU ``deadline`` has passed).
-    ``copies`` > 1 repeats an insertion that many times in one step (far targets): the finalists are scored as
-    single copies at the per-copy share of the size change, and the winner is repeated unscored. None when no
-    jump is possible."""
+    ``copies`` > 1 repeats a jump that many times in one step (far targets): the finalists are scored as single
+    jumps at the per-jump share of the size change, and the winner is repeated unscored (or taken once when the
+    repeat is not possible). None when no jump is possible."""
     order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + copies * c.delta - target), 2),
                                               round(c.offset, 2), str(c.jump)))
     want = kept(path.facade, settings.keep)
@@ -170,9 +178,10 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
     if best is None:
         return None
     _, cand, state, res = best
-    if copies == 1:
+    bulk = cand.apply(copies) if copies > 1 else None
+    if bulk is None or kept(bulk, settings.keep) != want:  # no repeat asked for, or not possible: one jump
         return state, res
-    return Path(*merge_leaves(cand.apply(copies), settings.fixed), path.jumps + (cand.jump,) * copies), None
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * copies), None
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
@@ -212,7 +221,7 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
                     _add(found, path, res or size(path.facade, settings, target, root=path.root))
                 break
             ahead = min(k for k in wanted if k > len(path.jumps)) - len(path.jumps)
-            copies = _affordable(path, ahead if sign > 0 else 1, rate, deadline, settings)
+            copies = _affordable(path, ahead, rate, deadline, settings)
             if copies == 0:
                 notes.append(f"CPU budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
                              f"of {wanted[-1]} column jumps")

@@ -96,16 +96,19 @@ def insertion_gap(grid: FacadeGrid, position: int) -> tuple[float, float] | None
     return None if c1 < c0 - EPS else (c0, max(c0, c1))
 
 
-def removal_slab(grid: FacadeGrid, column: int) -> tuple[float, float] | None:
+def removal_slab(grid: FacadeGrid, column: int, count: int = 1) -> tuple[float, float] | None:
     """The slab removing column ``column``: to the next column's left edge (the last column: from the previous
-    column's right edge); None when there is nothing to cut."""
+    column's right edge); None when there is nothing to cut. ``count`` > 1: the removal repeated (the columns
+    ``column .. column + count - 1``), at least one column stays."""
     n = len(grid.columns)
-    if n < 2 or not 0 <= column < n:
+    if n < 2 or not 0 <= column < n or count >= n or column + count > n:
         return None
-    if column < n - 1:
-        a, b = grid.columns[column][0], grid.columns[column + 1][0]
+    if column + count < n:
+        a, b = grid.columns[column][0], grid.columns[column + count][0]
+    elif column > 0:
+        a, b = grid.columns[column - 1][1], grid.columns[n - 1][1]
     else:
-        a, b = grid.columns[column - 1][1], grid.columns[column][1]
+        return None
     return (a, b) if b - a > EPS else None
 
 

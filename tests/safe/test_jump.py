@@ -101,3 +101,15 @@ def test_band_of_k_copies_is_the_insertion_repeated():
                              for x in merge_leaves(g, fixed)[0].leaves)
     assert bulk.width == twice.width == f.width + 2 * 3.0 and shape(bulk) == shape(twice)
     assert check_partition(to_layout(bulk)) == []
+
+
+def test_removal_repeated_is_one_wider_slab():
+    from citygen_safe.jump import removal_slab, remove_slab
+    f = facade_from_layout(regular(5, 2))
+    grid = detect_grid(f, WIN)
+    once = remove_column(f, grid, 1)
+    twice = remove_column(once, detect_grid(once, WIN), 1)
+    bulk = remove_slab(f, removal_slab(grid, 1, 2))
+    assert bulk.width == pytest.approx(twice.width) and len(detect_grid(bulk, WIN).columns) == 3
+    assert removal_slab(grid, 3, 2) == (grid.columns[2][1], grid.columns[4][1])  # through the last column
+    assert removal_slab(grid, 0, 5) is None and removal_slab(grid, 4, 2) is None  # one column must stay
