@@ -29,7 +29,7 @@ from citygen_safe.tree import Node, decompose
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
 BUDGET_S = 2.0  #: default CPU seconds per generated facade
-MAX_LEAVES = 2000  #: column jumps stop before a facade would have more leaves
+MAX_LEAVES = 4000  #: column jumps stop before a facade would have more leaves
 
 
 @dataclass(frozen=True)
@@ -248,7 +248,7 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
 def _affordable(path: Path, copies: int, rate: float, deadline: float, settings: Settings) -> int:
     """How many of ``copies`` column copies the next step can make before ``deadline``: its finalists and the
     final sizing each cost ``rate`` per leaf, a copy adds about one column's share of the leaves, and the facade
-    stays within ``MAX_LEAVES`` (the QP's dense rows grow quadratically beyond). 0: none."""
+    stays within ``MAX_LEAVES`` (tree rebuilds and the KKT factorisation grow faster than linearly). 0: none."""
     grids = grids_of(path.facade, settings.active)
     columns = max((len(g.columns) for g in grids), default=1)
     n = len(path.facade.leaves)

@@ -3,7 +3,8 @@
 ``minimise ||W (x - x*)||^2  s.t.  x > 0, C_h x = 0, C_a x = d_a, C_s x = 0`` plus the target width and any
 floor lines, with ``W`` the inverse leaf area normalised by the facade area (capped at 10). ``x`` holds one
 width per *variable node* after the variable reduction of Fig. 9. Heights are the same problem on the
-transposed facade. Width and left edge of a node are linear in ``x``: ``w = alpha' x`` and ``l = beta' x``.
+transposed facade. Width and left edge of a node are linear in ``x``: ``w = alpha' x`` and ``l = beta' x``, kept as sparse
+rows (index -> coefficient) and assembled into sparse matrices for the solve.
 """
 from __future__ import annotations
 
@@ -49,21 +50,30 @@ class Lines:
     at: tuple[float, ...]
 
 
+Vec = dict[int, float]  #: a sparse row over the reduced variables (index -> coefficient)
+
+
+def _comb(*terms: tuple[float, Vec]) -> Vec:
+    """The linear combination of sparse rows ``sum(c * v)``."""
+    out: Vec = {}
+    for c, vec in terms:
+        for k, a in vec.items():
+            out[k] = out.get(k, 0.0) + c * a
+    return out
+
+
 class _System:
-    """alpha and beta vectors of the tree's nodes over the reduced variables."""
+    """alpha and beta vectors of the tree's nodes over the reduced variables (sparse rows)."""
 
     def __init__(self, root: Node, constrained: set[int]) -> None:
-        self.alpha: dict[int, np.ndarray] = {}
-        self.beta: dict[int, np.ndarray] = {}
+        self.alpha: dict[int, Vec] = {}
+        self.beta: dict[int, Vec] = {}
         self.var_nodes: list[Node] = []
-        self.hierarchy: list[np.ndarray] = []
+        self.hierarchy: list[Vec] = []
         reduced: dict[int, bool] = {}
         self._reduced(root, constrained, reduced)
         self._assign(root, reduced)
-        n = len(self.var_nodes)
-        self.alpha = {k: _dense(v, n) for k, v in self.alpha.items()}
-        self.hierarchy = [_dense(v, n) for v in self.hierarchy]
-        self._beta(root, np.zeros(n))
+        self._beta(root, {})
 
     def _reduced(self, node: Node, constrained: set[int], memo: dict[int, bool]) -> bool:
         """Fill ``memo`` (node -> collapses to one variable); returns whether the subtree holds a constrained
@@ -83,14 +93,11 @@ class _System:
             return vec
         vecs = [self._assign(c, reduced) for c in node.children]
         if node.split == X:
-            vec: dict[int, float] = {}
-            for v in vecs:
-                for k, a in v.items():
-                    vec[k] = vec.get(k, 0.0) + a
+            vec = _comb(*((1.0, v) for v in vecs))
         else:
             vec = vecs[0]
             for a, b in zip(vecs, vecs[1:]):
-                self.hierarchy.append({k: a.get(k, 0.0) - b.get(k, 0.0) for k in set(a) | set(b)})
+                self.hierarchy.append(_comb((1.0, a), (-1.0, b)))
         self.alpha[id(node)] = vec
         return vec
 
@@ -101,7 +108,7 @@ class _System:
             for c in node.children:
                 self._share(c, vec)
 
-    def _beta(self, node: Node, beta: np.ndarray) -> None:
+    def _beta(self, node: Node, beta: Vec) -> None:
         self.beta[id(node)] = beta
         offset = beta
         for c in node.children:
@@ -109,14 +116,16 @@ class _System:
                 continue
             self._beta(c, offset)
             if node.split == X:
-                offset = offset + self.alpha[id(c)]
+                offset = _comb((1.0, offset), (1.0, self.alpha[id(c)]))
 
 
-def _dense(vec: dict[int, float], n: int) -> np.ndarray:
-    out = np.zeros(n)
-    for k, a in vec.items():
-        out[k] = a
-    return out
+def _matrix(rows: Sequence[Vec], n: int) -> sp.csr_matrix:
+    """Sparse rows as a CSR matrix (n columns)."""
+    data = [a for r in rows for a in r.values()]
+    cols = [k for r in rows for k in r]
+    indptr = np.concatenate([[0], np.cumsum([len(r) for r in rows], dtype=np.int64)])
+    return sp.csr_matrix((np.asarray(data, dtype=float), np.asarray(cols, dtype=np.int64), indptr),
+                         shape=(len(rows), n))
 
 
 def _anchor_eps(facade: Facade, column: Sequence[int]) -> float:
@@ -159,7 +168,7 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     n = len(sys_.var_nodes)
     alpha = lambda i: sys_.alpha[id(leaf_node[i])]  # noqa: E731
     beta = lambda i: sys_.beta[id(leaf_node[i])]  # noqa: E731
-    groups: dict[str, tuple[list[np.ndarray], list[float]]] = {"hierarchy": (sys_.hierarchy, [0.0] * len(sys_.hierarchy))}
+    groups: dict[str, tuple[list[Vec], list[float]]] = {"hierarchy": (sys_.hierarchy, [0.0] * len(sys_.hierarchy))}
     size_rows = [sys_.alpha[id(root)]]
     size_rhs = [target]
     if lines is not None:
@@ -171,23 +180,24 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
         eps = _anchor_eps(facade, col)
         for a, b in zip(col, col[1:]):
             fa, fb = facade.leaves[a], facade.leaves[b]
-            rows_a.append(beta(a) + eps * alpha(a) - beta(b) - eps * alpha(b))
+            rows_a.append(_comb((1.0, beta(a)), (eps, alpha(a)), (-1.0, beta(b)), (-eps, alpha(b))))
             rhs_a.append((fa.x + eps * fa.w) - (fb.x + eps * fb.w))
     groups["alignment"] = (rows_a, rhs_a)
-    groups["symmetry"] = ([alpha(a) - alpha(b) for a, b in pairs], [0.0] * len(pairs))
+    groups["symmetry"] = ([_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs))
     x_star = np.array([v.w for v in sys_.var_nodes])
     area = np.array([v.w * v.h for v in sys_.var_nodes])
     weight = np.minimum(facade.width * facade.height / np.maximum(area, EPS), WEIGHT_CAP)
-    G_rows, h_rows = [-np.eye(n)], [-np.full(n, MIN_SIZE)]
+    G_rows: list[Vec] = [{k: -1.0} for k in range(n)]
+    h_rows = [-MIN_SIZE] * n
     for i in cornered:
-        G_rows += [-beta(i)[None], (beta(i) + alpha(i))[None]]
-        h_rows += [np.array([-corners[0]]), np.array([target - corners[1]])]
-    G, h = np.vstack(G_rows), np.concatenate(h_rows)
+        G_rows += [_comb((-1.0, beta(i))), _comb((1.0, beta(i)), (1.0, alpha(i)))]
+        h_rows += [-corners[0], target - corners[1]]
+    G, h = _matrix(G_rows, n), np.asarray(h_rows, dtype=float)
     dropped: list[str] = []
     for drop in ((), ("symmetry",), ("symmetry", "alignment")):
         rows = [r for k, (rs, _) in groups.items() if k not in drop for r in rs]
         rhs = [v for k, (_, vs) in groups.items() if k not in drop for v in vs]
-        x = _solve(weight, x_star, rows, rhs, G, h)
+        x = _solve(weight, x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), G, h)
         if x is not None:
             objective = float(np.sum((weight * (x - x_star)) ** 2))
             return SpatialResult(_place(facade, root, sys_, x, target), True, objective, n, tuple(drop))
@@ -195,23 +205,21 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
 
 
-def _solve(weight: np.ndarray, x_star: np.ndarray, rows: list[np.ndarray], rhs: list[float], G: np.ndarray,
+def _solve(weight: np.ndarray, x_star: np.ndarray, A: sp.spmatrix, b: np.ndarray, G: sp.spmatrix,
            h: np.ndarray) -> np.ndarray | None:
-    """Eq. 1 with equality rows ``rows`` and inequality rows ``G x <= h``; None when infeasible.
+    """Eq. 1 with equality rows ``A x = b`` and inequality rows ``G x <= h`` (sparse); None when infeasible.
 
     Active-set loop on the sparse KKT system, which tolerates redundant equality rows (so no rank test): violated
     inequality rows join the active set, active rows whose multiplier has the wrong sign leave it. When the loop
     does not settle (adding every violated row at once can over-constrain), DAQP's dual active set, which also
     copes with dependent rows, solves the dense problem."""
-    n = x_star.size
     P = 2 * weight**2
     q = -P * x_star
-    A = np.vstack(rows) if rows else np.zeros((0, n))
-    b = np.asarray(rhs, dtype=float)
+    A, G = sp.csr_matrix(A), sp.csr_matrix(G)
     scale = 1.0 + float(np.max(np.abs(np.concatenate([b, h])), initial=0.0))
     active: list[int] = []
     for _ in range(ACTIVE_SET_ROUNDS):
-        solved = _kkt(P, q, np.vstack([A, G[active]]), np.concatenate([b, h[active]]), scale)
+        solved = _kkt(P, q, sp.vstack([A, G[active]], format="csr"), np.concatenate([b, h[active]]), scale)
         if solved is None:
             if not active:
                 return None  # the equality rows alone are inconsistent
@@ -229,10 +237,10 @@ def _solve(weight: np.ndarray, x_star: np.ndarray, rows: list[np.ndarray], rhs: 
     return _dual_active_set(P, q, A, b, G, h)
 
 
-def _dual_active_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray, G: np.ndarray,
+def _dual_active_set(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, G: sp.spmatrix,
                      h: np.ndarray) -> np.ndarray | None:
-    """DAQP on ``A x = b, G x <= h`` (``P`` diagonal); None unless it reports an optimum."""
-    rows = np.ascontiguousarray(np.vstack([A, G]))
+    """DAQP on ``A x = b, G x <= h`` (``P`` diagonal, rows made dense); None unless it reports an optimum."""
+    rows = np.ascontiguousarray(sp.vstack([A, G]).toarray())
     upper = np.concatenate([b, h])
     lower = np.concatenate([b, np.full(h.size, -1e30)])
     sense = np.zeros(upper.size, dtype=np.int32)
@@ -241,7 +249,7 @@ def _dual_active_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray,
     return np.asarray(x) if flag == 1 and np.all(np.isfinite(x)) else None
 
 
-def _kkt(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray, scale: float
+def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: float
          ) -> tuple[np.ndarray, np.ndarray] | None:
     """``x`` and multipliers ``y`` of ``min 1/2 x'Px + q'x s.t. A x = b`` (``P`` diagonal) from the sparse KKT
     system with a small dual regularisation, refined against the exact system (so redundant rows are harmless

@@ -46,10 +46,11 @@ def test_regression_regularised_kkt_meets_the_rows_to_rounding(cmp_facade):
 def test_duplicate_and_dependent_rows_need_no_rank_test():
     weight, x_star = np.ones(3), np.array([1.0, 2.0, 3.0])
     row = np.array([1.0, 1.0, 1.0])
-    x = _solve(weight, x_star, [row, row, 2 * row, np.array([1.0, -1.0, 0.0])], [9.0, 9.0, 18.0, 0.0],
+    x = _solve(weight, x_star, np.array([row, row, 2 * row, [1.0, -1.0, 0.0]]), np.array([9.0, 9.0, 18.0, 0.0]),
                -np.eye(3), -np.full(3, 1e-3))
     assert x is not None and x.sum() == pytest.approx(9.0) and x[0] == pytest.approx(x[1])
-    assert _solve(weight, x_star, [row, row], [9.0, 8.0], -np.eye(3), -np.full(3, 1e-3)) is None  # inconsistent
+    assert _solve(weight, x_star, np.array([row, row]), np.array([9.0, 8.0]), -np.eye(3),
+                  -np.full(3, 1e-3)) is None  # inconsistent
 
 
 def test_squeezed_face_falls_back_to_the_dual_active_set(cmp_ruleset, monkeypatch):
