@@ -3,8 +3,8 @@
 ``minimise ||W (x - x*)||^2  s.t.  x > 0, C_h x = 0, C_a x = d_a, C_s x = 0`` plus the target width and any
 floor lines, with ``W`` the inverse leaf area normalised by the facade area (capped at 10). ``x`` holds one
 width per *variable node* after the variable reduction of Fig. 9. Heights are the same problem on the
-transposed facade. Width and left edge of a node are linear in ``x``: ``w = alpha' x`` and ``l = beta' x``, kept as sparse
-rows (index -> coefficient) and assembled into sparse matrices for the solve.
+transposed facade. Width and left edge of a node are linear in ``x``: ``w = alpha' x`` and ``l = beta' x``,
+kept as sparse rows (index -> coefficient) and assembled into sparse matrices for the solve.
 """
 from __future__ import annotations
 
