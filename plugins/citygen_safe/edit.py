@@ -7,14 +7,14 @@ width mismatch it leaves, an analytic estimate of its distortion; jumps of equal
 the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
 states at the counts are the variations. Jumps apply to the natural (unsized)
 facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every jump.
-Each call has a CPU budget: once spent, steps take the estimate's best jump unscored, and the facade resized
-without jumps is always a variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
+Each call has a work budget (leaves sized by the spatial optimisation, a deterministic stand-in for CPU time):
+once spent, steps take the estimate's best jump unscored, and the facade resized without jumps is always a
+variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
 """
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,15 +28,27 @@ from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
-BUDGET_S = 2.0  #: default CPU seconds per generated facade
+BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
+#: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
+#: the budget counts work, not time, so the same request gives the same facade on any machine and under any load.
+LEAVES_PER_SECOND = 12_000
 MAX_LEAVES = 4000  #: column jumps stop before a facade would have more leaves
+
+
+class Work:
+    """The work spent by one edit: leaves sized by the spatial optimisation (shared by the settings it made)."""
+
+    __slots__ = ("spent",)
+
+    def __init__(self) -> None:
+        self.spent = 0
 
 
 @dataclass(frozen=True)
 class Settings:
     """How an edit is solved: active grid specs, constraint switches, labels never duplicated or removed (the
     door, whose budget the building coordinator owns), corner strips and the labels kept out of them, and the
-    CPU budget in seconds."""
+    budget in nominal CPU seconds (``work`` counts what is spent, in leaves: ``units`` is the budget's)."""
 
     active: tuple[GridSpec, ...]
     alignment: bool = True
@@ -45,6 +57,12 @@ class Settings:
     corners: tuple[float, float] = (0.0, 0.0)
     corner_labels: frozenset[str] = frozenset()
     budget: float = BUDGET_S
+    work: Work = field(default_factory=Work, compare=False, repr=False)
+
+    @property
+    def units(self) -> float:
+        """The budget in leaves sized."""
+        return self.budget * LEAVES_PER_SECOND
 
     @property
     def fixed(self) -> frozenset[str]:
@@ -99,6 +117,7 @@ def grids_of(facade: Facade, specs: Sequence[GridSpec]) -> list[FacadeGrid]:
 def size(facade: Facade, settings: Settings, target: float, lines: Lines | None = None,
          root: Node | None = None) -> SpatialResult:
     """The spatial optimisation of ``facade`` at width ``target`` (``lines`` refer to nodes of ``root``)."""
+    settings.work.spent += len(facade.leaves)
     return optimise_widths(facade, root or decompose(facade), grids_of(facade, settings.active), target, lines=lines,
                            corners=settings.corners, corner_labels=settings.corner_labels,
                            alignment=settings.alignment, symmetry=settings.symmetry)
@@ -147,7 +166,7 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
     """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
     mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
     equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
-    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the CPU ``deadline`` has passed).
+    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the work ``deadline`` has passed).
     ``copies`` > 1 repeats a jump that many times in one step (far targets): the finalists are scored as single
     jumps at the per-jump share of the size change, and the winner is repeated unscored (or taken once when the
     repeat is not possible). None when no jump is possible."""
@@ -169,7 +188,7 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
     best: tuple[float, Candidate, Path, SpatialResult | None] | None = None
     for cand in finalists:
         state = Path(*merge_leaves(cand.apply(1), settings.fixed), path.jumps + (cand.jump,))
-        if len(finalists) == 1 or time.process_time() > deadline:
+        if len(finalists) == 1 or settings.work.spent > deadline:
             best = best or (0.0, cand, state, None)
             break
         res = size(state.facade, settings, scout, root=state.root)
@@ -199,12 +218,10 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     The resized facade without jumps is always among them (the fallback when the budget is spent); budget cuts
     are appended to ``notes``."""
     notes = notes if notes is not None else []
-    t0 = time.process_time()
     start = Path(*merge_leaves(facade, settings.fixed))
     facade = start.facade
     found: list[Variation] = []
     res = size(facade, settings, target, root=start.root)
-    rate = (time.process_time() - t0) / max(1, len(facade.leaves))  # CPU s per leaf of a merge + QP
     if res.success:
         found.append(Variation((), res.facade, res.objective, res.dropped))
     step = pitch(facade, settings)
@@ -214,16 +231,16 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
         wanted = sorted(abs(k) for k in counts if k * sign > 0)
         path, res = start, None
         while wanted and len(path.jumps) < wanted[-1]:
-            if time.process_time() > deadline:
-                notes.append(f"CPU budget {settings.budget:g} s spent after {len(path.jumps)} of {wanted[-1]} "
+            if settings.work.spent > deadline:
+                notes.append(f"budget {settings.budget:g} s spent after {len(path.jumps)} of {wanted[-1]} "
                              "column jumps")
                 if path.jumps and len(path.jumps) not in wanted:  # the partial path: fewer jumps, one more QP
                     _add(found, path, res or size(path.facade, settings, target, root=path.root))
                 break
             ahead = min(k for k in wanted if k > len(path.jumps)) - len(path.jumps)
-            copies = _affordable(path, ahead, rate, deadline, settings)
+            copies = _affordable(path, ahead, deadline, settings)
             if copies == 0:
-                notes.append(f"CPU budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
+                notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
                              f"of {wanted[-1]} column jumps")
                 if path.jumps and len(path.jumps) not in wanted:
                     _add(found, path, res or size(path.facade, settings, target, root=path.root))
@@ -245,15 +262,15 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     return unique[:limit]
 
 
-def _affordable(path: Path, copies: int, rate: float, deadline: float, settings: Settings) -> int:
-    """How many of ``copies`` column copies the next step can make before ``deadline``: its finalists and the
-    final sizing each cost ``rate`` per leaf, a copy adds about one column's share of the leaves, and the facade
+def _affordable(path: Path, copies: int, deadline: float, settings: Settings) -> int:
+    """How many of ``copies`` column copies the next step can make before the work ``deadline``: its finalists and
+    the final sizing each cost one unit per leaf, a copy adds about one column's share of the leaves, and the facade
     stays within ``MAX_LEAVES`` (tree rebuilds and the KKT factorisation grow faster than linearly). 0: none."""
     grids = grids_of(path.facade, settings.active)
     columns = max((len(g.columns) for g in grids), default=1)
     n = len(path.facade.leaves)
     per_copy = max(1.0, n / max(1, columns))
-    left = min((deadline - time.process_time()) / (rate * (FINALISTS + 1)), MAX_LEAVES)
+    left = min((deadline - settings.work.spent) / (FINALISTS + 1), MAX_LEAVES)
     return max(0, min(copies, int((left - n) // per_copy)))
 
 

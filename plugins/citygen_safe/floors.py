@@ -9,7 +9,6 @@ full-width cut between two bands (the cut whose scaled position is nearest the l
 """
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 
 from citygen_safe.edit import Candidate, Path, Settings, greedy_step, size
@@ -57,15 +56,15 @@ def fit_floors(facade: Facade, settings: Settings, floor_lines: tuple[float, ...
     """Jump ``facade`` (upright) to the request's floor count and size its heights to ``floor_lines``.
 
     Returns the jumped path (transposed, natural sizes) and the height QP's result (its facade is upright).
-    A count that cannot be reached (no band to copy or remove) or a spent CPU budget is noted in ``notes``."""
+    A count that cannot be reached (no band to copy or remove) or a spent work budget (``deadline``, in leaves sized) is noted in ``notes``."""
     notes = notes if notes is not None else []
     settings = replace(settings, corners=(0.0, 0.0), corner_labels=frozenset())  # corner strips are widths
     target = floor_lines[-1]
     path = Path(*merge_leaves(transpose(facade), settings.fixed))
     want = len(floor_lines) - 1
     while len(floor_bands(path.facade)) != want and floor_bands(path.facade):
-        if time.process_time() > deadline:
-            notes.append(f"CPU budget {settings.budget:g} s spent at {len(floor_bands(path.facade))} of {want} floors")
+        if settings.work.spent > deadline:
+            notes.append(f"budget {settings.budget:g} s spent at {len(floor_bands(path.facade))} of {want} floors")
             break
         grow, shrink = band_candidates(path.facade)
         have = len(floor_bands(path.facade))

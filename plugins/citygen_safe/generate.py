@@ -4,7 +4,8 @@ Door budget: jumps never copy or remove the door. A face that must carry no entr
 wall panels (label ``wall``, depth 0); an entrance face keeps the input's door. Floor-bound elements are kept out
 of the request's corner strips by inequality rows of the width QP.
 
-Every call has a CPU budget (``Settings.budget``): floor jumps stop at 40 % of it, column jumps at 80 %; a spent budget
+Every call has a work budget (``Settings.budget``, nominal CPU seconds counted as leaves sized, so the output does
+not depend on the machine): floor jumps stop at 40 % of it, column jumps at 80 %; a spent budget
 means fewer jumps (the facade resized without jumps is always available) and a note in ``meta.diagnostics``.
 When the edit cannot meet the request (a floor count no row jump reaches, an element in a corner strip, a door
 outside the ground floor), the face falls back like the other kinds: a misplaced door becomes wall and
@@ -13,7 +14,6 @@ outside the ground floor), the face falls back like the other kinds: a misplaced
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, replace
 
 from citygen.entrance import enforce_entrance
@@ -43,6 +43,7 @@ class Edit:
     floor_jumps: tuple[str, ...]
     problems: tuple[str, ...]
     diagnostics: tuple[str, ...] = ()
+    work: int = 0  # leaves sized by the spatial optimisation (the budget's unit), remembered floors included
 
 
 def settings_for(ruleset: SafeRuleset, request: FacadeRequest | None = None) -> Settings:
@@ -53,13 +54,12 @@ def settings_for(ruleset: SafeRuleset, request: FacadeRequest | None = None) -> 
 
 def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = 8) -> Edit:
     settings = settings_for(ruleset, request)
-    start = time.process_time()
     notes: list[str] = []
     path, heights, floor_notes = _floors(ruleset, settings, tuple(request.floor_lines),
-                                         start + FLOORS_SHARE * settings.budget)
+                                         FLOORS_SHARE * settings.units)
     notes += floor_notes
     facade = heights.facade if heights.success else ruleset.facade
-    deadline = start + JUMPS_SHARE * settings.budget
+    deadline = JUMPS_SHARE * settings.units
     variations = width_variations(facade, settings, request.width, limit, deadline, notes)
     if not variations:
         variations = width_variations(facade, replace(settings, alignment=False, symmetry=False), request.width,
@@ -71,21 +71,25 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = 8) -> Edit:
         notes.append("no feasible sizing")
     layout = _checked(layout, request, notes)
     return Edit(layout, chosen, tuple(variations), tuple(floor_jumps), tuple(check_request(layout, request)),
-                tuple(notes))
+                tuple(notes), settings.work.spent)
 
 
 def _floors(ruleset: SafeRuleset, settings: Settings, floor_lines: tuple[float, ...], deadline: float):
     """:func:`fit_floors`, remembered per ruleset and floor lines: the faces of a building share their floor lines
-    (and floors ignore the corner strips), so only the first face pays for the row jumps."""
+    (and floors ignore the corner strips), so only the first face computes the row jumps. A remembered result
+    still charges the work it took, so a face's budget for column jumps does not depend on which faces the
+    process (one of several workers) saw before."""
     key = (id(ruleset), floor_lines)
     hit = _FLOOR_CACHE.get(key)
     if hit is not None and hit[0] is ruleset:
-        return hit[1:]
+        settings.work.spent += hit[4]
+        return hit[1:4]
     notes: list[str] = []
+    before = settings.work.spent
     path, heights = fit_floors(ruleset.facade, settings, floor_lines, deadline, notes)
     if len(_FLOOR_CACHE) >= FLOOR_CACHE_SIZE:
         _FLOOR_CACHE.pop(next(iter(_FLOOR_CACHE)))
-    _FLOOR_CACHE[key] = (ruleset, path, heights, tuple(notes))
+    _FLOOR_CACHE[key] = (ruleset, path, heights, tuple(notes), settings.work.spent - before)
     return path, heights, tuple(notes)
 
 

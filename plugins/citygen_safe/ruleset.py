@@ -7,7 +7,7 @@
     active NAME...                  grids whose columns/rows topological jumps insert or remove
     alignment on|off                alignment constraints C_a (default on)
     symmetry on|off                 same-size constraints C_s (default on)
-    budget SECONDS                  CPU seconds per generated facade (default 2)
+    budget SECONDS                  work per generated facade in nominal CPU seconds (default 2; counted, not timed)
 
 Without ``grid`` statements the grids are detected from labels (``window``, ``door``, ``window+door``, ...);
 without ``active`` the ``window`` grid is active. Errors name file:line:column and what was expected.
@@ -30,7 +30,7 @@ _TOKEN = re.compile(r'\s*(?:(#.*)|"([^"]*)"|([^\s"#]+)|(")|$)')
 @dataclass(frozen=True)
 class SafeRuleset:
     """A parsed ``.safe`` file: the input facade, its grid specs, the active ones, the constraint switches and the
-    CPU budget per facade (seconds)."""
+    work budget per facade (nominal CPU seconds, see ``citygen_safe.edit.LEAVES_PER_SECOND``)."""
 
     name: str
     source: str
