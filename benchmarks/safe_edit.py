@@ -4,8 +4,8 @@
 
 Prints, per target size, the median process time of ``edit`` (floors + width variations + QP) and of one
 spatial optimisation (resizing without topology change), the number of jumps chosen, the resulting leaf count and
-any budget note (the ruleset's budget is 2 nominal CPU seconds of work). Each repeat edits a freshly loaded ruleset, so the floor jumps
-that the faces of one building share are paid every time (the first face's cost).
+any budget note (the ruleset's budget is 2 nominal CPU seconds of work). Each repeat edits a freshly loaded
+ruleset, so the floor jumps that the faces of one building share are paid every time (the first face's cost).
 """
 from __future__ import annotations
 
