@@ -56,7 +56,8 @@ def fit_floors(facade: Facade, settings: Settings, floor_lines: tuple[float, ...
     """Jump ``facade`` (upright) to the request's floor count and size its heights to ``floor_lines``.
 
     Returns the jumped path (transposed, natural sizes) and the height QP's result (its facade is upright).
-    A count that cannot be reached (no band to copy or remove) or a spent work budget (``deadline``, in leaves sized) is noted in ``notes``."""
+    A count that cannot be reached (no band to copy or remove) or a spent work budget (``deadline``, in leaves
+    sized) is noted in ``notes``."""
     notes = notes if notes is not None else []
     settings = replace(settings, corners=(0.0, 0.0), corner_labels=frozenset())  # corner strips are widths
     target = floor_lines[-1]
