@@ -93,4 +93,4 @@ def test_every_shipped_scene_loads_with_its_rulesets(scene_path):
             kind.load(path)
             kinds.add(kind.id)
     if scene_path.name == "helsinki_all_kinds.toml":
-        assert kinds == {"split", "layers", "relayout"}
+        assert kinds == {"split", "layers", "relayout", "safe"}

@@ -1,0 +1,286 @@
+"""Choosing topological jumps for a target size (dang2014 §4-5, made non-interactive and bounded in cost).
+
+The paper proposes variations and lets the user pick. For a target width we try column counts around the one
+the grid's pitch suggests (one fewer, that one, one more). The counts lie on one greedy path of jumps: each step
+ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
+width mismatch it leaves, an analytic estimate of its distortion; jumps of equal width change count as one, and
+the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
+states at the counts are the variations. Jumps apply to the natural (unsized)
+facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every jump.
+Each call has a work budget (leaves sized by the spatial optimisation, a deterministic stand-in for CPU time):
+once spent, steps take the estimate's best jump unscored, and the facade resized without jumps is always a
+variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from citygen.layout import FLOOR_BOUND_LABELS
+from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
+from citygen_safe.jump import (Jump, insert_slab, insertion_gap, merge_leaves, remove_slab, removal_slab,
+                               source_columns)
+from citygen_safe.leaves import EPS, Facade
+from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
+from citygen_safe.tree import Node, decompose
+
+FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
+NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
+BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
+#: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
+#: the budget counts work, not time, so the same request gives the same facade on any machine and under any load.
+LEAVES_PER_SECOND = 12_000
+MAX_LEAVES = 4000  #: column jumps stop before a facade would have more leaves
+
+
+class Work:
+    """The work spent by one edit: leaves sized by the spatial optimisation (shared by the settings it made)."""
+
+    __slots__ = ("spent",)
+
+    def __init__(self) -> None:
+        self.spent = 0
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How an edit is solved: active grid specs, constraint switches, labels never duplicated or removed (the
+    door, whose budget the building coordinator owns), corner strips and the labels kept out of them, and the
+    budget in nominal CPU seconds (``work`` counts what is spent, in leaves: ``units`` is the budget's)."""
+
+    active: tuple[GridSpec, ...]
+    alignment: bool = True
+    symmetry: bool = True
+    keep: frozenset[str] = frozenset({"door"})
+    corners: tuple[float, float] = (0.0, 0.0)
+    corner_labels: frozenset[str] = frozenset()
+    budget: float = BUDGET_S
+    work: Work = field(default_factory=Work, compare=False, repr=False)
+
+    @property
+    def units(self) -> float:
+        """The budget in leaves sized."""
+        return self.budget * LEAVES_PER_SECOND
+
+    @property
+    def fixed(self) -> frozenset[str]:
+        """Labels whose leaves are never merged: grid elements and floor-bound openings."""
+        return FLOOR_BOUND_LABELS | self.keep | {label for spec in self.active for label in spec.labels}
+
+
+@dataclass(frozen=True)
+class Variation:
+    """A facade after ``jumps`` and the spatial optimisation, with its distortion E(x)."""
+
+    jumps: tuple[Jump, ...]
+    facade: Facade
+    objective: float
+    dropped: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A single jump of a facade: the size change ``delta`` it makes, the distance ``offset`` of its place from the
+    facade's middle, the ``slabs`` it copies (insertion) or cuts out (removal) and how to apply it ``copies``
+    times (insertions; removals once)."""
+
+    jump: Jump
+    delta: float
+    offset: float
+    slabs: tuple[tuple[float, float], ...]
+    apply: Callable[[int], Facade | None]
+
+    def changes(self, facade: Facade, labels: frozenset[str]) -> bool:
+        """Whether the jump would copy or remove a leaf with one of ``labels`` (tested before applying it)."""
+        if self.jump.op == "insert":
+            return any(f.label in labels and f.x < hi - EPS and f.right > lo + EPS
+                       for f in facade.leaves for lo, hi in self.slabs)
+        return any(f.label in labels and f.x >= lo - EPS and f.right <= hi + EPS
+                   for f in facade.leaves for lo, hi in self.slabs)
+
+
+@dataclass(frozen=True)
+class Path:
+    """A state of a greedy path: the natural (unsized) facade after ``jumps`` and its decomposition tree."""
+
+    facade: Facade
+    root: Node
+    jumps: tuple[Jump, ...] = ()
+
+
+def grids_of(facade: Facade, specs: Sequence[GridSpec]) -> list[FacadeGrid]:
+    return [g for g in (detect_grid(facade, s) for s in specs) if g is not None]
+
+
+def size(facade: Facade, settings: Settings, target: float, lines: Lines | None = None,
+         root: Node | None = None) -> SpatialResult:
+    """The spatial optimisation of ``facade`` at width ``target`` (``lines`` refer to nodes of ``root``)."""
+    settings.work.spent += len(facade.leaves)
+    return optimise_widths(facade, root or decompose(facade), grids_of(facade, settings.active), target, lines=lines,
+                           corners=settings.corners, corner_labels=settings.corner_labels,
+                           alignment=settings.alignment, symmetry=settings.symmetry)
+
+
+def kept(facade: Facade, labels: frozenset[str]) -> int:
+    return sum(1 for f in facade.leaves if f.label in labels)
+
+
+def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Candidate]:
+    """Every single jump of the active grids with its width change."""
+    out, middle = [], 0.5 * facade.width
+    for spec in settings.active:
+        grid = detect_grid(facade, spec)
+        if grid is None or len(grid.columns) < 2:
+            continue
+        if grow:
+            for s in source_columns(facade, grid):
+                slab = grid.columns[s]
+                for p in range(1, len(grid.columns)):
+                    gap = insertion_gap(grid, p)
+                    if gap is not None:
+                        out.append(Candidate(Jump("insert", spec.name, "x", s, p),
+                                             gap[1] - gap[0] + slab[1] - slab[0], abs(gap[0] - middle), (gap, slab),
+                                             lambda m, gap=gap, slab=slab: insert_slab(facade, gap, slab, m)))
+        else:
+            for c in range(len(grid.columns)):
+                cut = removal_slab(grid, c)
+                if cut is not None:
+                    out.append(Candidate(Jump("remove", spec.name, "x", c), cut[0] - cut[1],
+                                         abs(0.5 * (cut[0] + cut[1]) - middle), (cut,),
+                                         _remover(facade, grid, c)))
+    return out
+
+
+def _remover(facade: Facade, grid: FacadeGrid, column: int) -> Callable[[int], Facade | None]:
+    """Remove ``column`` ``m`` times (None when that would leave no column)."""
+    def apply(m: int) -> Facade | None:
+        slab = removal_slab(grid, column, m)
+        return None if slab is None else remove_slab(facade, slab)
+    return apply
+
+
+def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
+    """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
+    mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
+    equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
+    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the work ``deadline`` has passed).
+    ``copies`` > 1 repeats a jump that many times in one step (far targets): the finalists are scored as single
+    jumps at the per-jump share of the size change, and the winner is repeated unscored (or taken once when the
+    repeat is not possible). None when no jump is possible."""
+    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + copies * c.delta - target), 2),
+                                              round(c.offset, 2), str(c.jump)))
+    want = kept(path.facade, settings.keep)
+    finalists: list[Candidate] = []
+    seen: set[float] = set()
+    for cand in order:
+        if round(cand.delta, 2) in seen or cand.changes(path.facade, settings.keep):
+            continue
+        new = cand.apply(1)
+        if kept(new, settings.keep) == want:
+            seen.add(round(cand.delta, 2))
+            finalists.append(replace(cand, apply=lambda m, new=new, cand=cand: new if m == 1 else cand.apply(m)))
+            if len(finalists) == FINALISTS:
+                break
+    scout = path.facade.width + (target - path.facade.width) / copies
+    best: tuple[float, Candidate, Path, SpatialResult | None] | None = None
+    for cand in finalists:
+        state = Path(*merge_leaves(cand.apply(1), settings.fixed), path.jumps + (cand.jump,))
+        if len(finalists) == 1 or settings.work.spent > deadline:
+            best = best or (0.0, cand, state, None)
+            break
+        res = size(state.facade, settings, scout, root=state.root)
+        if res.success and (best is None or res.objective < best[0]):
+            best = (res.objective, cand, state, res)
+    if best is None:
+        return None
+    _, cand, state, res = best
+    bulk = cand.apply(copies) if copies > 1 else None
+    if bulk is None or kept(bulk, settings.keep) != want:  # no repeat asked for, or not possible: one jump
+        return state, res
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * copies), None
+
+
+def pitch(facade: Facade, settings: Settings) -> float | None:
+    """Mean distance between consecutive columns of the first active grid with two or more columns."""
+    for grid in grids_of(facade, settings.active):
+        if len(grid.columns) > 1:
+            return (grid.columns[-1][0] - grid.columns[0][0]) / (len(grid.columns) - 1)
+    return None
+
+
+def width_variations(facade: Facade, settings: Settings, target: float, limit: int = 8,
+                     deadline: float = float("inf"), notes: list[str] | None = None) -> list[Variation]:
+    """Variations of ``facade`` at width ``target``, least distortion first (ties by jump description).
+
+    The resized facade without jumps is always among them (the fallback when the budget is spent); budget cuts
+    are appended to ``notes``."""
+    notes = notes if notes is not None else []
+    start = Path(*merge_leaves(facade, settings.fixed))
+    facade = start.facade
+    found: list[Variation] = []
+    res = size(facade, settings, target, root=start.root)
+    if res.success:
+        found.append(Variation((), res.facade, res.objective, res.dropped))
+    step = pitch(facade, settings)
+    best_k = 0 if step is None else int(round((target - facade.width) / step))
+    counts = {best_k - 1, best_k, best_k + 1} - {0} if step is not None else set()
+    for sign in (1, -1):
+        wanted = sorted(abs(k) for k in counts if k * sign > 0)
+        path, res = start, None
+        while wanted and len(path.jumps) < wanted[-1]:
+            if settings.work.spent > deadline:
+                notes.append(f"budget {settings.budget:g} s spent after {len(path.jumps)} of {wanted[-1]} "
+                             "column jumps")
+                if path.jumps and len(path.jumps) not in wanted:  # the partial path: fewer jumps, one more QP
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
+                break
+            ahead = min(k for k in wanted if k > len(path.jumps)) - len(path.jumps)
+            copies = _affordable(path, ahead, deadline, settings)
+            if copies == 0:
+                notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
+                             f"of {wanted[-1]} column jumps")
+                if path.jumps and len(path.jumps) not in wanted:
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
+                break
+            nxt = greedy_step(path, column_candidates(path.facade, settings, sign > 0), settings, target, deadline,
+                              copies)
+            if nxt is None:
+                break
+            path, res = nxt
+            if len(path.jumps) in wanted:
+                _add(found, path, res or size(path.facade, settings, target, root=path.root))
+    found.sort(key=lambda v: (v.objective, [str(j) for j in v.jumps]))
+    unique, seen = [], set()
+    for v in found:
+        key = tuple(sorted((round(f.x, 6), round(f.w, 6), f.origin) for f in v.facade.leaves))
+        if key not in seen:
+            seen.add(key)
+            unique.append(v)
+    return unique[:limit]
+
+
+def _affordable(path: Path, copies: int, deadline: float, settings: Settings) -> int:
+    """How many of ``copies`` column copies the next step can make before the work ``deadline``: its finalists and
+    the final sizing each cost one unit per leaf, a copy adds about one column's share of the leaves, and the facade
+    stays within ``MAX_LEAVES`` (tree rebuilds and the KKT factorisation grow faster than linearly). 0: none."""
+    grids = grids_of(path.facade, settings.active)
+    columns = max((len(g.columns) for g in grids), default=1)
+    n = len(path.facade.leaves)
+    per_copy = max(1.0, n / max(1, columns))
+    left = min((deadline - settings.work.spent) / (FINALISTS + 1), MAX_LEAVES)
+    return max(0, min(copies, int((left - n) // per_copy)))
+
+
+def _add(found: list[Variation], path: Path, res: SpatialResult) -> None:
+    if res.success:
+        found.append(Variation(path.jumps, res.facade, res.objective, res.dropped))
+
+
+def pick(variations: Sequence[Variation], rng: np.random.Generator) -> Variation:
+    """One of the near-best variations (objective within NEAR_BEST of the least), chosen by ``rng``."""
+    best = variations[0].objective
+    near = [v for v in variations if v.objective <= best * NEAR_BEST + 1e-9]
+    return near[int(rng.integers(len(near)))]

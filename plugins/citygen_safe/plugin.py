@@ -1,0 +1,91 @@
+"""citygen plugin: the ``safe`` ruleset kind (dang2014) and the ``citygen edit`` command."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from citygen.errors import CitygenError
+from citygen.hookspecs import hookimpl
+from citygen.layout import FacadeLayout
+from citygen.registry import Command, Registry, RulesetKind
+from citygen.request import FacadeRequest
+from citygen_safe.generate import edit
+from citygen_safe.ruleset import SafeRuleset, load_ruleset
+
+
+class SafeKind(RulesetKind):
+    id = "safe"
+    suffixes = (".safe",)
+    description = "structure-aware facade editing (dang2014): grid row/column jumps + QP on one input layout"
+
+    def load(self, path: Path) -> SafeRuleset:
+        return load_ruleset(path)
+
+    def generate(self, ruleset: SafeRuleset, request: FacadeRequest) -> FacadeLayout:
+        return edit(ruleset, request).layout
+
+    def explain(self, ruleset: SafeRuleset, request: FacadeRequest) -> str:
+        result = edit(ruleset, request)
+        lines = [f"safe ruleset {ruleset.name}: {len(ruleset.facade.leaves)} input leaves, grids "
+                 f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
+                 f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}"]
+        for k, v in enumerate(result.variations):
+            mark = "*" if v is result.chosen else " "
+            lines.append(f"{mark} variation {k}: E={v.objective:.4g} {'; '.join(map(str, v.jumps)) or 'resize only'}")
+        lines += [f"note: {d}" for d in result.diagnostics] + [f"problem: {p}" for p in result.problems]
+        return "\n".join(lines)
+
+
+class EditCommand(Command):
+    name = "edit"
+    help = "list or write the K structure-aware variations (dang2014) of a .safe ruleset for one size"
+
+    def configure(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("ruleset", type=Path, help="a .safe ruleset file")
+        parser.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+        parser.add_argument("--count", type=int, default=4, help="K, the number of variations")
+        parser.add_argument("--seed", type=int, default=0)
+        parser.add_argument("--floor-height", type=float, default=3.0)
+        parser.add_argument("--no-entrance", action="store_true", help="the face carries no door")
+        out = parser.add_mutually_exclusive_group()
+        out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
+        out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
+
+    def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        from citygen_safe.generate import _finish
+        try:
+            ruleset = load_ruleset(args.ruleset)
+        except CitygenError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        width, height = args.size
+        request = FacadeRequest.preview(width, height, args.floor_height, entrance=not args.no_entrance,
+                                        seed=args.seed)
+        result = edit(ruleset, request, limit=max(1, args.count))
+        layouts = [_finish(v.facade, request, ruleset, v, list(result.floor_jumps)) for v in result.variations]
+        if args.json:
+            print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
+        elif args.png and layouts:
+            from citygen.preview import contact_sheet, draw_layout
+            px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
+            contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(args.png)
+            print(f"wrote {args.png} ({len(layouts)} variations)")
+        else:
+            print(f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}")
+            for k, v in enumerate(result.variations):
+                mark = "*" if v is result.chosen else " "
+                print(f"{mark} variation {k}: E={v.objective:.4g}, {len(v.facade.leaves)} leaves: "
+                      f"{'; '.join(map(str, v.jumps)) or 'resize only'}")
+        return 0 if layouts else 1
+
+
+@hookimpl
+def citygen_ruleset_kinds() -> list[RulesetKind]:
+    return [SafeKind()]
+
+
+@hookimpl
+def citygen_commands() -> list[Command]:
+    return [EditCommand()]
