@@ -5,6 +5,8 @@ density; layers of a layer stack are drawn back to front so upper layers cover l
 """
 from __future__ import annotations
 
+import argparse
+import json
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -72,3 +74,24 @@ def contact_sheet(images: Sequence[Image.Image], columns: int = 4, gap: int = 8)
     for k, img in enumerate(images):
         sheet.paste(img, (gap + (k % columns) * (cw + gap), gap + (k // columns) * (ch + gap)))
     return sheet
+
+
+def add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--json`` / ``--png FILE`` for a command that shows several layouts (see :func:`write_layouts`)."""
+    out = parser.add_mutually_exclusive_group()
+    out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
+    out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
+
+
+def write_layouts(layouts: Sequence[FacadeLayout], as_json: bool, png: Path | None) -> bool:
+    """Print ``layouts`` as a JSON list or draw them as one contact sheet at a common scale; False when neither
+    was asked for (or there is nothing to draw), so the caller prints its own summary."""
+    if as_json:
+        print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
+        return True
+    if png is None or not layouts:
+        return False
+    px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
+    contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(png)
+    print(f"wrote {png} ({len(layouts)} variations)")
+    return True

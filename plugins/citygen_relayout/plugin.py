@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -10,6 +9,7 @@ from pathlib import Path
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
+from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_relayout import building
@@ -56,9 +56,7 @@ class RelayoutCommand(Command):
         parser.add_argument("--count", type=int, default=1)
         parser.add_argument("--seed", type=int, default=0)
         parser.add_argument("--budget", type=float, default=10.0, help="CPU-time safety limit per variation (s)")
-        out = parser.add_mutually_exclusive_group()
-        out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
-        out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
+        add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
         try:
@@ -72,14 +70,7 @@ class RelayoutCommand(Command):
         for k, r in enumerate(results):
             if not r.success:
                 print(f"variation {k}: {r.message}", file=sys.stderr)
-        if args.json:
-            print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
-        elif args.png and layouts:
-            from citygen.preview import contact_sheet, draw_layout
-            px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
-            contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(args.png)
-            print(f"wrote {args.png} ({len(layouts)} variations)")
-        else:
+        if not write_layouts(layouts, args.json, args.png):
             for k, r in enumerate(results):
                 if r.success:
                     print(f"variation {k}: {len(r.layout.terminals())} terminals, {r.seconds * 1000:.1f} ms, "

@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
+from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_safe.generate import edit
@@ -49,9 +49,7 @@ class EditCommand(Command):
         parser.add_argument("--seed", type=int, default=0)
         parser.add_argument("--floor-height", type=float, default=3.0)
         parser.add_argument("--no-entrance", action="store_true", help="the face carries no door")
-        out = parser.add_mutually_exclusive_group()
-        out.add_argument("--json", action="store_true", help="print the layouts as FacadeLayout JSON")
-        out.add_argument("--png", type=Path, metavar="FILE", help="draw a contact sheet")
+        add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
         from citygen_safe.generate import _finish
@@ -65,14 +63,7 @@ class EditCommand(Command):
                                         seed=args.seed)
         result = edit(ruleset, request, limit=max(1, args.count))
         layouts = [_finish(v.facade, request, ruleset, v, list(result.floor_jumps)) for v in result.variations]
-        if args.json:
-            print(json.dumps([lay.to_json() for lay in layouts], indent=1, sort_keys=True))
-        elif args.png and layouts:
-            from citygen.preview import contact_sheet, draw_layout
-            px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
-            contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(args.png)
-            print(f"wrote {args.png} ({len(layouts)} variations)")
-        else:
+        if not write_layouts(layouts, args.json, args.png):
             print(f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}")
             for k, v in enumerate(result.variations):
                 mark = "*" if v is result.chosen else " "
