@@ -37,7 +37,7 @@ def main() -> None:
                        resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss) / 1024
             print(f"{Path(scene_path).name}: {report.written} buildings ({len(report.skipped)} skipped) in "
                   f"{elapsed:.2f} s = {report.written / elapsed:.0f} buildings/s, jobs {args.jobs}")
-            print(f"  stages: " + ", ".join(f"{k} {v:.2f}s" for k, v in report.timings.items()))
+            print("  stages: " + ", ".join(f"{k} {v:.2f}s" for k, v in report.timings.items()))
             print(f"  peak RSS {peak:.0f} MB; {args.suffix} {s.bytes / 1e6:.2f} MB; {s.prims} prims, {s.meshes} "
                   f"meshes, {s.polygons} polygons, {s.instances} instances of {s.prototypes} prototypes; "
                   f"warnings {len(report.warnings)}")

@@ -72,7 +72,6 @@ def solve_eq_qp(P: np.ndarray | sp.spmatrix, q: np.ndarray, A: np.ndarray | sp.s
         x = spla.spsolve(Ps, -q)
         return QPResult(np.atleast_1d(x), True, "solved", "optimal", float(0.5 * x @ (Ps @ x) + q @ x))
     As = sp.csc_matrix(A)
-    m = As.shape[0]
     bvec = np.asarray(b, dtype=float).ravel()
     K = _kkt_matrix(Ps, As, regularization)
     rhs = np.concatenate([-q, bvec])

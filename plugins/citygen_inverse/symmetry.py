@@ -52,17 +52,16 @@ class _Sides:
         self.stride = max(v.size for v in self.lines) + 1
         ranks = [np.searchsorted(self.lines[k % 2], v) for k, v in enumerate((X0, Y0, X1, Y1))]
         cols = ((0, 1, 3, 2), (2, 1, 3, 0), (1, 0, 2, 3), (3, 0, 2, 1))  # per side: terminal's line, start, end, far
-        key_start, key_end, far, side, at = [], [], [], [], []
+        key_start, key_end, far, at = [], [], [], []
         for d, (li, st, en, fa) in enumerate(cols):
             base = (d * self.stride + ranks[li]) * self.stride
             key_start.append(base + ranks[st])
             key_end.append(base + ranks[en])
             far.append((X0, Y0, X1, Y1)[fa])
-            side.append((X0, Y0, X1, Y1)[li])
             at.append(ranks[st] + (d // 2) * self.lines[1].size)  # index into the along-axis powers
         order = np.argsort(np.concatenate(key_start), kind="stable")
         self.by_start, self.by_end = np.concatenate(key_start)[order], np.concatenate(key_end)[order]
-        self.far, line = np.concatenate(far)[order], np.concatenate(side)[order]
+        self.far = np.concatenate(far)[order]
         new_run = np.ones(order.size, dtype=bool)
         new_run[1:] = (self.by_start[1:] // self.stride != self.by_start[:-1] // self.stride) | \
             (self.by_start[1:] != self.by_end[:-1]) | (self.far[1:] != self.far[:-1])

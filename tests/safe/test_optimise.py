@@ -6,7 +6,7 @@ import pytest
 
 from citygen.layout import check_partition
 from citygen_safe.compose import to_layout
-from citygen_safe.grids import GridSpec, auto_specs, detect_grid
+from citygen_safe.grids import auto_specs, detect_grid
 from citygen_safe.leaves import facade_from_layout, transpose
 from citygen_safe.optimise import MIN_SIZE, _anchor_eps, optimise_widths
 from citygen_safe.tree import decompose
