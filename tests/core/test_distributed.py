@@ -1,11 +1,13 @@
 """The dask executor: one task per tile, each tile a self-contained layer written by its worker."""
 from __future__ import annotations
 
+import hashlib
 import json
 import sys
 import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
 
@@ -46,13 +48,14 @@ def _scene(small_scene: Path, path: str):
 
 
 def _composed(path: Path) -> dict[str, object]:
-    """What a user sees: every prim path (instance proxies included) with its type, point count or instance count."""
+    """What a user sees: every prim path (instance proxies included) with its type, points or instance count."""
     stage = Usd.Stage.Open(str(path))
     seen = {}
     for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)):  # /Prototypes too
         value: object = prim.GetTypeName()
         if prim.IsA(UsdGeom.Mesh):
-            value = len(UsdGeom.Mesh(prim).GetPointsAttr().Get())
+            points = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get())
+            value = (len(points), hashlib.sha256(points.tobytes()).hexdigest())
         elif prim.IsA(UsdGeom.PointInstancer):
             value = len(UsdGeom.PointInstancer(prim).GetProtoIndicesAttr().Get())
         seen[str(prim.GetPath())] = value
