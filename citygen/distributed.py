@@ -124,8 +124,8 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
         with client:
             yield client
         return
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0") as cluster, \
-            Client(cluster) as client:
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address="127.0.0.1:0") as cluster, Client(cluster) as client:
         yield client
 
 
@@ -143,9 +143,10 @@ def run_tiles(work: Sequence[tuple], job: TileJob, scheduler: str | None, worker
             tile, size = futures[future]
             try:
                 result = future.result()
-            except CitygenError:
-                raise
             except Exception as exc:
+                client.cancel(list(futures))
+                if isinstance(exc, CitygenError):
+                    raise
                 raise CitygenError(f"{tile_name(tile)} failed on its dask worker: {type(exc).__name__}: {exc}",
                                   hint="see the worker's log") from exc
             results[tile] = result

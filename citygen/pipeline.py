@@ -2,7 +2,8 @@
 
 One bad building never aborts the city: any error while building it is caught, reported with the building id and
 reason, and the rest is written. ``jobs > 1`` generates buildings in worker processes; results are collected in
-input order, so the stage is byte-identical whatever the job count.
+input order, so the stage is byte-identical whatever the job count. ``executor="dask"`` hands whole tiles to a Dask
+cluster instead (:mod:`citygen.distributed`).
 """
 from __future__ import annotations
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
 
+from citygen import distributed as distributed_executor
 from citygen.cli import main
 from citygen.errors import CitygenError
 from citygen.geometry import building
@@ -186,3 +187,31 @@ def test_cli_generates_on_a_local_dask_cluster(tmp_path, capsys):
     assert main(["validate", str(tmp_path / "mini.usdc")]) == 0
     assert main(["generate", str(tmp_path / "mini.toml"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
     assert "--scheduler needs --executor dask" in capsys.readouterr().err
+
+
+def test_dask_usdz_packages_the_tile_layers(small_scene, test_registry, cluster):
+    report = generate_city(_scene(small_scene, "out/small.usdz"), registry=test_registry, executor="dask",
+                           scheduler=cluster.scheduler_address)
+    assert not (report.stats.path.parent / "small_tiles").exists()
+    assert len(buildings(Usd.Stage.Open(str(report.stats.path)))) == 3
+    assert _errors(report.stats.path) == []
+
+
+def test_a_failed_tile_task_stops_the_run_and_keeps_the_old_stage(small_scene, test_registry, cluster, monkeypatch):
+    scene = _scene(small_scene, "out/small.usda")
+    generate_city(scene, registry=test_registry, executor="dask", scheduler=cluster.scheduler_address)
+    out = Path(scene.output.path)
+    before = {p.name: p.read_bytes() for p in [out, *(out.parent / "small_tiles").iterdir()]}
+
+    add = distributed_executor.StageWriter.add
+
+    def disk_gone(self, record):
+        if record.tile == (1, 0):
+            raise OSError("disk gone")
+        add(self, record)
+
+    monkeypatch.setattr(distributed_executor.StageWriter, "add", disk_gone)
+    with pytest.raises(CitygenError, match=r"Tile_1_0 failed on its dask worker: OSError: disk gone"):
+        generate_city(scene, registry=test_registry, executor="dask", scheduler=cluster.scheduler_address)
+    assert {p.name: p.read_bytes() for p in [out, *(out.parent / "small_tiles").iterdir()]} == before
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]
