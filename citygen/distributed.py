@@ -56,7 +56,6 @@ class TileJob:
 class TileResult:
     """What a tile task sends back: its layer file (``None`` when no building was written) and its report items."""
 
-    tile: tuple[int, int]
     layer: str | None
     stats: StageStats | None
     prototypes: tuple[ProtoKey | ModuleKey, ...]
@@ -103,7 +102,7 @@ def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
             stats = writer.close()
     finally:
         clear_module_cache()
-    return TileResult(tile, layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
+    return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
                       tuple(skipped), tuple(warnings))
 
 
