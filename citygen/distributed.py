@@ -110,6 +110,7 @@ def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
 def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
     """A client of the cluster at ``scheduler``, or of a local cluster of ``workers`` worker processes."""
     try:
+        import dask
         from dask.distributed import Client, LocalCluster
     except ImportError as exc:
         raise CitygenError(f"the dask executor needs dask.distributed, which is not installed ({exc})",
@@ -123,8 +124,10 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
         with client:
             yield client
         return
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                      dashboard_address="127.0.0.1:0") as cluster, Client(cluster) as client:
+    # the workers' statistical profiler (for the dashboard) costs ~7 % of their CPU on citygen's Python-bound tasks
+    with dask.config.set({"distributed.worker.profile.enabled": False}), \
+            LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                         dashboard_address="127.0.0.1:0") as cluster, Client(cluster) as client:
         yield client
 
 
