@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
+from citygen_inverse.photo_elements import cluster_type
+
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
 TAU_EDGE = 2.5
 #: Fraction of a line over which its edge strength is averaged.
@@ -53,6 +55,7 @@ MAX_DOORS = 2
 #: §3.2 global synchronisation: split distances of one orientation within this fraction (plus a pixel) of a
 #: cluster's smallest are one size.
 SYNC = 0.1
+PRIOR = True
 
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
 
@@ -65,6 +68,7 @@ class Node:
     label: str | None = None
     children: tuple[Node, ...] = ()
     cuts: tuple[tuple[str, int], ...] = ()  # §3.1 split of this region: (side, distance of its line from the side)
+    element: str | None = None  # name of the matched library element (§4, ``photo_elements``)
 
 
 @dataclass(frozen=True)
@@ -259,12 +263,12 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
 def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool]) -> list[Node]:
     """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
     edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
-    whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members."""
-    stacks = [plausible_doors(stack_tree(edges, tiles, ground), len(tiles))
-              for tiles, ground in zip(groups, grounds)]
+    whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members, and §4's element type per
+    cluster of corresponding regions (:func:`match_elements`)."""
+    stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
     sizes = synchronised(stacks)
-    return [_members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles)
-            for tree, tiles in zip(stacks, groups)]
+    return [match_elements(edges, _members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles), ground)
+            for tree, tiles, ground in zip(stacks, groups, grounds)]
 
 
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
@@ -286,16 +290,40 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
     return tree
 
 
-def plausible_doors(node: Node, members: int) -> Node:
-    """Door leaves of a group's tree that are no plausible door -- lower than ``DOOR_ASPECT`` times their width,
-    or in a group of more than ``MAX_DOORS`` tiles -- become wall (shop fronts are not modelled; as windows they
-    cost window precision on the CMP development photos, where they are annotated as shops)."""
-    if node.children:
-        return Node(node.rects, node.label, tuple(plausible_doors(c, members) for c in node.children), node.cuts)
-    r0, r1, c0, c1 = node.rects[0]
-    if node.label == "door" and (members > MAX_DOORS or r1 - r0 < DOOR_ASPECT * (c1 - c0)):
-        return Node(node.rects, "wall")
-    return node
+def match_elements(edges: EdgeImage, tree: Node, ground: bool) -> Node:
+    """§4: every leaf that may hold an element (:func:`_element_labels`) is a cluster of similar regions, one per
+    member tile; its label and element are Eq. 8's best library element (the wall when none explains it)."""
+    tiles = tree.rects
+
+    def visit(node: Node) -> Node:
+        if node.children:
+            return Node(node.rects, node.label, tuple(visit(c) for c in node.children), node.cuts)
+        labels = _element_labels(node, tiles, ground)
+        if PRIOR:
+            if node.label in (None, "wall"):
+                return node
+            labels = tuple(lab for lab in (labels or ("window", "balcony")) if lab != "wall")
+        elif not labels:
+            return Node(node.rects, "wall")
+        element, _ = cluster_type(edges.gray, node.rects, labels)
+        return Node(node.rects, element.label, element=None if element.label == "wall" else element.name)
+    return visit(tree)
+
+
+def _element_labels(node: Node, tiles: tuple[Rect, ...], ground: bool) -> tuple[str, ...]:
+    """Labels a leaf may take: none when it touches its tile's sides (or, above the ground floor, its bottom) or is
+    under ``MIN_AREA`` of the tile; a ground-floor region on the tile's bottom is a door -- if plausible: at least
+    ``DOOR_ASPECT`` times as high as wide, in a group of at most ``MAX_DOORS`` tiles (a door repeated in every
+    tile of a longer row is a row of shop fronts or an arcade) -- or a shop front; any other a window (a balcony
+    above the ground floor)."""
+    sides, bottom = _touches(node.rects, tiles)
+    (r0, r1, c0, c1), (t0, t1, u0, u1) = node.rects[0], tiles[0]
+    if sides or (bottom and not ground) or (r1 - r0) * (c1 - c0) < MIN_AREA * (t1 - t0) * (u1 - u0):
+        return ()
+    if bottom:
+        plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
+        return ("door", "shop", "wall") if plausible else ("shop", "wall")
+    return ("window", "wall") if ground else ("window", "balcony", "wall")
 
 
 def synchronised(trees: list[Node]) -> dict[tuple[bool, int], int]:
