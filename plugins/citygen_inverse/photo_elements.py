@@ -140,12 +140,14 @@ def library() -> tuple[Element, ...]:
                     (ProtoKey("blind", "shutter_green", w // 2, h, 4), -w / 20, 0.0),
                     (ProtoKey("blind", "shutter_green", w // 2, h, 4), w / 10, 0.0)]
         out.append(_element(f"window_shutters_{w}x{h}", "window", shutters))
-    for w, h in ((10, 22), (14, 24)):
-        rail = ProtoKey("balcony", "railing_metal", w + 6, 11, 110)
-        out.append(_element(f"balcony_{w}x{h}", "balcony", [(rail, 0.0, 0.0),
-                                                            (ProtoKey("window", "frame_white", w, h, -22), 0.3, 0.0)]))
-    for w, h in ((9, 21), (10, 22), (12, 24), (16, 25)):
+    for w, h in ((10, 22), (12, 24)):
         out.append(_element(f"door_{w}x{h}", "door", [(ProtoKey("door", "door_wood", w, h, -28), 0.0, 0.0)]))
+        out.append(_element(f"door_double_{2 * w - 4}x{h}", "door", [
+            (ProtoKey("door", "door_wood", w - 2, h, -28), 0.0, 0.0),
+            (ProtoKey("door", "door_wood", w - 2, h, -28), (w - 2) / 10, 0.0)]))
+        out.append(_element(f"door_fanlight_{w}x{h + 5}", "door", [
+            (ProtoKey("door", "door_wood", w, h, -28), 0.0, 0.0),
+            (ProtoKey("window", "frame_white", w, 5, -28), 0.0, h / 10)]))
     for w, h in ((25, 22), (40, 26), (30, 30)):
         out.append(_element(f"shop_{w}x{h}", "shop", [(ProtoKey("shop", "frame_dark", w, h, -18), 0.0, 0.0)]))
     out.append(Element("wall", "wall", 0.0, None, (1.0, 1.0), np.full((RES, RES), _luminance(WALL))))
@@ -181,16 +183,13 @@ def region_mi(gray: np.ndarray, rect: Rect, index: int) -> float:
 
 
 def candidates(labels: Sequence[str], aspect: float) -> list[int]:
-    """Library indices for a region of ``aspect`` (height / width) and the allowed ``labels``: per label the
-    elements within ``ASPECT`` of the region's aspect, else the one nearest to it (resampling to the region hides
-    an element's proportions, so they select the elements compared). The wall is not among them."""
+    """Library indices for a region of ``aspect`` (height / width) and the allowed ``labels``: the elements within
+    ``ASPECT`` of the region's aspect, else the one nearest to it (resampling to the region hides an element's
+    proportions, so they select the elements compared). The wall is not among them."""
     lib = library()
-    out = []
-    for label in labels:
-        own = [i for i, e in enumerate(lib[:-1]) if e.label == label]
-        fit = [i for i in own if 1 / ASPECT <= lib[i].aspect / aspect <= ASPECT]
-        out += fit or sorted(own, key=lambda i: abs(np.log(lib[i].aspect / aspect)))[:1]
-    return out
+    own = [i for i, e in enumerate(lib[:-1]) if e.label in labels]
+    fit = [i for i in own if 1 / ASPECT <= lib[i].aspect / aspect <= ASPECT]
+    return fit or sorted(own, key=lambda i: abs(np.log(lib[i].aspect / aspect)))[:1]
 
 
 def cluster_type(gray: np.ndarray, rects: Sequence[Rect], labels: Sequence[str]) -> tuple[Element, float]:

@@ -55,7 +55,6 @@ MAX_DOORS = 2
 #: §3.2 global synchronisation: split distances of one orientation within this fraction (plus a pixel) of a
 #: cluster's smallest are one size.
 SYNC = 0.1
-PRIOR = True
 
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
 
@@ -291,39 +290,31 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
 
 
 def match_elements(edges: EdgeImage, tree: Node, ground: bool) -> Node:
-    """§4: every leaf that may hold an element (:func:`_element_labels`) is a cluster of similar regions, one per
-    member tile; its label and element are Eq. 8's best library element (the wall when none explains it)."""
+    """§4: every element leaf -- a region the contrast test (:func:`_element_label`) or the profile windows took
+    for an element -- is a cluster of similar regions, one per member tile; its label and element are Eq. 8's
+    best library element among those :func:`_element_labels` allows. The contrast test stays the prior that
+    decides element or wall (Eq. 8 with the wall element decided worse on the CMP development photos)."""
     tiles = tree.rects
 
     def visit(node: Node) -> Node:
         if node.children:
             return Node(node.rects, node.label, tuple(visit(c) for c in node.children), node.cuts)
-        labels = _element_labels(node, tiles, ground)
-        if PRIOR:
-            if node.label in (None, "wall"):
-                return node
-            labels = tuple(lab for lab in (labels or ("window", "balcony")) if lab != "wall")
-        elif not labels:
-            return Node(node.rects, "wall")
-        element, _ = cluster_type(edges.gray, node.rects, labels)
-        return Node(node.rects, element.label, element=None if element.label == "wall" else element.name)
+        if node.label in (None, "wall"):
+            return node
+        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles, ground))
+        return Node(node.rects, element.label, element=element.name)
     return visit(tree)
 
 
 def _element_labels(node: Node, tiles: tuple[Rect, ...], ground: bool) -> tuple[str, ...]:
-    """Labels a leaf may take: none when it touches its tile's sides (or, above the ground floor, its bottom) or is
-    under ``MIN_AREA`` of the tile; a ground-floor region on the tile's bottom is a door -- if plausible: at least
+    """Labels an element leaf may take: on the ground floor's bottom edge a door -- if plausible: at least
     ``DOOR_ASPECT`` times as high as wide, in a group of at most ``MAX_DOORS`` tiles (a door repeated in every
-    tile of a longer row is a row of shop fronts or an arcade) -- or a shop front; any other a window (a balcony
-    above the ground floor)."""
-    sides, bottom = _touches(node.rects, tiles)
+    tile of a longer row is a row of shop fronts or an arcade) -- or a shop front; anywhere else a window."""
     (r0, r1, c0, c1), (t0, t1, u0, u1) = node.rects[0], tiles[0]
-    if sides or (bottom and not ground) or (r1 - r0) * (c1 - c0) < MIN_AREA * (t1 - t0) * (u1 - u0):
-        return ()
-    if bottom:
-        plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
-        return ("door", "shop", "wall") if plausible else ("shop", "wall")
-    return ("window", "wall") if ground else ("window", "balcony", "wall")
+    if not (ground and r1 == t1):
+        return ("window",)
+    plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
+    return ("door", "shop") if plausible else ("shop",)
 
 
 def synchronised(trees: list[Node]) -> dict[tuple[bool, int], int]:
