@@ -266,8 +266,8 @@ def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[b
     cluster of corresponding regions (:func:`match_elements`)."""
     stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
     sizes = synchronised(stacks)
-    return [match_elements(edges, _members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles), ground)
-            for tree, tiles, ground in zip(stacks, groups, grounds)]
+    return [match_elements(edges, _members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles))
+            for tree, tiles in zip(stacks, groups)]
 
 
 def subdivide_group(edges: EdgeImage, tiles: list[Rect], ground: bool = False) -> Node:
@@ -289,7 +289,7 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
     return tree
 
 
-def match_elements(edges: EdgeImage, tree: Node, ground: bool) -> Node:
+def match_elements(edges: EdgeImage, tree: Node) -> Node:
     """§4: every element leaf -- a region the contrast test (:func:`_element_label`) or the profile windows took
     for an element -- is a cluster of similar regions, one per member tile; its label and element are Eq. 8's
     best library element among those :func:`_element_labels` allows. The contrast test stays the prior that
@@ -301,18 +301,19 @@ def match_elements(edges: EdgeImage, tree: Node, ground: bool) -> Node:
             return Node(node.rects, node.label, tuple(visit(c) for c in node.children), node.cuts)
         if node.label in (None, "wall"):
             return node
-        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles, ground))
+        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles))
         return Node(node.rects, element.label, element=element.name)
     return visit(tree)
 
 
-def _element_labels(node: Node, tiles: tuple[Rect, ...], ground: bool) -> tuple[str, ...]:
-    """Labels an element leaf may take: on the ground floor's bottom edge a door -- if plausible: at least
-    ``DOOR_ASPECT`` times as high as wide, in a group of at most ``MAX_DOORS`` tiles (a door repeated in every
-    tile of a longer row is a row of shop fronts or an arcade) -- or a shop front; anywhere else a window."""
-    (r0, r1, c0, c1), (t0, t1, u0, u1) = node.rects[0], tiles[0]
-    if not (ground and r1 == t1):
+def _element_labels(node: Node, tiles: tuple[Rect, ...]) -> tuple[str, ...]:
+    """Labels an element leaf may take: a region the contrast test took for a door (on the ground floor's bottom
+    edge, or a piece of one) is a door -- if plausible: at least ``DOOR_ASPECT`` times as high as wide, in a group
+    of at most ``MAX_DOORS`` tiles (a door repeated in every tile of a longer row is a row of shop fronts or an
+    arcade) -- or a shop front; any other a window."""
+    if node.label != "door":
         return ("window",)
+    r0, r1, c0, c1 = node.rects[0]
     plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
     return ("door", "shop") if plausible else ("shop",)
 

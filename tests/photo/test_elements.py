@@ -85,7 +85,7 @@ def test_eq8_cluster_vote_overrides_a_noisy_region():
     for members in ([0, 1], [3, 4]):
         tree = Node(tiles, None, (Node(tuple((0, 100, c0, c1) for _, _, c0, c1 in tiles), "wall"),
                                   Node(tuple(rects[k] for k in members), "door")))
-        matched = match_elements(EdgeImage.of(gray), tree, ground=True)
+        matched = match_elements(EdgeImage.of(gray), tree)
         assert (matched.children[1].label, matched.children[1].element) == ("door", "door_10x22")
         assert matched.children[0].element is None
 
@@ -95,17 +95,15 @@ def test_eq7_clear_match_and_plain_wall():
     assert cluster_type(gray, [(60, 120, 100, 140)], LABELS)[0].label == "wall"
 
 
-def test_element_labels_follow_the_position_in_the_tile():
-    """On the ground floor's bottom edge an element is a door only when plausible (at least ``DOOR_ASPECT`` high,
-    group of at most ``MAX_DOORS`` tiles), else a shop front; anywhere else a window."""
+def test_element_labels_follow_the_contrast_prior():
+    """A region the contrast test took for a door is a door only when plausible (at least ``DOOR_ASPECT`` high,
+    group of at most ``MAX_DOORS`` tiles), else a shop front; any other element a window."""
     tile = (0, 80, 0, 50)
-    door = Node(((20, 80, 10, 40),))
-    assert _element_labels(door, (tile,) * 2, ground=True) == ("door", "shop")
-    assert _element_labels(door, (tile,) * 3, ground=True) == ("shop",)
-    assert _element_labels(door, (tile,), ground=False) == ("window",)
-    low = Node(((50, 80, 10, 40),))  # 30 x 30: too low for a door
-    assert _element_labels(low, (tile,), ground=True) == ("shop",)
-    assert _element_labels(Node(((10, 40, 10, 40),)), (tile,), ground=True) == ("window",)
+    door = Node(((20, 80, 10, 40),), "door")
+    assert _element_labels(door, (tile,) * 2) == ("door", "shop")  # 60 x 30
+    assert _element_labels(door, (tile,) * 3) == ("shop",)
+    assert _element_labels(Node(((50, 80, 10, 40),), "door"), (tile,)) == ("shop",)  # 30 x 30: too low
+    assert _element_labels(Node(((20, 80, 10, 40),), "window"), (tile,)) == ("window",)
 
 
 def test_matched_elements_are_carried_into_the_layout():
