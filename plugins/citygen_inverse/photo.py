@@ -10,7 +10,9 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
 3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
-   and the subdivision mapped onto its members; elements are labelled window / door, the rest wall.
+   and the subdivision mapped onto its members; a contrast test tells elements from wall;
+4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
+   library of rendered citygen prototypes by summed mutual information (Eq. 8): label, depth and material.
 
 The layout is in metres: ``width`` metres for the crop, else ``floor_height`` metres per detected floor period.
 """
