@@ -32,7 +32,8 @@ BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
 #: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
 #: the budget counts work, not time, so the same request gives the same facade on any machine and under any load.
 LEAVES_PER_SECOND = 12_000
-MAX_LEAVES = 4000  #: column jumps stop before a facade would have more leaves
+MAX_LEAVES = 8000  #: column jumps stop before a facade would have more leaves (the QP's cost per leaf grows beyond)
+FAR_COPIES = 4  #: column insertions to the nearest count from which its counts are single jumps of many copies
 
 
 class Work:
@@ -161,19 +162,24 @@ def _remover(facade: Facade, grid: FacadeGrid, column: int) -> Callable[[int], F
     return apply
 
 
-def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
-                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
-    """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
-    mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
-    equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
-    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the work ``deadline`` has passed).
-    ``copies`` > 1 repeats a jump that many times in one step (far targets): the finalists are scored as single
-    jumps at the per-jump share of the size change, and the winner is repeated unscored (or taken once when the
-    repeat is not possible). None when no jump is possible."""
-    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + copies * c.delta - target), 2),
-                                              round(c.offset, 2), str(c.jump)))
+def choose(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+           copies: int | None = 1) -> tuple[Candidate, int, Path, SpatialResult | None] | None:
+    """The best jump of ``path`` towards ``target``: the candidate, its number of copies ``k``, the state after one
+    copy and that state's QP result (None: not scored). Candidates are ranked by the size mismatch that ``k``
+    copies leave (then nearest the middle, then by description); ``copies`` None gives each candidate the ``k``
+    whose mismatch is least. Jumps of equal size change are taken as equivalent, so the first that keeps the kept
+    labels stands for each. With one size change on offer its jump is taken unscored; else the QP scores the first
+    ``FINALISTS`` (fewer once the work ``deadline`` has passed) as single jumps at their per-copy share of the size
+    change. None when no jump is possible."""
+    gap = target - path.facade.width
+
+    def count(cand: Candidate) -> int:
+        return copies if copies is not None else max(1, int(round(gap / cand.delta))) if cand.delta * gap > 0 else 1
+
+    order = sorted(candidates, key=lambda c: (round(abs(gap - count(c) * c.delta), 2), round(c.offset, 2),
+                                              str(c.jump)))
     want = kept(path.facade, settings.keep)
-    finalists: list[Candidate] = []
+    finalists: list[tuple[Candidate, Facade]] = []
     seen: set[float] = set()
     for cand in order:
         if round(cand.delta, 2) in seen or cand.changes(path.facade, settings.keep):
@@ -181,26 +187,79 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
         new = cand.apply(1)
         if kept(new, settings.keep) == want:
             seen.add(round(cand.delta, 2))
-            finalists.append(replace(cand, apply=lambda m, new=new, cand=cand: new if m == 1 else cand.apply(m)))
+            finalists.append((cand, new))
             if len(finalists) == FINALISTS:
                 break
-    scout = path.facade.width + (target - path.facade.width) / copies
     best: tuple[float, Candidate, Path, SpatialResult | None] | None = None
-    for cand in finalists:
-        state = Path(*merge_leaves(cand.apply(1), settings.fixed), path.jumps + (cand.jump,))
+    for cand, new in finalists:
+        state = Path(*merge_leaves(new, settings.fixed), path.jumps + (cand.jump,))
         if len(finalists) == 1 or settings.work.spent > deadline:
             best = best or (0.0, cand, state, None)
             break
-        res = size(state.facade, settings, scout, root=state.root)
+        res = size(state.facade, settings, path.facade.width + gap / count(cand), root=state.root)
         if res.success and (best is None or res.objective < best[0]):
             best = (res.objective, cand, state, res)
     if best is None:
         return None
     _, cand, state, res = best
-    bulk = cand.apply(copies) if copies > 1 else None
-    if bulk is None or kept(bulk, settings.keep) != want:  # no repeat asked for, or not possible: one jump
-        return state, res
-    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * copies), None
+    return cand, count(cand), state, res
+
+
+def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
+    """The next state of ``path`` and its QP result (None: not scored), by :func:`choose`. ``copies`` > 1 repeats
+    the chosen jump that many times in one step (far targets), unscored (or takes it once when the repeat is not
+    possible). None when no jump is possible."""
+    chosen = choose(path, candidates, settings, target, deadline, copies)
+    if chosen is None:
+        return None
+    cand, k, state, res = chosen
+    bulk = repeated(path, cand, k, settings)
+    return (state, res) if bulk is None else (bulk, None)
+
+
+def repeated(path: Path, cand: Candidate, k: int, settings: Settings) -> Path | None:
+    """``path`` after ``k`` > 1 copies of ``cand`` in one jump (one band of ``k`` copies); None when ``k`` is 1 or
+    the repeat is not possible (it would copy or remove a kept label)."""
+    if k < 2:
+        return None
+    bulk = cand.apply(k)
+    if bulk is None or kept(bulk, settings.keep) != kept(path.facade, settings.keep):
+        return None
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * k)
+
+
+def far_variations(start: Path, settings: Settings, target: float, deadline: float, notes: list[str]
+                   ) -> list[tuple[Path, SpatialResult]]:
+    """States of a facade far narrower than ``target``, each one insertion jump of ``m`` copies of one source
+    column (the same insertion repeated as one band), and their QP results.
+
+    Every candidate gets the count ``k`` that leaves the least width mismatch; :func:`choose` ranks them by that
+    mismatch and the QP scores the finalists as single copies. The winner's counts ``k - 1, k, k + 1`` are sized in
+    order of their mismatch while the work ``deadline`` and ``MAX_LEAVES`` allow (leaves of ``m`` copies estimated
+    from one copy's, before any is built); when none fits, the largest count that does (noted in ``notes``)."""
+    chosen = choose(start, column_candidates(start.facade, settings, True), settings, target, deadline, None)
+    if chosen is None:
+        return []
+    cand, k, one, _ = chosen
+    n0, per_copy = len(start.facade.leaves), len(one.facade.leaves) - len(start.facade.leaves)
+    counts = sorted({max(1, k - 1), k, k + 1}, key=lambda m: (round(abs(target - start.facade.width
+                                                                        - m * cand.delta), 2), m))
+    out = []
+    for m in counts:
+        leaves = n0 + m * per_copy
+        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
+            continue
+        state = one if m == 1 else repeated(start, cand, m, settings)
+        if state is not None:
+            out.append((state, size(state.facade, settings, target, root=state.root)))
+    if not out:
+        fit = min(k, int((min(MAX_LEAVES, deadline - settings.work.spent) - n0) // max(1, per_copy)))
+        notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {max(0, fit)} of {k} column jumps")
+        state = one if fit == 1 else repeated(start, cand, fit, settings) if fit > 1 else None
+        if state is not None:
+            out.append((state, size(state.facade, settings, target, root=state.root)))
+    return out
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
@@ -229,6 +288,10 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     counts = {best_k - 1, best_k, best_k + 1} - {0} if step is not None else set()
     for sign in (1, -1):
         wanted = sorted(abs(k) for k in counts if k * sign > 0)
+        if sign > 0 and wanted and wanted[0] >= FAR_COPIES:
+            for state, res in far_variations(start, settings, target, deadline, notes):
+                _add(found, state, res)
+            continue
         path, res = start, None
         while wanted and len(path.jumps) < wanted[-1]:
             if settings.work.spent > deadline:

@@ -10,8 +10,8 @@ import pytest
 from citygen.layout import check_partition
 from citygen.request import FacadeRequest, check_request
 from citygen_safe.compose import to_layout
-from citygen_safe.edit import LEAVES_PER_SECOND, Settings, size
-from citygen_safe.generate import edit
+from citygen_safe.edit import LEAVES_PER_SECOND, Path, Settings, far_variations, size
+from citygen_safe.generate import JUMPS_SHARE, edit
 from citygen_safe.grids import GridSpec, auto_specs, detect_grid
 from citygen_safe.jump import insert_column, merge_leaves
 from citygen_safe.leaves import facade_from_layout
@@ -158,3 +158,47 @@ def test_budget_cut_faces_do_not_depend_on_the_machine_or_the_floor_cache(tmp_pa
     edit(warm_ruleset, FacadeRequest.preview(20.0, 30.0, 3.0))  # the same floor lines: floors remembered
     warm = edit(warm_ruleset, request)
     assert warm.layout.dumps() == cold.layout.dumps() and warm.work == cold.work
+
+
+def test_regression_wide_face_reaches_its_width_without_stretching(cmp_ruleset):
+    """110 x 36 m from the 15.6 m input (12 floors, one of the scene's widest faces): the greedy path of single
+    jumps stopped at the 4000-leaf cap after 23 of 32 column jumps and the face came out stretched (windows 1.79 m
+    instead of at most 1.6 m, E ~3e6). Now one jump inserts k copies of a column (k with the least width
+    mismatch) and the face is met within the default budget."""
+    request = FacadeRequest.preview(110.0, 36.0, 3.0)
+    result = edit(cmp_ruleset, request)
+    assert result.diagnostics == () and result.problems == () and "fallback" not in result.layout.meta
+    assert result.work <= JUMPS_SHARE * cmp_ruleset.budget * LEAVES_PER_SECOND
+    assert result.chosen.objective < 10.0
+    widest = max(f.w for f in cmp_ruleset.facade.leaves if f.label == "window")
+    assert max(r.w for r in result.layout.leaves if r.label == "window") <= widest + 0.01
+    assert len(result.chosen.jumps) >= 29 and len(set(result.chosen.jumps)) == 1  # one jump of k copies
+    assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
+
+
+def test_far_counts_are_single_jumps_of_k_copies_with_the_least_mismatch():
+    """A regular facade of 3-m bays widened by ten bays: the counts k - 1, k, k + 1 around the least width
+    mismatch (k = 10) are one insertion jump of k copies each, and k = 10 fits without distortion."""
+    facade = facade_from_layout(regular(3, 2))
+    settings = Settings((WIN,))
+    start = Path(*merge_leaves(facade, settings.fixed))
+    notes: list[str] = []
+    found = far_variations(start, settings, 39.0, float("inf"), notes)
+    assert notes == [] and sorted(len(p.jumps) for p, _ in found) == [9, 10, 11]
+    assert all(len(set(p.jumps)) == 1 for p, _ in found)
+    best = min(found, key=lambda s: s[1].objective)
+    assert len(best[0].jumps) == 10 and best[0].facade.width == pytest.approx(39.0)
+    assert best[1].objective == pytest.approx(0.0, abs=1e-6)
+    assert len([f for f in best[0].facade.leaves if f.label == "window"]) == 13 * 2
+
+
+def test_far_counts_past_the_leaf_cap_take_the_largest_that_fits(monkeypatch):
+    import citygen_safe.edit as edit_module
+    monkeypatch.setattr(edit_module, "MAX_LEAVES", 60)
+    facade = facade_from_layout(regular(3, 2))
+    settings = Settings((WIN,))
+    start = Path(*merge_leaves(facade, settings.fixed))
+    notes: list[str] = []
+    found = far_variations(start, settings, 39.0, float("inf"), notes)
+    assert len(found) == 1 and "leaves reached" in notes[0]
+    assert len(found[0][0].facade.leaves) <= 60 and 1 <= len(found[0][0].jumps) < 9
