@@ -20,8 +20,8 @@ import numpy as np
 
 from citygen.layout import FLOOR_BOUND_LABELS
 from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
-from citygen_safe.jump import (Jump, insert_slab, insertion_gap, merge_leaves, remove_slab, removal_slab,
-                               source_columns)
+from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, merge_leaves, remove_slab,
+                               removal_slab, source_columns)
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.tree import Node, decompose
@@ -133,13 +133,14 @@ def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Ca
     out, middle = [], 0.5 * facade.width
     for spec in settings.active:
         grid = detect_grid(facade, spec)
-        if grid is None or len(grid.columns) < 2:
+        if grid is None or len(grid.columns) < 2 and not grow:
             continue
         if grow:
             for s in source_columns(facade, grid):
                 slab = grid.columns[s]
-                for p in range(1, len(grid.columns)):
-                    gap = insertion_gap(grid, p)
+                gaps = ([(p, insertion_gap(grid, p)) for p in range(1, len(grid.columns))]
+                        if len(grid.columns) > 1 else boundary_gaps(slab, facade.width))
+                for p, gap in gaps:
                     if gap is not None:
                         out.append(Candidate(Jump("insert", spec.name, "x", s, p),
                                              gap[1] - gap[0] + slab[1] - slab[0], abs(gap[0] - middle), (gap, slab),
@@ -263,10 +264,16 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
-    """Mean distance between consecutive columns of the first active grid with two or more columns."""
-    for grid in grids_of(facade, settings.active):
+    """Mean distance between consecutive columns of the first active grid with two or more columns; else, for a
+    one-column grid, the mean width change of its insertions at the facade boundary (its width plus the mean gap
+    to the boundaries)."""
+    grids = grids_of(facade, settings.active)
+    for grid in grids:
         if len(grid.columns) > 1:
             return (grid.columns[-1][0] - grid.columns[0][0]) / (len(grid.columns) - 1)
+    for grid in grids:
+        lo, hi = grid.columns[0]
+        return 0.5 * (facade.width + hi - lo)
     return None
 
 

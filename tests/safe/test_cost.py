@@ -104,8 +104,11 @@ def test_budget_bounds_a_huge_face_and_says_so(tmp_path):
 
 
 def test_unreachable_floor_count_falls_back_to_plain_floors(tmp_path):
-    """One floor band cannot be copied (a row insertion needs two anchor bands): 3 floors are out of reach."""
-    ruleset = _ruleset(tmp_path, regular(3, 1))
+    """The only floor band holds the door, which is never copied: 3 floors are out of reach."""
+    one = regular(3, 1)
+    door = next(r for r in one.leaves if r.label == "window" and r.x > 3.0)
+    rects = [(r.x, r.y, r.w, r.h, "door" if r is door else r.label) for r in one.leaves]
+    ruleset = _ruleset(tmp_path, layout_of(one.width, one.height, rects))
     request = FacadeRequest.preview(9.0, 9.0, 3.0)
     result = edit(ruleset, request)
     assert "no row jump reaches 3 floors" in " ".join(result.diagnostics)
@@ -202,3 +205,17 @@ def test_far_counts_past_the_leaf_cap_take_the_largest_that_fits(monkeypatch):
     found = far_variations(start, settings, 39.0, float("inf"), notes)
     assert len(found) == 1 and "leaves reached" in notes[0]
     assert len(found[0][0].facade.leaves) <= 60 and 1 <= len(found[0][0].jumps) < 9
+
+
+def test_regression_one_floor_band_gains_floors(tmp_path):
+    """A facade with one floor band could not gain floors (a row insertion needs two anchor bands) and fell back
+    to plain wall. Now the band is copied next to itself, anchored at the facade boundary."""
+    ruleset = _ruleset(tmp_path, regular(3, 1))
+    request = FacadeRequest.preview(9.0, 9.0, 3.0, entrance=False)
+    result = edit(ruleset, request)
+    assert "fallback" not in result.layout.meta and result.diagnostics == ()
+    assert result.floor_jumps and all("row 0 of floors" in j for j in result.floor_jumps)
+    windows = [r for r in result.layout.leaves if r.label == "window"]
+    assert len(windows) == 9 and sorted({round(r.w, 6) for r in windows}) == [1.2]
+    assert [sum(1 for r in windows if lo <= r.y < hi) for lo, hi in ((0, 3), (3, 6), (6, 9))] == [3, 3, 3]
+    assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
