@@ -5,8 +5,11 @@ the grid's pitch suggests (one fewer, that one, one more). The counts lie on one
 ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
 width mismatch it leaves, an analytic estimate of its distortion; jumps of equal width change count as one, and
 the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
-states at the counts are the variations. Jumps apply to the natural (unsized)
-facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every jump.
+states at the counts are the variations. A far wider target (``FAR_COPIES`` or more insertions to the nearest
+count) is met by single jumps of many copies instead: each candidate gets the copy count whose width mismatch is
+least, and the winner's counts around it are the variations (:func:`far_variations`). Jumps apply to the natural
+(unsized) facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every
+jump.
 Each call has a work budget (leaves sized by the spatial optimisation, a deterministic stand-in for CPU time):
 once spent, steps take the estimate's best jump unscored, and the facade resized without jumps is always a
 variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).

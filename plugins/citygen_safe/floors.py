@@ -3,10 +3,10 @@
 A *floor band* is a maximal y range of overlapping openings (windows, doors): a ground floor's tall windows and
 the transom over its door are one band. To reach the request's floor count, bands are inserted (a copy of a
 band with the content between two bands, as a row insertion of §4; a single band is copied with the content
-between it and the top or bottom of the face, the boundary standing in for the missing anchor band) or removed, greedily as the columns are (the
-height mismatch ranks the jumps, the QP scores the finalists); the band holding the door is never copied or
-removed. Each floor line then pins the lowest-cost
-full-width cut between two bands (the cut whose scaled position is nearest the line).
+between it and the top or bottom of the face, the boundary standing in for the missing anchor band) or removed,
+greedily as the columns are (the height mismatch ranks the jumps, the QP scores the finalists); the band holding
+the door is never copied or removed. Each floor line then pins the lowest-cost full-width cut between two bands
+(the cut whose scaled position is nearest the line).
 """
 from __future__ import annotations
 

@@ -219,3 +219,4 @@ def test_regression_one_floor_band_gains_floors(tmp_path):
     assert len(windows) == 9 and sorted({round(r.w, 6) for r in windows}) == [1.2]
     assert [sum(1 for r in windows if lo <= r.y < hi) for lo, hi in ((0, 3), (3, 6), (6, 9))] == [3, 3, 3]
     assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
+
