@@ -3,9 +3,9 @@
 The paper proposes variations and lets the user pick. For a target width we try column counts around the one
 the grid's pitch suggests (one fewer, that one, one more). The counts lie on one greedy path of jumps: each step
 ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
-width mismatch it leaves, an analytic estimate of its distortion; jumps of equal width change count as one, and
-the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
-states at the counts are the variations. A far wider target (``FAR_COPIES`` or more insertions to the nearest
+width mismatch it leaves, an analytic estimate of its distortion; the spatial optimisation scores the
+``FINALISTS`` best of distinct width changes and compares the winner with up to ``POSITIONS`` other jumps of its
+width change (other positions); the path's states at the counts are the variations. A far wider target (``FAR_COPIES`` or more insertions to the nearest
 count) is met by single jumps of many copies instead: each candidate gets the copy count whose width mismatch is
 least, and the winner's counts around it are the variations (:func:`far_variations`). Jumps apply to the natural
 (unsized) facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every
@@ -30,6 +30,7 @@ from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
+POSITIONS = 4  #: other positions of the winning width change the spatial optimisation compares with it
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
 BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
 #: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
@@ -171,10 +172,11 @@ def choose(path: Path, candidates: list[Candidate], settings: Settings, target: 
     """The best jump of ``path`` towards ``target``: the candidate, its number of copies ``k``, the state after one
     copy and that state's QP result (None: not scored). Candidates are ranked by the size mismatch that ``k``
     copies leave (then nearest the middle, then by description); ``copies`` None gives each candidate the ``k``
-    whose mismatch is least. Jumps of equal size change are taken as equivalent, so the first that keeps the kept
-    labels stands for each. With one size change on offer its jump is taken unscored; else the QP scores the first
-    ``FINALISTS`` (fewer once the work ``deadline`` has passed) as single jumps at their per-copy share of the size
-    change. None when no jump is possible."""
+    whose mismatch is least. The QP scores the first ``FINALISTS`` of distinct size changes that keep the kept labels
+    (none when one size change is on offer; fewer once the work ``deadline`` has passed) as single jumps at their
+    per-copy share of the size change, then compares the winner with up to ``POSITIONS`` other jumps of its size
+    change (other positions, the next nearest the middle; a rival must be strictly better). None when no jump is
+    possible."""
     gap = target - path.facade.width
 
     def count(cand: Candidate) -> int:
@@ -206,6 +208,20 @@ def choose(path: Path, candidates: list[Candidate], settings: Settings, target: 
     if best is None:
         return None
     _, cand, state, res = best
+    rivals = [c for c in order if c is not cand and round(c.delta, 2) == round(cand.delta, 2)
+              and not c.changes(path.facade, settings.keep)][:POSITIONS]
+    for alt in rivals:  # other positions of the winning size change: the QP compares them with the winner's
+        if settings.work.spent > deadline:
+            break
+        scout = path.facade.width + gap / count(cand)
+        res = res or size(state.facade, settings, scout, root=state.root)
+        new = alt.apply(1)
+        if kept(new, settings.keep) != want:
+            continue
+        other = Path(*merge_leaves(new, settings.fixed), path.jumps + (alt.jump,))
+        r = size(other.facade, settings, scout, root=other.root)
+        if r.success and (not res.success or r.objective < res.objective - 1e-9 * max(1.0, res.objective)):
+            cand, state, res = alt, other, r
     return cand, count(cand), state, res
 
 

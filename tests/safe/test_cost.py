@@ -220,3 +220,25 @@ def test_regression_one_floor_band_gains_floors(tmp_path):
     assert [sum(1 for r in windows if lo <= r.y < hi) for lo, hi in ((0, 3), (3, 6), (6, 9))] == [3, 3, 3]
     assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
 
+
+def test_regression_qp_compares_positions_of_equal_width_change():
+    """Jumps of equal width change were taken as equivalent: with one width change on offer the most central
+    jump was taken unscored. On a face whose ground floor half is one shop, inserting next to the shop absorbs
+    the residual better; the QP now compares the positions and picks it (the least objective of all)."""
+    from citygen_safe.edit import choose, column_candidates
+    base = regular(4, 2)
+    rects = [(r.x, r.y, r.w, r.h, r.label) for r in base.leaves if not (r.y < 3 and r.x < 6)] + [(0, 0, 6, 3, "shop")]
+    settings = Settings((WIN,))
+    start = Path(*merge_leaves(facade_from_layout(layout_of(12, 6, rects)), settings.fixed))
+    candidates = column_candidates(start.facade, settings, True)
+    assert len({round(c.delta, 2) for c in candidates}) == 1  # one width change at every position
+
+    def objective(cand):
+        state = Path(*merge_leaves(cand.apply(1), settings.fixed))
+        return size(state.facade, settings, 15.5, root=state.root).objective
+
+    central = min(candidates, key=lambda c: (round(c.offset, 2), str(c.jump)))
+    cand, k, state, res = choose(start, candidates, settings, 15.5, float("inf"))
+    assert k == 1 and res is not None and cand.jump != central.jump
+    assert res.objective == pytest.approx(min(objective(c) for c in candidates))
+    assert res.objective < objective(central) - 0.1
