@@ -5,19 +5,19 @@ the grid's pitch suggests (one fewer, that one, one more). The counts lie on one
 ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
 width mismatch it leaves, an analytic estimate of its distortion; the spatial optimisation scores the
 ``FINALISTS`` best of distinct width changes and compares the winner with up to ``POSITIONS`` other jumps of its
-width change (other positions); the path's states at the counts are the variations. A far wider target (``FAR_COPIES`` or more insertions to the nearest
-count) is met by single jumps of many copies instead: each candidate gets the copy count whose width mismatch is
-least, and the winner's counts around it are the variations (:func:`far_variations`). Jumps apply to the natural
-(unsized) facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every
-jump.
-Each call has a work budget (leaves sized by the spatial optimisation, a deterministic stand-in for CPU time):
-once spent, steps take the estimate's best jump unscored, and the facade resized without jumps is always a
-variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
+width change (other positions); the path's states at the counts are the variations. A far wider target
+(``FAR_COPIES`` or more insertions to the nearest count) is met by single jumps of many copies instead: each
+candidate gets the copy count whose width mismatch is least, and the winner's counts around it are the variations
+(:func:`far_variations`). Jumps apply to the natural (unsized) facade, so copies keep the input's sizes, and
+sibling pieces of one region are merged back after every jump. Each call has a work budget (leaves sized by the
+spatial optimisation, a deterministic stand-in for CPU time): once spent, steps take the estimate's best jump
+unscored, and the facade resized without jumps is always a variation. Heights do the same with floors (see
+:mod:`citygen_safe.floors`).
 """
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -180,7 +180,7 @@ def choose(path: Path, candidates: list[Candidate], settings: Settings, target: 
     gap = target - path.facade.width
 
     def count(cand: Candidate) -> int:
-        return copies if copies is not None else max(1, int(round(gap / cand.delta))) if cand.delta * gap > 0 else 1
+        return copies if copies is not None else max(1, round(gap / cand.delta)) if cand.delta * gap > 0 else 1
 
     order = sorted(candidates, key=lambda c: (round(abs(gap - count(c) * c.delta), 2), round(c.offset, 2),
                                               str(c.jump)))
@@ -210,11 +210,12 @@ def choose(path: Path, candidates: list[Candidate], settings: Settings, target: 
     _, cand, state, res = best
     rivals = [c for c in order if c is not cand and round(c.delta, 2) == round(cand.delta, 2)
               and not c.changes(path.facade, settings.keep)][:POSITIONS]
+    scout = path.facade.width + gap / count(cand)
     for alt in rivals:  # other positions of the winning size change: the QP compares them with the winner's
         if settings.work.spent > deadline:
             break
-        scout = path.facade.width + gap / count(cand)
-        res = res or size(state.facade, settings, scout, root=state.root)
+        if res is None:
+            res = size(state.facade, settings, scout, root=state.root)
         new = alt.apply(1)
         if kept(new, settings.keep) != want:
             continue

@@ -238,7 +238,7 @@ def test_regression_qp_compares_positions_of_equal_width_change():
         return size(state.facade, settings, 15.5, root=state.root).objective
 
     central = min(candidates, key=lambda c: (round(c.offset, 2), str(c.jump)))
-    cand, k, state, res = choose(start, candidates, settings, 15.5, float("inf"))
+    cand, k, _, res = choose(start, candidates, settings, 15.5, float("inf"))
     assert k == 1 and res is not None and cand.jump != central.jump
     assert res.objective == pytest.approx(min(objective(c) for c in candidates))
     assert res.objective < objective(central) - 0.1
