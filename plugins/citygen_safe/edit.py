@@ -250,28 +250,57 @@ def repeated(path: Path, cand: Candidate, k: int, settings: Settings) -> Path | 
     return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * k)
 
 
+def mixed(path: Path, first: Candidate, a: int, second: Candidate, b: int, settings: Settings) -> Path | None:
+    """``path`` after ``b`` copies of insertion ``second`` and then ``a`` copies of insertion ``first`` (its gap and
+    slab moved with the content right of the first band): two jumps of many copies, for a width that one column
+    kind repeated misses. None when ``first``'s gap or slab straddles the band's place or a kept label would be
+    copied."""
+    c0, width = second.slabs[0][0], b * second.delta
+    if any(lo < c0 - EPS < hi - EPS for lo, hi in first.slabs):
+        return None
+    gap, slab = ((lo + width, hi + width) if lo >= c0 - EPS else (lo, hi) for lo, hi in first.slabs)
+    bulk = insert_slab(second.apply(b), gap, slab, a)
+    if kept(bulk, settings.keep) != kept(path.facade, settings.keep):
+        return None
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (second.jump,) * b + (first.jump,) * a)
+
+
 def far_variations(start: Path, settings: Settings, target: float, deadline: float, notes: list[str]
                    ) -> list[tuple[Path, SpatialResult]]:
     """States of a facade far narrower than ``target``, each one insertion jump of ``m`` copies of one source
     column (the same insertion repeated as one band), and their QP results.
 
     Every candidate gets the count ``k`` that leaves the least width mismatch; :func:`choose` ranks them by that
-    mismatch and the QP scores the finalists as single copies. The winner's counts ``k - 1, k, k + 1`` are sized in
-    order of their mismatch while the work ``deadline`` and ``MAX_LEAVES`` allow (leaves of ``m`` copies estimated
-    from one copy's, before any is built); when none fits, the largest count that does (noted in ``notes``)."""
-    chosen = choose(start, column_candidates(start.facade, settings, True), settings, target, deadline, None)
+    mismatch and the QP scores the finalists as single copies. The winner's counts ``k - 1, k, k + 1`` are the
+    states, plus, when it fits the width closer than they do, the winner's copies mixed with copies of one other
+    insertion (:func:`mixed`; the split with the least mismatch). States are sized in order of their mismatch
+    while the work ``deadline`` and ``MAX_LEAVES`` allow (leaves estimated from one copy's, before a state is
+    built); when none fits, the largest count of the winner that does (noted in ``notes``)."""
+    candidates = column_candidates(start.facade, settings, True)
+    chosen = choose(start, candidates, settings, target, deadline, None)
     if chosen is None:
         return []
     cand, k, one, _ = chosen
+    gap = target - start.facade.width
     n0, per_copy = len(start.facade.leaves), len(one.facade.leaves) - len(start.facade.leaves)
-    counts = sorted({max(1, k - 1), k, k + 1}, key=lambda m: (round(abs(target - start.facade.width
-                                                                        - m * cand.delta), 2), m))
+    counts = sorted({max(1, k - 1), k, k + 1})
+    options = [(round(abs(gap - m * cand.delta), 2), m, None, 0) for m in counts]
+    others = [c for c in candidates if round(c.delta, 2) != round(cand.delta, 2)
+              and not c.changes(start.facade, settings.keep)]
+    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), m, c, b)
+             for m in counts for c in others for b in range(1, m)]
+    best_mix = min(mixes, key=lambda o: (o[0], o[3], o[1]), default=None)
+    if best_mix is not None and best_mix[0] < min(o[0] for o in options):
+        options.append(best_mix)
     out = []
-    for m in counts:
+    for _, m, other, b in sorted(options, key=lambda o: (o[0], o[1], o[3])):
         leaves = n0 + m * per_copy
         if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
             continue
-        state = one if m == 1 else repeated(start, cand, m, settings)
+        if other is None:
+            state = one if m == 1 else repeated(start, cand, m, settings)
+        else:
+            state = mixed(start, cand, m - b, other, b, settings)
         if state is not None:
             out.append((state, size(state.facade, settings, target, root=state.root)))
     if not out:

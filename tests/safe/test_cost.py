@@ -242,3 +242,31 @@ def test_regression_qp_compares_positions_of_equal_width_change():
     assert k == 1 and res is not None and cand.jump != central.jump
     assert res.objective == pytest.approx(min(objective(c) for c in candidates))
     assert res.objective < objective(central) - 0.1
+
+
+def _two_kinds():
+    """Bays of 3.0 m (window 1.2) and 3.6 m (window 1.8), A | B | A on two floors: insertions of 3.0 and 3.6 m."""
+    rects = []
+    for r in range(2):
+        x = 0.0
+        for win in (1.2, 1.8, 1.2):
+            rects += [(x, 3.0 * r, 0.9, 3.0, "wall"), (x + 0.9 + win, 3.0 * r, 0.9, 3.0, "wall"),
+                      (x + 0.9, 3.0 * r, win, 0.9, "wall"), (x + 0.9, 3.0 * r + 0.9, win, 1.5, "window"),
+                      (x + 0.9, 3.0 * r + 2.4, win, 0.6, "wall")]
+            x += 1.8 + win
+    return facade_from_layout(layout_of(9.6, 6.0, rects))
+
+
+def test_far_width_one_kind_misses_is_met_by_two_kinds_of_copies():
+    """26.4 m from 9.6 m: no count of one kind fits (6 x 3.0 or 5 x 3.6 m leave 1.2 m), 2 x 3.0 + 3 x 3.6 m does.
+    The far path adds the mixed state (two jumps of many copies) and the QP finds it undistorted."""
+    settings = Settings((WIN,))
+    start = Path(*merge_leaves(_two_kinds(), settings.fixed))
+    found = far_variations(start, settings, 26.4, float("inf"), [])
+    best_state, best = min(found, key=lambda s: s[1].objective)
+    assert len(set(best_state.jumps)) == 2 and len(best_state.jumps) == 5
+    assert best_state.facade.width == pytest.approx(26.4) and best.objective == pytest.approx(0.0, abs=1e-6)
+    assert all(res.objective > 1.0 for state, res in found if len(set(state.jumps)) == 1)
+    windows = sorted(round(f.w, 6) for f in best.facade.leaves if f.label == "window")
+    assert windows == [1.2] * 8 + [1.8] * 8
+    assert check_partition(to_layout(best.facade)) == []
