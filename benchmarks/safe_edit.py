@@ -23,7 +23,7 @@ from citygen_safe.ruleset import load_ruleset
 
 RULESET = Path(__file__).resolve().parents[1] / "rulesets" / "cmp_b0035.safe"
 SIZES = ((15.6125, 12.0), (10.0, 12.0), (20.0, 12.0), (15.6125, 6.0), (22.0, 15.0), (25.0, 18.0), (5.0, 30.0),
-         (40.0, 30.0), (60.0, 30.0))
+         (40.0, 30.0), (60.0, 30.0), (80.0, 36.0), (110.0, 36.0), (140.0, 36.0))
 
 
 def main() -> None:
