@@ -2,11 +2,14 @@
 
 * **Floor lines** -- one set of floor heights per building; every face's request carries it, so windows of
   adjacent faces sit at the same heights.
-* **Entrance** -- exactly one door per building, on the widest street-facing face (else the widest facade face).
+* **Entrance** -- exactly one door per building, on the widest street-facing face whose foot is free (else the
+  widest facade face with a free foot; none when every foot is hidden, e.g. a tower rising from a lower block).
 * **Corners** -- a wall strip at each corner, the same width on both faces meeting there, so openings of two faces
   never collide at a corner and corners meet with equal margins.
 
-Party walls (faces against a neighbouring building) and faces narrower than ``min_face_width`` get no facade.
+Party walls (faces against a neighbouring building that reaches within ``PARTY_RISE`` of their top) and faces
+narrower than ``min_face_width`` get no facade. A face against a lower neighbour gets a facade (it is seen above
+the neighbour) but is no street face and gets no entrance: its foot is hidden.
 """
 from __future__ import annotations
 
@@ -20,6 +23,9 @@ from citygen.footprints import Footprint
 from citygen.mass import Mass
 from citygen.request import FaceContext, FacadeRequest
 from citygen.scene import Defaults
+
+#: A face whose neighbours reach this close (m) to its top is a party wall (no facade).
+PARTY_RISE = 1.0
 
 
 @dataclass(frozen=True)
@@ -53,17 +59,20 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults) -> t
     return tuple(float(v) for v in np.linspace(0.0, height, levels + 1))
 
 
-def plan_building(footprint: Footprint, mass: Mass, party: np.ndarray, defaults: Defaults,
+def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults,
                   seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
-    """Decide floor lines, entrance face and corner strips; build one request per facade face."""
+    """Decide floor lines, entrance face and corner strips; build one request per facade face. ``cover`` is per
+    face the height up to which neighbours stand against it (``citygen.mass.neighbour_cover``)."""
     floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults)
     faces = mass.faces
     widths = np.array([f.width for f in faces])
-    facade = (~party) & (widths >= defaults.min_face_width)
-    street = facade & np.array([not f.is_courtyard for f in faces])
+    cover = np.asarray(cover, dtype=float)
+    facade = (cover < mass.height - PARTY_RISE) & (widths >= defaults.min_face_width)
+    free_foot = cover <= 0.0
+    street = facade & free_foot & np.array([not f.is_courtyard for f in faces])
     door_candidates = np.flatnonzero(street & (widths >= 1.5))
     if door_candidates.size == 0:
-        door_candidates = np.flatnonzero(facade & (widths >= 1.5))
+        door_candidates = np.flatnonzero(facade & free_foot & (widths >= 1.5))
     entrance = int(door_candidates[np.argmax(widths[door_candidates])]) if door_candidates.size else None
     corner = _corner_strips(mass, widths, facade, defaults.corner_width)
     attrs = dict(attributes if attributes is not None else footprint.attributes)

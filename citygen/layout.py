@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import json
+import operator
 from collections.abc import Iterator, Mapping
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any
@@ -265,6 +266,26 @@ def require_partition(layout: FacadeLayout, where: str = "<layout>", plugin: str
         raise LayoutError("; ".join(problems[:5]), where=where, plugin=plugin,
                           hint="a ruleset kind must emit terminal regions that tile the face exactly")
     return layout
+
+
+def hidden_below(layout: FacadeLayout, height: float, tol: float = 1e-6) -> FacadeLayout:
+    """``layout`` with every subtree lying wholly below ``height`` replaced by one plain wall region: the part of a
+    face that a lower neighbour hides is a party wall (no openings, no attachments inside the neighbour)."""
+    if height <= tol:
+        return layout
+
+    def cull(region: Region) -> Region:
+        if region.y + region.h <= height + tol:
+            if region.children or region.label not in (None, "wall") or region.depth:
+                return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
+            return region
+        if not region.children or region.y >= height - tol:
+            return region
+        children = tuple(cull(c) for c in region.children)
+        if all(map(operator.is_, children, region.children)):
+            return region
+        return replace(region, children=children, key=None)  # (its subtree is no longer the one its key names)
+    return replace(layout, root=cull(layout.root))
 
 
 def leaf(x: float, y: float, w: float, h: float, symbol: str, label: str | None, **kw: Any) -> Region:

@@ -143,11 +143,13 @@ def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float
     return Mass(outline=outline, base=footprint.base, height=footprint.height, faces=tuple(faces))
 
 
-def party_walls(masses: list[Mass], offset: float = 0.3, share: float = 0.5) -> list[np.ndarray]:
-    """Per mass, a boolean array marking faces that stand against another building (shared walls).
+def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5) -> list[np.ndarray]:
+    """Per mass, per face the height (metres above the mass's base, 0..its height) up to which other buildings
+    stand against the face: 0 for a free face.
 
-    A face is a party wall when most of the points sampled just outside it (``offset`` metres along the normal
-    at 10%, 30%, 50%, 70%, 90% of its width) fall inside another building's outline.
+    A face stands against other buildings when most of the points sampled just outside it (``offset`` metres along
+    the normal at 10%, 30%, 50%, 70%, 90% of its width) fall inside their outlines; its cover is then the lowest
+    top among those neighbours (the face is seen above it).
     """
     outlines = [m.outline for m in masses]
     tree = shapely.STRtree(outlines)
@@ -159,13 +161,21 @@ def party_walls(masses: list[Mass], offset: float = 0.3, share: float = 0.5) -> 
             samples.append(o + np.outer(fractions * face.width, u) + n * offset)
             owner.append(mi)
     if not samples:
-        return [np.zeros(0, bool) for _ in masses]
+        return [np.zeros(0) for _ in masses]
     pts = np.concatenate(samples)
     point_owner = np.repeat(np.asarray(owner), len(fractions))
     hit_pt, hit_poly = tree.query(shapely.points(pts), predicate="within")
-    inside = np.zeros(len(pts), bool)
-    inside[hit_pt[hit_poly != point_owner[hit_pt]]] = True
-    per_face = inside.reshape(-1, len(fractions)).mean(axis=1) >= share
+    other = hit_poly != point_owner[hit_pt]
+    hit_pt, hit_poly = hit_pt[other], hit_poly[other]
+    base = np.array([m.base for m in masses])
+    top = base + np.array([m.height for m in masses])
+    covered = np.full(len(pts), np.inf)  # per sample the lowest neighbour top above the face's base
+    np.minimum.at(covered, hit_pt, top[hit_poly] - base[point_owner[hit_pt]])
+    covered = covered.reshape(-1, len(fractions))
+    inside = np.isfinite(covered)
+    lowest = np.where(inside, covered, np.inf).min(axis=1)
+    own = np.array([masses[i].height for i in owner])
+    per_face = np.where(inside.mean(axis=1) >= share, np.clip(lowest, 0.0, own), 0.0)
     result, start = [], 0
     for mass in masses:
         result.append(per_face[start:start + len(mass.faces)])

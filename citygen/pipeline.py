@@ -27,8 +27,8 @@ from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import build_geometry, clear_module_cache
-from citygen.layout import FacadeLayout, Region, check_partition
-from citygen.mass import Mass, build_mass, party_walls
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_below
+from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.registry import Registry, RulesetKind, default_registry, load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
@@ -96,11 +96,11 @@ class _Builder:
                 return a, a.rulesets[int(pick)]
         return None
 
-    def build(self, footprint: Footprint, mass: Mass, party: np.ndarray, name: str,
+    def build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
               tile: tuple[int, int]) -> _BuildingOutcome:
         warnings: list[str] = []
         try:
-            plan = plan_building(footprint, mass, party, self.scene.defaults, self.seed)
+            plan = plan_building(footprint, mass, cover, self.scene.defaults, self.seed)
             layouts: dict[int, FacadeLayout] = {}
             used: list[str] = []
             for scope, courtyard in (("street", False), ("courtyard", True)):
@@ -115,7 +115,8 @@ class _Builder:
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
                 for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
-                    layouts[request.context.face_index] = self._checked(layout, request, kind.id, warnings)
+                    face = request.context.face_index
+                    layouts[face] = hidden_below(self._checked(layout, request, kind.id, warnings), cover[face])
             palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
@@ -225,12 +226,12 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
             footprints.append(fp)
         except Exception as exc:
             report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
-    party = party_walls(masses)
+    cover = neighbour_cover(masses)
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in footprints]
     size = scene.output.tile_size
     tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
-    work = sorted(zip(footprints, masses, party, names, tiles), key=lambda w: (w[4], w[3]))
+    work = sorted(zip(footprints, masses, cover, names, tiles), key=lambda w: (w[4], w[3]))
     plugins = _worker_plugins(registry) if jobs > 1 or executor == "dask" else None
     if isinstance(plugins, str) and executor == "dask":
         raise CitygenError(f"the registry given to generate_city cannot be rebuilt on dask workers: {plugins}",

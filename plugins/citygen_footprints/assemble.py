@@ -16,7 +16,7 @@ from citygen.footprints import Footprint, ImportResult, Skipped
 from pyproj import CRS
 
 from citygen_footprints.frame import make_frame
-from citygen_footprints.heights import Height, resolve_height
+from citygen_footprints.heights import Height, infer_height, resolve_height
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem, Part, build_polygon
 
@@ -88,7 +88,8 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
             out_skipped.append((feature.index, Skipped(feature.id, str(problem), feature.where)))
             continue
         out_warnings.extend(f"{label}: {w}" for w in notes)
-        height = feature.height or resolve_height(feature.attributes, label, options.heights)
+        height = feature.height or infer_height(resolve_height(feature.attributes, label, options.heights),
+                                                feature.attributes, _least_width(polygon), options.heights)
         out_warnings.extend(height.warnings)
         if height.rejected and options.bad_height == "skip":
             reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
@@ -101,3 +102,9 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
                                     source=feature.source))
     ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
     return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)
+
+
+def _least_width(polygon) -> float:
+    """The short side of the footprint's minimum rotated rectangle (metres)."""
+    corners = np.asarray(polygon.minimum_rotated_rectangle.exterior.coords)[:3]
+    return float(min(np.hypot(*(corners[1] - corners[0])), np.hypot(*(corners[2] - corners[1]))))

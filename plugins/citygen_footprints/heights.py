@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 HEIGHT_TAGS = ("height", "building:height", "measuredHeight")
 LEVEL_TAGS = ("building:levels", "storeysAboveGround")
@@ -102,14 +102,36 @@ def parse_levels(value: object) -> float:
     return levels
 
 
+#: levels of building types that are low by nature (OSM ``building=*``), used when a feature has no height data
+TYPE_LEVELS: tuple[tuple[str, float], ...] = tuple(sorted({
+    **dict.fromkeys(("kiosk", "shed", "garage", "garages", "carport", "hut", "cabin", "toilets", "pavilion",
+                     "service", "utility", "roof", "bunker", "greenhouse", "glasshouse", "entrance",
+                     "underpass_entrance", "container", "bandstand", "gazebo", "static_caravan", "bungalow",
+                     "barn", "stable", "sty", "cowshed", "boathouse", "houseboat", "guardhouse", "parking_entrance",
+                     "ruins"), 1),
+    **dict.fromkeys(("house", "detached", "semidetached_house", "farm", "farm_auxiliary", "transformer_tower"), 2),
+    **dict.fromkeys(("terrace",), 3),
+}.items()))
+#: building types that are slender by nature: never capped by their footprint's width
+SLENDER_TYPES = frozenset(("tower", "church", "cathedral", "chapel", "bell_tower", "minaret", "water_tower",
+                           "lighthouse", "chimney", "silo", "campanile"))
+
+
 @dataclass(frozen=True)
 class HeightSettings:
-    """Scene defaults for height resolution."""
+    """Scene defaults for height resolution.
+
+    A feature with no usable height or level data gets ``type_levels[building]`` levels when its type is listed,
+    else ``default_height`` capped at ``slenderness`` times the footprint's least width (whole levels, at least
+    one; ``slenderness = 0`` turns the cap off): an untagged 2 m kiosk does not become an 18 m pillar.
+    """
 
     default_height: float = 10.0
     floor_height: float = 3.0
     max_height: float = 1000.0
     base_offsets: bool = True
+    type_levels: tuple[tuple[str, float], ...] = TYPE_LEVELS  # (building type, levels) pairs
+    slenderness: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -209,3 +231,23 @@ def _with_offset(top: float, source: str, total_levels: float | None, offsets: t
         offset = offset_levels = 0.0
     levels = None if total_levels is None else _round_levels(max(total_levels - offset_levels, 1.0))
     return Height(top - offset, source, levels, offset, tuple(warnings), tuple(rejected))
+
+
+def infer_height(height: Height, tags: Mapping[str, object], least_width: float, settings: HeightSettings) -> Height:
+    """``height`` itself unless it is the scene default (no usable data): then the height the building type implies
+    (``settings.type_levels``, source ``"building=TYPE"``) or the default capped by the footprint's least width
+    (source ``"default, capped by width"``); see :class:`HeightSettings`."""
+    if height.source != "default":
+        return height
+    kind = tags.get("building") if isinstance(tags.get("building"), str) else None
+    levels = dict(settings.type_levels).get(kind)
+    if levels is not None:
+        source = f"building={kind}"
+    elif settings.slenderness > 0 and settings.slenderness * least_width < height.height and \
+            kind not in SLENDER_TYPES:
+        levels, source = settings.slenderness * least_width // settings.floor_height, "default, capped by width"
+    else:
+        return height
+    levels = max(1, int(levels))  # (the wall runs from any base offset up, like the default height)
+    return replace(height, height=min(levels * settings.floor_height, settings.max_height), source=source,
+                   levels=levels)

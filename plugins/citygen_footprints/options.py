@@ -8,7 +8,7 @@ from typing import Any
 
 from citygen.errors import SceneError
 
-from citygen_footprints.heights import HeightSettings
+from citygen_footprints.heights import TYPE_LEVELS, HeightSettings
 
 #: keys of the [footprints] table that belong to the scene reader, not to the importer
 SCENE_KEYS = frozenset({"path", "format"})
@@ -33,10 +33,13 @@ class ImportOptions:
     bad_height: str = "fallback"
     base_offsets: bool = True
     cityjson_height: str = "geometry"
+    type_levels: tuple[tuple[str, float], ...] = TYPE_LEVELS
+    slenderness: float = 3.0
 
     @property
     def heights(self) -> HeightSettings:
-        return HeightSettings(self.default_height, self.floor_height, self.max_height, self.base_offsets)
+        return HeightSettings(self.default_height, self.floor_height, self.max_height, self.base_offsets,
+                              self.type_levels, self.slenderness)
 
     @property
     def part_area(self) -> float:
@@ -72,7 +75,7 @@ def parse_options(table: Mapping[str, Any]) -> tuple[ImportOptions, tuple[str, .
     for key in ("default_height", "floor_height", "max_height"):
         if key in table:
             values[key] = _number(key, table[key], 0.0)
-    for key in ("min_area", "min_part_area"):
+    for key in ("min_area", "min_part_area", "slenderness"):
         if key in table:
             values[key] = _number(key, table[key], 0.0, low_open=False)
     if "repair_min_area_ratio" in table:
@@ -93,6 +96,12 @@ def parse_options(table: Mapping[str, Any]) -> tuple[ImportOptions, tuple[str, .
         if not isinstance(origin, list | tuple) or len(origin) != 2:
             raise _fail("origin", origin, "[x, y] in the input CRS (lon, lat for geographic data)")
         values["origin"] = (_number("origin", origin[0], -math.inf), _number("origin", origin[1], -math.inf))
+    if "type_levels" in table:
+        levels = table["type_levels"]
+        if not isinstance(levels, Mapping) or not all(isinstance(k, str) for k in levels):
+            raise _fail("type_levels", levels, "a table of building type = levels, e.g. { kiosk = 1, garage = 1 }")
+        values["type_levels"] = tuple(sorted({**dict(TYPE_LEVELS), **{
+            k: _number(f"type_levels.{k}", v, 0.0) for k, v in levels.items()}}.items()))
     if "bad_height" in table:
         values["bad_height"] = _choice("bad_height", table["bad_height"], BAD_HEIGHT_CHOICES)
     if "cityjson_height" in table:

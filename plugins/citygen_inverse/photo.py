@@ -10,7 +10,9 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
 3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
-   and the subdivision mapped onto its members; elements are labelled window / door, the rest wall.
+   and the subdivision mapped onto its members; a contrast test tells elements from wall;
+4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
+   library of rendered citygen prototypes by summed mutual information (Eq. 8): label, depth and material.
 
 The layout is in metres: ``width`` metres for the crop, else ``floor_height`` metres per detected floor period.
 """
@@ -24,6 +26,7 @@ from scipy.ndimage import gaussian_filter
 
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
+from citygen_inverse.photo_elements import library
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
 from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
 from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
@@ -44,8 +47,8 @@ MERGE_GAP = 6
 #: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
 THUMB = 16
 SIMILAR = 0.5
-#: Depth (m along the outward normal) of the detected elements.
-DEPTH = {"window": -0.25, "door": -0.3}
+#: The library elements by name (§4): a matched terminal takes its label, depth and material.
+ELEMENTS = {e.name: e for e in library()}
 
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in crop pixels, y down
 Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 in working pixels, y down
@@ -246,20 +249,21 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
     """Region tree in metres (y up) and the element rectangles in working pixels."""
     elements: list = []
 
-    def region(rect, symbol, label=None, children=()):
+    def region(rect, symbol, label=None, children=(), element=None):
         r0, r1, c0, c1 = rect
         x0, x1, y0, y1 = c0 * s, c1 * s, (H - r1) * s, (H - r0) * s
-        return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label,
-                      depth=DEPTH.get(label, 0.0), children=tuple(children))
+        e = ELEMENTS.get(element)
+        return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label, depth=e.depth if e else 0.0,
+                      material=e.material if e else None, children=tuple(children))
 
     def build(node: Node, m: int, symbol: str, i: int, j: int):
         if node.children:  # regions that the proportional mapping shrank to nothing are left out
             kids = [build(c, m, f"{symbol}_{k}", i, j) for k, c in enumerate(node.children)
                     if c.rects[m][0] < c.rects[m][1] and c.rects[m][2] < c.rects[m][3]]
             return region(node.rects[m], symbol, children=kids)
-        if node.label in DEPTH:
+        if node.element is not None:
             elements.append((node.rects[m], node.label, (i, j)))
-        return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall")
+        return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall", element=node.element)
 
     floor_regions = []
     last = floors.size - 2

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
+from citygen_inverse.photo_elements import cluster_type
+
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
 TAU_EDGE = 2.5
 #: Fraction of a line over which its edge strength is averaged.
@@ -65,6 +67,7 @@ class Node:
     label: str | None = None
     children: tuple[Node, ...] = ()
     cuts: tuple[tuple[str, int], ...] = ()  # §3.1 split of this region: (side, distance of its line from the side)
+    element: str | None = None  # name of the matched library element (§4, ``photo_elements``)
 
 
 @dataclass(frozen=True)
@@ -259,11 +262,11 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
 def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool]) -> list[Node]:
     """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
     edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
-    whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members."""
-    stacks = [plausible_doors(stack_tree(edges, tiles, ground), len(tiles))
-              for tiles, ground in zip(groups, grounds)]
+    whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members, and §4's element type per
+    cluster of corresponding regions (:func:`match_elements`)."""
+    stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
     sizes = synchronised(stacks)
-    return [_members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles)
+    return [match_elements(edges, _members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles))
             for tree, tiles in zip(stacks, groups)]
 
 
@@ -286,16 +289,33 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
     return tree
 
 
-def plausible_doors(node: Node, members: int) -> Node:
-    """Door leaves of a group's tree that are no plausible door -- lower than ``DOOR_ASPECT`` times their width,
-    or in a group of more than ``MAX_DOORS`` tiles -- become wall (shop fronts are not modelled; as windows they
-    cost window precision on the CMP development photos, where they are annotated as shops)."""
-    if node.children:
-        return Node(node.rects, node.label, tuple(plausible_doors(c, members) for c in node.children), node.cuts)
+def match_elements(edges: EdgeImage, tree: Node) -> Node:
+    """§4: every element leaf -- a region the contrast test (:func:`_element_label`) or the profile windows took
+    for an element -- is a cluster of similar regions, one per member tile; its label and element are Eq. 8's
+    best library element among those :func:`_element_labels` allows. The contrast test stays the prior that
+    decides element or wall (Eq. 8 with the wall element decided worse on the CMP development photos)."""
+    tiles = tree.rects
+
+    def visit(node: Node) -> Node:
+        if node.children:
+            return Node(node.rects, node.label, tuple(visit(c) for c in node.children), node.cuts)
+        if node.label in (None, "wall"):
+            return node
+        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles))
+        return Node(node.rects, element.label, element=element.name)
+    return visit(tree)
+
+
+def _element_labels(node: Node, tiles: tuple[Rect, ...]) -> tuple[str, ...]:
+    """Labels an element leaf may take: a region the contrast test took for a door (on the ground floor's bottom
+    edge, or a piece of one) is a door -- if plausible: at least ``DOOR_ASPECT`` times as high as wide, in a group
+    of at most ``MAX_DOORS`` tiles (a door repeated in every tile of a longer row is a row of shop fronts or an
+    arcade) -- or a shop front; any other a window."""
+    if node.label != "door":
+        return ("window",)
     r0, r1, c0, c1 = node.rects[0]
-    if node.label == "door" and (members > MAX_DOORS or r1 - r0 < DOOR_ASPECT * (c1 - c0)):
-        return Node(node.rects, "wall")
-    return node
+    plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
+    return ("door", "shop") if plausible else ("shop",)
 
 
 def synchronised(trees: list[Node]) -> dict[tuple[bool, int], int]:

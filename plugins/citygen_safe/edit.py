@@ -3,36 +3,41 @@
 The paper proposes variations and lets the user pick. For a target width we try column counts around the one
 the grid's pitch suggests (one fewer, that one, one more). The counts lie on one greedy path of jumps: each step
 ranks every single jump of the active grids (insert a source column at any position, or remove a column) by the
-width mismatch it leaves, an analytic estimate of its distortion; jumps of equal width change count as one, and
-the spatial optimisation scores only the ``FINALISTS`` best (none when one width change is on offer); the path's
-states at the counts are the variations. Jumps apply to the natural (unsized)
-facade, so copies keep the input's sizes, and sibling pieces of one region are merged back after every jump.
-Each call has a work budget (leaves sized by the spatial optimisation, a deterministic stand-in for CPU time):
-once spent, steps take the estimate's best jump unscored, and the facade resized without jumps is always a
-variation. Heights do the same with floors (see :mod:`citygen_safe.floors`).
+width mismatch it leaves, an analytic estimate of its distortion; the spatial optimisation scores the
+``FINALISTS`` best of distinct width changes and compares the winner with up to ``POSITIONS`` other jumps of its
+width change (other positions); the path's states at the counts are the variations. A far wider target
+(``FAR_COPIES`` or more insertions to the nearest count) is met by single jumps of many copies instead: each
+candidate gets the copy count whose width mismatch is least, and the winner's counts around it are the variations
+(:func:`far_variations`). Jumps apply to the natural (unsized) facade, so copies keep the input's sizes, and
+sibling pieces of one region are merged back after every jump. Each call has a work budget (leaves sized by the
+spatial optimisation, a deterministic stand-in for CPU time): once spent, steps take the estimate's best jump
+unscored, and the facade resized without jumps is always a variation. Heights do the same with floors (see
+:mod:`citygen_safe.floors`).
 """
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from citygen.layout import FLOOR_BOUND_LABELS
 from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
-from citygen_safe.jump import (Jump, insert_slab, insertion_gap, merge_leaves, remove_slab, removal_slab,
-                               source_columns)
+from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, merge_leaves, remove_slab,
+                               removal_slab, source_columns)
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
+POSITIONS = 4  #: other positions of the winning width change the spatial optimisation compares with it
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
 BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
 #: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
 #: the budget counts work, not time, so the same request gives the same facade on any machine and under any load.
 LEAVES_PER_SECOND = 12_000
-MAX_LEAVES = 4000  #: column jumps stop before a facade would have more leaves
+MAX_LEAVES = 8000  #: column jumps stop before a facade would have more leaves (the QP's cost per leaf grows beyond)
+FAR_COPIES = 4  #: column insertions to the nearest count from which its counts are single jumps of many copies
 
 
 class Work:
@@ -132,13 +137,14 @@ def column_candidates(facade: Facade, settings: Settings, grow: bool) -> list[Ca
     out, middle = [], 0.5 * facade.width
     for spec in settings.active:
         grid = detect_grid(facade, spec)
-        if grid is None or len(grid.columns) < 2:
+        if grid is None or len(grid.columns) < 2 and not grow:
             continue
         if grow:
             for s in source_columns(facade, grid):
                 slab = grid.columns[s]
-                for p in range(1, len(grid.columns)):
-                    gap = insertion_gap(grid, p)
+                gaps = ([(p, insertion_gap(grid, p)) for p in range(1, len(grid.columns))]
+                        if len(grid.columns) > 1 else boundary_gaps(slab, facade.width))
+                for p, gap in gaps:
                     if gap is not None:
                         out.append(Candidate(Jump("insert", spec.name, "x", s, p),
                                              gap[1] - gap[0] + slab[1] - slab[0], abs(gap[0] - middle), (gap, slab),
@@ -161,19 +167,25 @@ def _remover(facade: Facade, grid: FacadeGrid, column: int) -> Callable[[int], F
     return apply
 
 
-def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
-                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
-    """The next state of ``path`` and its QP result (None: not scored). Candidates are ranked by the size
-    mismatch they leave (then nearest the middle, then by description); jumps of equal size change are taken as
-    equivalent, so the first that keeps the kept labels stands for each. With one size change on offer its jump
-    is taken unscored; else the QP scores the first ``FINALISTS`` (fewer once the work ``deadline`` has passed).
-    ``copies`` > 1 repeats a jump that many times in one step (far targets): the finalists are scored as single
-    jumps at the per-jump share of the size change, and the winner is repeated unscored (or taken once when the
-    repeat is not possible). None when no jump is possible."""
-    order = sorted(candidates, key=lambda c: (round(abs(path.facade.width + copies * c.delta - target), 2),
-                                              round(c.offset, 2), str(c.jump)))
+def choose(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+           copies: int | None = 1) -> tuple[Candidate, int, Path, SpatialResult | None] | None:
+    """The best jump of ``path`` towards ``target``: the candidate, its number of copies ``k``, the state after one
+    copy and that state's QP result (None: not scored). Candidates are ranked by the size mismatch that ``k``
+    copies leave (then nearest the middle, then by description); ``copies`` None gives each candidate the ``k``
+    whose mismatch is least. The QP scores the first ``FINALISTS`` of distinct size changes that keep the kept labels
+    (none when one size change is on offer; fewer once the work ``deadline`` has passed) as single jumps at their
+    per-copy share of the size change, then compares the winner with up to ``POSITIONS`` other jumps of its size
+    change (other positions, the next nearest the middle; a rival must be strictly better). None when no jump is
+    possible."""
+    gap = target - path.facade.width
+
+    def count(cand: Candidate) -> int:
+        return copies if copies is not None else max(1, round(gap / cand.delta)) if cand.delta * gap > 0 else 1
+
+    order = sorted(candidates, key=lambda c: (round(abs(gap - count(c) * c.delta), 2), round(c.offset, 2),
+                                              str(c.jump)))
     want = kept(path.facade, settings.keep)
-    finalists: list[Candidate] = []
+    finalists: list[tuple[Candidate, Facade]] = []
     seen: set[float] = set()
     for cand in order:
         if round(cand.delta, 2) in seen or cand.changes(path.facade, settings.keep):
@@ -181,33 +193,136 @@ def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, tar
         new = cand.apply(1)
         if kept(new, settings.keep) == want:
             seen.add(round(cand.delta, 2))
-            finalists.append(replace(cand, apply=lambda m, new=new, cand=cand: new if m == 1 else cand.apply(m)))
+            finalists.append((cand, new))
             if len(finalists) == FINALISTS:
                 break
-    scout = path.facade.width + (target - path.facade.width) / copies
     best: tuple[float, Candidate, Path, SpatialResult | None] | None = None
-    for cand in finalists:
-        state = Path(*merge_leaves(cand.apply(1), settings.fixed), path.jumps + (cand.jump,))
+    for cand, new in finalists:
+        state = Path(*merge_leaves(new, settings.fixed), path.jumps + (cand.jump,))
         if len(finalists) == 1 or settings.work.spent > deadline:
             best = best or (0.0, cand, state, None)
             break
-        res = size(state.facade, settings, scout, root=state.root)
+        res = size(state.facade, settings, path.facade.width + gap / count(cand), root=state.root)
         if res.success and (best is None or res.objective < best[0]):
             best = (res.objective, cand, state, res)
     if best is None:
         return None
     _, cand, state, res = best
-    bulk = cand.apply(copies) if copies > 1 else None
-    if bulk is None or kept(bulk, settings.keep) != want:  # no repeat asked for, or not possible: one jump
-        return state, res
-    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * copies), None
+    rivals = [c for c in order if c is not cand and round(c.delta, 2) == round(cand.delta, 2)
+              and not c.changes(path.facade, settings.keep)][:POSITIONS]
+    scout = path.facade.width + gap / count(cand)
+    for alt in rivals:  # other positions of the winning size change: the QP compares them with the winner's
+        if settings.work.spent > deadline:
+            break
+        if res is None:
+            res = size(state.facade, settings, scout, root=state.root)
+        new = alt.apply(1)
+        if kept(new, settings.keep) != want:
+            continue
+        other = Path(*merge_leaves(new, settings.fixed), path.jumps + (alt.jump,))
+        r = size(other.facade, settings, scout, root=other.root)
+        if r.success and (not res.success or r.objective < res.objective - 1e-9 * max(1.0, res.objective)):
+            cand, state, res = alt, other, r
+    return cand, count(cand), state, res
+
+
+def greedy_step(path: Path, candidates: list[Candidate], settings: Settings, target: float, deadline: float,
+                copies: int = 1) -> tuple[Path, SpatialResult | None] | None:
+    """The next state of ``path`` and its QP result (None: not scored), by :func:`choose`. ``copies`` > 1 repeats
+    the chosen jump that many times in one step (far targets), unscored (or takes it once when the repeat is not
+    possible). None when no jump is possible."""
+    chosen = choose(path, candidates, settings, target, deadline, copies)
+    if chosen is None:
+        return None
+    cand, k, state, res = chosen
+    bulk = repeated(path, cand, k, settings)
+    return (state, res) if bulk is None else (bulk, None)
+
+
+def repeated(path: Path, cand: Candidate, k: int, settings: Settings) -> Path | None:
+    """``path`` after ``k`` > 1 copies of ``cand`` in one jump (one band of ``k`` copies); None when ``k`` is 1 or
+    the repeat is not possible (it would copy or remove a kept label)."""
+    if k < 2:
+        return None
+    bulk = cand.apply(k)
+    if bulk is None or kept(bulk, settings.keep) != kept(path.facade, settings.keep):
+        return None
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (cand.jump,) * k)
+
+
+def mixed(path: Path, first: Candidate, a: int, second: Candidate, b: int, settings: Settings) -> Path | None:
+    """``path`` after ``b`` copies of insertion ``second`` and then ``a`` copies of insertion ``first`` (its gap and
+    slab moved with the content right of the first band): two jumps of many copies, for a width that one column
+    kind repeated misses. None when ``first``'s gap or slab straddles the band's place or a kept label would be
+    copied."""
+    c0, width = second.slabs[0][0], b * second.delta
+    if any(lo < c0 - EPS < hi - EPS for lo, hi in first.slabs):
+        return None
+    gap, slab = ((lo + width, hi + width) if lo >= c0 - EPS else (lo, hi) for lo, hi in first.slabs)
+    bulk = insert_slab(second.apply(b), gap, slab, a)
+    if kept(bulk, settings.keep) != kept(path.facade, settings.keep):
+        return None
+    return Path(*merge_leaves(bulk, settings.fixed), path.jumps + (second.jump,) * b + (first.jump,) * a)
+
+
+def far_variations(start: Path, settings: Settings, target: float, deadline: float, notes: list[str]
+                   ) -> list[tuple[Path, SpatialResult]]:
+    """States of a facade far narrower than ``target``, each one insertion jump of ``m`` copies of one source
+    column (the same insertion repeated as one band), and their QP results.
+
+    Every candidate gets the count ``k`` that leaves the least width mismatch; :func:`choose` ranks them by that
+    mismatch and the QP scores the finalists as single copies. The winner's counts ``k - 1, k, k + 1`` are the
+    states, plus, when it fits the width closer than they do, the winner's copies mixed with copies of one other
+    insertion (:func:`mixed`; the split with the least mismatch). States are sized in order of their mismatch
+    while the work ``deadline`` and ``MAX_LEAVES`` allow (leaves estimated from one copy's, before a state is
+    built); when none fits, the largest count of the winner that does (noted in ``notes``)."""
+    candidates = column_candidates(start.facade, settings, True)
+    chosen = choose(start, candidates, settings, target, deadline, None)
+    if chosen is None:
+        return []
+    cand, k, one, _ = chosen
+    gap = target - start.facade.width
+    n0, per_copy = len(start.facade.leaves), len(one.facade.leaves) - len(start.facade.leaves)
+    counts = sorted({max(1, k - 1), k, k + 1})
+    options = [(round(abs(gap - m * cand.delta), 2), m, None, 0) for m in counts]
+    others = [c for c in candidates if round(c.delta, 2) != round(cand.delta, 2)
+              and not c.changes(start.facade, settings.keep)]
+    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), m, c, b)
+             for m in counts for c in others for b in range(1, m)]
+    best_mix = min(mixes, key=lambda o: (o[0], o[3], o[1]), default=None)
+    if best_mix is not None and best_mix[0] < min(o[0] for o in options):
+        options.append(best_mix)
+    out = []
+    for _, m, other, b in sorted(options, key=lambda o: (o[0], o[1], o[3])):
+        leaves = n0 + m * per_copy
+        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
+            continue
+        if other is None:
+            state = one if m == 1 else repeated(start, cand, m, settings)
+        else:
+            state = mixed(start, cand, m - b, other, b, settings)
+        if state is not None:
+            out.append((state, size(state.facade, settings, target, root=state.root)))
+    if not out:
+        fit = min(k, int((min(MAX_LEAVES, deadline - settings.work.spent) - n0) // max(1, per_copy)))
+        notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {max(0, fit)} of {k} column jumps")
+        state = one if fit == 1 else repeated(start, cand, fit, settings) if fit > 1 else None
+        if state is not None:
+            out.append((state, size(state.facade, settings, target, root=state.root)))
+    return out
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
-    """Mean distance between consecutive columns of the first active grid with two or more columns."""
-    for grid in grids_of(facade, settings.active):
+    """Mean distance between consecutive columns of the first active grid with two or more columns; else, for a
+    one-column grid, the mean width change of its insertions at the facade boundary (its width plus the mean gap
+    to the boundaries)."""
+    grids = grids_of(facade, settings.active)
+    for grid in grids:
         if len(grid.columns) > 1:
             return (grid.columns[-1][0] - grid.columns[0][0]) / (len(grid.columns) - 1)
+    for grid in grids:
+        lo, hi = grid.columns[0]
+        return 0.5 * (facade.width + hi - lo)
     return None
 
 
@@ -229,6 +344,10 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
     counts = {best_k - 1, best_k, best_k + 1} - {0} if step is not None else set()
     for sign in (1, -1):
         wanted = sorted(abs(k) for k in counts if k * sign > 0)
+        if sign > 0 and wanted and wanted[0] >= FAR_COPIES:
+            for state, res in far_variations(start, settings, target, deadline, notes):
+                _add(found, state, res)
+            continue
         path, res = start, None
         while wanted and len(path.jumps) < wanted[-1]:
             if settings.work.spent > deadline:

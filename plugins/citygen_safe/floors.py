@@ -2,17 +2,18 @@
 
 A *floor band* is a maximal y range of overlapping openings (windows, doors): a ground floor's tall windows and
 the transom over its door are one band. To reach the request's floor count, bands are inserted (a copy of a
-band with the content between two bands, as a row insertion of §4) or removed, greedily as the columns are (the
-height mismatch ranks the jumps, the QP scores the finalists); the band holding the door is never copied or
-removed. Each floor line then pins the lowest-cost
-full-width cut between two bands (the cut whose scaled position is nearest the line).
+band with the content between two bands, as a row insertion of §4; a single band is copied with the content
+between it and the top or bottom of the face, the boundary standing in for the missing anchor band) or removed,
+greedily as the columns are (the height mismatch ranks the jumps, the QP scores the finalists); the band holding
+the door is never copied or removed. Each floor line then pins the lowest-cost full-width cut between two bands
+(the cut whose scaled position is nearest the line).
 """
 from __future__ import annotations
 
 from dataclasses import replace
 
 from citygen_safe.edit import Candidate, Path, Settings, greedy_step, size
-from citygen_safe.jump import Jump, insert_slab, merge_leaves, remove_slab
+from citygen_safe.jump import Jump, boundary_gaps, insert_slab, merge_leaves, remove_slab
 from citygen_safe.leaves import EPS, Facade, transpose
 from citygen_safe.optimise import Lines, SpatialResult
 from citygen_safe.tree import Node
@@ -38,8 +39,9 @@ def band_candidates(facade: Facade) -> tuple[list[Candidate], list[Candidate]]:
     middle = 0.5 * facade.width
     grow, shrink = [], []
     for s, band in enumerate(bands):
-        for p in range(1, len(bands)):
-            gap = (bands[p - 1][1], max(bands[p - 1][1], bands[p][0]))
+        gaps = ([(p, (bands[p - 1][1], max(bands[p - 1][1], bands[p][0]))) for p in range(1, len(bands))]
+                if len(bands) > 1 else boundary_gaps(band, facade.width))
+        for p, gap in gaps:
             grow.append(Candidate(Jump("insert", "floors", "y", s, p), gap[1] - gap[0] + band[1] - band[0],
                                   abs(gap[0] - middle), (gap, band),
                                   lambda m, gap=gap, band=band: insert_slab(facade, gap, band, m)))

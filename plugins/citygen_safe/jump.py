@@ -96,6 +96,15 @@ def insertion_gap(grid: FacadeGrid, position: int) -> tuple[float, float] | None
     return None if c1 < c0 - EPS else (c0, max(c0, c1))
 
 
+def boundary_gaps(extent: tuple[float, float], width: float) -> tuple[tuple[int, tuple[float, float]], ...]:
+    """Insertions next to the only column (or floor band) ``extent`` of a face ``width`` wide, anchored at the
+    facade boundary: (position, gap) with the gap between the left boundary and the column (position 0, the copy
+    goes left of it) and between the column and the right boundary (position 1). A copy of the column with the
+    gap, ``A_l | gap' | S' | gap | boundary``, spaces the copies by the gap as two anchors would be."""
+    lo, hi = extent
+    return (0, (0.0, max(0.0, lo))), (1, (hi, max(hi, width)))
+
+
 def removal_slab(grid: FacadeGrid, column: int, count: int = 1) -> tuple[float, float] | None:
     """The slab removing column ``column``: to the next column's left edge (the last column: from the previous
     column's right edge); None when there is nothing to cut. ``count`` > 1: the removal repeated (the columns

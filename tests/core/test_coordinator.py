@@ -42,7 +42,28 @@ def test_plan_agrees_across_faces(w, d, h, seed):
 def test_party_walls_get_no_request_and_no_door():
     foot = Footprint(id="b", polygon=Polygon([(0, 0), (30, 0), (30, 8), (0, 8)]), height=9, height_source="height")
     mass = build_mass(foot)
-    party = np.array([True, False, False, False])  # the long south wall is shared
-    plan = plan_building(foot, mass, party, Defaults(), 1)
+    cover = np.array([9.0, 0, 0, 0])  # the long south wall is shared
+    plan = plan_building(foot, mass, cover, Defaults(), 1)
     assert 0 in plan.plain_faces and all(r.context.face_index != 0 for r in plan.requests)
     assert plan.entrance_face == 2
+
+
+def test_a_wall_above_a_lower_neighbour_gets_a_facade_but_no_door():
+    """Bug fixture: a wall against a lower neighbour was a plain party wall over its whole height, a blank slab
+    above the neighbour's roof (Helsinki demo). It gets a facade now; its foot is hidden, so no entrance."""
+    foot = Footprint(id="b", polygon=Polygon([(0, 0), (30, 0), (30, 8), (0, 8)]), height=18, height_source="height")
+    mass = build_mass(foot)
+    plan = plan_building(foot, mass, np.array([6.6, 0, 0, 0]), Defaults(), 1)
+    south = next(r for r in plan.requests if r.context.face_index == 0)
+    assert not south.entrance and not south.context.street_facing and plan.entrance_face == 2
+    plan = plan_building(foot, mass, np.array([17.5, 0, 0, 0]), Defaults(), 1)  # within PARTY_RISE of the top
+    assert 0 in plan.plain_faces
+
+
+def test_a_tower_rising_from_a_lower_block_has_no_entrance():
+    """Bug fixture (way/28775756, Helsinki): a tower whose every wall stands on a lower building got its door on a
+    hidden foot; with no free foot there is no entrance."""
+    foot = Footprint(id="t", polygon=Polygon([(0, 0), (6, 0), (6, 6), (0, 6)]), height=18, height_source="height")
+    mass = build_mass(foot)
+    plan = plan_building(foot, mass, np.full(len(mass.faces), 6.6), Defaults(), 1)
+    assert plan.entrance_face is None and len(plan.requests) == 4 and not any(r.entrance for r in plan.requests)

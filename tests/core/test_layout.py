@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, strategies as st
 
 from citygen.errors import LayoutError
-from citygen.layout import FacadeLayout, Region, check_partition, require_partition
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_below, leaf, require_partition
 
 
 def two_by_one(**override):
@@ -94,3 +94,23 @@ def test_regression_partition_check_with_a_region_exactly_eps_wide():
     for kept in (regions[:2], (regions[0], regions[2])):  # without the strip, or without the wall: a hole
         hole = FacadeLayout(1.0, 1.0, Region(0.0, 0.0, 1.0, 1.0, "Facade", children=kept))
         assert any("uncovered" in p for p in check_partition(hole))
+
+
+def test_hidden_below_walls_up_what_a_lower_neighbour_hides():
+    """Subtrees wholly below the neighbour's top become one plain wall region each; ones reaching above it keep
+    their content above and lose their module key; the result still partitions the face."""
+    floor0 = Region(0, 0, 10, 3, "Floor", key=7, children=(
+        leaf(0, 0, 4, 3, "Wall", "wall"), leaf(4, 0, 2, 2.5, "Door", "door", depth=-0.3),
+        leaf(4, 2.5, 2, 0.5, "Wall", "wall"), leaf(6, 0, 4, 3, "Wall", "wall")))
+    floor1 = Region(0, 3, 10, 3, "Floor", key=7, children=(
+        leaf(0, 3, 4, 3, "Wall", "wall"), leaf(4, 3, 2, 2, "Window", "window"), leaf(4, 5, 2, 1, "Wall", "wall"),
+        leaf(6, 3, 4, 3, "Wall", "wall")))
+    layout = FacadeLayout(10, 6, Region(0, 0, 10, 6, "Facade", children=(floor0, floor1)))
+    assert hidden_below(layout, 0.0) is layout
+    hidden = hidden_below(layout, 4.0)
+    assert check_partition(hidden) == []
+    assert hidden.root.children[0] == Region(0, 0, 10, 3, "Wall", "wall")
+    assert hidden.root.children[1] is floor1  # reaches above 4 m: untouched (its window starts at 3 m)
+    hidden = hidden_below(layout, 5.5)
+    assert [t.label for t in hidden.root.children[1].terminals()] == ["wall", "wall", "wall", "wall"]
+    assert hidden.root.children[1].key is None and floor1.key == 7

@@ -3,7 +3,7 @@ import pytest
 from shapely.geometry import Polygon
 
 from citygen.footprints import Footprint
-from citygen.mass import build_mass, clean_ring, party_walls
+from citygen.mass import build_mass, clean_ring, neighbour_cover
 
 
 def fp(coords, holes=(), height=10.0, id="b"):
@@ -52,6 +52,17 @@ def test_clean_ring_keeps_real_corners():
 def test_party_walls_detected_between_touching_buildings():
     a = build_mass(fp([(0, 0), (10, 0), (10, 10), (0, 10)], id="a"))
     b = build_mass(fp([(10, 0), (20, 0), (20, 10), (10, 10)], id="b"))
-    pa, pb = party_walls([a, b])
-    assert pa.tolist() == [False, True, False, False]
-    assert pb.tolist() == [False, False, False, True]
+    pa, pb = neighbour_cover([a, b])
+    assert pa.tolist() == [0, a.height, 0, 0]
+    assert pb.tolist() == [0, 0, 0, b.height]
+
+
+def test_neighbour_cover_is_the_lowest_neighbour_top():
+    """A wall against lower neighbours is covered up to the lowest of their tops (it is seen above them); one
+    against a taller neighbour is covered to its own top."""
+    tall = build_mass(fp([(0, 0), (10, 0), (10, 10), (0, 10)], id="tall", height=18.0))
+    low = build_mass(fp([(10, 0), (20, 0), (20, 6), (10, 6)], id="low", height=3.3))
+    lower = build_mass(fp([(10, 6), (20, 6), (20, 10), (10, 10)], id="lower", height=6.6))
+    ct, cl, cr = neighbour_cover([tall, low, lower])
+    assert ct.tolist() == [0, 3.3, 0, 0]  # east wall: low covers 3 of 5 samples, lower 2; the lowest top counts
+    assert cl.max() == 3.3 and cr.max() == 6.6  # the lower buildings' west walls are covered to their own tops

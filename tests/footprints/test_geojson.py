@@ -60,15 +60,33 @@ def test_helsinki_height_sources(helsinki):
     assert sum(p["building:levels"] is not None for p in raw) == 163
     assert sum(p["height"] is not None for p in raw) == 17
     tally = Counter(f.height_source for f in helsinki.footprints)
-    assert tally == {"default": 315, "building:levels": 138, "building:levels+roof:levels": 10, "height": 17}
+    inferred = {"building=roof": 7, "building=kiosk": 3, "building=shed": 2, "building=pavilion": 1,
+                "building=glasshouse": 1, "building=underpass_entrance": 1, "default, capped by width": 19}
+    assert tally == {"default": 281, "building:levels": 138, "building:levels+roof:levels": 10, "height": 17,
+                     **inferred}
     for f in helsinki.footprints:
         expected = "height" if "height" in f.attributes else \
-            "building:levels" if "building:levels" in f.attributes else "default"
+            "building:levels" if "building:levels" in f.attributes else \
+            f"building={f.attributes['building']}" if f.height_source.startswith("building=") else "default"
         assert f.height_source.startswith(expected)
         assert 0 < f.height <= 100
     ateneum = next(f for f in helsinki.footprints if f.id == "way/8033120")
     assert (ateneum.height, ateneum.levels) == (pytest.approx(10.5), 4)  # building:levels "3.5"
     assert ateneum.attributes["name"] == "Ateneum" and ateneum.attributes["tourism"] == "museum"  # tags merged
+
+
+def test_helsinki_untagged_kiosks_are_not_pillars():
+    """Bug fixture: in the demo scene (default height 18 m, floors 3.3 m) three untagged 4.3 m2 footprints
+    (way/470004893-95, 2.1 m wide) were 18 m pillars; with no height data the default is capped at 3 x the least
+    width, in whole levels."""
+    from citygen_footprints.plugin import read_footprints
+    result = read_footprints(HELSINKI, {"default_height": 18.0, "floor_height": 3.3})
+    by_id = {f.id: f for f in result.footprints}
+    for fid in ("way/470004893", "way/470004894", "way/470004895"):
+        f = by_id[fid]
+        assert (f.height, f.levels, f.height_source) == (pytest.approx(3.3), 1, "default, capped by width")
+    capped = [f for f in result.footprints if f.height_source == "default, capped by width"]
+    assert len(capped) == 40 and all(f.height < 18.0 and f.height == pytest.approx(3.3 * f.levels) for f in capped)
 
 
 def test_helsinki_local_frame_is_centred_and_about_a_kilometre(helsinki):
@@ -208,12 +226,19 @@ def test_options_shape_heights(tmp_path):
     doc = _collection(_square(24.94, 60.17, 0.0002))
     path = write_json(tmp_path / "d.geojson", doc)
     assert read_footprints(path, {"default_height": 7.5}).footprints[0].height == 7.5
+    doc = _collection(_square(24.94, 60.17, 0.0002), building="garage")
+    path = write_json(tmp_path / "g.geojson", doc)
+    assert read_footprints(path, {"floor_height": 3.5}).footprints[0].height == 3.5
+    garage = read_footprints(path, {"floor_height": 3.5, "type_levels": {"garage": 2}}).footprints[0]
+    assert (garage.height, garage.levels, garage.height_source) == (7.0, 2, "building=garage")
 
 
 @pytest.mark.parametrize("options, message", [
     ({"floor_height": 0}, "floor_height"), ({"default_height": "ten"}, "default_height"),
     ({"min_area": -1}, "min_area"), ({"origin": [1]}, "origin"), ({"bad_height": "drop"}, "bad_height"),
     ({"crs_check": "yes"}, "crs_check"), ({"cityjson_height": "roof"}, "cityjson_height"),
+    ({"slenderness": -2}, "slenderness"), ({"type_levels": {"kiosk": "one"}}, "type_levels.kiosk"),
+    ({"type_levels": [1, 2]}, "type_levels"),
 ])
 def test_bad_options_are_scene_errors(tmp_path, options, message):
     path = write_json(tmp_path / "h.geojson", _collection(_square(24.94, 60.17, 0.0002)))

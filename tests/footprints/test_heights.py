@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from citygen_footprints.heights import HeightSettings, parse_length, parse_levels, resolve_height
+from citygen_footprints.heights import HeightSettings, infer_height, parse_length, parse_levels, resolve_height
 
 LENGTHS = [
     ("12.13 m", 12.13), ("12,5", 12.5), ("3.5", 3.5), ("~10", 10.0), ("40 ft", 12.192), ("40ft", 12.192),
@@ -119,3 +119,38 @@ def test_resolve_height_always_gives_a_positive_finite_height(tags):
     assert math.isfinite(h.height) and 0 < h.height <= 1000
     assert h.levels is None or h.levels >= 1
     assert math.isfinite(h.base_offset) and h.base_offset >= 0
+
+
+def _inferred(tags, width, **settings):
+    s = HeightSettings(default_height=18.0, floor_height=3.3, **settings)
+    return infer_height(resolve_height(tags, "way/1", s), tags, width, s)
+
+
+def test_low_building_types_get_their_levels_without_height_data():
+    h = _inferred({"building": "kiosk"}, 20.0)
+    assert (h.height, h.levels, h.source) == (pytest.approx(3.3), 1, "building=kiosk")
+    assert _inferred({"building": "house"}, 20.0).levels == 2
+    h = _inferred({"building": "kiosk", "height": "5"}, 20.0)  # data wins over the type
+    assert (h.height, h.source) == (5.0, "height")
+    h = _inferred({"building": "kiosk", "building:levels": "3"}, 20.0)
+    assert (h.levels, h.source) == (3, "building:levels")
+    assert _inferred({"building": "kiosk"}, 20.0, type_levels=(("kiosk", 2.0),)).levels == 2
+
+
+@pytest.mark.parametrize("width, levels", [(0.5, 1), (2.0, 1), (2.3, 2), (4.0, 3), (5.9, 5)])
+def test_untagged_default_is_capped_by_the_least_width(width, levels):
+    h = _inferred({"building": "yes"}, width)
+    assert (h.levels, h.source) == (levels, "default, capped by width")
+    assert h.height == pytest.approx(3.3 * levels) and h.height <= max(3.0 * width, 3.3)
+
+
+@pytest.mark.parametrize("tags, width, settings", [
+    ({"building": "yes"}, 6.0, {}),  # 3 x 6 m reaches the default
+    ({"building": "tower"}, 2.0, {}),  # slender by nature
+    ({"building": "church"}, 3.0, {}),
+    ({"building": "yes"}, 2.0, {"slenderness": 0.0}),  # cap off
+    ({"building": ["yes", "no"]}, 20.0, {}),  # not a string: no type
+])
+def test_default_height_stays_where_nothing_is_inferred(tags, width, settings):
+    h = _inferred(tags, width, **settings)
+    assert (h.height, h.levels, h.source) == (18.0, None, "default")

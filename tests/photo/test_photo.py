@@ -88,17 +88,6 @@ def test_shop_fronts_are_not_doors(shop):
     assert check_partition(result.layout) == []
 
 
-def test_plausible_doors_limits():
-    """A door stays a door in a group of up to ``MAX_DOORS`` tiles when at least ``DOOR_ASPECT`` times as high as
-    wide; otherwise it becomes wall."""
-    from citygen_inverse.photo_tiles import Node, plausible_doors
-    tree = Node(((0, 80, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), Node(((20, 80, 0, 50),), "door")))
-    assert [c.label for c in plausible_doors(tree, 2).children] == ["wall", "door"]  # 60 x 50: 1.2
-    assert [c.label for c in plausible_doors(tree, 3).children] == ["wall", "wall"]
-    wide = Node(((0, 80, 0, 51),), None, (Node(((0, 20, 0, 51),), "wall"), Node(((20, 80, 0, 51),), "door")))
-    assert [c.label for c in plausible_doors(wide, 1).children] == ["wall", "wall"]
-
-
 def test_layout_round_trips_through_greedy_extraction():
     image, _, _ = facade(floors=3, cols=4)
     layout = analyse(image, width=12.0).layout

@@ -113,3 +113,33 @@ def test_removal_repeated_is_one_wider_slab():
     assert bulk.width == pytest.approx(twice.width) and len(detect_grid(bulk, WIN).columns) == 3
     assert removal_slab(grid, 3, 2) == (grid.columns[2][1], grid.columns[4][1])  # through the last column
     assert removal_slab(grid, 0, 5) is None and removal_slab(grid, 4, 2) is None  # one column must stay
+
+
+def test_regression_one_column_grid_gains_columns_at_the_boundary():
+    """A one-column grid could not gain columns (insertion needs two anchor columns). Now the column is copied
+    next to itself with its gap to the facade boundary (``A_l | gap' | S' | gap | boundary``), on either side."""
+    from citygen_safe.edit import Settings, column_candidates
+    f = facade_from_layout(regular(1, 2))  # 3 m: wall 0.9 | window 1.2 | wall 0.9
+    cands = column_candidates(f, Settings((WIN,)), grow=True)
+    assert sorted(c.jump.position for c in cands) == [0, 1]
+    assert all(c.delta == pytest.approx(2.1) for c in cands)
+    for cand in cands:
+        new = cand.apply(2)
+        assert new.width == pytest.approx(3.0 + 2 * 2.1) and check_partition(to_layout(new)) == []
+        grid = detect_grid(new, WIN)
+        assert len(grid.columns) == 3 and len(grid.rows) == 2
+        assert [round(b[0] - a[1], 6) for a, b in zip(grid.columns, grid.columns[1:])] == [0.9, 0.9]
+        assert round(grid.columns[0][0], 6) == 0.9 and round(new.width - grid.columns[-1][1], 6) == 0.9
+
+
+def test_one_column_facade_widens_to_the_request(tmp_path):
+    from citygen.request import FacadeRequest, check_request
+    from citygen_safe.generate import edit
+    from citygen_safe.ruleset import parse_ruleset
+    (tmp_path / "f.layout.json").write_text(regular(1, 2).dumps())
+    ruleset = parse_ruleset('safe f\nlayout "f.layout.json"\ngrid window window\n', "f.safe", base=tmp_path)
+    request = FacadeRequest.preview(9.0, 6.0, 3.0, entrance=False)
+    result = edit(ruleset, request)
+    windows = [r for r in result.layout.leaves if r.label == "window"]
+    assert "fallback" not in result.layout.meta and len(windows) >= 6
+    assert check_partition(result.layout) == [] and check_request(result.layout, request) == []

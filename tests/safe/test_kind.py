@@ -88,7 +88,7 @@ def test_floor_count_follows_the_request(regular_ruleset):
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(cols=st.integers(2, 5), rows=st.integers(2, 3), width=st.floats(5.0, 20.0), floors=st.integers(1, 4),
+@given(cols=st.integers(1, 5), rows=st.integers(1, 3), width=st.floats(5.0, 20.0), floors=st.integers(1, 4),
        seed=st.integers(0, 3))
 def test_properties(tmp_path, cols, rows, width, floors, seed):
     path = tmp_path / f"r{cols}{rows}.layout.json"
