@@ -1,10 +1,13 @@
 """Scaling benchmark: a synthetic city of N blocks of row houses, to see how generation grows with city size.
 
-    python benchmarks/city_scale.py [N ...] [--jobs 2] [--tile-layers]
+    python benchmarks/city_scale.py [N ...] [--jobs 2] [--tile-layers] [--executor dask [--scheduler ADDRESS]]
 
 Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide, 3-8 storeys, in blocks that
-share party walls, dressed with the shipped split grammars. Prints buildings/s, peak memory (main process and
-largest worker) and stage size per N. Run one N per invocation for a clean peak (ru_maxrss never goes down).
+share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
+main plus its finished children: the workers), peak memory (main process and largest worker) and stage size per N.
+``--executor dask`` runs one task per tile on a local dask cluster of ``--jobs`` workers (or on ``--scheduler``;
+then the workers' CPU and memory are not seen here). Run one N per invocation for a clean peak (ru_maxrss never
+goes down).
 """
 from __future__ import annotations
 
@@ -43,6 +46,8 @@ def main() -> None:
     parser.add_argument("sizes", nargs="*", type=int, default=[500, 2000])
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--tile-layers", action="store_true", help="stream each 250 m tile into its own layer")
+    parser.add_argument("--executor", choices=("local", "dask"), default="local")
+    parser.add_argument("--scheduler", help="with --executor dask: a running scheduler's address")
     args = parser.parse_args()
     for n in args.sizes:
         with tempfile.TemporaryDirectory() as tmp:
@@ -54,15 +59,24 @@ def main() -> None:
                 f'[scene]\nseed = 1\n[footprints]\npath = "city.geojson"\ncrs = "EPSG:3067"\n'
                 f'[[assign]]\nruleset = [{rulesets}]\n[output]\npath = "city.usdc"\n'
                 f'tile_layers = {str(args.tile_layers).lower()}\n')
-            t0 = time.perf_counter()
-            report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs)
-            elapsed = time.perf_counter() - t0
+            t0, c0, k0 = time.perf_counter(), time.process_time(), _children_cpu()
+            report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs, executor=args.executor,
+                                   scheduler=args.scheduler)
+            elapsed, cpu, children = time.perf_counter() - t0, time.process_time() - c0, _children_cpu() - k0
             main_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
             worker_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
             s = report.stats
-            print(f"N={n}: {report.written} buildings in {elapsed:.1f} s = {report.written / elapsed:.0f} buildings/s;"
-                  f" peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB; {s.bytes / 1e6:.1f} MB .usdc ({s.bytes / max(report.written, 1) / 1e3:.0f}"
-                  f" kB/building); {s.instances} instances of {s.prototypes} prototypes")
+            print(f"N={n} [{args.executor}, {args.jobs} jobs{', tile layers' if args.tile_layers else ''}]: "
+                  f"{report.written} buildings in {elapsed:.1f} s = {report.written / elapsed:.0f} buildings/s; "
+                  f"CPU main {cpu:.1f} s, main+workers {cpu + children:.1f} s; "
+                  f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB; {s.bytes / 1e6:.1f} MB .usdc "
+                  f"({s.bytes / max(report.written, 1) / 1e3:.0f} kB/building); {s.instances} instances of "
+                  f"{s.prototypes} prototypes")
+
+
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 if __name__ == "__main__":

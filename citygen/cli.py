@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from citygen import __version__
+from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import check_partition
 from citygen.pipeline import generate_city, terminal_progress
@@ -19,8 +20,11 @@ from citygen.usd.validate import validate_stage
 def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     scene = load_scene(args.scene)
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
+    if args.scheduler and args.executor != "dask":
+        raise CitygenError("--scheduler needs --executor dask", hint="add --executor dask")
     report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=jobs,
-                           registry=registry, progress=None if args.quiet else terminal_progress)
+                           registry=registry, progress=None if args.quiet else terminal_progress,
+                           executor=args.executor, scheduler=args.scheduler)
     print(report.summary())
     return 1 if args.strict and report.skipped else 0
 
@@ -93,6 +97,12 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
     g.add_argument("--jobs", type=int, default=0,
                    help="worker processes (default 0: one per CPU core); the output does not depend on it")
+    g.add_argument("--executor", choices=EXECUTORS, default="local",
+                   help="local (default): worker processes on this machine; dask: one task per tile on a Dask "
+                        "cluster, each tile its own layer written by its worker")
+    g.add_argument("--scheduler", metavar="ADDRESS",
+                   help="with --executor dask: the scheduler to use (e.g. tcp://host:8786); default: a local "
+                        "cluster of --jobs workers")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g.set_defaults(run=_cmd_generate)
     v = sub.add_parser("validate", help="run UsdValidation and mesh topology checks on stages")

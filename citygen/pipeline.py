@@ -2,7 +2,8 @@
 
 One bad building never aborts the city: any error while building it is caught, reported with the building id and
 reason, and the rest is written. ``jobs > 1`` generates buildings in worker processes; results are collected in
-input order, so the stage is byte-identical whatever the job count.
+input order, so the stage is byte-identical whatever the job count. ``executor="dask"`` hands whole tiles to a Dask
+cluster instead (:mod:`citygen.distributed`).
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from citygen.coordinator import plan_building
+from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
@@ -195,9 +197,16 @@ def _work(chunk: Sequence[_Work]) -> list[_BuildingOutcome]:
 
 
 def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = None, jobs: int = 1,
-                  registry: Registry | None = None,
-                  progress: Callable[[int, int], None] | None = None) -> Report:
-    """Generate the scene's city and write its stage; never raises for one bad building."""
+                  registry: Registry | None = None, progress: Callable[[int, int], None] | None = None,
+                  executor: str = "local", scheduler: str | None = None) -> Report:
+    """Generate the scene's city and write its stage; never raises for one bad building.
+
+    ``executor`` is ``"local"`` (``jobs`` worker processes) or ``"dask"``: one task per tile on the cluster at
+    ``scheduler`` (default: a local cluster of ``jobs`` workers), each tile its own layer whatever the scene's
+    ``tile_layers`` (see :mod:`citygen.distributed`).
+    """
+    if executor not in EXECUTORS:
+        raise CitygenError(f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
     registry = registry or default_registry()
     seed = scene.seed if seed is None else seed
     out = out or scene.output.path
@@ -223,7 +232,10 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     size = scene.output.tile_size
     tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
     work = sorted(zip(footprints, masses, cover, names, tiles), key=lambda w: (w[4], w[3]))
-    plugins = _worker_plugins(registry) if jobs > 1 else None
+    plugins = _worker_plugins(registry) if jobs > 1 or executor == "dask" else None
+    if isinstance(plugins, str) and executor == "dask":
+        raise CitygenError(f"the registry given to generate_city cannot be rebuilt on dask workers: {plugins}",
+                           hint="register the plugins through the `citygen` entry-point group")
     if isinstance(plugins, str):
         report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
                                f"worker processes: {plugins}")
@@ -231,6 +243,12 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     t2 = time.perf_counter()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
+    if executor == "dask":
+        _generate_on_dask(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs, scheduler, report,
+                          progress)
+        report.timings = {"import": t1 - t0, "masses": t2 - t1, **report.timings,
+                          "total": time.perf_counter() - t0}
+        return report
     usd = 0.0
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
                      tile_layers=scene.output.tile_layers) as writer:
@@ -248,6 +266,25 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
                       "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
     return report
+
+
+def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
+                      out: Path, layer_data: dict[str, Any], jobs: int, scheduler: str | None, report: Report,
+                      progress: Callable[[int, int], None] | None) -> None:
+    """Tiles built and written by dask workers; the root layer listing them written here."""
+    t0 = time.perf_counter()
+    with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True) as writer:
+        job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
+        results = run_tiles(work, job, scheduler, jobs, progress)
+        t1 = time.perf_counter()
+        for result in results:
+            report.warnings += result.warnings
+            report.skipped += result.skipped
+            if result.stats is not None:
+                writer.add_tile_layer(result.layer, result.stats, result.prototypes)
+                report.written += result.stats.buildings
+        report.stats = writer.close()
+    report.timings = {"tiles (dask)": t1 - t0, "usd": time.perf_counter() - t1}
 
 
 def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,

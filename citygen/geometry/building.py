@@ -13,6 +13,7 @@ All per-region work is numpy over the regions of a face; Python loops run per fa
 """
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -188,26 +189,36 @@ def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) ->
                        face_quaternion(matrix), size / (q * QUANTUM))
 
 
-_MODULE_CACHE: dict[ModuleKey, ModuleProto] = {}
+_MODULE_CACHE = threading.local()
 _MODULE_CACHE_SIZE = 4096
 
 
+def _module_cache() -> dict[ModuleKey, ModuleProto]:
+    cache = getattr(_MODULE_CACHE, "modules", None)
+    if cache is None:
+        cache = _MODULE_CACHE.modules = {}
+    return cache
+
+
 def _module_proto(key: ModuleKey, region: Region) -> ModuleProto:
-    """A module's prototype geometry, cached per process: buildings dressed by one ruleset share most modules.
+    """A module's prototype geometry, cached per thread: buildings dressed by one ruleset share most modules.
 
     Stages stay deterministic: the writer keeps the first prototype of a key in stage order, and that building,
-    being the first with the key in its worker too, built it itself (the pipeline clears the cache per city).
+    being the first with the key in its worker too, built it itself (the pipeline clears the cache per city, the
+    dask executor per tile). Per thread, so tiles built by concurrent threads of one process never share it.
     """
-    proto = _MODULE_CACHE.get(key)
+    cache = _module_cache()
+    proto = cache.get(key)
     if proto is None:
-        if len(_MODULE_CACHE) >= _MODULE_CACHE_SIZE:
-            _MODULE_CACHE.clear()
-        proto = _MODULE_CACHE[key] = _build_module_proto(key, region)
+        if len(cache) >= _MODULE_CACHE_SIZE:
+            cache.clear()
+        proto = cache[key] = _build_module_proto(key, region)
     return proto
 
 
 def clear_module_cache() -> None:
-    _MODULE_CACHE.clear()
+    """Forget the calling thread's module prototypes."""
+    _module_cache().clear()
 
 
 def _build_module_proto(key: ModuleKey, region: Region) -> ModuleProto:

@@ -71,6 +71,11 @@ def prim_name(raw: str, taken: set[str]) -> str:
     return name
 
 
+def tile_name(tile: tuple[int, int]) -> str:
+    """The prim (and layer file) name of a tile: ``Tile_<i>_<j>``, ``m`` for a minus sign."""
+    return f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
+
+
 class _Author:
     """Thin Sdf authoring helpers on one layer."""
 
@@ -259,7 +264,7 @@ class StageWriter:
                               hint="add buildings sorted by tile")
         self._flush_tile()
         self.seen_tiles.add(tile)
-        name = f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
+        name = tile_name(tile)
         if self.tiles_dir is None:
             layer, parent = None, self.world
         else:
@@ -276,14 +281,33 @@ class StageWriter:
         """Export the open tile layer into the staging folder and let it go."""
         if self.tile is None or self.tile[1] is None:
             return
-        assert self.tiles_dir is not None
+        name = self.tile[2].name + self.tile_suffix
+        _export(self.tile[1], self.staging_folder() / name)
+        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
+        self.tile, self.protos_root = None, None
+
+    def staging_folder(self) -> Path:
+        """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes it."""
+        if self.tiles_dir is None:
+            raise ExportError("this stage has no tile layers", where=str(self.path), hint="pass tile_layers=True")
         if self.staging is None:
             self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
             self.staging = Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
-        name = self.tile[2].name + self.tile_suffix
-        _export(self.tile[1], self.staging / name)
+        return self.staging
+
+    def add_tile_layer(self, name: str, stats: StageStats, prototypes: Iterable[ProtoKey | ModuleKey]) -> None:
+        """List a tile layer that another process wrote into :meth:`staging_folder` as file ``name`` (a complete
+        stage of its own, see :mod:`citygen.distributed`); tiles come in tile order, like :meth:`add`."""
+        self._flush_tile()
+        if not (self.staging_folder() / name).is_file():
+            raise ExportError(f"tile layer {name} is missing from the staging folder", where=str(self.staging),
+                              hint="the output folder must be shared with every worker, at the same path")
         self.sublayers.append(f"{self.tiles_dir.name}/{name}")
-        self.tile, self.protos_root = None, None
+        self.author.prims += stats.prims
+        for key in ("buildings", "meshes", "instances", "polygons"):
+            self.counts[key] += getattr(stats, key)
+        for key in prototypes:
+            self.prototypes.setdefault(key, Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name)))
 
     def close(self) -> StageStats:
         """Write the last tile, the tile folder and the root layer; return the stage's figures."""
