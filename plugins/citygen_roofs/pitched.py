@@ -65,7 +65,7 @@ def _merge(meshes: list[MeshData]) -> MeshData:
 
 def _area(xy: np.ndarray) -> float:
     x, y = xy[:, 0], xy[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 
 def _rise(spec: RoofSpec, run: float) -> float:

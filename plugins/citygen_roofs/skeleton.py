@@ -8,8 +8,8 @@ edges. Two kinds of event change its topology:
 * a *split event*: a reflex vertex reaches an opposite edge and splits that wavefront ring in two (or, when the
   edge belongs to another ring, e.g. a courtyard's, joins the two rings).
 
-The next event is found by testing every vertex and edge of the current wavefront (``O(n^2)`` per event, which is
-cheap for building footprints and keeps no priority queue that could go stale after simultaneous events). A ring
+The next event is found by testing every vertex and edge of the current wavefront (``O(n^2)`` per event, in
+numpy, which is cheap for building footprints and keeps no priority queue that could go stale after simultaneous events). A ring
 that becomes a two-vertex ring or collapses to zero area ends in skeleton arcs (a ridge); a vertex between two
 antiparallel edges (a zero-width spike) is folded back at once. Every arc the wavefront's vertices trace borders the
 faces of their two edges, so each input edge's *face* is collected from those arcs.
@@ -124,44 +124,50 @@ class _Wavefront:
     # -- events -------------------------------------------------------------------------------------------------
 
     def next_event(self, t: float) -> tuple[float, int, tuple] | None:
-        """Earliest event at or after ``t``: ``(time, priority, data)``; edge events win ties."""
+        """Earliest event at or after ``t``: ``(time, kind, where)`` with kind 0 (edge event, wins ties) or 1
+        (split event); every vertex against every edge at once, in numpy."""
+        verts = [v for ring in self.rings for v in ring]
+        where = [(r, i) for r, ring in enumerate(self.rings) for i in range(len(ring))]
+        sizes = np.array([len(ring) for ring in self.rings])
+        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        local = np.arange(len(verts)) - first
+        nxt = first + (local + 1) % np.repeat(sizes, sizes)
+        vel = np.array([v.vel for v in verts])
+        pos = np.array([v.p0 for v in verts]) + (t - np.array([v.t0 for v in verts]))[:, None] * vel
+        e_in, e_out = np.array([v.e_in for v in verts]), np.array([v.e_out for v in verts])
         best = None
-        pos = [[v.at(t) for v in ring] for ring in self.rings]
-        for r, ring in enumerate(self.rings):
-            n = len(ring)
-            for i, v in enumerate(ring):
-                u = ring[(i + 1) % n]
-                d = self.D[v.e_out]
-                length = d @ (pos[r][(i + 1) % n] - pos[r][i])
-                rate = d @ (np.subtract(u.vel, v.vel))
-                if rate < -1e-12:
-                    te = t + max(length, 0.0) / -rate
-                    if best is None or (te, 0) < best[:2]:
-                        best = (te, 0, (r, i))
-        for r, ring in enumerate(self.rings):
-            n = len(ring)
-            for i, v in enumerate(ring):
-                a, b = self.D[v.e_in], self.D[v.e_out]
-                if a[0] * b[1] - a[1] * b[0] > -1e-9:
-                    continue  # convex vertex: no split event
-                for s, other in enumerate(self.rings):
-                    m = len(other)
-                    for j, x in enumerate(other):
-                        y = other[(j + 1) % m]
-                        if x is v or y is v:
-                            continue
-                        f = x.e_out
-                        dist = self.N[f] @ pos[r][i] - self.C[f] - t
-                        rate = self.N[f] @ v.vel - 1.0
-                        if rate > -1e-12 or dist < -self.eps:
-                            continue
-                        te = t + max(dist, 0.0) / -rate
-                        if best is not None and te >= best[0]:
-                            continue
-                        p, px, py = v.at(te), x.at(te), y.at(te)
-                        along = self.D[f] @ (p - px)
-                        if -self.eps <= along <= self.D[f] @ (py - px) + self.eps:
-                            best = (te, 1, (r, i, s, j))
+        d = self.D[e_out]
+        length = np.einsum("ij,ij->i", d, pos[nxt] - pos)
+        rate = np.einsum("ij,ij->i", d, vel[nxt] - vel)
+        shrinking = np.flatnonzero(rate < -1e-12)
+        if len(shrinking):
+            te = t + np.maximum(length[shrinking], 0.0) / -rate[shrinking]
+            k = int(np.argmin(te))
+            best = (float(te[k]), 0, where[shrinking[k]])
+        a, b = self.D[e_in], self.D[e_out]
+        reflex = np.flatnonzero(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < -1e-9)
+        if not len(reflex):
+            return best
+        n_f, c_f = self.N[e_out], self.C[e_out]  # the edge from vertex j to nxt[j]
+        dist = pos[reflex] @ n_f.T - c_f - t
+        rate = vel[reflex] @ n_f.T - 1.0
+        ok = (rate < -1e-12) & (dist >= -self.eps)
+        ok &= (np.arange(len(verts))[None, :] != reflex[:, None]) & (nxt[None, :] != reflex[:, None])
+        rr, jj = np.nonzero(ok)  # candidate (reflex vertex, edge) pairs: does the vertex land inside the edge?
+        if not len(rr):
+            return best
+        dt = np.maximum(dist[rr, jj], 0.0) / -rate[rr, jj]
+        v = reflex[rr]
+        f = self.D[e_out[jj]]
+        px = pos[jj] + dt[:, None] * vel[jj]
+        along = np.einsum("ij,ij->i", pos[v] + dt[:, None] * vel[v] - px, f)
+        span = np.einsum("ij,ij->i", pos[nxt[jj]] + dt[:, None] * vel[nxt[jj]] - px, f)
+        inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps))
+        if len(inside):
+            k = inside[np.argmin(dt[inside])]
+            te = t + float(dt[k])
+            if best is None or te < best[0]:
+                best = (te, 1, (*where[v[k]], *where[jj[k]]))
         return best
 
     def edge_event(self, t: float, r: int, i: int) -> None:
