@@ -2,8 +2,8 @@
 
 Tags read (https://wiki.openstreetmap.org/wiki/Key:roof:shape): ``roof:shape``, ``roof:height`` (metres above the
 wall top), ``roof:angle`` (pitch in degrees), ``roof:direction`` (compass degrees or N/NE/..., the direction the
-slope faces, i.e. downhill) and ``roof:orientation`` (``along``/``across``, kept for builders that use it). A tag
-that does not parse is ignored, so the scene's default applies.
+slope faces, i.e. downhill). A tag that does not parse is ignored, so the scene's default applies.
+``roof:orientation`` is not read: gabled ridges follow the straight skeleton (see docs/roofs.md).
 """
 from __future__ import annotations
 
@@ -27,14 +27,13 @@ _NUMBER = re.compile(r"^\s*(-?\d+(?:\.\d*)?)\s*(m|deg|°)?\s*$")
 @dataclass(frozen=True)
 class RoofSpec:
     """A roof to build: ``shape`` (a roof builder id), ``pitch`` in degrees, an explicit ``height`` in metres
-    (wins over the pitch), the compass ``direction`` its slope faces (skillion), ``orientation`` and ``cap``, the
-    greatest height allowed above the wall top."""
+    (wins over the pitch), the compass ``direction`` its slope faces (skillion) and ``cap``, the greatest
+    height allowed above the wall top."""
 
     shape: str = "flat"
     pitch: float = 30.0
     height: float | None = None
     direction: float | None = None
-    orientation: str | None = None
     cap: float = math.inf
 
     @property
@@ -74,7 +73,5 @@ def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "f
     pitch = min(max(pitch, PITCH_RANGE[0]), PITCH_RANGE[1])
     height = _number(attributes.get("roof:height"))
     cap = max(MIN_ROOF_CAP, ROOF_TO_WALL_CAP * wall_height)
-    orientation = attributes.get("roof:orientation")
     return RoofSpec(shape=shape, pitch=pitch, height=min(height, cap) if height and height > 0 else None,
-                    direction=parse_direction(attributes.get("roof:direction")),
-                    orientation=str(orientation) if orientation in ("along", "across") else None, cap=cap)
+                    direction=parse_direction(attributes.get("roof:direction")), cap=cap)

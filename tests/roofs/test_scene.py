@@ -99,10 +99,9 @@ def test_roof_pitch_must_be_an_angle(tmp_path):
 
 
 def test_roof_spec_reads_osm_tags():
-    spec = roof_spec({"roof:shape": "Gabled ", "roof:angle": "42", "roof:height": "3.5 m", "roof:direction": "SW",
-                      "roof:orientation": "across"}, wall_height=9.0)
-    assert (spec.shape, spec.pitch, spec.height, spec.direction, spec.orientation) == ("gabled", 42.0, 3.5, 225.0,
-                                                                                       "across")
+    spec = roof_spec({"roof:shape": "Gabled ", "roof:angle": "42", "roof:height": "3.5 m", "roof:direction": "SW"},
+                     wall_height=9.0)
+    assert (spec.shape, spec.pitch, spec.height, spec.direction) == ("gabled", 42.0, 3.5, 225.0)
     assert roof_spec({"roof:direction": "370", "roof:angle": "89.9"}, 9.0).direction == 10.0
     assert roof_spec({"roof:angle": "89.9"}, 9.0).pitch == 75.0  # clamped
     assert roof_spec({"roof:angle": "steep"}, 9.0, pitch=33.0).pitch == 33.0  # unparsable: the default
