@@ -19,13 +19,19 @@ import math
 
 import mapbox_earcut
 import numpy as np
-from shapely.geometry import MultiPolygon, Polygon
+from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
+
+
+#: Pitch (degrees) of the steep lower slopes of mansard and gambrel roofs, unless the roof's pitch is steeper.
+MANSARD_LOWER = 60.0
+#: Bands (planar rings of faces) approximating a dome's profile.
+DOME_BANDS = 6
 
 
 class RoofError(ValueError):
@@ -38,19 +44,39 @@ def _parts(outline: Polygon | MultiPolygon) -> list[Polygon]:
 
 
 def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
-    """Ear-clipped triangles of one simple polygon (indices into ``xy``), counter-clockwise."""
+    """Ear-clipped triangles of one simple polygon (indices into ``xy``), counter-clockwise, with no zero-area
+    triangle: a polygon with collinear points (break points on a cut line) gets its slivers flipped away."""
     if len(face) == 3:
         return [tuple(face)]
     ring = xy[face]
-    tris = mapbox_earcut.triangulate_float64(ring, np.array([len(face)], np.uint32)).reshape(-1, 3)
-    return [(face[a], face[b], face[c]) for a, b, c in tris]
+    cut = mapbox_earcut.triangulate_float64(ring, np.array([len(face)], np.uint32)).reshape(-1, 3)
+    tris = [(face[a], face[b], face[c]) for a, b, c in cut]
+    scale = float(np.ptp(ring, axis=0).max()) ** 2
+    for _ in range(len(tris)):
+        sliver = next((k for k, t in enumerate(tris) if abs(_area(xy[list(t)])) < 1e-12 * scale), None)
+        if sliver is None:
+            break
+        t = tris[sliver]
+        longest = max(range(3), key=lambda k: float(np.hypot(*(xy[t[k]] - xy[t[k - 1]]))))
+        c, a = t[longest - 1], t[longest]  # the sliver is (a, b, c) with b on the long side c -> a
+        b = t[(longest + 1) % 3]
+        other = next((k for k, u in enumerate(tris) if k != sliver and any(
+            (u[m], u[(m + 1) % 3]) == (a, c) for m in range(3))), None)
+        if other is None:
+            break
+        u = tris[other]
+        d = next(n for n in u if n not in (a, c))
+        tris[sliver], tris[other] = (a, b, d), (b, c, d)
+    return tris
 
 
 def _mesh(points: np.ndarray, roof_faces: list[list[int]], walls: list[list[int]]) -> MeshData:
     """Triangles of the (non-vertical) roof faces and the vertical walls, with unused points dropped."""
     tris = [t for f in roof_faces for t in _triangulate(points[:, :2], f)]
-    for w in walls:
-        tris += [(w[0], w[k], w[k + 1]) for k in range(1, len(w) - 1)]
+    for w in walls:  # in the wall's plane: along its foot a -> b, and up (counter-clockwise there is outward)
+        a, b = points[w[0], :2], points[w[1], :2]
+        u = (b - a) / math.hypot(*(b - a))
+        tris += _triangulate(np.column_stack([(points[:, :2] - a) @ u, points[:, 2]]), w)
     idx = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
     used, inverse = np.unique(idx, return_inverse=True)
     return MeshData(points[used].astype(np.float32), np.full(len(idx), 3, np.int32),
@@ -76,24 +102,160 @@ def _rise(spec: RoofSpec, run: float) -> float:
     return min(rise, spec.cap / run)
 
 
-def hip_faces(part: Polygon, top: float, spec: RoofSpec) -> tuple[np.ndarray, list[list[int]]]:
-    """Lifted skeleton of one part: points ``(k, 3)`` and one face (node indices, CCW) per outline edge."""
+def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndarray]:
+    """Height above the eave as a piecewise-linear function of the distance swept in from the eave: breakpoints
+    ``(ts, zs)`` from 0 to ``run`` (the skeleton's greatest time), scaled to ``roof:height`` and the cap.
+
+    ``hipped``/``gabled``: one slope at the pitch. ``mansard``/``gambrel``: the outer third of the run at
+    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``: a quarter ellipse in
+    ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline)."""
+    if run <= 0:
+        raise RoofError("outline too thin for a pitched roof")
+    if shape in ("mansard", "gambrel") and spec.pitch < MANSARD_LOWER:
+        lower = math.tan(math.radians(MANSARD_LOWER))
+        ts = np.array([0.0, run / 3, run])
+        zs = np.array([0.0, lower * run / 3, lower * run / 3 + spec.slope * 2 * run / 3])
+    elif shape == "dome":
+        theta = np.linspace(0.0, math.pi / 2, DOME_BANDS + 1)
+        ts, zs = run * (1 - np.cos(theta)), run * np.sin(theta)
+    else:
+        ts, zs = np.array([0.0, run]), np.array([0.0, spec.slope * run])
+    if spec.height:
+        zs = zs * spec.height / zs[-1]
+    return ts, zs * min(1.0, spec.cap / zs[-1])
+
+
+def skeleton_faces(part: Polygon) -> tuple[np.ndarray, list[list[int]]]:
+    """The straight skeleton of one part as points ``(k, 3)`` -- x, y and the time (distance swept) -- and one face
+    (point indices, CCW, starting with its outline edge) per outline edge; checked to cover the part once."""
     try:
         skeleton = straight_skeleton(part)
     except SkeletonError as exc:
         raise RoofError(f"no straight skeleton: {exc}") from exc
-    rise = _rise(spec, float(skeleton.times.max()))
-    points = np.column_stack([skeleton.nodes, top + skeleton.times * rise])
     faces = [list(f) for f in skeleton.faces]
     areas = np.array([_area(skeleton.nodes[f]) for f in faces])
     if np.any(areas < -1e-6 * part.area) or not math.isclose(areas.sum(), part.area, rel_tol=1e-6):
         raise RoofError(f"skeleton faces cover {areas.sum():.3f} m² of a {part.area:.3f} m² outline")
-    return points, faces
+    return np.column_stack([skeleton.nodes, skeleton.times]), faces
+
+
+class _Bands:
+    """Roof faces cut where the profile breaks, so every piece is one plane; cut points are shared by the faces
+    (and gable walls) on either side of a skeleton arc, so the mesh stays closed."""
+
+    def __init__(self, points: np.ndarray, ts: np.ndarray) -> None:
+        self.tol = 1e-7 * max(1.0, float(np.ptp(points[:, :2], axis=0).max()))
+        t = points[:, 2].copy()
+        near = np.abs(t[:, None] - ts[None, :]) < 10 * self.tol  # a node (nearly) on a break line is on it
+        t[near.any(axis=1)] = ts[near.argmax(axis=1)][near.any(axis=1)]
+        self.xy, self.t = [tuple(p[:2]) for p in points], list(t)
+        self.ts = ts
+        self.cuts: dict[tuple[int, int, int], int] = {}
+
+    def ring(self, cycle: list[int]) -> list[int]:
+        """``cycle`` with the profile's break points inserted on its sides."""
+        out = []
+        for k, u in enumerate(cycle):
+            v = cycle[(k + 1) % len(cycle)]
+            out.append(u)
+            tu, tv = self.t[u], self.t[v]
+            inner = [j for j in range(1, len(self.ts) - 1) if min(tu, tv) + 1e-9 < self.ts[j] < max(tu, tv) - 1e-9]
+            for j in (inner if tv > tu else inner[::-1]):
+                key = (min(u, v), max(u, v), j)
+                if key not in self.cuts:
+                    s = (self.ts[j] - tu) / (tv - tu)
+                    a, b = self.xy[u], self.xy[v]
+                    self.xy.append((a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])))
+                    self.t.append(float(self.ts[j]))
+                    self.cuts[key] = len(self.xy) - 1
+                out.append(self.cuts[key])
+        return out
+
+    def pieces(self, face: list[int]) -> list[list[int]]:
+        """The planar pieces of a roof face: its ring clipped to each band of the profile."""
+        ring = self.ring(face)
+        times = [self.t[n] for n in ring]
+        bands = [j for j in range(len(self.ts) - 1) if self.ts[j] < max(times) - 1e-9 and self.ts[j + 1] > min(times) + 1e-9]
+        if len(bands) <= 1:
+            return [ring]
+        xy = np.array([self.xy[n] for n in ring])
+        a, b = xy[0], xy[1]
+        d = (b - a) / math.hypot(*(b - a))
+        n = np.array([-d[1], d[0]])
+        reach = 4 * float(np.ptp(xy, axis=0).max()) + 1.0
+        polygon = Polygon(xy)
+        out = []
+        for j in bands:  # the outermost lines lie beyond the face: only break lines cut it
+            lo = self.ts[j] if j > 0 else -reach
+            hi = self.ts[j + 1] if j + 1 < len(self.ts) - 1 else reach
+            strip = Polygon([a - reach * d + lo * n, a + reach * d + lo * n, a + reach * d + hi * n,
+                             a - reach * d + hi * n])
+            clipped = polygon.intersection(strip)
+            for piece in getattr(clipped, "geoms", [clipped]):
+                if isinstance(piece, Polygon) and piece.area > 0:
+                    corners = self._indices(orient(piece, sign=1.0), ring, xy, polygon)
+                    if len(corners) >= 3:
+                        out.append(corners)
+        return out
+
+    def _indices(self, piece: Polygon, ring: list[int], xy: np.ndarray, face: Polygon) -> list[int]:
+        """A clipped piece's corners as ring points: clipping adds no corner but break points, except points on a
+        side of the face (collinear, dropped)."""
+        out: list[int] = []
+        for p in np.asarray(piece.exterior.coords)[:-1]:
+            gap = np.hypot(*(xy - p).T)
+            k = int(np.argmin(gap))
+            if gap[k] > 10 * self.tol:
+                if face.exterior.distance(Point(p)) < 10 * self.tol:
+                    continue
+                raise RoofError("a profile band does not end on the face's break points")
+            if not out or out[-1] != ring[k]:
+                out.append(ring[k])
+        if len(out) > 1 and out[0] == out[-1]:
+            out.pop()
+        return self._conforming(out, ring, xy)
+
+    def _conforming(self, piece: list[int], ring: list[int], xy: np.ndarray) -> list[int]:
+        """``piece`` with the ring points that lie on its sides put back (clipping drops points on a cut line,
+        which would leave T-junctions with the piece across the line)."""
+        where = {n: k for k, n in enumerate(ring)}
+        out = []
+        for k, u in enumerate(piece):
+            v = piece[(k + 1) % len(piece)]
+            out.append(u)
+            a, b = xy[where[u]], xy[where[v]]
+            d = b - a
+            length2 = float(d @ d)
+            if length2 == 0:
+                continue
+            s = (xy - a) @ d / length2
+            off = np.abs((xy - a) @ np.array([-d[1], d[0]])) / math.sqrt(length2)
+            on = [(s[m], ring[m]) for m in np.flatnonzero((s > 1e-9) & (s < 1 - 1e-9) & (off < 10 * self.tol))]
+            out += [n for _, n in sorted(on) if n not in (u, v)]
+        return out
+
+    def mesh(self, faces: list[list[int]], walls: list[list[int]], top: float, zs: np.ndarray) -> MeshData:
+        roof = [piece for f in faces for piece in self.pieces(f)]
+        walls = [self.ring(w) for w in walls]
+        points = np.column_stack([np.array(self.xy), top + np.interp(self.t, self.ts, zs)])
+        return _mesh(points, roof, walls)
+
+
+def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables: bool) -> MeshData:
+    """A roof over the straight skeleton of ``part`` with ``shape``'s profile, hip ends turned into gables."""
+    points, faces = skeleton_faces(part)
+    walls: list[list[int]] = []
+    if gables:
+        outline_nodes = sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors))
+        points, faces, walls = gable(points, faces, outline_nodes)
+    ts, zs = profile(shape, spec, float(points[:, 2].max()))
+    return _Bands(points, ts).mesh(faces, walls, top, zs)
 
 
 def gable(points: np.ndarray, faces: list[list[int]], outline_nodes: int) -> tuple[np.ndarray, list[list[int]],
                                                                                  list[list[int]]]:
-    """Turn hip ends into gable walls: returns points, roof faces and walls (``[a, b, apex]``, outward)."""
+    """Turn hip ends into gable walls: ``points`` are x, y, time; returns points (the moved apexes appended),
+    roof faces and walls (``[a, b, apex]``, outward)."""
     neighbours: dict[int, set[int]] = {}
     owners: dict[int, int] = {}
     for f in faces:
@@ -180,32 +342,41 @@ def skillion(part: Polygon, top: float, spec: RoofSpec) -> MeshData:
     return _mesh(points, [list(high[t]) for t in tris], walls)
 
 
-class HippedRoof(RoofBuilder):
+class _SkeletonRoof(RoofBuilder):
+    """A roof over the straight skeleton with the profile of its ``id``; ``gables``: hip ends become gables."""
+
+    gables = False
+
+    def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
+        spec = spec or RoofSpec(self.id)
+        return _merge([skeleton_roof(part, top, spec, self.id, self.gables) for part in _parts(outline)])
+
+
+class HippedRoof(_SkeletonRoof):
     id = "hipped"
     description = "hipped roof: straight-skeleton faces at one pitch (roof:angle, roof:height)"
 
-    def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
-        spec = spec or RoofSpec(self.id)
-        meshes = []
-        for part in _parts(outline):
-            points, faces = hip_faces(part, top, spec)
-            meshes.append(_mesh(points, faces, []))
-        return _merge(meshes)
 
-
-class GabledRoof(RoofBuilder):
+class GabledRoof(_SkeletonRoof):
     id = "gabled"
     description = "gabled roof: hipped roof with its hip ends turned into vertical gable walls"
+    gables = True
 
-    def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
-        spec = spec or RoofSpec(self.id)
-        meshes = []
-        for part in _parts(outline):
-            points, faces = hip_faces(part, top, spec)
-            outline_nodes = sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors))
-            points, roof, walls = gable(points, faces, outline_nodes)
-            meshes.append(_mesh(points, roof, walls))
-        return _merge(meshes)
+
+class MansardRoof(_SkeletonRoof):
+    id = "mansard"
+    description = "mansard roof: hipped, steep on the outer third of the run, at the pitch above"
+
+
+class GambrelRoof(_SkeletonRoof):
+    id = "gambrel"
+    description = "gambrel roof: gabled with the mansard's two slopes"
+    gables = True
+
+
+class DomeRoof(_SkeletonRoof):
+    id = "dome"
+    description = "dome: a quarter-ellipse profile over the straight skeleton, as high as the outline is deep"
 
 
 class PyramidalRoof(RoofBuilder):
@@ -214,14 +385,8 @@ class PyramidalRoof(RoofBuilder):
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        meshes = []
-        for part in _parts(outline):
-            mesh = pyramid(part, top, spec)
-            if mesh is None:
-                points, faces = hip_faces(part, top, spec)
-                mesh = _mesh(points, faces, [])
-            meshes.append(mesh)
-        return _merge(meshes)
+        return _merge([pyramid(part, top, spec) or skeleton_roof(part, top, spec, "hipped", False)
+                       for part in _parts(outline)])
 
 
 class SkillionRoof(RoofBuilder):

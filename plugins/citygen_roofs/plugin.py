@@ -1,5 +1,6 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
-:mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``)."""
+:mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
+``mansard``, ``gambrel``, ``dome``)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -10,7 +11,8 @@ from citygen.geometry.building import MeshData
 from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
-from citygen_roofs.pitched import GabledRoof, HippedRoof, PyramidalRoof, SkillionRoof
+from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
+                                   SkillionRoof)
 
 
 def _cap(part: Polygon, top: float) -> tuple[np.ndarray, np.ndarray]:
@@ -43,4 +45,5 @@ class FlatRoof(RoofBuilder):
 
 @hookimpl
 def citygen_roof_builders():
-    return [FlatRoof(), HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof()]
+    return [FlatRoof(), HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(), GambrelRoof(),
+            DomeRoof()]

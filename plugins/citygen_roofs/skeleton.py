@@ -250,14 +250,37 @@ class _Wavefront:
         return out
 
     def finish(self, ring: list[_Vertex], t: float) -> None:
-        nodes = [self.node(v.at(t), t) for v in ring]
+        """A collapsed ring: its vertices stop where they are and each of its edges becomes a ridge arc of that
+        edge's face, passing through every other node of the ring on it (so the faces on both sides of a ridge
+        have the same nodes, without T-junctions). A ring that is small all round -- not a thin strip: its area
+        is not tiny against its diameter squared -- ends in one node instead, so it leaves no uncovered sliver."""
+        at = np.array([v.at(t) for v in ring])
+        diameter = float(np.ptp(at, axis=0).max())
+        if diameter < 1e-4 * self.scale or (len(ring) > 2 and self.area(ring, t) > 1e-3 * diameter ** 2):
+            node = self.node(at.mean(axis=0), t)
+            for v in ring:
+                self.end(v, node)
+            return
+        nodes = [self.node(p, t) for p in at]
         for v, node in zip(ring, nodes):
             self.end(v, node)
-        if len(ring) > 1:
-            for k, v in enumerate(ring):
-                a, b = nodes[k], nodes[(k + 1) % len(ring)]
-                if a != b:
-                    self.arcs[v.e_out].add((min(a, b), max(a, b)))
+        if len(ring) < 2:
+            return
+        xy = np.array([self.nodes[n] for n in nodes])
+        for k, v in enumerate(ring):
+            a, b = nodes[k], nodes[(k + 1) % len(ring)]
+            if a == b:
+                continue
+            pa, pb = np.asarray(self.nodes[a]), np.asarray(self.nodes[b])
+            d = pb - pa
+            s = (xy - pa) @ d / (d @ d)
+            off = np.abs((xy - pa) @ np.array([-d[1], d[0]])) / math.sqrt(d @ d)
+            inner = sorted({(s[m], nodes[m]) for m in range(len(ring))
+                            if 0 < s[m] < 1 and off[m] < 1e-7 * self.scale and nodes[m] not in (a, b)})
+            chain = [a, *[n for _, n in inner], b]
+            for p, q in zip(chain, chain[1:]):
+                if p != q:
+                    self.arcs[v.e_out].add((min(p, q), max(p, q)))
 
     # -- faces ---------------------------------------------------------------------------------------------------
 

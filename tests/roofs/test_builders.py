@@ -8,12 +8,14 @@ from hypothesis import strategies as st
 from shapely.geometry import MultiPolygon, Polygon, box
 
 from citygen.roof import RoofSpec
-from citygen_roofs.pitched import HippedRoof, GabledRoof, PyramidalRoof, RoofError, SkillionRoof, hip_faces
+from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
+                                   RoofError, SkillionRoof, skeleton_faces)
 from citygen_roofs.plugin import FlatRoof
 from tests.roofs.shapes import outlines
 
 TOP = 12.0
-BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof()]
+BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof(), MansardRoof(), GambrelRoof(),
+            DomeRoof()]
 
 
 def _triangles(mesh):
@@ -56,8 +58,9 @@ def test_hipped_rectangle_worked_example():
     p, tris = _triangles(mesh)
     ridge = p[np.isclose(p[:, 2], TOP + width / 2 * math.tan(math.radians(pitch)))]
     assert len(ridge) == 2 and np.ptp(ridge[:, 0]) == pytest.approx(length - width)
-    points, faces = hip_faces(box(0, 0, length, width), TOP, RoofSpec("hipped", pitch))
-    assert len(faces) == 4
+    assert len(skeleton_faces(box(0, 0, length, width))[1]) == 4
+    n = _normals(p, tris)
+    assert len(np.unique(np.round(n / np.linalg.norm(n, axis=1)[:, None], 6), axis=0)) == 4  # four planes
 
 
 def test_gabled_rectangle_ridge_spans_the_length_and_gables_are_vertical():
@@ -84,6 +87,30 @@ def test_roof_height_wins_over_pitch_and_is_capped():
     assert mesh.points[:, 2].max() == pytest.approx(TOP + 2.0)
     mesh = HippedRoof().build(box(0, 0, 20, 10), TOP, RoofSpec("hipped", 75.0, cap=4.0))
     assert mesh.points[:, 2].max() == pytest.approx(TOP + 4.0)
+
+
+def test_mansard_and_dome_profiles():
+    outline = box(0, 0, 20, 12)
+    p, _ = _triangles(MansardRoof().build(outline, TOP, RoofSpec("mansard", 30.0)))
+    lower = 2 * math.tan(math.radians(60))  # outer third of the 6 m run at 60 degrees
+    assert np.any(np.isclose(p[:, 2], TOP + lower, atol=1e-4))
+    assert p[:, 2].max() == pytest.approx(TOP + lower + 4 * math.tan(math.radians(30)), abs=1e-4)
+    p, tris = _triangles(GambrelRoof().build(outline, TOP, RoofSpec("gambrel", 30.0)))
+    n = _normals(p, tris)
+    assert np.sum(np.abs(n[:, 2]) < 1e-4 * np.linalg.norm(n, axis=1)) == 6  # two pentagonal gables, 3 triangles each
+    p, _ = _triangles(DomeRoof().build(box(0, 0, 12, 12), TOP, RoofSpec("dome")))
+    assert p[:, 2].max() == pytest.approx(TOP + 6.0, abs=1e-4)  # as high as the run
+    assert len(np.unique(np.round(p[:, 2], 4))) == 7  # eave + six bands
+
+
+def test_dome_over_a_courtyard_has_no_cracks_where_a_ridge_lies_on_a_band_line():
+    """Regression: clipping a face to a band dropped the nodes on the cut line (a T-junction with the band above)
+    and ear clipping then left a zero-area triangle along it."""
+    outline = Polygon([(0, 0), (11.998172341876696, 0.2094288772474021), (11.788743464629293, 12.207601219124099),
+                       (-0.2094288772474021, 11.998172341876696)],
+                      [[(7.859162309752862, 8.138400812749397), (7.963876748376563, 2.1393146418110507),
+                        (1.9647905774382155, 2.0346002031873494), (1.8600761388145144, 8.033686374125697)]])
+    test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, DomeRoof(), 30.0, None)
 
 
 def test_skillion_falls_towards_its_direction():
@@ -113,12 +140,31 @@ def test_roofs_cover_the_outline_and_close_the_walls(outline, builder, pitch, di
 
 
 @settings(max_examples=40)
-@given(outlines, st.floats(10.0, 60.0))
-def test_hipped_faces_are_planes_at_the_pitch(outline, pitch):
-    points, faces = hip_faces(outline, TOP, RoofSpec("hipped", pitch))
-    slope = math.tan(math.radians(pitch))
+@given(outlines)
+def test_skeleton_faces_are_planes(outline):
+    """A face's points have the time (hence the height, at any pitch) of their distance to its outline edge."""
+    points, faces = skeleton_faces(outline)
     for face in faces:
         a, b = points[face[0], :2], points[face[1], :2]
         d = (b - a) / np.hypot(*(b - a))
         inward = (points[face, :2] - a) @ np.array([-d[1], d[0]])
-        assert np.allclose(points[face, 2], TOP + inward * slope, atol=1e-6)
+        assert np.allclose(points[face, 2], inward, atol=1e-6)
+
+
+@settings(max_examples=40)
+@given(outlines, st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof()]))
+def test_every_triangle_lies_in_the_plane_of_its_outline_edge_or_is_a_wall(outline, builder):
+    """Roof triangles rise from some outline edge at one of the profile's slopes: each triangle's gradient is
+    perpendicular to an outline edge (planar faces and bands), walls are vertical."""
+    p, tris = _triangles(builder.build(outline, TOP, RoofSpec(builder.id, 35.0)))
+    n = _normals(p, tris)
+    big = np.linalg.norm(n, axis=1) > 2e-4  # float32 points: the normal of a sub-cm² triangle is noise
+    n = n[big] / np.linalg.norm(n[big], axis=1)[:, None]
+    roof = n[:, 2] > 1e-4
+    edges = _outline_edges(outline)
+    d = edges[:, 2:] - edges[:, :2]
+    d = d / np.linalg.norm(d, axis=1)[:, None]
+    downhill = n[roof, :2] / np.maximum(np.linalg.norm(n[roof, :2], axis=1), 1e-12)[:, None]
+    along = np.abs(downhill @ d.T).min(axis=1)  # 0 when the slope is perpendicular to some edge
+    flat = np.linalg.norm(n[roof, :2], axis=1) < 1e-6
+    assert np.all((along < 2e-3) | flat)
