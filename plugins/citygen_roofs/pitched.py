@@ -19,7 +19,7 @@ import math
 
 import mapbox_earcut
 import numpy as np
-from shapely.geometry import MultiPolygon, Point, Polygon
+from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
@@ -172,67 +172,48 @@ class _Bands:
         return out
 
     def pieces(self, face: list[int]) -> list[list[int]]:
-        """The planar pieces of a roof face: its ring clipped to each band of the profile."""
+        """The planar pieces of a roof face: its ring cut along the chords where the profile breaks."""
         ring = self.ring(face)
-        times = [self.t[n] for n in ring]
-        bands = [j for j in range(len(self.ts) - 1) if self.ts[j] < max(times) - 1e-9 and self.ts[j + 1] > min(times) + 1e-9]
-        if len(bands) <= 1:
-            return [ring]
-        xy = np.array([self.xy[n] for n in ring])
-        a, b = xy[0], xy[1]
-        d = (b - a) / math.hypot(*(b - a))
-        n = np.array([-d[1], d[0]])
-        reach = 4 * float(np.ptp(xy, axis=0).max()) + 1.0
-        polygon = Polygon(xy)
-        out = []
-        for j in bands:  # the outermost lines lie beyond the face: only break lines cut it
-            lo = self.ts[j] if j > 0 else -reach
-            hi = self.ts[j + 1] if j + 1 < len(self.ts) - 1 else reach
-            strip = Polygon([a - reach * d + lo * n, a + reach * d + lo * n, a + reach * d + hi * n,
-                             a - reach * d + hi * n])
-            clipped = polygon.intersection(strip)
-            for piece in getattr(clipped, "geoms", [clipped]):
-                if isinstance(piece, Polygon) and piece.area > 0:
-                    corners = self._indices(orient(piece, sign=1.0), ring, xy, polygon)
-                    if len(corners) >= 3:
-                        out.append(corners)
-        return out
+        a, b = np.asarray(self.xy[ring[0]]), np.asarray(self.xy[ring[1]])
+        along = np.array([self.xy[n] for n in ring]) @ ((b - a) / math.hypot(*(b - a)))  # level lines are parallel
+        pieces = [ring]
+        for level in self.ts[1:-1]:
+            for p, q in self._chords(ring, float(level), along):
+                k = next(k for k, piece in enumerate(pieces) if p in piece and q in piece)
+                piece = pieces[k]
+                i, j = sorted((piece.index(p), piece.index(q)))
+                pieces[k:k + 1] = [piece[i:j + 1], piece[j:] + piece[:i + 1]]
+        return pieces
 
-    def _indices(self, piece: Polygon, ring: list[int], xy: np.ndarray, face: Polygon) -> list[int]:
-        """A clipped piece's corners as ring points: clipping adds no corner but break points, except points on a
-        side of the face (collinear, dropped)."""
-        out: list[int] = []
-        for p in np.asarray(piece.exterior.coords)[:-1]:
-            gap = np.hypot(*(xy - p).T)
-            k = int(np.argmin(gap))
-            if gap[k] > 10 * self.tol:
-                if face.exterior.distance(Point(p)) < 10 * self.tol:
-                    continue
-                raise RoofError("a profile band does not end on the face's break points")
-            if not out or out[-1] != ring[k]:
-                out.append(ring[k])
-        if len(out) > 1 and out[0] == out[-1]:
-            out.pop()
-        return self._conforming(out, ring, xy)
-
-    def _conforming(self, piece: list[int], ring: list[int], xy: np.ndarray) -> list[int]:
-        """``piece`` with the ring points that lie on its sides put back (clipping drops points on a cut line,
-        which would leave T-junctions with the piece across the line)."""
-        where = {n: k for k, n in enumerate(ring)}
-        out = []
-        for k, u in enumerate(piece):
-            v = piece[(k + 1) % len(piece)]
-            out.append(u)
-            a, b = xy[where[u]], xy[where[v]]
-            d = b - a
-            length2 = float(d @ d)
-            if length2 == 0:
+    def _chords(self, ring: list[int], level: float, along: np.ndarray) -> list[tuple[int, int]]:
+        """Where the level line crosses the face: runs of ring points on the level whose neighbours lie on opposite
+        sides, paired in order along the line (inside, outside, inside, ...); a chord joins the facing ends."""
+        t = np.array([self.t[n] for n in ring]) - level
+        on = t == 0
+        if not on.any() or on.all():
+            return []
+        n = len(ring)
+        start = int(np.flatnonzero(~on)[0])
+        runs, k = [], start
+        while k < start + n:
+            if not on[k % n]:
+                k += 1
                 continue
-            s = (xy - a) @ d / length2
-            off = np.abs((xy - a) @ np.array([-d[1], d[0]])) / math.sqrt(length2)
-            on = [(s[m], ring[m]) for m in np.flatnonzero((s > 1e-9) & (s < 1 - 1e-9) & (off < 10 * self.tol))]
-            out += [n for _, n in sorted(on) if n not in (u, v)]
-        return out
+            run = []
+            while on[k % n]:
+                run.append(k % n)
+                k += 1
+            if np.sign(t[(run[0] - 1) % n]) != np.sign(t[k % n]):
+                runs.append(sorted(run, key=lambda m: along[m]))
+        if len(runs) % 2:
+            raise RoofError("a profile break line crosses a roof face an odd number of times")
+        runs.sort(key=lambda run: along[run[0]])
+        chords = []
+        for first, second in zip(runs[::2], runs[1::2]):
+            p, q = first[-1], second[0]
+            if (p - q) % n not in (1, n - 1):
+                chords.append((ring[p], ring[q]))
+        return chords
 
     def mesh(self, faces: list[list[int]], walls: list[list[int]], top: float, zs: np.ndarray) -> MeshData:
         roof = [piece for f in faces for piece in self.pieces(f)]
