@@ -186,8 +186,10 @@ class _Bands:
         return pieces
 
     def _chords(self, ring: list[int], level: float, along: np.ndarray) -> list[tuple[int, int]]:
-        """Where the level line crosses the face: runs of ring points on the level whose neighbours lie on opposite
-        sides, paired in order along the line (inside, outside, inside, ...); a chord joins the facing ends."""
+        """Where the level line runs inside the face, as chords between ring points on the level. Runs of such
+        points whose neighbours lie on opposite sides are crossings; in order along the line they switch between
+        outside and inside. Inside, a chord joins each run to the next one, a touching run (a ridge lying on the
+        line) included, so no chord passes over a ring point."""
         t = np.array([self.t[n] for n in ring]) - level
         on = t == 0
         if not on.any() or on.all():
@@ -203,16 +205,17 @@ class _Bands:
             while on[k % n]:
                 run.append(k % n)
                 k += 1
-            if np.sign(t[(run[0] - 1) % n]) != np.sign(t[k % n]):
-                runs.append(sorted(run, key=lambda m: along[m]))
-        if len(runs) % 2:
+            crossing = bool(np.sign(t[(run[0] - 1) % n]) != np.sign(t[k % n]))
+            runs.append((sorted(run, key=lambda m: along[m]), crossing))
+        if sum(crossing for _, crossing in runs) % 2:
             raise RoofError("a profile break line crosses a roof face an odd number of times")
-        runs.sort(key=lambda run: along[run[0]])
-        chords = []
-        for first, second in zip(runs[::2], runs[1::2]):
-            p, q = first[-1], second[0]
-            if (p - q) % n not in (1, n - 1):
-                chords.append((ring[p], ring[q]))
+        runs.sort(key=lambda run: along[run[0][0]])
+        chords, inside, last = [], False, None
+        for run, crossing in runs:
+            if inside and (last - run[0]) % n not in (1, n - 1):
+                chords.append((ring[last], ring[run[0]]))
+            inside ^= crossing
+            last = run[-1]
         return chords
 
     def mesh(self, faces: list[list[int]], walls: list[list[int]], top: float, zs: np.ndarray) -> MeshData:

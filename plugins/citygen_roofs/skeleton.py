@@ -103,6 +103,19 @@ class _Wavefront:
     def antiparallel(self, v: _Vertex) -> bool:
         return v.vel == (0.0, 0.0)
 
+    def meet(self, v: _Vertex, u: _Vertex, t: float) -> np.ndarray:
+        """Where ``v`` and ``u`` meet at an edge event: where the offset lines of the collapsing edge and its
+        neighbours cross at ``t`` (exact, so positions do not drift from event to event); the midpoint of the two
+        vertices where those lines are nearly parallel."""
+        points = []
+        for a, b in ((v.e_in, v.e_out), (u.e_in, u.e_out)):
+            det = self.N[a][0] * self.N[b][1] - self.N[a][1] * self.N[b][0]
+            if abs(det) > 0.05:
+                ca, cb = self.C[a] + t, self.C[b] + t
+                points.append(((ca * self.N[b][1] - cb * self.N[a][1]) / det,
+                               (self.N[a][0] * cb - self.N[b][0] * ca) / det))
+        return np.mean(points, axis=0) if points else (v.at(t) + u.at(t)) / 2
+
     def node(self, p: np.ndarray, t: float) -> int:
         """The node at ``p`` (reusing one within tolerance: simultaneous events meet in one node)."""
         tol = 1e-7 * self.scale
@@ -173,7 +186,7 @@ class _Wavefront:
     def edge_event(self, t: float, r: int, i: int) -> None:
         ring = self.rings[r]
         v, u = ring[i], ring[(i + 1) % len(ring)]
-        node = self.node((v.at(t) + u.at(t)) / 2, t)
+        node = self.node(self.meet(v, u, t), t)
         self.end(v, node)
         self.end(u, node)
         w = self.vertex(node, t, v.e_in, u.e_out)
@@ -204,12 +217,12 @@ class _Wavefront:
     # -- clean-up after an event -----------------------------------------------------------------------------------
 
     def settle(self, t: float) -> None:
-        """Fold spikes and finish rings that have collapsed (two vertices, or no area left)."""
+        """Fold spikes and finish rings that have collapsed (two vertices, or a strip with no area left)."""
         changed = True
         while changed:
             changed = False
             for r, ring in enumerate(self.rings):
-                if len(ring) <= 2 or self.area(ring, t) < 1e-9 * self.scale ** 2:
+                if len(ring) <= 2 or self.collapsed(ring, t):
                     self.finish(ring, t)
                     del self.rings[r]
                     changed = True
@@ -219,6 +232,13 @@ class _Wavefront:
                     self.rings[r] = self.fold(ring, k, t)
                     changed = True
                     break
+
+    def collapsed(self, ring: list[_Vertex], t: float) -> bool:
+        """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
+        against its diameter squared) is no strip: its own edge events close it exactly."""
+        area = self.area(ring, t)
+        diameter = float(np.ptp([v.at(t) for v in ring], axis=0).max())
+        return area < 1e-9 * self.scale ** 2 and area <= 1e-3 * diameter ** 2
 
     def area(self, ring: list[_Vertex], t: float) -> float:
         p = np.array([v.at(t) for v in ring])
@@ -252,15 +272,8 @@ class _Wavefront:
     def finish(self, ring: list[_Vertex], t: float) -> None:
         """A collapsed ring: its vertices stop where they are and each of its edges becomes a ridge arc of that
         edge's face, passing through every other node of the ring on it (so the faces on both sides of a ridge
-        have the same nodes, without T-junctions). A ring that is small all round -- not a thin strip: its area
-        is not tiny against its diameter squared -- ends in one node instead, so it leaves no uncovered sliver."""
+        have the same nodes, without T-junctions)."""
         at = np.array([v.at(t) for v in ring])
-        diameter = float(np.ptp(at, axis=0).max())
-        if diameter < 1e-4 * self.scale or (len(ring) > 2 and self.area(ring, t) > 1e-3 * diameter ** 2):
-            node = self.node(at.mean(axis=0), t)
-            for v in ring:
-                self.end(v, node)
-            return
         nodes = [self.node(p, t) for p in at]
         for v, node in zip(ring, nodes):
             self.end(v, node)
