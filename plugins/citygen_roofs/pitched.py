@@ -71,16 +71,19 @@ def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
 
 
 def _mesh(points: np.ndarray, roof_faces: list[list[int]], walls: list[list[int]]) -> MeshData:
-    """Triangles of the (non-vertical) roof faces and the vertical walls, with unused points dropped."""
+    """Triangles of the (non-vertical) roof faces and the vertical walls as float32, points that round to the same
+    float32 point welded (triangles they collapse dropped: their sides cancel, the mesh stays closed) and unused
+    points dropped."""
     tris = [t for f in roof_faces for t in _triangulate(points[:, :2], f)]
     for w in walls:  # in the wall's plane: along its foot a -> b, and up (counter-clockwise there is outward)
         a, b = points[w[0], :2], points[w[1], :2]
         u = (b - a) / math.hypot(*(b - a))
         tris += _triangulate(np.column_stack([(points[:, :2] - a) @ u, points[:, 2]]), w)
-    idx = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+    welded, weld = np.unique(points.astype(np.float32), axis=0, return_inverse=True)
+    idx = weld.reshape(-1)[np.asarray(tris, dtype=np.int64).reshape(-1, 3)]
+    idx = idx[(idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 0])]
     used, inverse = np.unique(idx, return_inverse=True)
-    return MeshData(points[used].astype(np.float32), np.full(len(idx), 3, np.int32),
-                    inverse.reshape(-1).astype(np.int32))
+    return MeshData(welded[used], np.full(len(idx), 3, np.int32), inverse.reshape(-1).astype(np.int32))
 
 
 def _merge(meshes: list[MeshData]) -> MeshData:

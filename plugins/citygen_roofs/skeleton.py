@@ -272,8 +272,13 @@ class _Wavefront:
     def finish(self, ring: list[_Vertex], t: float) -> None:
         """A collapsed ring: its vertices stop where they are and each of its edges becomes a ridge arc of that
         edge's face, passing through every other node of the ring on it (so the faces on both sides of a ridge
-        have the same nodes, without T-junctions)."""
+        have the same nodes, without T-junctions). Vertices within ``1e-4`` of the outline's size of an earlier
+        one stop on it: rounding, not a ridge, set them apart."""
         at = np.array([v.at(t) for v in ring])
+        for k in range(1, len(at)):
+            near = np.flatnonzero(np.hypot(*(at[:k] - at[k]).T) < 1e-4 * self.scale)
+            if len(near):
+                at[k] = at[near[0]]
         nodes = [self.node(p, t) for p in at]
         for v, node in zip(ring, nodes):
             self.end(v, node)

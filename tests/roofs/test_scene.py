@@ -40,7 +40,7 @@ def demo(tmp_path_factory):
 
 def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     report, out = demo
-    assert report.written == 9 and not report.skipped and not report.warnings
+    assert report.written == 12 and not report.skipped and not report.warnings
     assert main(["validate", str(out)]) == 0
     roofs = _roofs(out)
     assert roofs["way/1"][1] == 2 and roofs["way/6"][1] == 2  # gabled rectangle and U: a gable at each ridge end
@@ -49,6 +49,8 @@ def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     assert roofs["way/3"][0] == 4  # pyramid over a square
     assert roofs["way/7"][2] == roofs["way/7"][3] and roofs["way/8"][2] == roofs["way/8"][3]  # flat, "onion"
     assert roofs["way/9"][1] == 2  # untagged house: gabled by its [[assign]] rule
+    assert roofs["way/12"][1] == 6  # gambrel: two five-sided gables
+    assert roofs["way/10"][0] > 24 * 6 and roofs["way/11"][1] == 0  # a dome in bands over the 24-gon; mansard
 
 
 def test_untagged_buildings_keep_flat_roofs_by_default(tmp_path):
@@ -68,7 +70,7 @@ def test_a_failing_builder_gives_a_flat_roof_and_a_warning(tmp_path, monkeypatch
     monkeypatch.setattr(HippedRoof, "build", broken)
     out = tmp_path / "r.usda"
     report = generate_city(load_scene(SCENE), out=out)
-    assert report.written == 9
+    assert report.written == 12
     assert [w for w in report.warnings if "flat roof instead of hipped" in w] == [
         "way/2: flat roof instead of hipped: RoofError: no straight skeleton: test",
         "way/5: flat roof instead of hipped: RoofError: no straight skeleton: test"]
