@@ -227,10 +227,10 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
             r.fail(f"faces must be one of {', '.join(FACE_SCOPES)}, got {faces!r}", line=line)
         shape_line = _line_of(r.text, "roof_shape", header) if header >= 0 else line
         pitch_line = _line_of(r.text, "roof_pitch", header) if header >= 0 else line
+        shape = r.roof_shape(item["roof_shape"], shape_line) if "roof_shape" in item else None
+        pitch = r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None
         result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), line),
-                                 faces=faces, kind=item.get("kind"), line=line,
-                                 roof_shape=r.roof_shape(item["roof_shape"], shape_line) if "roof_shape" in item else None,
-                                 roof_pitch=r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None))
+                                 faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch))
     return tuple(result)
 
 

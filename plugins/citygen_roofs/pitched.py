@@ -110,8 +110,8 @@ def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndar
     ``(ts, zs)`` from 0 to ``run`` (the skeleton's greatest time), scaled to ``roof:height`` and the cap.
 
     ``hipped``/``gabled``: one slope at the pitch. ``mansard``/``gambrel``: the outer third of the run at
-    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``: a quarter ellipse in
-    ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline)."""
+    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``: a quarter
+    ellipse in ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline)."""
     if run <= 0:
         raise RoofError("outline too thin for a pitched roof")
     if shape in ("mansard", "gambrel") and spec.pitch < MANSARD_LOWER:

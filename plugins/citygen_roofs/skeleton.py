@@ -9,10 +9,10 @@ edges. Two kinds of event change its topology:
   edge belongs to another ring, e.g. a courtyard's, joins the two rings).
 
 The next event is found by testing every vertex and edge of the current wavefront (``O(n^2)`` per event, in
-numpy, which is cheap for building footprints and keeps no priority queue that could go stale after simultaneous events). A ring
-that becomes a two-vertex ring or collapses to zero area ends in skeleton arcs (a ridge); a vertex between two
-antiparallel edges (a zero-width spike) is folded back at once. Every arc the wavefront's vertices trace borders the
-faces of their two edges, so each input edge's *face* is collected from those arcs.
+numpy): cheap for building footprints, and no priority queue that could go stale after simultaneous events. A
+ring left with two vertices, or a thin ring with no area left, ends in skeleton arcs (a ridge); a vertex between
+two antiparallel edges (a zero-width spike) is folded back at once. Every arc the wavefront's vertices trace
+borders the faces of their two edges, so each input edge's *face* is collected from those arcs.
 
 API: :func:`straight_skeleton` returns a :class:`Skeleton` (nodes with their offset time, one face per input
 edge) or raises :class:`SkeletonError` for input it cannot handle; callers fall back to something simpler.
