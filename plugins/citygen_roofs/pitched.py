@@ -9,6 +9,8 @@
   the hipped roof instead, the same roof for a square.
 * ``skillion``: one plane falling towards ``roof:direction`` (default: out over the longest edge), closed by
   vertical walls between the wall top and the plane.
+* ``mansard``, ``gambrel``, ``dome``: the hipped (gambrel: gabled) roof with a piecewise-linear :func:`profile`;
+  every skeleton face is cut into planar bands where the profile breaks.
 
 Every mesh's open boundary is exactly the outline at the wall top, so it closes the facade walls; faces are
 triangles wound outward. A failure raises :class:`RoofError`; the pipeline then builds a flat roof and warns.
