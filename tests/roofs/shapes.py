@@ -6,7 +6,7 @@ import math
 
 from hypothesis import strategies as st
 from shapely import affinity
-from shapely.geometry import Polygon, box
+from shapely.geometry import MultiPolygon, Polygon, box
 
 from citygen.mass import clean_outline
 
@@ -53,4 +53,13 @@ def courtyards(draw) -> Polygon:
     return _placed(box(0, 0, w, d).difference(box(x0, y0, x1, y1)), draw(turns))
 
 
-outlines = st.one_of(star_polygons(), l_u_shapes(), courtyards())
+@st.composite
+def multipolygons(draw) -> MultiPolygon:
+    """Two of the shapes above side by side, as one building."""
+    first, second = draw(st.one_of(star_polygons(), l_u_shapes())), draw(st.one_of(star_polygons(), courtyards()))
+    shift = first.bounds[2] - second.bounds[0] + draw(st.floats(1.0, 10.0))
+    return MultiPolygon([first, affinity.translate(second, xoff=shift)])
+
+
+polygons = st.one_of(star_polygons(), l_u_shapes(), courtyards())
+outlines = st.one_of(polygons, multipolygons())

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from shapely.geometry import Polygon, box
 
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
-from tests.roofs.shapes import outlines
+from tests.roofs.shapes import polygons
 
 
 def _faces(polygon):
@@ -74,7 +74,7 @@ def test_invalid_polygon_is_an_error():
 
 
 @settings(max_examples=60)
-@given(outlines)
+@given(polygons)
 def test_faces_partition_the_polygon(polygon):
     sk, faces = _faces(polygon)
     assert len(faces) == sum(len(r.coords) - 1 for r in (polygon.exterior, *polygon.interiors))
