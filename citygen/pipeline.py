@@ -26,12 +26,13 @@ from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
-from citygen.geometry.building import build_geometry, clear_module_cache
+from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition, hidden_below
 from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.registry import Registry, RulesetKind, default_registry, load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
+from citygen.roof import roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
 from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, prim_name
@@ -69,6 +70,11 @@ class _BuildingOutcome:
     warnings: tuple[str, ...]
 
 
+def _attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
+    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height and area."""
+    return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
+
+
 class _Builder:
     """Builds one building at a time; holds the registry and a ruleset cache (one per worker process)."""
 
@@ -88,8 +94,7 @@ class _Builder:
         return kind, self.rulesets[key]
 
     def choose(self, footprint: Footprint, mass: Mass, scope: str) -> tuple[Assignment, Path] | None:
-        attrs = {**footprint.attributes, "levels": footprint.levels, "height": footprint.height,
-                 "area": mass.outline.area}
+        attrs = _attributes(footprint, mass)
         for a in self.scene.assignments:
             if a.faces in ("all", scope) and a.matches(attrs):
                 pick = derive_rng(self.seed, footprint.id, "ruleset", scope).integers(len(a.rulesets))
@@ -120,8 +125,7 @@ class _Builder:
             palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof_builder = self.roofs.get(str(footprint.attributes.get("roof:shape")), self.roofs.get("flat"))
-            roof = roof_builder.build(mass.outline, mass.base + mass.height) if roof_builder else None
+            roof = self._roof(footprint, mass, warnings)
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
         except CitygenError as exc:
             return _BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
@@ -133,6 +137,26 @@ class _Builder:
                       "ruleset": ", ".join(used) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
         return _BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+
+    def _roof(self, footprint: Footprint, mass: Mass, warnings: list[str]) -> MeshData | None:
+        """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
+        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof."""
+        attrs = _attributes(footprint, mass)
+        rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
+        defaults = self.scene.defaults
+        spec = roof_spec(footprint.attributes, mass.height,
+                         shape=(rule and rule.roof_shape) or defaults.roof_shape,
+                         pitch=(rule and rule.roof_pitch) or defaults.roof_pitch)
+        flat = self.roofs.get("flat")
+        builder = self.roofs.get(spec.shape, flat)
+        top = mass.base + mass.height
+        if builder is None or builder is flat:
+            return flat.build(mass.outline, top, spec) if flat else None
+        try:
+            return builder.build(mass.outline, top, spec)
+        except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
+            warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
+            return flat.build(mass.outline, top, spec) if flat else None
 
     @staticmethod
     def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],

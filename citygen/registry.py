@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from citygen.geometry.building import MeshData
     from citygen.layout import FacadeLayout
     from citygen.request import FacadeRequest
+    from citygen.roof import RoofSpec
 
 
 class RulesetKind(ABC):
@@ -79,8 +80,10 @@ class RoofBuilder(ABC):
     description: str = ""
 
     @abstractmethod
-    def build(self, outline: Polygon | MultiPolygon, top: float) -> MeshData:
-        """Roof mesh for ``outline`` (local frame) whose walls end at height ``top``."""
+    def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
+        """Roof mesh for ``outline`` (local frame) whose walls end at height ``top``, shaped by ``spec`` (pitch,
+        height, direction; None: the builder's defaults). Its open boundary must be the outline at ``top`` so it
+        closes the walls; raise on an outline it cannot roof (the pipeline then builds a flat roof and warns)."""
 
 
 class Command(ABC):

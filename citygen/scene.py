@@ -8,7 +8,7 @@ from __future__ import annotations
 import operator
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,6 +29,8 @@ class Defaults:
     default_height: float = 10.0
     corner_width: float = 0.4
     min_face_width: float = 0.8
+    roof_shape: str = "flat"
+    roof_pitch: float = 30.0
 
 
 @dataclass(frozen=True)
@@ -65,6 +67,8 @@ class Assignment:
     faces: str = "all"
     kind: str | None = None
     line: int | None = None
+    roof_shape: str | None = None
+    roof_pitch: float | None = None
 
     def matches(self, attrs: Mapping[str, Any]) -> bool:
         return all(c.holds(attrs) for c in self.conditions)
@@ -102,8 +106,8 @@ def _line_of(text: str, key: str, start: int = 0) -> int | None:
 class _Reader:
     """Checks one table of the scene, reporting problems with file:line."""
 
-    def __init__(self, path: Path, text: str) -> None:
-        self.path, self.text = path, text
+    def __init__(self, path: Path, text: str, roof_shapes: Collection[str] | None = None) -> None:
+        self.path, self.text, self.roof_shapes = path, text, roof_shapes
 
     def fail(self, message: str, key: str | None = None, hint: str | None = None, line: int | None = None) -> None:
         if line is None and key is not None:
@@ -125,14 +129,29 @@ class _Reader:
             self.fail(f"{key} must be a {'positive ' if positive else ''}number, got {value!r}", key)
         return float(value)
 
+    def roof_shape(self, value: Any, line: int | None) -> str:
+        """A roof builder id (checked against the loaded roof builders)."""
+        from citygen.registry import default_registry
+        shapes = sorted(self.roof_shapes if self.roof_shapes is not None else default_registry().roof_builders)
+        if not isinstance(value, str) or value not in shapes:
+            self.fail(f"unknown roof shape {value!r}", line=line, hint=f"valid shapes: {', '.join(shapes)}")
+        return value
+
+    def pitch(self, value: Any, line: int | None) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 90:
+            self.fail(f"roof_pitch must be a number of degrees between 0 and 90, got {value!r}", line=line)
+        return float(value)
+
     def path_of(self, value: Any, key: str) -> Path:
         if not isinstance(value, str) or not value:
             self.fail(f"{key} must be a path string, got {value!r}", key)
         return (self.path.parent / value).resolve()
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Parse and check a scene file; raise :class:`SceneError` with file:line on any problem."""
+def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> Scene:
+    """Parse and check a scene file; raise :class:`SceneError` with file:line on any problem.
+
+    Roof shapes are checked against ``roof_shapes`` (default: the roof builders of the installed plugins)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -144,7 +163,7 @@ def load_scene(path: str | Path) -> Scene:
         match = re.search(r"line (\d+), column (\d+)", str(exc))
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
-    r = _Reader(path, text)
+    r = _Reader(path, text, roof_shapes)
     unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
     if unknown:
         r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",
@@ -158,7 +177,11 @@ def load_scene(path: str | Path) -> Scene:
         r.fail("[footprints] with a path is required", hint='e.g. [footprints] path = "data/city.geojson"', line=1)
     fp_options = {k: v for k, v in fp.items() if k != "path"}
     d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
-    defaults = Defaults(**{k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__})
+    numbers = {k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__ if k != "roof_shape"}
+    at = max(text.find("[defaults]"), 0)
+    shape = r.roof_shape(d["roof_shape"], _line_of(text, "roof_shape", at)) if "roof_shape" in d else "flat"
+    defaults = Defaults(**numbers, roof_shape=shape)
+    r.pitch(defaults.roof_pitch, _line_of(text, "roof_pitch", at))
     out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
@@ -186,10 +209,11 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         header = r.text.find("[[assign]]", search_from)
         line = r.text.count("\n", 0, header) + 1 if header >= 0 else None
         search_from = header + 1 if header >= 0 else search_from
-        unknown = sorted(set(item) - {"ruleset", "when", "faces", "kind"})
+        keys = {"ruleset", "when", "faces", "kind", "roof_shape", "roof_pitch"}
+        unknown = sorted(set(item) - keys)
         if unknown:
             r.fail(f"unknown key {unknown[0]!r} in [[assign]] #{index + 1}", line=line,
-                   hint="valid keys: ruleset, when, faces, kind")
+                   hint=f"valid keys: {', '.join(sorted(keys))}")
         rulesets = item.get("ruleset")
         names = [rulesets] if isinstance(rulesets, str) else rulesets
         if not names or not isinstance(names, list) or not all(isinstance(n, str) for n in names):
@@ -201,8 +225,12 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         faces = item.get("faces", "all")
         if faces not in FACE_SCOPES:
             r.fail(f"faces must be one of {', '.join(FACE_SCOPES)}, got {faces!r}", line=line)
+        shape_line = _line_of(r.text, "roof_shape", header) if header >= 0 else line
+        pitch_line = _line_of(r.text, "roof_pitch", header) if header >= 0 else line
+        shape = r.roof_shape(item["roof_shape"], shape_line) if "roof_shape" in item else None
+        pitch = r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None
         result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), line),
-                                 faces=faces, kind=item.get("kind"), line=line))
+                                 faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch))
     return tuple(result)
 
 

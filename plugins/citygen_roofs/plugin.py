@@ -1,4 +1,6 @@
-"""Roof builders: ``flat`` (a cap over the outline, courtyards left open)."""
+"""Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
+:mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
+``mansard``, ``gambrel``, ``dome``)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -8,6 +10,9 @@ from shapely.geometry import MultiPolygon, Polygon
 from citygen.geometry.building import MeshData
 from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
+from citygen.roof import RoofSpec
+from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
+                                   SkillionRoof)
 
 
 def _cap(part: Polygon, top: float) -> tuple[np.ndarray, np.ndarray]:
@@ -26,7 +31,7 @@ class FlatRoof(RoofBuilder):
     id = "flat"
     description = "flat roof cap at the wall top (holes stay open)"
 
-    def build(self, outline: Polygon | MultiPolygon, top: float) -> MeshData:
+    def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         parts = outline.geoms if isinstance(outline, MultiPolygon) else [outline]
         points, faces, offset = [], [], 0
         for part in parts:
@@ -40,4 +45,5 @@ class FlatRoof(RoofBuilder):
 
 @hookimpl
 def citygen_roof_builders():
-    return [FlatRoof()]
+    return [FlatRoof(), HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(), GambrelRoof(),
+            DomeRoof()]

@@ -1,0 +1,77 @@
+"""What a roof builder is asked to build: the shape and its parameters, from OSM roof tags and scene defaults.
+
+Tags read (https://wiki.openstreetmap.org/wiki/Key:roof:shape): ``roof:shape``, ``roof:height`` (metres above the
+wall top), ``roof:angle`` (pitch in degrees), ``roof:direction`` (compass degrees or N/NE/..., the direction the
+slope faces, i.e. downhill). A tag that does not parse is ignored, so the scene's default applies.
+``roof:orientation`` is not read: gabled ridges follow the straight skeleton (see docs/roofs.md).
+"""
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+#: A pitch outside this range (degrees) is clamped: flatter is a flat roof, steeper a tower.
+PITCH_RANGE = (5.0, 75.0)
+#: A roof is never taller than this many times its walls (with at least ``MIN_ROOF_CAP`` metres allowed).
+ROOF_TO_WALL_CAP = 1.0
+MIN_ROOF_CAP = 4.0
+
+_CARDINAL = {name: 22.5 * k for k, name in enumerate(
+    "N NNE NE ENE E ESE SE SSE S SSW SW WSW W WNW NW NNW".split())}
+_NUMBER = re.compile(r"^\s*(-?\d+(?:\.\d*)?)\s*(m|deg|°)?\s*$")
+
+
+@dataclass(frozen=True)
+class RoofSpec:
+    """A roof to build: ``shape`` (a roof builder id), ``pitch`` in degrees, an explicit ``height`` in metres
+    (wins over the pitch), the compass ``direction`` its slope faces (skillion) and ``cap``, the greatest
+    height allowed above the wall top."""
+
+    shape: str = "flat"
+    pitch: float = 30.0
+    height: float | None = None
+    direction: float | None = None
+    cap: float = math.inf
+
+    @property
+    def slope(self) -> float:
+        """Rise per metre of run for the pitch."""
+        return math.tan(math.radians(self.pitch))
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        return float(value) if math.isfinite(value) else None
+    match = _NUMBER.match(str(value))
+    return float(match[1]) if match else None
+
+
+def parse_direction(value: Any) -> float | None:
+    """Compass degrees from a number or a cardinal direction (``"NE"``), or None."""
+    if value is None:
+        return None
+    cardinal = _CARDINAL.get(str(value).strip().upper())
+    if cardinal is not None:
+        return cardinal
+    number = _number(value)
+    return None if number is None else number % 360.0
+
+
+def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "flat",
+              pitch: float = 30.0) -> RoofSpec:
+    """The roof of a building with OSM-style ``attributes``; ``shape`` and ``pitch`` apply where it has no tags."""
+    tag = attributes.get("roof:shape")
+    shape = str(tag).strip().lower() if tag not in (None, "") else shape
+    angle = _number(attributes.get("roof:angle"))
+    if angle is not None and 0 < angle < 90:
+        pitch = angle
+    pitch = min(max(pitch, PITCH_RANGE[0]), PITCH_RANGE[1])
+    height = _number(attributes.get("roof:height"))
+    cap = max(MIN_ROOF_CAP, ROOF_TO_WALL_CAP * wall_height)
+    return RoofSpec(shape=shape, pitch=pitch, height=min(height, cap) if height and height > 0 else None,
+                    direction=parse_direction(attributes.get("roof:direction")), cap=cap)
