@@ -140,7 +140,7 @@ class _Builder:
 
     def _roof(self, footprint: Footprint, mass: Mass, warnings: list[str]) -> MeshData | None:
         """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
-        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof."""
+        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning)."""
         attrs = _attributes(footprint, mass)
         rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
         defaults = self.scene.defaults
@@ -149,6 +149,9 @@ class _Builder:
                          pitch=(rule and rule.roof_pitch) or defaults.roof_pitch)
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
+        if spec.shape not in self.roofs:
+            warnings.append(f"{footprint.id}: flat roof instead of roof:shape={spec.shape!r}, which no roof builder "
+                            f"makes (known: {', '.join(sorted(self.roofs))})")
         top = mass.base + mass.height
         if builder is None or builder is flat:
             return flat.build(mass.outline, top, spec) if flat else None
