@@ -22,6 +22,7 @@ from itertools import groupby
 from pathlib import Path
 from typing import Any
 
+from citygen.builder import Builder
 from citygen.errors import CitygenError
 from citygen.footprints import Skipped
 from citygen.geometry.building import clear_module_cache
@@ -71,14 +72,12 @@ class TileResult:
 _BUILDERS = threading.local()
 
 
-def _builder(job: TileJob):
+def _builder(job: TileJob) -> Builder:
     """The calling worker thread's building builder for this run (registry and rulesets loaded once)."""
-    from citygen.pipeline import _Builder
-
     token = job.token
     if getattr(_BUILDERS, "token", None) != token:
         registry = None if job.plugins is None else load_registry(*job.plugins)
-        _BUILDERS.builder, _BUILDERS.token = _Builder(job.scene, job.seed, registry), token
+        _BUILDERS.builder, _BUILDERS.token = Builder(job.scene, job.seed, registry), token
     return _BUILDERS.builder
 
 

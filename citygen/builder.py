@@ -1,0 +1,165 @@
+"""One building from its footprint, mass and neighbour cover to a stage record: the coordinator's plan, a facade
+layout per face from the assigned ruleset kinds, the roof and the geometry.
+
+A :class:`Builder` holds the registry and a ruleset cache; the local executor keeps one per worker process, the
+dask executor one per worker thread. Any error while building one building becomes its :class:`BuildingOutcome`'s
+``skipped`` reason, never an exception.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from citygen.coordinator import plan_building
+from citygen.entrance import enforce_entrance
+from citygen.errors import CitygenError
+from citygen.footprints import Footprint, Skipped
+from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_below
+from citygen.mass import Mass
+from citygen.registry import Registry, RulesetKind, default_registry
+from citygen.request import FacadeRequest, check_request
+from citygen.rng import derive_rng
+from citygen.roof import roof_spec
+from citygen.scene import Assignment, Scene
+from citygen.usd.materials import WALL_PALETTE
+from citygen.usd.writer import BuildingRecord
+
+
+@dataclass(frozen=True)
+class BuildingOutcome:
+    """A built building's stage record, or why it was skipped; and the warnings met on the way."""
+
+    record: BuildingRecord | None
+    skipped: Skipped | None
+    warnings: tuple[str, ...]
+
+
+def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
+    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height and area."""
+    return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
+
+
+class Builder:
+    """Builds one building at a time; holds the registry and a ruleset cache."""
+
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None) -> None:
+        self.scene, self.seed = scene, seed
+        self.registry = registry or default_registry()
+        self.rulesets: dict[tuple[str, Path], Any] = {}
+        self.roofs = self.registry.roof_builders
+        clear_module_cache()
+
+    def ruleset(self, assignment: Assignment, path: Path):
+        kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
+                else self.registry.kind_for_path(path))
+        key = (kind.id, path)
+        if key not in self.rulesets:
+            self.rulesets[key] = kind.load(path)
+        return kind, self.rulesets[key]
+
+    def choose(self, footprint: Footprint, mass: Mass, scope: str) -> tuple[Assignment, Path] | None:
+        attrs = assign_attributes(footprint, mass)
+        for a in self.scene.assignments:
+            if a.faces in ("all", scope) and a.matches(attrs):
+                pick = derive_rng(self.seed, footprint.id, "ruleset", scope).integers(len(a.rulesets))
+                return a, a.rulesets[int(pick)]
+        return None
+
+    def build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
+              tile: tuple[int, int]) -> BuildingOutcome:
+        warnings: list[str] = []
+        try:
+            plan = plan_building(footprint, mass, cover, self.scene.defaults, self.seed)
+            layouts: dict[int, FacadeLayout] = {}
+            used: list[str] = []
+            for scope, courtyard in (("street", False), ("courtyard", True)):
+                requests = [r for r in plan.requests if r.context.is_courtyard == courtyard]
+                if not requests:
+                    continue
+                choice = self.choose(footprint, mass, scope)
+                if choice is None:
+                    warnings.append(f"{footprint.id}: no [[assign]] matches its {scope} faces; plain walls")
+                    continue
+                assignment, path = choice
+                kind, ruleset = self.ruleset(assignment, path)
+                used.append(f"{kind.id}:{path.name}")
+                for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
+                    face = request.context.face_index
+                    layouts[face] = hidden_below(self._checked(layout, request, kind.id, warnings), cover[face])
+            palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
+            wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
+            faces = [(f, layouts.get(f.index)) for f in mass.faces]
+            roof = self._roof(footprint, mass, warnings)
+            geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
+        except CitygenError as exc:
+            return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
+        except Exception as exc:  # a plugin bug must skip one building, not the city
+            reason = f"internal error {type(exc).__name__}: {exc}"
+            return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
+        attributes = {"sourceId": footprint.id, "height": float(footprint.height),
+                      "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
+                      "ruleset": ", ".join(used) or "none", "seed": self.seed,
+                      "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
+        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+
+    def _roof(self, footprint: Footprint, mass: Mass, warnings: list[str]) -> MeshData | None:
+        """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
+        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning)."""
+        attrs = assign_attributes(footprint, mass)
+        rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
+        defaults = self.scene.defaults
+        spec = roof_spec(footprint.attributes, mass.height,
+                         shape=(rule and rule.roof_shape) or defaults.roof_shape,
+                         pitch=(rule and rule.roof_pitch) or defaults.roof_pitch)
+        flat = self.roofs.get("flat")
+        builder = self.roofs.get(spec.shape, flat)
+        if spec.shape not in self.roofs:
+            warnings.append(f"{footprint.id}: flat roof instead of roof:shape={spec.shape!r}, which no roof builder "
+                            f"makes (known: {', '.join(sorted(self.roofs))})")
+        top = mass.base + mass.height
+        if builder is None or builder is flat:
+            return flat.build(mass.outline, top, spec) if flat else None
+        try:
+            return builder.build(mass.outline, top, spec)
+        except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
+            warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
+            return flat.build(mass.outline, top, spec) if flat else None
+
+    @staticmethod
+    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
+                  warnings: list[str]) -> list[FacadeLayout]:
+        """Layouts for a building's faces; if the kind fails on the building, face by face, so one face it cannot
+        dress becomes a plain wall (reported) instead of costing the building."""
+        try:
+            return kind.generate_building(ruleset, requests)
+        except CitygenError:
+            pass
+        layouts = []
+        for request in requests:
+            try:
+                layouts.append(kind.generate(ruleset, request))
+            except CitygenError as exc:
+                warnings.append(f"{request.context.building_id} face {request.context.face_index}: plain wall, "
+                                f"the ruleset failed: {exc}")
+                layouts.append(FacadeLayout(request.width, request.height,
+                                            Region(0.0, 0.0, request.width, request.height, "Wall", "wall")))
+        return layouts
+
+    @staticmethod
+    def _checked(layout: FacadeLayout, request: FacadeRequest, kind_id: str, warnings: list[str]) -> FacadeLayout:
+        where = f"{request.context.building_id} face {request.context.face_index}"
+        problems = check_partition(layout)
+        if problems:
+            raise CitygenError(f"{where}: layout is not a partition: {problems[0]}", plugin=kind_id,
+                               hint="this is a bug in the ruleset kind; please report it with the ruleset")
+        if layout.meta.get("fallback"):  # a kind that could not dress the face says why (e.g. relayout)
+            warnings.append(f"{where}: {kind_id} fell back to plain walls: {layout.meta['fallback']}")
+        layout, note = enforce_entrance(layout, request)
+        if note:
+            warnings.append(f"{where}: {note}")
+        warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
+        return layout
