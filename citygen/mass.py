@@ -149,7 +149,7 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5)
 
     A face stands against other buildings when most of the points sampled just outside it (``offset`` metres along
     the normal at 10%, 30%, 50%, 70%, 90% of its width) fall inside their outlines; its cover is then the lowest
-    top among those neighbours (the face is seen above it).
+    top among those neighbours (the face is seen above it), taken over the face's whole width.
     """
     outlines = [m.outline for m in masses]
     tree = shapely.STRtree(outlines)
