@@ -167,15 +167,13 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5)
     hit_pt, hit_poly = tree.query(shapely.points(pts), predicate="within")
     other = hit_poly != point_owner[hit_pt]
     hit_pt, hit_poly = hit_pt[other], hit_poly[other]
-    base = np.array([m.base for m in masses])
-    top = base + np.array([m.height for m in masses])
+    base, height = np.array([m.base for m in masses]), np.array([m.height for m in masses])
+    top = base + height
     covered = np.full(len(pts), np.inf)  # per sample the lowest neighbour top above the face's base
     np.minimum.at(covered, hit_pt, top[hit_poly] - base[point_owner[hit_pt]])
     covered = covered.reshape(-1, len(fractions))
-    inside = np.isfinite(covered)
-    lowest = np.where(inside, covered, np.inf).min(axis=1)
-    own = np.array([masses[i].height for i in owner])
-    per_face = np.where(inside.mean(axis=1) >= share, np.clip(lowest, 0.0, own), 0.0)
+    against = np.isfinite(covered).mean(axis=1) >= share
+    per_face = np.where(against, np.clip(covered.min(axis=1), 0.0, height[owner]), 0.0)
     result, start = [], 0
     for mass in masses:
         result.append(per_face[start:start + len(mass.faces)])
