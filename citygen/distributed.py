@@ -34,6 +34,8 @@ from citygen.usd.writer import StageStats, StageWriter, tile_name
 
 EXECUTORS = ("local", "dask")
 INSTALL_HINT = "pip install 'citygen[distributed]'"
+#: How long ``--scheduler ADDRESS`` is tried before the run stops with an error (the old output is kept)
+CONNECT_TIMEOUT = "30s"
 #: Dask settings of the local cluster: no statistical profiler in the workers (~7 % of their CPU on citygen's
 #: Python-bound tasks), and slower event-loop ticks and system monitor (an idle cluster's main process: 0.7 s of
 #: CPU in 40 s instead of 1.8 s)
@@ -121,8 +123,11 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
                            hint=INSTALL_HINT) from exc
     if scheduler:
         try:
-            client = Client(scheduler, timeout="30s")
-        except OSError as exc:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except ValueError as exc:  # not an address dask can parse
+            raise CitygenError(f"--scheduler {scheduler!r} is not a dask scheduler address: {exc}",
+                               hint="give it as tcp://HOST:PORT (the address `dask scheduler` prints)") from exc
+        except OSError as exc:  # nothing answers there within CONNECT_TIMEOUT
             raise CitygenError(f"cannot reach the dask scheduler at {scheduler}: {exc}",
                                hint="start one with `dask scheduler` and workers with `dask worker ADDRESS`") from exc
         with client:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import socket
 import sys
 import threading
 from pathlib import Path
@@ -154,6 +155,25 @@ def test_missing_dask_names_the_extra_to_install(small_scene, test_registry, mon
         generate_city(scene, registry=test_registry, executor="dask")
     out = Path(scene.output.path)
     assert not out.exists() and not [p for p in out.parent.iterdir() if p.name.startswith(".")]
+
+
+def test_an_unreachable_scheduler_is_an_error_that_keeps_the_old_stage(small_scene, test_registry, monkeypatch):
+    scene = _scene(small_scene, "out/small.usda")
+    out = Path(scene.output.path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("#usda 1.0\n")
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    monkeypatch.setattr(distributed_executor, "CONNECT_TIMEOUT", "1s")
+    with pytest.raises(CitygenError, match=f"cannot reach the dask scheduler at tcp://127.0.0.1:{port}") as err:
+        generate_city(scene, registry=test_registry, executor="dask", scheduler=f"tcp://127.0.0.1:{port}")
+    assert "dask scheduler" in err.value.hint
+    with pytest.raises(CitygenError, match="'tcp://host:port' is not a dask scheduler address") as err:
+        generate_city(scene, registry=test_registry, executor="dask", scheduler="tcp://host:port")
+    assert "tcp://HOST:PORT" in err.value.hint
+    assert out.read_text() == "#usda 1.0\n"
+    assert sorted(p.name for p in out.parent.iterdir()) == ["small.usda"]
 
 
 def test_an_unknown_executor_lists_the_choices(small_scene, test_registry):
