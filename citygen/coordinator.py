@@ -3,7 +3,8 @@
 * **Floor lines** -- one set of floor heights per building; every face's request carries it, so windows of
   adjacent faces sit at the same heights.
 * **Entrance** -- exactly one door per building, on the widest street-facing face whose foot is free (else the
-  widest facade face with a free foot; none when every foot is hidden, e.g. a tower rising from a lower block).
+  widest facade face with a free foot; none when every foot is hidden, e.g. a tower rising from a lower block, or
+  when the building is lifted off the ground, ``Footprint.lift``: it has no street faces and no taller ground floor).
 * **Corners** -- a wall strip at each corner, the same width on both faces meeting there, so openings of two faces
   never collide at a corner and corners meet with equal margins.
 
@@ -40,11 +41,13 @@ class BuildingPlan:
     plain_faces: tuple[int, ...]
 
 
-def plan_floor_lines(height: float, levels: int | None, defaults: Defaults) -> tuple[float, ...]:
+def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lifted: bool = False
+                     ) -> tuple[float, ...]:
     """Floor boundaries from 0 to ``height``: the data's level count when known, else the default floor height.
 
-    A taller ground floor (``ground_floor_height``) is used when the building has at least three floors and the
-    upper floors stay at least 2.4 m high; everything always ends exactly at ``height``.
+    A taller ground floor (``ground_floor_height``) is used when the building has at least three floors, the
+    upper floors stay at least 2.4 m high and it is not ``lifted`` off the ground; everything always ends exactly at
+    ``height``.
     """
     if levels is None or levels < 1:
         levels = round(height / defaults.floor_height)
@@ -53,7 +56,7 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults) -> t
         return (0.0, float(height))
     typical = height / levels
     ground = min(defaults.ground_floor_height, 1.3 * typical)
-    if levels >= 3 and ground > typical and (height - ground) / (levels - 1) >= 2.4:
+    if levels >= 3 and ground > typical and (height - ground) / (levels - 1) >= 2.4 and not lifted:
         step = (height - ground) / (levels - 1)
         return (0.0, *(float(ground + i * step) for i in range(levels - 1)), float(height))
     return tuple(float(v) for v in np.linspace(0.0, height, levels + 1))
@@ -63,12 +66,13 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
                   seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
     """Decide floor lines, entrance face and corner strips; build one request per facade face. ``cover`` is per
     face the height up to which neighbours stand against it (``citygen.mass.neighbour_cover``)."""
-    floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults)
+    lifted = footprint.lift > 0.0
+    floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults, lifted)
     faces = mass.faces
     widths = np.array([f.width for f in faces])
     cover = np.asarray(cover, dtype=float)
     facade = (cover < mass.height - PARTY_RISE) & (widths >= defaults.min_face_width)
-    free_foot = cover <= 0.0
+    free_foot = (cover <= 0.0) & (not lifted)
     street = facade & free_foot & np.array([not f.is_courtyard for f in faces])
     door_candidates = np.flatnonzero(street & (widths >= 1.5))
     if door_candidates.size == 0:

@@ -31,7 +31,10 @@ class Footprint:
     ``polygon`` is valid, oriented (exterior counter-clockwise, holes clockwise) and in metres in the local frame.
     ``height`` is the wall height in metres and ``height_source`` says where it came from
     (``"height"``, ``"measuredHeight"``, ``"building:levels"``, ``"default"``, ...). ``levels`` is the number of
-    above-ground floors when known from the data, else ``None``; ``base`` is the ground elevation.
+    above-ground floors when known from the data, else ``None``; ``base`` is the elevation of the wall's foot:
+    the ground, plus ``lift`` for a building (part) that starts above it (OSM ``min_height`` /
+    ``building:min_level``: an upper part of a Simple 3D Buildings model, a bridge building), whose foot is not at
+    street level.
     """
 
     id: str
@@ -42,6 +45,7 @@ class Footprint:
     base: float = 0.0
     attributes: Mapping[str, Any] = field(default_factory=dict)
     source: str = ""
+    lift: float = 0.0
 
 
 @dataclass(frozen=True)

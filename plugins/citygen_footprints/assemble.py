@@ -99,7 +99,7 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
         footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
                                     height_source=height.source, levels=height.levels,
                                     base=feature.base + height.base_offset, attributes=dict(feature.attributes),
-                                    source=feature.source))
+                                    source=feature.source, lift=height.base_offset))
     ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
     return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)
 

@@ -14,6 +14,7 @@ from citygen_footprints.heights import TYPE_LEVELS, HeightSettings
 SCENE_KEYS = frozenset({"path", "format"})
 BAD_HEIGHT_CHOICES = ("fallback", "skip")
 CITYJSON_HEIGHT_CHOICES = ("geometry", "attribute")
+OSM_PARTS_CHOICES = ("replace", "ignore")
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,7 @@ class ImportOptions:
     bad_height: str = "fallback"
     base_offsets: bool = True
     cityjson_height: str = "geometry"
+    osm_parts: str = "replace"
     type_levels: tuple[tuple[str, float], ...] = TYPE_LEVELS
     slenderness: float = 3.0
 
@@ -106,4 +108,6 @@ def parse_options(table: Mapping[str, Any]) -> tuple[ImportOptions, tuple[str, .
         values["bad_height"] = _choice("bad_height", table["bad_height"], BAD_HEIGHT_CHOICES)
     if "cityjson_height" in table:
         values["cityjson_height"] = _choice("cityjson_height", table["cityjson_height"], CITYJSON_HEIGHT_CHOICES)
+    if "osm_parts" in table:
+        values["osm_parts"] = _choice("osm_parts", table["osm_parts"], OSM_PARTS_CHOICES)
     return ImportOptions(**values), warnings

@@ -1,4 +1,4 @@
-"""Registers the GeoJSON and CityJSON footprint importers with citygen."""
+"""Registers the GeoJSON, CityJSON and OpenStreetMap footprint importers with citygen."""
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -14,6 +14,8 @@ from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
 from citygen_footprints.geojson import import_geojson
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
+from citygen_footprints.osm import SUFFIXES as OSM_SUFFIXES
+from citygen_footprints.osm import import_osm
 
 
 def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
@@ -50,7 +52,17 @@ class CityJSONImporter(FootprintImporter):
         return read_footprints(path, options)
 
 
+class OSMImporter(FootprintImporter):
+    id = "osm"
+    suffixes = OSM_SUFFIXES
+    description = "OpenStreetMap XML / PBF (needs pyosmium: citygen[osm]): building ways, multipolygons, S3DB parts"
+
+    def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
+        parsed, warnings = parse_options(options)
+        return import_osm(Path(path), parsed, warnings)
+
+
 @hookimpl
 def citygen_footprint_importers() -> list[FootprintImporter]:
     # CityJSON first: the registry picks the first importer whose suffix matches, and .city.json ends in .json
-    return [CityJSONImporter(), GeoJSONImporter()]
+    return [CityJSONImporter(), GeoJSONImporter(), OSMImporter()]

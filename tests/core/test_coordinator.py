@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 from shapely.geometry import Polygon
 
@@ -67,3 +68,18 @@ def test_a_tower_rising_from_a_lower_block_has_no_entrance():
     mass = build_mass(foot)
     plan = plan_building(foot, mass, np.full(len(mass.faces), 6.6), Defaults(), 1)
     assert plan.entrance_face is None and len(plan.requests) == 4 and not any(r.entrance for r in plan.requests)
+
+
+def test_a_building_part_lifted_off_the_ground_has_no_door_and_no_tall_ground_floor():
+    """Bug fixture (Helsinki, OSM min_height 16 / building:min_level parts): an upper part standing on others got a
+    street door and a tall ground floor in mid-air."""
+    foot = Footprint(id="p", polygon=Polygon([(0, 0), (20, 0), (20, 10), (0, 10)]), height=12, height_source="height",
+                     levels=4, base=16.0, lift=16.0)
+    mass = build_mass(foot)
+    plan = plan_building(foot, mass, np.zeros(len(mass.faces)), Defaults(ground_floor_height=4.4), 1)
+    assert plan.entrance_face is None and len(plan.requests) == 4
+    assert not any(r.entrance or r.context.street_facing for r in plan.requests)
+    assert plan.floor_lines == pytest.approx((0.0, 3.0, 6.0, 9.0, 12.0))
+    grounded = Footprint(id="g", polygon=foot.polygon, height=12, height_source="height", levels=4, base=16.0)
+    plan = plan_building(grounded, build_mass(grounded), np.zeros(4), Defaults(ground_floor_height=4.4), 1)
+    assert plan.entrance_face is not None and plan.floor_lines[1] > 3.0

@@ -265,3 +265,10 @@ def test_fixed_origin_is_not_rounded(tmp_path):
     result = read_footprints(path, {"origin": [385001.5, 6672002.25]})
     assert result.georef.origin == (385001.5, 6672002.25)
     assert result.footprints[0].polygon.bounds == (-1.5, -2.25, 8.5, 7.75)
+
+
+def test_helsinki_parts_standing_above_the_ground_are_lifted(helsinki):
+    lifted = {fp.id: fp.lift for fp in helsinki.footprints if fp.lift > 0}
+    assert len(lifted) == 11
+    assert lifted["way/396370569"] == 16.0 and lifted["relation/1319473"] == 21.0
+    assert all(fp.base == fp.lift for fp in helsinki.footprints if fp.id in lifted)  # ground elevation 0 in GeoJSON

@@ -1,0 +1,171 @@
+"""OpenStreetMap files (``.osm``, ``.osm.pbf``, ``.osm.bz2``, ...) read with pyosmium (libosmium).
+
+Buildings are closed ways and multipolygon relations tagged ``building`` or ``building:part`` (not ``no``);
+libosmium assembles the areas (rings from unordered member ways, holes). Simple 3D Buildings: an outline that has
+``building:part`` areas inside it is drawn by its parts (``osm_parts = "replace"``, the default) -- each part
+with its own height tags (``min_height``, ``building:min_level`` lift its base) and the outline's other tags
+(``building``, address, ...) unless it has its own; ``osm_parts = "ignore"`` keeps the outlines and drops the parts.
+What cannot become a building is reported by id: an open way, a relation whose members are missing from the
+extract (clipped at its edge), a way with nodes missing.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import shapely
+from citygen.errors import FootprintError
+from citygen.footprints import ImportResult, Skipped
+from shapely.geometry import Polygon
+
+from citygen_footprints.assemble import RawFeature, assemble
+from citygen_footprints.frame import parse_crs
+from citygen_footprints.options import ImportOptions
+from citygen_footprints.repair import FeatureProblem, clean_rings
+
+INSTALL_HINT = "pip install 'citygen[osm]'"
+SUFFIXES = (".osm", ".osm.pbf", ".pbf", ".osm.bz2", ".osm.gz", ".osc", ".opl")
+#: tags a part does not take from its outline: its own shape and height
+OWN_KEYS = ("height", "min_height", "building:levels", "building:min_level", "building:part", "roof:", "type")
+#: a part belongs to the outline holding at least this share of its area
+PART_SHARE = 0.5
+
+
+@dataclass(frozen=True)
+class _Area:
+    """One building area as read: OSM id, tags, rings (lon, lat) as GeoJSON polygon coordinates."""
+
+    index: int
+    id: str
+    tags: Mapping[str, str]
+    polygons: list[list[list[tuple[float, float]]]]
+
+    @property
+    def is_part(self) -> bool:
+        return "building" not in self.tags or self.tags["building"] == "no"
+
+
+def _osmium():
+    try:
+        import osmium
+    except ImportError as exc:
+        raise FootprintError(f"reading OpenStreetMap files needs pyosmium, which is not installed ({exc})",
+                             hint=f"{INSTALL_HINT}, or convert the file to GeoJSON") from exc
+    return osmium
+
+
+def _is_building(tags) -> bool:
+    return tags.get("building", "no") != "no" or tags.get("building:part", "no") != "no"
+
+
+def _rings(area) -> list[list[list[tuple[float, float]]]]:
+    """The area's polygons: per outer ring, the outer then its inner rings, as (lon, lat) lists."""
+    return [[[(n.lon, n.lat) for n in outer], *[[(n.lon, n.lat) for n in inner] for inner in area.inner_rings(outer)]]
+            for outer in area.outer_rings()]
+
+
+def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
+    """Building areas in file order, and the buildings that could not be assembled (with why)."""
+    osmium = _osmium()
+    where = path.name
+    areas: list[_Area] = []
+    skipped: dict[str, Skipped] = {}
+    order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, in file order
+    made: set[str] = set()
+    try:
+        for obj in osmium.FileProcessor(str(path)).with_locations().with_areas():
+            if not _is_building(obj.tags):
+                continue
+            if obj.is_area():
+                oid = f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}"
+                made.add(oid)
+                areas.append(_Area(order.setdefault(oid, len(order)), oid, dict(obj.tags), _rings(obj)))
+            elif obj.is_way():
+                oid = f"way/{obj.id}"
+                order.setdefault(oid, len(order))
+                missing = sum(not n.location.valid() for n in obj.nodes)
+                if missing:
+                    skipped[oid] = Skipped(oid, f"{missing} of its {len(obj.nodes)} nodes are missing from the file "
+                                                "(the extract cut the building) -- use an extract that keeps whole "
+                                                "ways (osmium extract --strategy complete_ways)", f"{where}, {oid}")
+                elif not obj.is_closed():
+                    skipped[oid] = Skipped(oid, "the building way is not closed -- close its outline or map it as a "
+                                                "multipolygon relation", f"{where}, {oid}")
+            elif obj.is_relation() and obj.tags.get("type") == "multipolygon":
+                order.setdefault(f"relation/{obj.id}", len(order))
+    except RuntimeError as exc:  # libosmium's errors: unreadable, not OSM, truncated
+        raise FootprintError(f"cannot read the OpenStreetMap file: {exc}", where=str(path),
+                             hint="give an .osm (XML), .osm.pbf or .opl file") from exc
+    for oid in order.keys() - made - skipped.keys():
+        what = "member ways or nodes missing from the extract, or rings that do not close" \
+            if oid.startswith("relation/") else "fewer than three distinct nodes, or a self-crossing libosmium rejects"
+        skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
+                                    "extract or fix the outline in OSM", f"{where}, {oid}")
+    areas.sort(key=lambda a: a.index)
+    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0])
+
+
+def _with_parts(areas: list[_Area]) -> tuple[list[_Area], list[str]]:
+    """Simple 3D Buildings: outlines that hold parts are replaced by them; parts take the outline's other tags."""
+    outlines = [a for a in areas if not a.is_part]
+    parts = [a for a in areas if a.is_part]
+    if not outlines or not parts:
+        return areas, []
+    shapes = [_shape(a) for a in outlines]
+    tree = shapely.STRtree(shapes)
+    host: dict[str, int] = {}
+    for part in parts:
+        shape = _shape(part)
+        if shape.is_empty or shape.area == 0:
+            continue
+        best, best_share = None, PART_SHARE
+        for k in tree.query(shape, predicate="intersects"):
+            share = shapes[k].intersection(shape).area / shape.area
+            if share >= best_share:
+                best, best_share = int(k), share
+        if best is not None:
+            host[part.id] = best
+    drawn = set(host.values())
+    out = [a for k, a in enumerate(outlines) if k not in drawn]
+    for part in parts:
+        k = host.get(part.id)
+        if k is not None:
+            inherited = {key: v for key, v in outlines[k].tags.items() if not key.startswith(OWN_KEYS)}
+            part = replace(part, tags={**inherited, **part.tags, "building:outline": outlines[k].id})
+        out.append(part)
+    note = [f"{len(drawn)} building outlines are drawn by their {len(host)} building:part areas (Simple 3D "
+            "Buildings); set osm_parts = \"ignore\" to keep the outlines instead"] if drawn else []
+    return sorted(out, key=lambda a: a.index), note
+
+
+def _shape(area: _Area) -> shapely.Geometry:
+    polys = [Polygon(p[0], p[1:]) for p in area.polygons if len(p[0]) >= 4]
+    return shapely.make_valid(shapely.MultiPolygon(polys)) if polys else Polygon()
+
+
+def import_osm(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
+    """Footprints from an OpenStreetMap file (always lon/lat, EPSG:4326)."""
+    areas, skipped = read_areas(path)
+    notes: list[str] = []
+    if options.osm_parts == "replace":
+        areas, notes = _with_parts(areas)
+    else:
+        areas = [a for a in areas if not a.is_part]
+    crs_warnings = [] if options.crs is None else [
+        f"{path.name}: OpenStreetMap data is always lon/lat; the scene's crs {options.crs} is ignored"]
+    raws: list[RawFeature] = []
+    for area in areas:
+        where = f"{path.name}, {area.id}"
+        attributes: dict[str, Any] = {**area.tags, "osm_type": area.id.split("/")[0],
+                                      "osm_id": int(area.id.split("/")[1])}
+        try:
+            cleaned = clean_rings(area.polygons)
+        except FeatureProblem as problem:
+            skipped.append((area.index, Skipped(area.id, str(problem), where)))
+            continue
+        raws.append(RawFeature(area.index, area.id, where, f"{path.name}#{area.id}", attributes, cleaned.parts,
+                               cleaned.warnings))
+    return assemble(raws, skipped, [*warnings, *crs_warnings, *notes], parse_crs("EPSG:4326", str(path)),
+                    options, path)
