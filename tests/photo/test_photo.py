@@ -312,3 +312,60 @@ def test_profile_split_none_on_plain_wall():
     gray = 0.7 + 0.02 * np.random.default_rng(2).standard_normal((50, 50))
     edges = EdgeImage.of(gray)
     assert profile_split(edges, wall_stats(edges, [(0, 50, 0, 50)])) is None
+
+
+def _misaligned_group():
+    """Four 60 x 50 tiles whose 30 x 22 windows sit at different heights and sides (floor and tile lines off by up
+    to 8 px, as on the CMP photos): the group's mean tile is a blur."""
+    gray = 0.7 + 0.02 * np.random.default_rng(7).standard_normal((240, 50))
+    tiles, boxes = [], []
+    for k, (dr, dc) in enumerate(((0, 0), (8, -4), (-8, 4), (4, 6))):
+        t0 = 60 * k
+        r0, c0 = t0 + 15 + dr, 14 + dc
+        gray[r0:r0 + 30, c0:c0 + 22] = 0.25
+        tiles.append((t0, t0 + 60, 0, 50))
+        boxes.append((r0, r0 + 30, c0, c0 + 22))
+    return gray, tiles, boxes
+
+
+def test_misaligned_group_windows_are_found_per_member():
+    """Regression (CMP dev: 213 annotated windows lay in tiles with no detected window, e.g. cmp_b0016 with 1 of
+    18): averaging members that are not aligned blurs the mean tile, §3.1 finds no window in it. The edge boxes
+    found per member, with the group's size imposed, give every member's window exactly (they replace §3.1's
+    windows in ``subdivide_groups`` where those cover less than ``COVER`` of them)."""
+    from citygen_inverse.photo_tiles import EdgeImage, box_split, stack_tree
+    gray, tiles, boxes = _misaligned_group()
+    edges = EdgeImage.of(gray)
+    mean_windows = [n.rects[0] for n in _leaves(stack_tree(edges, tiles, False)) if n.label == "window"]
+    assert not any(close(w, boxes[0], 1) for w in mean_windows)  # the blur: 46 x 31 px for 30 x 22
+    tree = box_split(edges, tiles)
+    (found,) = [n.rects for n in _leaves(tree) if n.label == "window"]
+    assert all(close(f, b, 1) for f, b in zip(found, boxes))
+    assert check_partition_of(tree, tiles)
+
+
+def check_partition_of(tree, tiles) -> bool:
+    leaves = _leaves(tree)
+    return all(sum((r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in (n.rects[m] for n in leaves))
+               == (t1 - t0) * (u1 - u0) for m, (t0, t1, u0, u1) in enumerate(tiles))
+
+
+def test_edge_box_member_off_the_group_size_takes_the_median():
+    """A member whose own edge box has another size (a window merged with a dark shutter) takes the group's median
+    box relative to its tile (§3.2: the group's common split imposed)."""
+    from citygen_inverse.photo_tiles import EdgeImage, box_split
+    gray, tiles, boxes = _misaligned_group()
+    gray[165:195, 40:47] = 0.25  # third member: a shutter beside the window widens its box
+    (r0, r1, c0, c1) = box_split(EdgeImage.of(gray), tiles).children[1].children[1].rects[2]
+    assert (r1 - r0, c1 - c0) == (30, 22)
+
+
+def test_window_box_refined_at_full_resolution():
+    """Regression: boxes scaled up from the ~400 px work image are off by up to a work pixel (2.5 crop px on a
+    1000 px CMP crop) plus the work image's blur; each side is moved to the strongest edge of the box's polarity
+    at full resolution."""
+    from citygen_inverse.photo import refine_box
+    gray = 0.7 + 0.02 * np.random.default_rng(3).standard_normal((300, 300))
+    gray[57:139, 103:161] = 0.2
+    assert refine_box(gray, (100.5, 60.0, 163.0, 135.5)) == (103.0, 57.0, 161.0, 139.0)
+    assert refine_box(gray, (106.0, 53.0, 158.0, 142.0)) == (103.0, 57.0, 161.0, 139.0)
