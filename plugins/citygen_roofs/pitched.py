@@ -426,7 +426,8 @@ class PyramidalRoof(RoofBuilder):
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        return _merge([(not party and pyramid(part, top, spec)) or skeleton_roof(part, top, spec, "hipped", False, party)
+        return _merge([(None if party else pyramid(part, top, spec))
+                       or skeleton_roof(part, top, spec, "hipped", False, party)
                        for part, party in _parts(outline, spec.party)])
 
 
