@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from warnings import catch_warnings, simplefilter, warn_explicit
 
 import numpy as np
 from shapely.geometry import MultiPolygon
@@ -24,7 +25,7 @@ from citygen.mass import Mass
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import party_edges, rectangle_like, roof_spec
+from citygen.roof import RoofWarning, party_edges, rectangle_like, roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
 from citygen.usd.writer import BuildingRecord
@@ -131,7 +132,15 @@ class Builder:
         if builder is None or builder is flat:
             return flat.build(mass.outline, top, spec) if flat else None
         try:
-            return builder.build(mass.outline, top, spec)
+            with catch_warnings(record=True) as caught:
+                simplefilter("always", RoofWarning)
+                roof = builder.build(mass.outline, top, spec)
+            for w in caught:  # a builder's RoofWarning is the building's warning; others pass on
+                if issubclass(w.category, RoofWarning):
+                    warnings.append(f"{footprint.id}: {spec.shape} roof: {w.message}")
+                else:
+                    warn_explicit(w.message, w.category, w.filename, w.lineno)
+            return roof
         except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
             return flat.build(mass.outline, top, spec) if flat else None

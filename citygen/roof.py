@@ -35,6 +35,10 @@ RECTANGLE_FILL = 0.9
 _NUMBER = re.compile(r"^\s*(-?\d+(?:\.\d*)?)\s*(m|deg|°)?\s*$")
 
 
+class RoofWarning(UserWarning):
+    """A roof builder built something other than asked (e.g. ignored party walls); the pipeline reports it."""
+
+
 @dataclass(frozen=True)
 class RoofSpec:
     """A roof to build: ``shape`` (a roof builder id), ``pitch`` in degrees, an explicit ``height`` in metres

@@ -18,6 +18,7 @@ triangles wound outward. A failure raises :class:`RoofError`; the pipeline then 
 from __future__ import annotations
 
 import math
+import warnings
 
 import mapbox_earcut
 import numpy as np
@@ -26,7 +27,7 @@ from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
-from citygen.roof import ORIENTATIONS, RoofSpec, rectangle_like
+from citygen.roof import ORIENTATIONS, RoofSpec, RoofWarning, rectangle_like
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 
 
@@ -269,9 +270,18 @@ class _Bands:
 def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables: bool,
                   party: frozenset[int] = frozenset(), orientation: str | None = None) -> MeshData:
     """A roof over the weighted straight skeleton of ``part`` (:func:`edge_weights`) with ``shape``'s profile;
-    faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too."""
+    faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too. Where every edge is a
+    party wall, or the weighted skeleton fails, the part is roofed as if free (with a :class:`RoofWarning`)."""
     weights = edge_weights(part, party, orientation, gables)
-    points, faces = skeleton_faces(part, weights)
+    try:
+        if party and not weights.any():
+            raise RoofError("every wall is a party wall")
+        points, faces = skeleton_faces(part, weights)
+    except RoofError as exc:
+        if not party:
+            raise
+        warnings.warn(f"party walls ignored: {exc}", RoofWarning, stacklevel=2)
+        return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
     standing = {k for k in range(len(faces)) if weights[k] == 0}
     walls = [faces[k] for k in sorted(standing)]
     faces = [f for k, f in enumerate(faces) if k not in standing]

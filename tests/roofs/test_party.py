@@ -189,3 +189,26 @@ def test_row_terrace_roofs_are_planar_and_their_eaves_are_the_free_edges(houses,
         found, z = _open_edges(mesh)
         assert _same_edges(found, edges) and np.allclose(z, TOP, atol=1e-4)
         assert np.all(n[:, 2] > 0) and (n[:, 2].sum() / 2) == pytest.approx(house.area, rel=1e-6)
+
+
+def test_all_party_walls_roof_as_free_with_a_warning():
+    """A building enclosed by neighbours on every side keeps the asked shape (as if free) and says so."""
+    from citygen.roof import RoofWarning
+    house = _house(0, 8.0, 12.0)
+    with pytest.warns(RoofWarning, match="party walls ignored: every wall is a party wall"):
+        mesh = HippedRoof().build(house, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3)))
+    plain = HippedRoof().build(house, TOP, RoofSpec("hipped", 30.0))
+    assert np.array_equal(mesh.points, plain.points)
+
+
+def test_helsinki_pent_roof_over_a_party_step_falls_back_to_the_free_roof():
+    """Regression: the one Helsinki outline whose only free wall sweeps over a party-wall step (the moving edge
+    becomes collinear with a standing one) stuck the weighted skeleton; the roof is built as if free."""
+    from citygen.roof import RoofWarning
+    outline = Polygon([(150.31611266805214, -779.06728694852), (167.70571787762862, -778.03037268876),
+                       (167.95576201732632, -782.2418513042077), (178.27182497847977, -781.6285813925218),
+                       (177.72170676039295, -772.4480053831785), (150.0160878010167, -774.0981866017828)])
+    with pytest.warns(RoofWarning, match="wavefront stuck"):
+        mesh = HippedRoof().build(outline, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3, 4)))
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline))
