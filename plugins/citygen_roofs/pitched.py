@@ -9,7 +9,8 @@
   the hipped roof instead, the same roof for a square.
 * ``skillion``: one plane falling towards ``roof:direction`` (default: out over the longest edge), closed by
   vertical walls between the wall top and the plane.
-* ``mansard``, ``gambrel``, ``dome``: the hipped (gambrel: gabled) roof with a piecewise-linear :func:`profile`;
+* ``mansard``, ``gambrel``, ``dome``, ``round``: the hipped (gambrel, round: gabled) roof with a piecewise-linear
+  :func:`profile`;
   every skeleton face is cut into planar bands where the profile breaks.
 
 Every mesh's open boundary is exactly the outline at the wall top, so it closes the facade walls; faces are
@@ -148,15 +149,16 @@ def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndar
     ``(ts, zs)`` from 0 to ``run`` (the skeleton's greatest time), scaled to ``roof:height`` and the cap.
 
     ``hipped``/``gabled``: one slope at the pitch. ``mansard``/``gambrel``: the outer third of the run at
-    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``: a quarter
-    ellipse in ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline)."""
+    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``, ``round``: a
+    quarter ellipse in ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline, a half cylinder
+    over a rectangle)."""
     if run <= 0:
         raise RoofError("outline too thin for a pitched roof")
     if shape in ("mansard", "gambrel") and spec.pitch < MANSARD_LOWER:
         lower = math.tan(math.radians(MANSARD_LOWER))
         ts = np.array([0.0, run / 3, run])
         zs = np.array([0.0, lower * run / 3, lower * run / 3 + spec.slope * 2 * run / 3])
-    elif shape == "dome":
+    elif shape in ("dome", "round"):
         theta = np.linspace(0.0, math.pi / 2, DOME_BANDS + 1)
         ts, zs = run * (1 - np.cos(theta)), run * np.sin(theta)
     else:
@@ -427,6 +429,13 @@ class GambrelRoof(_SkeletonRoof):
 class DomeRoof(_SkeletonRoof):
     id = "dome"
     description = "dome: a quarter-ellipse profile over the straight skeleton, as high as the outline is deep"
+
+
+class RoundRoof(_SkeletonRoof):
+    id = "round"
+    description = "round (barrel) roof: gabled with the dome's quarter-ellipse profile, in planar bands"
+    gables = True
+    oriented = True
 
 
 class PyramidalRoof(RoofBuilder):

@@ -10,7 +10,7 @@ from shapely.geometry import Polygon
 
 from citygen.roof import RoofSpec, party_edges
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   SkillionRoof)
+                                   RoundRoof, SkillionRoof)
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
 
 SLOPE = math.tan(math.radians(30))
@@ -112,7 +112,7 @@ def test_end_terrace_gabled_house_gets_a_gable_at_its_free_end_too():
 
 
 @pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
-                                     GambrelRoof(), DomeRoof()])
+                                     GambrelRoof(), DomeRoof(), RoundRoof()])
 def test_free_standing_house_is_unchanged(builder):
     house = _house(0, 6.0, 15.0)
     plain = builder.build(house, TOP, RoofSpec(builder.id, 30.0))
@@ -159,7 +159,8 @@ def terraces(draw):
 
 
 @settings(max_examples=40, deadline=None)
-@given(terraces(), st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof()]),
+@given(terraces(), st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(),
+                                    RoundRoof()]),
        st.floats(15.0, 60.0))
 def test_row_terrace_roofs_are_planar_and_their_eaves_are_the_free_edges(houses, builder, pitch):
     for house, party in houses:
