@@ -2,9 +2,9 @@
 
     python benchmarks/roofs_hipped.py [--shape hipped] [--repeat 3] [--party] [FILE ...]
 
-``--party``: roof with the party walls the pipeline finds (neighbours covering a face up to the eave). Per roof the median CPU time (process_time) over the repeats; prints the median, p99 and worst roof, the slowest
-footprints with their vertex counts, and the roofs that failed (the pipeline would build those flat).
-"""
+Per roof the median CPU time (process_time) over the repeats; prints the median, p99 and worst roof, the slowest
+footprints with their vertex counts, the roofs that failed (the pipeline would build those flat) and the builders'
+warnings. ``--party``: roof with the party walls the pipeline finds (neighbours up to the eave)."""
 from __future__ import annotations
 
 import argparse
