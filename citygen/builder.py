@@ -10,10 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from warnings import catch_warnings, simplefilter, warn_explicit
 
 import numpy as np
+from shapely.geometry import MultiPolygon
 
-from citygen.coordinator import plan_building
+from citygen.coordinator import PARTY_RISE, plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
@@ -23,7 +25,7 @@ from citygen.mass import Mass
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import roof_spec
+from citygen.roof import RoofWarning, party_edges, rectangle_like, roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
 from citygen.usd.writer import BuildingRecord
@@ -93,7 +95,7 @@ class Builder:
             palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof = self._roof(footprint, mass, warnings)
+            roof = self._roof(footprint, mass, cover, warnings)
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
@@ -106,25 +108,39 @@ class Builder:
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
         return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
 
-    def _roof(self, footprint: Footprint, mass: Mass, warnings: list[str]) -> MeshData | None:
+    def _roof(self, footprint: Footprint, mass: Mass, cover: np.ndarray, warnings: list[str]) -> MeshData | None:
         """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
-        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning)."""
+        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning).
+        Faces that are party walls (``cover``, as the coordinator decides) are passed on in the spec."""
         attrs = assign_attributes(footprint, mass)
         rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
         defaults = self.scene.defaults
         spec = roof_spec(footprint.attributes, mass.height,
                          shape=(rule and rule.roof_shape) or defaults.roof_shape,
-                         pitch=(rule and rule.roof_pitch) or defaults.roof_pitch)
+                         pitch=(rule and rule.roof_pitch) or defaults.roof_pitch,
+                         party=party_edges(cover, mass.height, PARTY_RISE))
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
         if spec.shape not in self.roofs:
             warnings.append(f"{footprint.id}: flat roof instead of roof:shape={spec.shape!r}, which no roof builder "
                             f"makes (known: {', '.join(sorted(self.roofs))})")
+        parts = mass.outline.geoms if isinstance(mass.outline, MultiPolygon) else [mass.outline]
+        if spec.orientation and getattr(builder, "oriented", False) and not all(map(rectangle_like, parts)):
+            warnings.append(f"{footprint.id}: roof:orientation={spec.orientation} ignored where the outline is not "
+                            f"rectangle-like; the ridge follows the straight skeleton")
         top = mass.base + mass.height
         if builder is None or builder is flat:
             return flat.build(mass.outline, top, spec) if flat else None
         try:
-            return builder.build(mass.outline, top, spec)
+            with catch_warnings(record=True) as caught:
+                simplefilter("always", RoofWarning)
+                roof = builder.build(mass.outline, top, spec)
+            for w in caught:  # a builder's RoofWarning is the building's warning; others pass on
+                if issubclass(w.category, RoofWarning):
+                    warnings.append(f"{footprint.id}: {spec.shape} roof: {w.message}")
+                else:
+                    warn_explicit(w.message, w.category, w.filename, w.lineno)
+            return roof
         except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
             return flat.build(mass.outline, top, spec) if flat else None

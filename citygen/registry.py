@@ -78,12 +78,15 @@ class RoofBuilder(ABC):
 
     id: str
     description: str = ""
+    #: Reads ``spec.orientation`` on rectangle-like outlines (the pipeline warns where it cannot apply).
+    oriented: bool = False
 
     @abstractmethod
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         """Roof mesh for ``outline`` (local frame) whose walls end at height ``top``, shaped by ``spec`` (pitch,
-        height, direction; None: the builder's defaults). Its open boundary must be the outline at ``top`` so it
-        closes the walls; raise on an outline it cannot roof (the pipeline then builds a flat roof and warns)."""
+        height, direction, orientation, party-wall edges; None: the builder's defaults). Its open boundary must be
+        the outline at ``top`` so it closes the walls; raise on an outline it cannot roof (the pipeline then builds
+        a flat roof and warns)."""
 
 
 class Command(ABC):

@@ -2,8 +2,12 @@
 
 Tags read (https://wiki.openstreetmap.org/wiki/Key:roof:shape): ``roof:shape``, ``roof:height`` (metres above the
 wall top), ``roof:angle`` (pitch in degrees), ``roof:direction`` (compass degrees or N/NE/..., the direction the
-slope faces, i.e. downhill). A tag that does not parse is ignored, so the scene's default applies.
-``roof:orientation`` is not read: gabled ridges follow the straight skeleton (see docs/roofs.md).
+slope faces, i.e. downhill), ``roof:orientation`` (``along``: ridge parallel to the longest side, ``across``:
+perpendicular to it; rectangle-like outlines only, see :func:`rectangle_like`). A tag that does not parse is
+ignored, so the scene's default applies.
+
+*Party walls* -- outline edges a neighbour stands against up to the eave (:func:`party_edges`) -- are passed to
+the builder in :attr:`RoofSpec.party`: a pitched roof must not slope down onto the neighbour.
 """
 from __future__ import annotations
 
@@ -13,6 +17,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+from shapely.geometry import Polygon
+
 #: A pitch outside this range (degrees) is clamped: flatter is a flat roof, steeper a tower.
 PITCH_RANGE = (5.0, 75.0)
 #: A roof is never taller than this many times its walls (with at least ``MIN_ROOF_CAP`` metres allowed).
@@ -21,20 +28,32 @@ MIN_ROOF_CAP = 4.0
 
 _CARDINAL = {name: 22.5 * k for k, name in enumerate(
     "N NNE NE ENE E ESE SE SSE S SSW SW WSW W WNW NW NNW".split())}
+#: ``roof:orientation`` values (OSM): the ridge along or across the longest side.
+ORIENTATIONS = ("along", "across")
+#: A part is rectangle-like when it has four sides and fills at least this share of its minimum rotated rectangle.
+RECTANGLE_FILL = 0.9
 _NUMBER = re.compile(r"^\s*(-?\d+(?:\.\d*)?)\s*(m|deg|°)?\s*$")
+
+
+class RoofWarning(UserWarning):
+    """A roof builder built something other than asked (e.g. ignored party walls); the pipeline reports it."""
 
 
 @dataclass(frozen=True)
 class RoofSpec:
     """A roof to build: ``shape`` (a roof builder id), ``pitch`` in degrees, an explicit ``height`` in metres
-    (wins over the pitch), the compass ``direction`` its slope faces (skillion) and ``cap``, the greatest
-    height allowed above the wall top."""
+    (wins over the pitch), the compass ``direction`` its slope faces (skillion), ``cap``, the greatest
+    height allowed above the wall top, the ridge ``orientation`` (``"along"``/``"across"``; None: untagged) and
+    ``party``, the indices of the outline edges that are party walls (edge ``k`` of the outline's rings in order,
+    part by part, exterior ring first: the mass's face indices)."""
 
     shape: str = "flat"
     pitch: float = 30.0
     height: float | None = None
     direction: float | None = None
     cap: float = math.inf
+    orientation: str | None = None
+    party: tuple[int, ...] = ()
 
     @property
     def slope(self) -> float:
@@ -62,9 +81,23 @@ def parse_direction(value: Any) -> float | None:
     return None if number is None else number % 360.0
 
 
+def party_edges(cover: np.ndarray, wall_height: float, rise: float) -> tuple[int, ...]:
+    """The faces that are party walls: a neighbour stands against them (``cover``, per face, from
+    ``citygen.mass.neighbour_cover``) up to within ``rise`` metres of the wall top, as the coordinator decides."""
+    cover = np.asarray(cover, dtype=float)
+    return tuple(int(k) for k in np.flatnonzero((cover > 0) & (cover >= wall_height - rise)))
+
+
+def rectangle_like(part: Polygon) -> bool:
+    """Four sides, no courtyard and nearly filling its minimum rotated rectangle: ``roof:orientation`` applies."""
+    return (not part.interiors and len(part.exterior.coords) == 5
+            and part.area >= RECTANGLE_FILL * part.minimum_rotated_rectangle.area)
+
+
 def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "flat",
-              pitch: float = 30.0) -> RoofSpec:
-    """The roof of a building with OSM-style ``attributes``; ``shape`` and ``pitch`` apply where it has no tags."""
+              pitch: float = 30.0, party: tuple[int, ...] = ()) -> RoofSpec:
+    """The roof of a building with OSM-style ``attributes``; ``shape`` and ``pitch`` apply where it has no tags;
+    ``party``: its party-wall edges."""
     tag = attributes.get("roof:shape")
     shape = str(tag).strip().lower() if tag not in (None, "") else shape
     angle = _number(attributes.get("roof:angle"))
@@ -73,5 +106,7 @@ def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "f
     pitch = min(max(pitch, PITCH_RANGE[0]), PITCH_RANGE[1])
     height = _number(attributes.get("roof:height"))
     cap = max(MIN_ROOF_CAP, ROOF_TO_WALL_CAP * wall_height)
+    orientation = str(attributes.get("roof:orientation", "")).strip().lower()
     return RoofSpec(shape=shape, pitch=pitch, height=min(height, cap) if height and height > 0 else None,
-                    direction=parse_direction(attributes.get("roof:direction")), cap=cap)
+                    direction=parse_direction(attributes.get("roof:direction")), cap=cap,
+                    orientation=orientation if orientation in ORIENTATIONS else None, party=tuple(party))

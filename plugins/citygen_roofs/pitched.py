@@ -9,7 +9,8 @@
   the hipped roof instead, the same roof for a square.
 * ``skillion``: one plane falling towards ``roof:direction`` (default: out over the longest edge), closed by
   vertical walls between the wall top and the plane.
-* ``mansard``, ``gambrel``, ``dome``: the hipped (gambrel: gabled) roof with a piecewise-linear :func:`profile`;
+* ``mansard``, ``gambrel``, ``dome``, ``round``: the hipped (gambrel, round: gabled) roof with a piecewise-linear
+  :func:`profile`;
   every skeleton face is cut into planar bands where the profile breaks.
 
 Every mesh's open boundary is exactly the outline at the wall top, so it closes the facade walls; faces are
@@ -18,6 +19,7 @@ triangles wound outward. A failure raises :class:`RoofError`; the pipeline then 
 from __future__ import annotations
 
 import math
+import warnings
 
 import mapbox_earcut
 import numpy as np
@@ -26,7 +28,7 @@ from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
-from citygen.roof import RoofSpec
+from citygen.roof import ORIENTATIONS, RoofSpec, RoofWarning, rectangle_like
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 
 
@@ -40,9 +42,44 @@ class RoofError(ValueError):
     """A pitched roof cannot be built for this outline."""
 
 
-def _parts(outline: Polygon | MultiPolygon) -> list[Polygon]:
-    parts = outline.geoms if isinstance(outline, MultiPolygon) else [outline]
-    return [orient(p, sign=1.0) for p in parts]
+def _parts(outline: Polygon | MultiPolygon, party: tuple[int, ...] = ()) -> list[tuple[Polygon, frozenset[int]]]:
+    """The outline's parts (oriented) with the indices, within each part, of its party-wall edges."""
+    out, first = [], 0
+    for part in (outline.geoms if isinstance(outline, MultiPolygon) else [outline]):
+        n = sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors))
+        out.append((orient(part, sign=1.0), frozenset(k - first for k in party if first <= k < first + n)))
+        first += n
+    return out
+
+
+def edge_weights(part: Polygon, party: frozenset[int], orientation: str | None, gables: bool) -> np.ndarray:
+    """Per outline edge its speed in the weighted straight skeleton; 0 makes it a vertical gable wall.
+
+    A rectangle-like part has *ends*, the two sides the ridge runs towards: the short ones for ``roof:orientation``
+    ``along``, the long ones ``across``; untagged, the pair holding the party walls (the ridge runs perpendicular
+    to them, as in a terrace). Ends are gables (0) for a gabled roof or where they are party walls, else hips: at
+    the pitch when they are the short sides, steeper when the long ones (weight ``(short / long)^2``: the ridge is
+    as long, relative to the side it runs along, as on the short sides). The other two sides slope even where they
+    are party walls (a tag wins). Anywhere else party walls get 0, the rest 1."""
+    n = sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors))
+    weights = np.ones(n)
+    if orientation is None and party and rectangle_like(part) and len({k % 2 for k in party}) == 1:
+        ends = min(party) % 2
+    elif orientation in ORIENTATIONS and rectangle_like(part):
+        ends = None
+    else:
+        weights[list(party)] = 0.0
+        return weights
+    xy = np.asarray(part.exterior.coords)[:, :2]
+    length = np.hypot(*np.diff(xy, axis=0).T)
+    pair = np.array([length[0] + length[2], length[1] + length[3]])
+    short = 0 if pair[0] <= pair[1] else 1
+    if ends is None:
+        ends = short if orientation == "along" else 1 - short
+    hip = 1.0 if ends == short else float(pair[short] / pair[1 - short]) ** 2
+    for k in (ends, ends + 2):
+        weights[k] = 0.0 if gables or k in party else hip
+    return weights
 
 
 def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
@@ -112,15 +149,16 @@ def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndar
     ``(ts, zs)`` from 0 to ``run`` (the skeleton's greatest time), scaled to ``roof:height`` and the cap.
 
     ``hipped``/``gabled``: one slope at the pitch. ``mansard``/``gambrel``: the outer third of the run at
-    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``: a quarter
-    ellipse in ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline)."""
+    ``MANSARD_LOWER`` degrees, the rest at the pitch (one slope if the pitch is as steep). ``dome``, ``round``: a
+    quarter ellipse in ``DOME_BANDS`` bands, as high as the run (a hemisphere over a round outline, a half cylinder
+    over a rectangle)."""
     if run <= 0:
         raise RoofError("outline too thin for a pitched roof")
     if shape in ("mansard", "gambrel") and spec.pitch < MANSARD_LOWER:
         lower = math.tan(math.radians(MANSARD_LOWER))
         ts = np.array([0.0, run / 3, run])
         zs = np.array([0.0, lower * run / 3, lower * run / 3 + spec.slope * 2 * run / 3])
-    elif shape == "dome":
+    elif shape in ("dome", "round"):
         theta = np.linspace(0.0, math.pi / 2, DOME_BANDS + 1)
         ts, zs = run * (1 - np.cos(theta)), run * np.sin(theta)
     else:
@@ -130,11 +168,12 @@ def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndar
     return ts, zs * min(1.0, spec.cap / zs[-1])
 
 
-def skeleton_faces(part: Polygon) -> tuple[np.ndarray, list[list[int]]]:
-    """The straight skeleton of one part as points ``(k, 3)`` -- x, y and the time (distance swept) -- and one face
-    (point indices, CCW, starting with its outline edge) per outline edge; checked to cover the part once."""
+def skeleton_faces(part: Polygon, weights: np.ndarray | None = None) -> tuple[np.ndarray, list[list[int]]]:
+    """The (weighted) straight skeleton of one part as points ``(k, 3)`` -- x, y and the time (distance swept at
+    unit speed) -- and one face (point indices, CCW, starting with its outline edge) per outline edge; checked to
+    cover the part once (faces of weight-0 edges, vertical walls, have no area)."""
     try:
-        skeleton = straight_skeleton(part)
+        skeleton = straight_skeleton(part, weights=weights)
     except SkeletonError as exc:
         raise RoofError(f"no straight skeleton: {exc}") from exc
     faces = [list(f) for f in skeleton.faces]
@@ -230,29 +269,44 @@ class _Bands:
         return _mesh(points, roof, walls)
 
 
-def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables: bool) -> MeshData:
-    """A roof over the straight skeleton of ``part`` with ``shape``'s profile, hip ends turned into gables."""
-    points, faces = skeleton_faces(part)
-    walls: list[list[int]] = []
+def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables: bool,
+                  party: frozenset[int] = frozenset(), orientation: str | None = None) -> MeshData:
+    """A roof over the weighted straight skeleton of ``part`` (:func:`edge_weights`) with ``shape``'s profile;
+    faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too. Where every edge is a
+    party wall, or the weighted skeleton fails, the part is roofed as if free (with a :class:`RoofWarning`)."""
+    weights = edge_weights(part, party, orientation, gables)
+    try:
+        if party and not weights.any():
+            raise RoofError("every wall is a party wall")
+        points, faces = skeleton_faces(part, weights)
+    except RoofError as exc:
+        if not party:
+            raise
+        warnings.warn(f"party walls ignored: {exc}", RoofWarning, stacklevel=2)
+        return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
+    standing = {k for k in range(len(faces)) if weights[k] == 0}
+    walls = [faces[k] for k in sorted(standing)]
+    faces = [f for k, f in enumerate(faces) if k not in standing]
     if gables:
-        outline_nodes = sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors))
-        points, faces, walls = gable(points, faces, outline_nodes)
+        outline_nodes = len(weights)
+        points, faces, walls = gable(points, faces, walls, outline_nodes)
     ts, zs = profile(shape, spec, float(points[:, 2].max()))
     return _Bands(points, ts).mesh(faces, walls, top, zs)
 
 
-def gable(points: np.ndarray, faces: list[list[int]], outline_nodes: int) -> tuple[np.ndarray, list[list[int]],
-                                                                                 list[list[int]]]:
-    """Turn hip ends into gable walls: ``points`` are x, y, time; returns points (the moved apexes appended),
-    roof faces and walls (``[a, b, apex]``, outward)."""
+def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]],
+          outline_nodes: int) -> tuple[np.ndarray, list[list[int]], list[list[int]]]:
+    """Turn hip ends into gable walls: ``points`` are x, y, time; ``walls`` the faces already standing (party
+    walls). Returns points (the moved apexes appended), roof faces and walls (the new ones ``[a, b, apex]``,
+    outward)."""
     neighbours: dict[int, set[int]] = {}
     owners: dict[int, int] = {}
-    for f in faces:
+    for f in faces + walls:
         for k, n in enumerate(f):
             owners[n] = owners.get(n, 0) + 1
             neighbours.setdefault(n, set()).update((f[k - 1], f[(k + 1) % len(f)]))
     points = points.copy()
-    roof, walls = [], []
+    roof, walls = [], list(walls)
     moved: dict[int, int] = {}
     for f in faces:
         apex = f[2] if len(f) == 3 else None
@@ -276,7 +330,7 @@ def gable(points: np.ndarray, faces: list[list[int]], outline_nodes: int) -> tup
         moved[apex] = len(points) - 1
         walls.append([f[0], f[1], moved[apex]])
     roof = [[moved.get(n, n) for n in f] for f in roof]
-    return points, roof, walls
+    return points, roof, [[moved.get(n, n) for n in w] for w in walls]
 
 
 def pyramid(part: Polygon, top: float, spec: RoofSpec) -> MeshData | None:
@@ -296,14 +350,16 @@ def pyramid(part: Polygon, top: float, spec: RoofSpec) -> MeshData | None:
     return _mesh(points, [[k, (k + 1) % apex, apex] for k in range(apex)], [])
 
 
-def skillion(part: Polygon, top: float, spec: RoofSpec) -> MeshData:
+def skillion(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] = frozenset()) -> MeshData:
     """One plane falling towards ``spec.direction`` over the part, with walls up to it."""
     rings = [np.asarray(r.coords)[:-1, :2] for r in (part.exterior, *part.interiors)]
     xy = np.concatenate(rings)
-    if spec.direction is None:  # the slope faces out over the longest outer edge
+    if spec.direction is None:  # the slope faces out over the longest outer edge that is no party wall
         ext = rings[0]
         d = np.roll(ext, -1, axis=0) - ext
-        k = int(np.argmax(np.hypot(d[:, 0], d[:, 1])))
+        length = np.hypot(d[:, 0], d[:, 1])
+        free = np.array([k not in party for k in range(len(ext))])
+        k = int(np.argmax(np.where(free, length, -1.0) if free.any() else length))
         down = np.array([d[k, 1], -d[k, 0]]) / math.hypot(*d[k])
     else:
         angle = math.radians(spec.direction)
@@ -332,35 +388,42 @@ def skillion(part: Polygon, top: float, spec: RoofSpec) -> MeshData:
 
 
 class _SkeletonRoof(RoofBuilder):
-    """A roof over the straight skeleton with the profile of its ``id``; ``gables``: hip ends become gables."""
+    """A roof over the straight skeleton with the profile of its ``id``; ``gables``: hip ends become gables;
+    ``oriented``: reads ``roof:orientation``. Party walls are gable walls."""
 
     gables = False
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        return _merge([skeleton_roof(part, top, spec, self.id, self.gables) for part in _parts(outline)])
+        orientation = spec.orientation if self.oriented else None
+        return _merge([skeleton_roof(part, top, spec, self.id, self.gables, party, orientation)
+                       for part, party in _parts(outline, spec.party)])
 
 
 class HippedRoof(_SkeletonRoof):
     id = "hipped"
     description = "hipped roof: straight-skeleton faces at one pitch (roof:angle, roof:height)"
+    oriented = True
 
 
 class GabledRoof(_SkeletonRoof):
     id = "gabled"
     description = "gabled roof: hipped roof with its hip ends turned into vertical gable walls"
     gables = True
+    oriented = True
 
 
 class MansardRoof(_SkeletonRoof):
     id = "mansard"
     description = "mansard roof: hipped, steep on the outer third of the run, at the pitch above"
+    oriented = True
 
 
 class GambrelRoof(_SkeletonRoof):
     id = "gambrel"
     description = "gambrel roof: gabled with the mansard's two slopes"
     gables = True
+    oriented = True
 
 
 class DomeRoof(_SkeletonRoof):
@@ -368,14 +431,23 @@ class DomeRoof(_SkeletonRoof):
     description = "dome: a quarter-ellipse profile over the straight skeleton, as high as the outline is deep"
 
 
+class RoundRoof(_SkeletonRoof):
+    id = "round"
+    description = "round (barrel) roof: gabled with the dome's quarter-ellipse profile, in planar bands"
+    gables = True
+    oriented = True
+
+
 class PyramidalRoof(RoofBuilder):
     id = "pyramidal"
-    description = "pyramidal roof: one apex over the centroid (hipped where the outline is not star-shaped)"
+    description = ("pyramidal roof: one apex over the centroid (hipped where the outline is not star-shaped or "
+                   "has party walls)")
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        return _merge([pyramid(part, top, spec) or skeleton_roof(part, top, spec, "hipped", False)
-                       for part in _parts(outline)])
+        return _merge([(None if party else pyramid(part, top, spec))
+                       or skeleton_roof(part, top, spec, "hipped", False, party)
+                       for part, party in _parts(outline, spec.party)])
 
 
 class SkillionRoof(RoofBuilder):
@@ -384,4 +456,4 @@ class SkillionRoof(RoofBuilder):
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        return _merge([skillion(part, top, spec) for part in _parts(outline)])
+        return _merge([skillion(part, top, spec, party) for part, party in _parts(outline, spec.party)])

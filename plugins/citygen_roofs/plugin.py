@@ -1,6 +1,6 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
 :mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
-``mansard``, ``gambrel``, ``dome``)."""
+``mansard``, ``gambrel``, ``dome``, ``round``)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -12,7 +12,7 @@ from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   SkillionRoof)
+                                   RoundRoof, SkillionRoof)
 
 
 def _cap(part: Polygon, top: float) -> tuple[np.ndarray, np.ndarray]:
@@ -46,4 +46,4 @@ class FlatRoof(RoofBuilder):
 @hookimpl
 def citygen_roof_builders():
     return [FlatRoof(), HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof()]
+            DomeRoof(), RoundRoof()]

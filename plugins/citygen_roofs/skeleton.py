@@ -55,13 +55,14 @@ class _Vertex:
     vel: tuple[float, float]
     e_in: int
     e_out: int
+    spike: bool = False
 
     def at(self, t: float) -> np.ndarray:
         return np.array([self.p0[0] + (t - self.t0) * self.vel[0], self.p0[1] + (t - self.t0) * self.vel[1]])
 
 
 class _Wavefront:
-    def __init__(self, rings: list[np.ndarray]) -> None:
+    def __init__(self, rings: list[np.ndarray], weights: np.ndarray) -> None:
         starts = np.concatenate(rings)
         ends = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
         d = ends - starts
@@ -73,6 +74,7 @@ class _Wavefront:
         self.D = d / length[:, None]
         self.N = np.column_stack([-self.D[:, 1], self.D[:, 0]])  # inward: interior is left of every edge
         self.C = np.einsum("ij,ij->i", self.N, starts)
+        self.W = weights
         self.nodes: list[tuple[float, float]] = [tuple(p) for p in starts]
         self.times: list[float] = [0.0] * len(starts)
         self.arcs: list[set[tuple[int, int]]] = [set() for _ in starts]
@@ -87,21 +89,22 @@ class _Wavefront:
             first += n
 
     def velocity(self, a: int, b: int) -> tuple[float, float] | None:
-        """Speed of the intersection of the offset lines of edges ``a`` and ``b`` (None: antiparallel)."""
-        na, nb = self.N[a], self.N[b]
+        """Speed of the intersection of the offset lines of edges ``a`` and ``b``, each moving at its weight
+        (None: antiparallel, or parallel at different speeds)."""
+        na, nb, wa, wb = self.N[a], self.N[b], self.W[a], self.W[b]
         det = na[0] * nb[1] - na[1] * nb[0]
         if abs(det) < 1e-12:
-            return (float(na[0]), float(na[1])) if na @ nb > 0 else None
-        return ((nb[1] - na[1]) / det, (na[0] - nb[0]) / det)
+            return (float(wa * na[0]), float(wa * na[1])) if na @ nb > 0 and wa == wb else None
+        return ((wa * nb[1] - wb * na[1]) / det, (wb * na[0] - wa * nb[0]) / det)
 
     def vertex(self, node: int, t: float, e_in: int, e_out: int) -> _Vertex:
         vel = self.velocity(e_in, e_out)
         if vel is not None and math.hypot(*vel) > 1e6:
             vel = None
-        return _Vertex(node, self.nodes[node], t, vel if vel is not None else (0.0, 0.0), e_in, e_out)
+        return _Vertex(node, self.nodes[node], t, vel if vel is not None else (0.0, 0.0), e_in, e_out, vel is None)
 
     def antiparallel(self, v: _Vertex) -> bool:
-        return v.vel == (0.0, 0.0)
+        return v.spike
 
     def meet(self, v: _Vertex, u: _Vertex, t: float) -> np.ndarray:
         """Where ``v`` and ``u`` meet at an edge event: where the offset lines of the collapsing edge and its
@@ -111,7 +114,7 @@ class _Wavefront:
         for a, b in ((v.e_in, v.e_out), (u.e_in, u.e_out)):
             det = self.N[a][0] * self.N[b][1] - self.N[a][1] * self.N[b][0]
             if abs(det) > 0.05:
-                ca, cb = self.C[a] + t, self.C[b] + t
+                ca, cb = self.C[a] + self.W[a] * t, self.C[b] + self.W[b] * t
                 points.append(((ca * self.N[b][1] - cb * self.N[a][1]) / det,
                                (self.N[a][0] * cb - self.N[b][0] * ca) / det))
         return np.mean(points, axis=0) if points else (v.at(t) + u.at(t)) / 2
@@ -162,8 +165,8 @@ class _Wavefront:
         if not len(reflex):
             return best
         n_f, c_f = self.N[e_out], self.C[e_out]  # the edge from vertex j to nxt[j]
-        dist = pos[reflex] @ n_f.T - c_f - t
-        rate = vel[reflex] @ n_f.T - 1.0
+        dist = pos[reflex] @ n_f.T - c_f - self.W[e_out] * t
+        rate = vel[reflex] @ n_f.T - self.W[e_out]
         ok = (rate < -1e-12) & (dist >= -self.eps)
         ok &= (np.arange(len(verts))[None, :] != reflex[:, None]) & (nxt[None, :] != reflex[:, None])
         rr, jj = np.nonzero(ok)  # candidate (reflex vertex, edge) pairs: does the vertex land inside the edge?
@@ -343,13 +346,22 @@ def _rings(polygon: Polygon) -> list[np.ndarray]:
     return rings
 
 
-def straight_skeleton(polygon: Polygon, max_events: int | None = None) -> Skeleton:
+def straight_skeleton(polygon: Polygon, max_events: int | None = None,
+                      weights: np.ndarray | None = None) -> Skeleton:
     """The straight skeleton of a valid polygon (holes allowed); faces in input edge order, exterior ring first,
-    then each hole (rings oriented exterior counter-clockwise, holes clockwise)."""
+    then each hole (rings oriented exterior counter-clockwise, holes clockwise).
+
+    ``weights`` (one per edge, default 1) is each edge's speed: a *weighted* straight skeleton (Eppstein & Erickson
+    1999), where a node's time is still the wavefront's. An edge of weight 0 stays where it is: its face is the
+    edge line itself (points along it, rising with time) -- a vertical gable in a roof."""
     if not polygon.is_valid or polygon.is_empty or polygon.area <= 0:
         raise SkeletonError("invalid or empty polygon")
-    wf = _Wavefront(_rings(polygon))
-    n = len(wf.D)
+    rings = _rings(polygon)
+    n = sum(len(r) for r in rings)
+    weights = np.ones(n) if weights is None else np.asarray(weights, dtype=float)
+    if weights.shape != (n,) or np.any(weights < 0) or not np.any(weights > 0):
+        raise SkeletonError(f"need {n} edge weights >= 0, not all 0")
+    wf = _Wavefront(rings, weights)
     limit = max_events or 4 * n * n + 16
     t = 0.0
     for _ in range(limit):

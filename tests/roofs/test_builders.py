@@ -9,13 +9,13 @@ from shapely.geometry import MultiPolygon, Polygon, box
 
 from citygen.roof import RoofSpec
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   RoofError, SkillionRoof, skeleton_faces)
+                                   RoofError, RoundRoof, SkillionRoof, skeleton_faces)
 from citygen_roofs.plugin import FlatRoof
 from tests.roofs.shapes import outlines, polygons
 
 TOP = 12.0
 BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof()]
+            DomeRoof(), RoundRoof()]
 
 
 def _triangles(mesh):
@@ -113,6 +113,27 @@ def test_dome_over_a_courtyard_has_no_cracks_where_a_ridge_lies_on_a_band_line()
     test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, DomeRoof(), 30.0, None)
 
 
+def test_round_rectangle_is_a_half_cylinder_the_length_of_the_building():
+    """A barrel vault: ridge the full length along the long side, as high as half the width (a semicircle in six
+    planar bands a side), closed by two vertical end walls whose top follows the arc."""
+    length, width = 20.0, 8.0
+    mesh = RoundRoof().build(box(0, 0, length, width), TOP, RoofSpec("round", 30.0))
+    p, tris = _triangles(mesh)
+    ridge = p[np.isclose(p[:, 2], TOP + width / 2)]
+    assert len(ridge) == 2 and np.allclose(ridge[:, 1], width / 2) and np.ptp(ridge[:, 0]) == pytest.approx(length)
+    theta = np.linspace(0, math.pi / 2, 7)
+    side = p[np.isclose(p[:, 0], 0) & (p[:, 1] <= width / 2 + 1e-6)]
+    assert np.allclose(np.sort(side[:, 1]), width / 2 * (1 - np.cos(theta)), atol=1e-5)  # on the circle
+    assert np.allclose(np.sort(side[:, 2]) - TOP, width / 2 * np.sin(theta), atol=1e-5)
+    n = _normals(p, tris)
+    walls = n[np.abs(n[:, 2]) < 1e-4 * np.linalg.norm(n, axis=1)]
+    assert len(walls) and set(np.sign(walls[:, 0]).astype(int)) == {-1, 1} and np.allclose(walls[:, 1], 0, atol=1e-4)
+    roof = n[n[:, 2] > 1e-4 * np.linalg.norm(n, axis=1)]
+    assert len(np.unique(np.round(roof / np.linalg.norm(roof, axis=1)[:, None], 5), axis=0)) == 12  # 12 planes
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(box(0, 0, length, width))) and np.allclose(z, TOP, atol=1e-4)
+
+
 def test_skillion_falls_towards_its_direction():
     mesh = SkillionRoof().build(box(0, 0, 10, 6), TOP, RoofSpec("skillion", 30.0, direction=90.0))  # faces east
     p, _ = _triangles(mesh)
@@ -152,7 +173,7 @@ def test_skeleton_faces_are_planes(outline):
 
 
 @settings(max_examples=40)
-@given(outlines, st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof()]))
+@given(outlines, st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()]))
 def test_every_triangle_lies_in_the_plane_of_its_outline_edge_or_is_a_wall(outline, builder):
     """Roof triangles rise from some outline edge at one of the profile's slopes: each triangle's gradient is
     perpendicular to an outline edge (planar faces and bands), walls are vertical."""

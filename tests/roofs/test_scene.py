@@ -42,7 +42,7 @@ def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     report, out = demo
     assert report.written == 12 and not report.skipped
     assert report.warnings == ["way/8: flat roof instead of roof:shape='onion', which no roof builder makes (known: "
-                               "dome, flat, gabled, gambrel, hipped, mansard, pyramidal, skillion)"]
+                               "dome, flat, gabled, gambrel, hipped, mansard, pyramidal, round, skillion)"]
     assert main(["validate", str(out)]) == 0
     roofs = _roofs(out)
     assert roofs["way/1"][1] == 2 and roofs["way/6"][1] == 2  # gabled rectangle and U: a gable at each ridge end
@@ -111,3 +111,34 @@ def test_roof_spec_reads_osm_tags():
     assert roof_spec({"roof:angle": "steep"}, 9.0, pitch=33.0).pitch == 33.0  # unparsable: the default
     assert roof_spec({"roof:height": "40"}, 9.0).height == 9.0  # never taller than the walls
     assert roof_spec({"roof:height": "40"}, 2.5).cap == 4.0 and math.isinf(roof_spec({}, 9.0).height or math.inf)
+
+
+def _feature(fid, xy, **tags):
+    """A footprint from local metres (east, north) near the demo's origin."""
+    ring = [[24.94 + x / 55700.0, 60.17 + y / 111320.0] for x, y in xy + xy[:1]]
+    return {"type": "Feature", "properties": {"id": fid, "osm_type": "way", "building": "house", **tags},
+            "geometry": {"type": "Polygon", "coordinates": [ring]}}
+
+
+def test_terrace_of_hipped_houses_gets_gables_on_its_party_walls(tmp_path):
+    """Three attached houses, hipped by the scene: gables on the party walls (two mid-terrace, one at each end),
+    no slope down onto a neighbour; the stage validates. An L tagged roof:orientation=across warns and keeps its
+    skeleton ridge."""
+    import json
+    houses = [_feature(k + 1, [(x, 0), (x + w, 0), (x + w, 12), (x, 12)], **{"building:levels": "2"})
+              for k, (x, w) in enumerate([(0, 6), (6, 7), (13, 6)])]
+    l_shape = _feature(4, [(40, 0), (60, 0), (60, 8), (48, 8), (48, 20), (40, 20)],
+                       **{"roof:shape": "gabled", "roof:orientation": "across"})
+    (tmp_path / "t.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": houses + [l_shape]}))
+    (tmp_path / "t.toml").write_text(
+        f'[scene]\nseed = 1\n[footprints]\npath = "t.geojson"\n[defaults]\nroof_shape = "hipped"\n'
+        f'[[assign]]\nruleset = "{(REPO / "rulesets" / "house.grammar").as_posix()}"\n')
+    out = tmp_path / "t.usda"
+    report = generate_city(load_scene(tmp_path / "t.toml"), out=out)
+    assert report.written == 4 and not report.skipped
+    assert report.warnings == ["way/4: roof:orientation=across ignored where the outline is not rectangle-like; the "
+                               "ridge follows the straight skeleton"]
+    assert main(["validate", str(out)]) == 0
+    roofs = _roofs(out)
+    assert [roofs[f"way/{k}"][1] for k in (1, 2, 3)] == [1, 2, 1]  # gable triangles on the party walls
+    assert roofs["way/4"][1] == 2  # the L as without the tag: a gable at the end of each arm

@@ -1,0 +1,215 @@
+"""Party-wall-aware roofs: edges a neighbour stands against get vertical gable walls, never a slope."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from shapely import affinity
+from shapely.geometry import Polygon
+
+from citygen.roof import RoofSpec, party_edges
+from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
+                                   RoundRoof, SkillionRoof)
+from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
+
+SLOPE = math.tan(math.radians(30))
+
+
+def _house(x0, width, depth):
+    """A row house: front (y=0) edge 0, party side x0+width edge 1, back edge 2, party side x0 edge 3."""
+    return Polygon([(x0, 0), (x0 + width, 0), (x0 + width, depth), (x0, depth)])
+
+
+def _split(mesh):
+    """Roof (sloped) and wall (vertical) triangles as point arrays ``(m, 3, 3)``."""
+    p, tris = _triangles(mesh)
+    n = _normals(p, tris)
+    vertical = np.abs(n[:, 2]) < 1e-4 * np.linalg.norm(n, axis=1)
+    return p[tris[~vertical]], p[tris[vertical]], n[~vertical]
+
+
+def _eaves(roof, top=TOP):
+    """Sides of sloped triangles lying at the wall top, as rows x0 y0 x1 y1 (each once, unordered)."""
+    out = set()
+    for tri in roof:
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            if abs(tri[a, 2] - top) < 1e-4 and abs(tri[b, 2] - top) < 1e-4:
+                out.add(tuple(np.round(np.r_[tri[a, :2], tri[b, :2]], 6)))
+    return np.array(sorted(out))
+
+
+def _eave_edges_cover(roof, edges):
+    """The wall-top sides of the sloped faces run exactly along ``edges`` (none along any other outline edge)."""
+    found = _eaves(roof)
+    if not len(edges):
+        return not len(found)
+    if not len(found):
+        return False
+    on = []
+    for seg in found:
+        a, b = seg[:2], seg[2:]
+        hit = False
+        for e in edges:
+            p, q = e[:2], e[2:]
+            d = (q - p) / np.hypot(*(q - p))
+            off = max(abs(d[0] * (a - p)[1] - d[1] * (a - p)[0]), abs(d[0] * (b - p)[1] - d[1] * (b - p)[0]))
+            s = sorted(((a - p) @ d, (b - p) @ d))
+            hit |= off < 1e-3 and s[0] > -1e-3 and s[1] < np.hypot(*(q - p)) + 1e-3
+        on.append(hit)
+    length = sum(np.hypot(*(s[2:] - s[:2])) for s in found)
+    return all(on) and length == pytest.approx(sum(np.hypot(*(e[2:] - e[:2])) for e in edges), rel=1e-5)
+
+
+def test_mid_terrace_hipped_house_has_two_gable_ends_and_the_ridge_across():
+    """A narrow deep house between two neighbours: the ridge runs from party wall to party wall (perpendicular to
+    them), at half the depth x the pitch; both party walls are vertical gables, no slope comes down onto them."""
+    width, depth = 6.0, 15.0
+    mesh = HippedRoof().build(_house(0, width, depth), TOP, RoofSpec("hipped", 30.0, party=(1, 3)))
+    roof, walls, _ = _split(mesh)
+    ridge_z = TOP + depth / 2 * SLOPE
+    assert mesh.points[:, 2].max() == pytest.approx(ridge_z, rel=1e-6)
+    ridge = mesh.points[np.isclose(mesh.points[:, 2], ridge_z)]
+    assert np.allclose(ridge[:, 1], depth / 2) and np.ptp(ridge[:, 0]) == pytest.approx(width)
+    assert sorted({round(float(x), 4) for x in walls[:, :, 0].ravel()}) == [0.0, width]  # the two gables
+    assert len(walls) == 2
+    on_party = roof[np.isclose(roof[:, :, 0], 0) | np.isclose(roof[:, :, 0], width)]
+    assert np.allclose(on_party[on_party[:, 2] > TOP + 1e-4, 2], ridge_z)  # only eave corners and the ridge
+    assert _eave_edges_cover(roof, np.array([[0, 0, width, 0], [width, depth, 0, depth]]))
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(_house(0, width, depth))) and np.allclose(z, TOP, atol=1e-4)
+
+
+def test_mid_terrace_gabled_house_is_the_same_roof():
+    house = _house(0, 6.0, 15.0)
+    hipped = HippedRoof().build(house, TOP, RoofSpec("hipped", 30.0, party=(1, 3)))
+    gabled = GabledRoof().build(house, TOP, RoofSpec("gabled", 30.0, party=(1, 3)))
+    assert len(hipped.indices) == len(gabled.indices)
+    assert np.allclose(np.sort(hipped.points, axis=0), np.sort(gabled.points, axis=0))
+
+
+@pytest.mark.parametrize("width, depth, hip", [(12.0, 8.0, 1.0), (6.0, 15.0, (6.0 / 15.0) ** 2)])
+def test_end_terrace_house_has_one_gable_and_one_hip(width, depth, hip):
+    """One neighbour (party wall x = width): a gable there, the ridge perpendicular to it at half the depth, and a
+    hip at the free end -- at the pitch for a wide house, steeper (weight (width / depth)^2) for a deep one, whose
+    free end is its long side."""
+    mesh = HippedRoof().build(_house(0, width, depth), TOP, RoofSpec("hipped", 30.0, party=(1,)))
+    roof, walls, n = _split(mesh)
+    assert len(walls) == 1 and np.allclose(walls[:, :, 0], width)  # the gable on the party wall
+    assert np.any(n[:, 0] < -1e-3 * np.linalg.norm(n, axis=1))  # the free side x=0 is a hip, falling towards -x
+    assert not np.any(n[:, 0] > 1e-3 * np.linalg.norm(n, axis=1))  # nothing falls onto the neighbour
+    ridge_z = TOP + depth / 2 * SLOPE
+    ridge = mesh.points[np.isclose(mesh.points[:, 2], ridge_z)]
+    assert len(ridge) == 2 and np.allclose(ridge[:, 1], depth / 2)
+    assert sorted(ridge[:, 0]) == pytest.approx([hip * depth / 2, width], abs=1e-5)
+    assert _eave_edges_cover(roof, np.array([[0, 0, width, 0], [width, depth, 0, depth], [0, depth, 0, 0]]))
+
+
+def test_end_terrace_gabled_house_gets_a_gable_at_its_free_end_too():
+    mesh = GabledRoof().build(_house(0, 6.0, 15.0), TOP, RoofSpec("gabled", 30.0, party=(1,)))
+    _, walls, _ = _split(mesh)
+    assert sorted({round(float(x), 4) for x in walls[:, :, 0].ravel()}) == [0.0, 6.0]
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
+                                     GambrelRoof(), DomeRoof(), RoundRoof()])
+def test_free_standing_house_is_unchanged(builder):
+    house = _house(0, 6.0, 15.0)
+    plain = builder.build(house, TOP, RoofSpec(builder.id, 30.0))
+    party = builder.build(house, TOP, RoofSpec(builder.id, 30.0, party=()))
+    assert np.array_equal(plain.points, party.points) and np.array_equal(plain.indices, party.indices)
+
+
+def test_skillion_without_direction_falls_away_from_party_walls():
+    """A lean-to against a taller neighbour (party wall on the long side) falls over the free long side."""
+    shed = Polygon([(0, 0), (10, 0), (10, 4), (0, 4)])
+    p, _ = _triangles(SkillionRoof().build(shed, TOP, RoofSpec("skillion", 30.0, party=(0,))))
+    assert np.allclose(p[p[:, 1] == 4, 2], TOP) and p[p[:, 1] == 0, 2].max() == pytest.approx(TOP + 4 * SLOPE)
+
+
+def test_pyramidal_house_with_a_party_wall_does_not_slope_onto_it():
+    _, walls, n = _split(PyramidalRoof().build(_house(0, 8.0, 8.0), TOP, RoofSpec("pyramidal", 30.0, party=(1,))))
+    assert len(walls) and not np.any(n[:, 0] > 1e-3 * np.linalg.norm(n, axis=1))
+
+
+def test_party_edges_follow_the_coordinator():
+    """A face is a party wall when a neighbour covers it up to within PARTY_RISE of the top, never when free."""
+    assert party_edges(np.array([0.0, 9.5, 8.9, 12.0]), 10.0, 1.0) == (1, 3)
+    assert party_edges(np.zeros(4), 0.5, 1.0) == ()
+
+
+@st.composite
+def terraces(draw):
+    """A row of 2-5 attached houses of random widths and depths along a rotated street; returns the house outlines
+    and their party edges (sides shared with a neighbour over their whole depth: the shallower house's side)."""
+    n = draw(st.integers(2, 5))
+    widths = draw(st.lists(st.floats(4.0, 12.0), min_size=n, max_size=n))
+    depths = draw(st.lists(st.floats(6.0, 18.0), min_size=n, max_size=n))
+    angle = draw(st.floats(0.0, 360.0))
+    x, houses = 0.0, []
+    for k, (w, d) in enumerate(zip(widths, depths)):
+        party = []
+        if k > 0 and depths[k - 1] >= d:
+            party.append(3)
+        if k < n - 1 and depths[k + 1] >= d:
+            party.append(1)
+        houses.append((affinity.rotate(_house(x, w, d), angle, origin=(0, 0)), tuple(party)))
+        x += w
+    return houses
+
+
+@settings(max_examples=40, deadline=None)
+@given(terraces(), st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(),
+                                    RoundRoof()]),
+       st.floats(15.0, 60.0))
+def test_row_terrace_roofs_are_planar_and_their_eaves_are_the_free_edges(houses, builder, pitch):
+    for house, party in houses:
+        mesh = builder.build(house, TOP, RoofSpec(builder.id, pitch, party=party))
+        roof, walls, n = _split(mesh)
+        edges = _outline_edges(house)
+        d = edges[:, 2:] - edges[:, :2]
+        d = d / np.linalg.norm(d, axis=1)[:, None]
+        # planar: each sloped triangle's gradient is perpendicular to one outline edge (a plane rising from it)
+        big = np.linalg.norm(n, axis=1) / np.max(np.linalg.norm(roof - np.roll(roof, 1, axis=1), axis=2),
+                                                  axis=1) > 0.01
+        downhill = n[big, :2] / np.maximum(np.linalg.norm(n[big, :2], axis=1), 1e-12)[:, None]
+        flat = np.linalg.norm(n[big, :2], axis=1) < 1e-6 * np.linalg.norm(n[big], axis=1)
+        assert np.all((np.abs(downhill @ d.T).min(axis=1) < 2e-3) | flat)
+        # no slope falls onto a party wall: no sloped triangle faces out over it
+        for k in party:
+            out = np.array([d[k, 1], -d[k, 0]])
+            assert not np.any(downhill @ out > 1 - 2e-3)
+        # every party wall stands (a gable); the wall-top sides of the sloped faces are exactly the free edges
+        # (gabled roofs: but those with a gable of their own); the mesh closes the walls
+        out = np.column_stack([d[:, 1], -d[:, 0]])
+        line = np.abs(np.einsum("mpi,ki->mpk", walls[:, :, :2], out) - np.sum(edges[:, :2] * out, axis=1)) < 1e-3
+        standing = {k for k in range(len(edges)) if _eave_edges_cover(walls[line[:, :, k].all(axis=1)], edges[[k]])}
+        assert set(party) <= standing
+        eaves = [e for k, e in enumerate(edges) if k not in party and not (builder.gables and k in standing)]
+        assert _eave_edges_cover(roof, np.array(eaves))
+        found, z = _open_edges(mesh)
+        assert _same_edges(found, edges) and np.allclose(z, TOP, atol=1e-4)
+        assert np.all(n[:, 2] > 0) and (n[:, 2].sum() / 2) == pytest.approx(house.area, rel=1e-6)
+
+
+def test_all_party_walls_roof_as_free_with_a_warning():
+    """A building enclosed by neighbours on every side keeps the asked shape (as if free) and says so."""
+    from citygen.roof import RoofWarning
+    house = _house(0, 8.0, 12.0)
+    with pytest.warns(RoofWarning, match="party walls ignored: every wall is a party wall"):
+        mesh = HippedRoof().build(house, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3)))
+    plain = HippedRoof().build(house, TOP, RoofSpec("hipped", 30.0))
+    assert np.array_equal(mesh.points, plain.points)
+
+
+def test_helsinki_pent_roof_over_a_party_step_falls_back_to_the_free_roof():
+    """Regression: the one Helsinki outline whose only free wall sweeps over a party-wall step (the moving edge
+    becomes collinear with a standing one) stuck the weighted skeleton; the roof is built as if free."""
+    from citygen.roof import RoofWarning
+    outline = Polygon([(150.31611266805214, -779.06728694852), (167.70571787762862, -778.03037268876),
+                       (167.95576201732632, -782.2418513042077), (178.27182497847977, -781.6285813925218),
+                       (177.72170676039295, -772.4480053831785), (150.0160878010167, -774.0981866017828)])
+    with pytest.warns(RoofWarning, match="wavefront stuck"):
+        mesh = HippedRoof().build(outline, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3, 4)))
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline))
