@@ -135,6 +135,8 @@ class Builder:
             with catch_warnings(record=True) as caught:
                 simplefilter("always", RoofWarning)
                 roof = builder.build(mass.outline, top, spec)
+            # (the warnings module's state is per process: on a worker running several threads a RoofWarning
+            # may be reported with another building; docs/distributed.md advises one thread per worker)
             for w in caught:  # a builder's RoofWarning is the building's warning; others pass on
                 if issubclass(w.category, RoofWarning):
                     warnings.append(f"{footprint.id}: {spec.shape} roof: {w.message}")
