@@ -36,6 +36,8 @@ from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 MANSARD_LOWER = 60.0
 #: Bands (planar rings of faces) approximating a dome's profile.
 DOME_BANDS = 6
+#: half-hipped: the gable wall rises to this share of the ridge's height, a small hip above it
+HALF_HIP = 0.6
 
 
 class RoofError(ValueError):
@@ -288,30 +290,40 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     walls = [faces[k] for k in sorted(standing)]
     faces = [f for k, f in enumerate(faces) if k not in standing]
     if gables:
-        outline_nodes = len(weights)
-        points, faces, walls = gable(points, faces, walls, outline_nodes)
+        points, faces, walls = gable(points, faces, walls, len(weights), HALF_HIP if shape == "half-hipped" else 1.0)
     ts, zs = profile(shape, spec, float(points[:, 2].max()))
     return _Bands(points, ts).mesh(faces, walls, top, zs)
 
 
-def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]],
-          outline_nodes: int) -> tuple[np.ndarray, list[list[int]], list[list[int]]]:
+def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], outline_nodes: int,
+          clip: float = 1.0) -> tuple[np.ndarray, list[list[int]], list[list[int]]]:
     """Turn hip ends into gable walls: ``points`` are x, y, time; ``walls`` the faces already standing (party
-    walls). Returns points (the moved apexes appended), roof faces and walls (the new ones ``[a, b, apex]``,
-    outward)."""
+    walls). Returns points (new points appended), roof faces and walls (the new ones outward).
+
+    A hip end ``[a, b, apex]`` whose apex ends a ridge becomes the wall ``[a, b, A]``, A where the ridge, extended,
+    meets the edge. With ``clip`` < 1 (half-hipped) the wall stops at ``clip`` of the ridge's time: the wall is
+    ``[a, b, Rb, Ra]`` (Ra = a + clip (A - a), on the rakes), a small hip ``[Ra, Rb, P]`` rises above it to
+    P = apex + clip (A - apex) on the ridge, and the side faces run a -> Ra -> P (their planes are unchanged)."""
     neighbours: dict[int, set[int]] = {}
     owners: dict[int, int] = {}
     for f in faces + walls:
         for k, n in enumerate(f):
             owners[n] = owners.get(n, 0) + 1
             neighbours.setdefault(n, set()).update((f[k - 1], f[(k + 1) % len(f)]))
-    points = points.copy()
+    rows = [points]
+    count = len(points)
     roof, walls = [], list(walls)
-    moved: dict[int, int] = {}
+    ends: dict[int, tuple[int, int, int, int, int]] = {}  # apex -> (a, b, Ra, Rb, new apex)
+
+    def add(point: np.ndarray) -> int:
+        nonlocal count
+        rows.append(point[None, :])
+        count += 1
+        return count - 1
     for f in faces:
         apex = f[2] if len(f) == 3 else None
         ridge = [n for n in neighbours.get(apex, ()) if n >= outline_nodes] if apex is not None else []
-        if apex is None or len(ridge) != 1 or owners[apex] != 3 or apex in moved:
+        if apex is None or len(ridge) != 1 or owners[apex] != 3 or apex in ends:
             roof.append(f)
             continue
         a, b, p, q = points[f[0]], points[f[1]], points[apex], points[ridge[0]]
@@ -326,11 +338,30 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]],
         if s < 1 - 1e-9 or not 1e-6 < u < 1 - 1e-6:
             roof.append(f)
             continue
-        points = np.vstack([points, q + s * (p - q)])
-        moved[apex] = len(points) - 1
-        walls.append([f[0], f[1], moved[apex]])
-    roof = [[moved.get(n, n) for n in f] for f in roof]
-    return points, roof, [[moved.get(n, n) for n in w] for w in walls]
+        end = q + s * (p - q)
+        if clip >= 1.0:
+            top = add(end)
+            ends[apex] = (f[0], f[1], top, top, top)
+            walls.append([f[0], f[1], top])
+            continue
+        ra, rb, top = add(a + clip * (end - a)), add(b + clip * (end - b)), add(p + clip * (end - p))
+        ends[apex] = (f[0], f[1], ra, rb, top)
+        walls.append([f[0], f[1], rb, ra])
+        roof.append([ra, rb, top])
+
+    def remap(ring: list[int]) -> list[int]:
+        out = []
+        for k, n in enumerate(ring):
+            if n not in ends:
+                out.append(n)
+                continue
+            a, b, ra, rb, top = ends[n]
+            before, after = ring[k - 1], ring[(k + 1) % len(ring)]
+            out += [ra] if before == a and ra != top else []
+            out.append(top)
+            out += [rb] if after == b and rb != top else []
+        return out
+    return np.vstack(rows), [remap(f) for f in roof], [remap(w) for w in walls]
 
 
 def pyramid(part: Polygon, top: float, spec: RoofSpec) -> MeshData | None:
@@ -409,6 +440,13 @@ class HippedRoof(_SkeletonRoof):
 class GabledRoof(_SkeletonRoof):
     id = "gabled"
     description = "gabled roof: hipped roof with its hip ends turned into vertical gable walls"
+    gables = True
+    oriented = True
+
+
+class HalfHippedRoof(_SkeletonRoof):
+    id = "half-hipped"
+    description = "half-hipped (jerkinhead) roof: gable walls up to 60 % of the ridge height, a small hip above"
     gables = True
     oriented = True
 

@@ -1,6 +1,6 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
 :mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
-``mansard``, ``gambrel``, ``dome``, ``round``)."""
+``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -11,8 +11,8 @@ from citygen.geometry.building import MeshData
 from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
-from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   RoundRoof, SkillionRoof)
+from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof, MansardRoof,
+                                   PyramidalRoof, RoundRoof, SkillionRoof)
 
 
 def _cap(part: Polygon, top: float) -> tuple[np.ndarray, np.ndarray]:
@@ -45,5 +45,5 @@ class FlatRoof(RoofBuilder):
 
 @hookimpl
 def citygen_roof_builders():
-    return [FlatRoof(), HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof(), RoundRoof()]
+    return [FlatRoof(), HippedRoof(), GabledRoof(), HalfHippedRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
+            GambrelRoof(), DomeRoof(), RoundRoof()]

@@ -8,14 +8,14 @@ from hypothesis import strategies as st
 from shapely.geometry import MultiPolygon, Polygon, box
 
 from citygen.roof import RoofSpec
-from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   RoofError, RoundRoof, SkillionRoof, skeleton_faces)
+from citygen_roofs.pitched import (HALF_HIP, DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof,
+                                   MansardRoof, PyramidalRoof, RoofError, RoundRoof, SkillionRoof, skeleton_faces)
 from citygen_roofs.plugin import FlatRoof
 from tests.roofs.shapes import outlines, polygons
 
 TOP = 12.0
 BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof(), RoundRoof()]
+            DomeRoof(), RoundRoof(), HalfHippedRoof()]
 
 
 def _triangles(mesh):
@@ -73,6 +73,24 @@ def test_gabled_rectangle_ridge_spans_the_length_and_gables_are_vertical():
     n = _normals(p, tris)
     walls = n[np.isclose(n[:, 2], 0)]
     assert len(walls) == 2 and sorted(np.sign(walls[:, 0])) == [-1, 1]  # one gable at each end, facing out
+
+
+def test_half_hipped_rectangle_gables_to_part_height_and_hips_above():
+    """20 x 10 m at 30 degrees: the ridge (5 tan 30 above the eave) is L - W + HALF_HIP W long; each end is a
+    vertical trapezoid up to HALF_HIP of the ridge height, then a triangle hip to the ridge end."""
+    length, width = 20.0, 10.0
+    mesh = HalfHippedRoof().build(box(0, 0, length, width), TOP, RoofSpec("half-hipped", 30.0))
+    p, tris = _triangles(mesh)
+    rise = width / 2 * math.tan(math.radians(30))
+    ridge = p[np.isclose(p[:, 2], TOP + rise, atol=1e-4)]
+    assert len(ridge) == 2 and np.allclose(ridge[:, 1], width / 2, atol=1e-4)
+    assert np.ptp(ridge[:, 0]) == pytest.approx(length - width + HALF_HIP * width, abs=1e-3)
+    n = _normals(p, tris)
+    walls = np.isclose(n[:, 2], 0, atol=1e-6)
+    assert sorted(np.sign(n[walls, 0])) == [-1, -1, 1, 1]  # a trapezoid (two triangles) at each end, facing out
+    assert p[np.unique(tris[walls])][:, 2].max() == pytest.approx(TOP + HALF_HIP * rise, abs=1e-4)
+    hips = (~walls) & (np.abs(n[:, 1]) < 1e-6)  # roof triangles sloping along x: the two small hips
+    assert hips.sum() == 2 and p[np.unique(tris[hips])][:, 2].min() == pytest.approx(TOP + HALF_HIP * rise, abs=1e-4)
 
 
 def test_pyramidal_square_apex_over_the_centroid():
@@ -173,7 +191,8 @@ def test_skeleton_faces_are_planes(outline):
 
 
 @settings(max_examples=40)
-@given(outlines, st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()]))
+@given(outlines, st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof(),
+                                  HalfHippedRoof()]))
 def test_every_triangle_lies_in_the_plane_of_its_outline_edge_or_is_a_wall(outline, builder):
     """Roof triangles rise from some outline edge at one of the profile's slopes: each triangle's gradient is
     perpendicular to an outline edge (planar faces and bands), walls are vertical."""

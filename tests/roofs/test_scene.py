@@ -42,7 +42,7 @@ def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     report, out = demo
     assert report.written == 12 and not report.skipped
     assert report.warnings == ["way/8: flat roof instead of roof:shape='onion', which no roof builder makes (known: "
-                               "dome, flat, gabled, gambrel, hipped, mansard, pyramidal, round, skillion)"]
+                               "dome, flat, gabled, gambrel, half-hipped, hipped, mansard, pyramidal, round, skillion)"]
     assert main(["validate", str(out)]) == 0
     roofs = _roofs(out)
     assert roofs["way/1"][1] == 2 and roofs["way/6"][1] == 2  # gabled rectangle and U: a gable at each ridge end
