@@ -34,6 +34,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.materials import look
+from citygen.usd.uv import planar_st
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
 T = Sdf.ValueTypeNames
@@ -77,10 +78,11 @@ def tile_name(tile: tuple[int, int]) -> str:
 
 
 class _Author:
-    """Thin Sdf authoring helpers on one layer."""
+    """Thin Sdf authoring helpers on one layer; ``uvs``: meshes get ``primvars:st`` (:mod:`citygen.usd.uv`)."""
 
-    def __init__(self, layer: Sdf.Layer) -> None:
+    def __init__(self, layer: Sdf.Layer, uvs: bool = False) -> None:
         self.layer = layer
+        self.uvs = uvs
         self.prims = 0
 
     def prim(self, parent: Sdf.PrimSpec | Sdf.Layer, name: str, type_name: str = "",
@@ -116,6 +118,10 @@ class _Author:
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         self.attr(prim, "extent", T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
+        if self.uvs:
+            st = Sdf.AttributeSpec(prim, "primvars:st", T.TexCoord2fArray, Sdf.VariabilityVarying)
+            st.default = Vt.Vec2fArray.FromNumpy(planar_st(pts, mesh.counts, mesh.indices))
+            st.SetInfo("interpolation", "faceVarying")
         schemas = []
         if material is not None:
             schemas.append("MaterialBindingAPI")
@@ -173,11 +179,12 @@ class StageWriter:
     so memory stays bounded by one tile whatever the city's size. The root layer holds ``/World`` and its materials
     and lists the tile layers as sublayers: internal references and material bindings compose as in one file (the
     tile layers are a streaming device, not independently loadable assets). Without it everything goes into the
-    root layer. Nothing at ``path`` changes until :meth:`close` succeeds.
+    root layer. Nothing at ``path`` changes until :meth:`close` succeeds. With ``uvs`` every mesh gets
+    face-varying ``primvars:st`` in metres (:mod:`citygen.usd.uv`; about doubles the file).
     """
 
     def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
-                 tile_layers: bool = False) -> None:
+                 tile_layers: bool = False, uvs: bool = False) -> None:
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if suffix not in SUFFIXES:
@@ -188,7 +195,7 @@ class StageWriter:
         self.tiles_dir = self.path.with_name(f"{self.path.stem}_tiles") if tile_layers else None
         self.staging: Path | None = None
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
-        self.author = _Author(self.layer)
+        self.author = _Author(self.layer, uvs)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
         self.materials: dict[str, Sdf.Path] = {}
         self.material_names: set[str] = set()

@@ -50,6 +50,7 @@ def test_scene_parses_and_matches(tmp_path):
     (("[defaults]", "[defaults]\nfloorheight = 3"), "unknown key 'floorheight'", 10),
     (('ruleset = "b.grammar"\n', 'ruleset = "missing.grammar"\n'), "missing.grammar does not exist", 20),
     (("seed = 1", "seed = = 1"), "not valid TOML", 3),
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\n[output]\nuvs = "yes"\n'), "uvs must be true or false", 23),
 ])
 def test_scene_errors_name_file_and_line(tmp_path, edit, message, line):
     path = write(tmp_path, BASE.replace(*edit))

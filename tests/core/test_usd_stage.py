@@ -143,3 +143,24 @@ def test_a_registry_workers_cannot_rebuild_runs_in_one_job(small_scene, test_reg
     report = generate(small_scene, load_registry(extra_plugins=[LocalPlugin()]), tmp_path / "a.usda", jobs=2)
     assert report.written == 6
     assert any("running with 1 job" in w and "pickled" in w for w in report.warnings)
+
+
+def test_uvs_are_metres_on_every_mesh_and_validate(small_scene, test_registry, tmp_path):
+    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nuvs = true')
+    small_scene.write_text(text)
+    report = generate(small_scene, test_registry, None)
+    assert errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    meshes = [UsdGeom.Mesh(p) for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    assert meshes
+    for mesh in meshes:
+        st = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("st")
+        assert st.GetInterpolation() == UsdGeom.Tokens.faceVarying and st.GetTypeName() == "texCoord2f[]"
+        assert len(st.Get()) == len(mesh.GetFaceVertexIndicesAttr().Get())
+
+
+def test_no_uvs_unless_asked(small_scene, test_registry, tmp_path):
+    out = tmp_path / "city.usda"
+    generate(small_scene, test_registry, out)
+    stage = Usd.Stage.Open(str(out))
+    assert not any(p.HasAttribute("primvars:st") for p in stage.Traverse())

@@ -1,0 +1,34 @@
+"""Texture coordinates in metres: every polygon mapped onto its own plane.
+
+A polygon's ``u`` runs along the horizontal direction of its plane (left to right seen from outside: along a wall,
+along a roof's eave) and ``v`` up its slope (up a wall, up a roof; across a flat roof), both in metres, so a
+texture of a metre-sized pattern (brick, plaster, tiles) tiles at true scale on every face and lines up across
+the faces of one wall. Face-varying: corners shared by faces of different planes get one value per face.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def planar_st(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """``(len(indices), 2) float32`` texture coordinates (faceVarying) of a polygon mesh."""
+    counts = np.asarray(counts, dtype=np.int64)
+    if not counts.size:
+        return np.zeros((0, 2), np.float32)
+    p = np.asarray(points, dtype=float)[indices]
+    start = np.cumsum(counts) - counts
+    poly = np.repeat(np.arange(counts.size), counts)
+    nxt = start[poly] + (np.arange(len(indices)) - start[poly] + 1) % counts[poly]
+    q = p[nxt]
+    terms = np.column_stack([(p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2]), (p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0]),
+                             (p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])])
+    normal = np.add.reduceat(terms, start, axis=0)  # Newell's normal per polygon
+    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-12)[:, None]
+    horizontal = np.hypot(normal[:, 0], normal[:, 1])
+    level = horizontal < 1e-9  # a flat face: u along x
+    tangent = np.column_stack([np.where(level, 1.0, -normal[:, 1] / np.where(level, 1.0, horizontal)),
+                               np.where(level, 0.0, normal[:, 0] / np.where(level, 1.0, horizontal)),
+                               np.zeros(counts.size)])
+    up = np.cross(normal, tangent)
+    return np.column_stack([np.einsum("ij,ij->i", p, tangent[poly]),
+                            np.einsum("ij,ij->i", p, up[poly])]).astype(np.float32)
