@@ -24,15 +24,17 @@ tiles = [o for o in bpy.data.objects if o.name.startswith("Tile_")]
 buildings = [o for o in bpy.data.objects if o.parent in tiles]
 meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 print("BUILDINGS", len(buildings), "MESHES", len(meshes), "INSTANCERS",
-      sum(1 for o in bpy.data.objects if o.type == "POINTCLOUD"))
+      sum(1 for o in bpy.data.objects if o.type == "POINTCLOUD"),
+      "UVMAPPED", sum(1 for o in meshes if "st" in o.data.uv_layers))
 """
 
 
-@pytest.mark.parametrize("tile_layers", [False, True], ids=["one-layer", "tile-layers"])
-def test_blender_imports_the_delft_city(tmp_path, tile_layers):
+@pytest.mark.parametrize("tile_layers, uvs", [(False, False), (True, False), (False, True)],
+                         ids=["one-layer", "tile-layers", "uvs"])
+def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs):
     out = tmp_path / "delft.usdc"
     scene = load_scene(REPO / "scenes" / "delft.toml")
-    scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0))
+    scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0, uvs=uvs))
     report = generate_city(scene, out=out)
     assert len(list(tmp_path.glob("delft_tiles/*.usdc"))) == (5 if tile_layers else 0)
     # bpy bundles its own USD; run it in a separate interpreter so it never meets usd-core in one process
@@ -42,3 +44,4 @@ def test_blender_imports_the_delft_city(tmp_path, tile_layers):
     fields = line.split()
     assert int(fields[1]) == report.written == 160
     assert int(fields[3]) > 0 and int(fields[5]) > 0
+    assert int(fields[7]) == (int(fields[3]) if uvs else 0)  # Blender reads primvars:st as the UV map "st"
