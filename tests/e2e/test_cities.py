@@ -94,3 +94,16 @@ def test_every_shipped_scene_loads_with_its_rulesets(scene_path):
             kinds.add(kind.id)
     if scene_path.name == "helsinki_all_kinds.toml":
         assert kinds == {"split", "layers", "relayout", "safe"}
+
+
+def test_helsinki_from_the_osm_file(tmp_path):
+    pytest.importorskip("osmium")
+    out = tmp_path / "helsinki_osm.usdc"
+    report = generate_city(load_scene(REPO / "scenes" / "helsinki_osm.toml"), out=out, jobs=2)
+    assert report.written == 519 and len(report.skipped) == 62
+    assert [f for f in validate_stage(out) if f.severity == "error"] == []
+    stage = Usd.Stage.Open(str(out))
+    lifted = [p for p in buildings(stage) if p.GetAttribute("citygen:base").Get() > 0]
+    assert len(lifted) == 82  # Simple 3D Buildings parts standing on others: no door in mid-air
+    assert all(p.GetAttribute("citygen:entranceFace").Get() == -1 for p in lifted)
+    assert all(element_labels(stage, p.GetChild("Elements")).count("door") == 0 for p in lifted)
