@@ -137,7 +137,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         return report
     usd = 0.0
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
-                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs) as writer:
+                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod) as writer:
         for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
             report.warnings += outcome.warnings
             if outcome.record is None:
@@ -160,7 +160,7 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
     """Tiles built and written by dask workers; the root layer listing them written here."""
     t0 = time.perf_counter()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
-                     uvs=scene.output.uvs) as writer:
+                     uvs=scene.output.uvs, lod=scene.output.lod) as writer:
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
         results = run_tiles(work, job, scheduler, jobs, progress)
         t1 = time.perf_counter()

@@ -82,6 +82,7 @@ class Output:
     instancing: str = "modules"
     tile_layers: bool = False
     uvs: bool = False
+    lod: bool = False
 
 
 @dataclass(frozen=True)
@@ -183,21 +184,19 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
     shape = r.roof_shape(d["roof_shape"], _line_of(text, "roof_shape", at)) if "roof_shape" in d else "flat"
     defaults = Defaults(**numbers, roof_shape=shape)
     r.pitch(defaults.roof_pitch, _line_of(text, "roof_pitch", at))
-    out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers", "uvs"})
+    out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers", "uvs", "lod"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
-    tile_layers, uvs = out.get("tile_layers", False), out.get("uvs", False)
-    if not isinstance(tile_layers, bool):
-        r.fail(f"tile_layers must be true or false, got {tile_layers!r}", "tile_layers")
-    if not isinstance(uvs, bool):
-        r.fail(f"uvs must be true or false, got {uvs!r}", "uvs")
+    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "lod")}
+    for key, value in flags.items():
+        if not isinstance(value, bool):
+            r.fail(f"{key} must be true or false, got {value!r}", key)
     output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, tile_layers=tile_layers,
-                    uvs=uvs)
+                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, **flags)
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
                  assignments=_assignments(r, data.get("assign", [])), output=output,

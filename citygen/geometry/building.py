@@ -74,10 +74,14 @@ class ModuleProto:
 
 @dataclass(frozen=True)
 class BuildingGeometry:
+    """A building's facade meshes, element and module instances, roof, and ``walls``: its mass as plain wall
+    quads (the light level of detail a stage may offer instead of the facades)."""
+
     meshes: Mapping[tuple[str, str], MeshData]
     instances: Instances
     modules: Mapping[ModuleKey, ModuleProto]
     roof: MeshData | None
+    walls: MeshData | None = None
 
 
 class _Sink:
@@ -260,4 +264,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
             scale.append((r.w / qw, r.h / qh))
         sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m), face_quaternion(m),
                            np.asarray(scale))
-    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof)
+    plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), face.matrix())
+             for face, _ in layouts]
+    walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
+    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof, walls=walls)

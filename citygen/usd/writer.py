@@ -180,11 +180,12 @@ class StageWriter:
     and lists the tile layers as sublayers: internal references and material bindings compose as in one file (the
     tile layers are a streaming device, not independently loadable assets). Without it everything goes into the
     root layer. Nothing at ``path`` changes until :meth:`close` succeeds. With ``uvs`` every mesh gets
-    face-varying ``primvars:st`` in metres (:mod:`citygen.usd.uv`; about doubles the file).
+    face-varying ``primvars:st`` in metres (:mod:`citygen.usd.uv`; about doubles the file); with ``lod`` every
+    building a ``lod`` variant set (``full``: facades and elements; ``mass``: plain walls).
     """
 
     def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
-                 tile_layers: bool = False, uvs: bool = False) -> None:
+                 tile_layers: bool = False, uvs: bool = False, lod: bool = False) -> None:
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if suffix not in SUFFIXES:
@@ -196,6 +197,7 @@ class StageWriter:
         self.staging: Path | None = None
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
         self.author = _Author(self.layer, uvs)
+        self.lod = lod
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
         self.materials: dict[str, Sdf.Path] = {}
         self.material_names: set[str] = set()
@@ -261,7 +263,7 @@ class StageWriter:
         """Author one building; records must come grouped by tile (a tile cannot be reopened)."""
         with Sdf.ChangeBlock():
             _write_building(self.author, self._tile_prim(record.tile), record, self.material, self.prototype,
-                            self.counts)
+                            self.counts, self.lod)
 
     def _tile_prim(self, tile: tuple[int, int]) -> Sdf.PrimSpec:
         if self.tile is not None and self.tile[0] == tile:
@@ -357,15 +359,27 @@ def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axi
 
 
 def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecord, material, prototype,
-                    counts: dict[str, int]) -> None:
+                    counts: dict[str, int], lod: bool = False) -> None:
+    """One building prim; with ``lod`` its facades and elements are the ``full`` variant of a ``lod`` variant set
+    whose ``mass`` variant is the plain walls (the roof is shared by both)."""
     geo = record.geometry
     prim = author.prim(parent, record.name, "Xform")
     prim.SetInfo("kind", "component")
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
         author.attr(prim, f"citygen:{key}", vtype, v)
+    body = prim
+    if lod:
+        lods = Sdf.VariantSetSpec(prim, "lod")
+        body, mass = Sdf.VariantSpec(lods, "full").primSpec, Sdf.VariantSpec(lods, "mass").primSpec
+        prim.variantSetNameList.prependedItems.append("lod")
+        prim.variantSelections["lod"] = "full"
+        wall = next((mat for label, mat in geo.meshes if label == "wall"), "concrete")
+        if geo.walls is not None and author.mesh(mass, "Walls", geo.walls, material(wall), "wall") is not None:
+            counts["meshes"] += 1
+            counts["polygons"] += len(geo.walls.counts)
     if geo.meshes:
-        facade = author.prim(prim, "Facade", "Scope")
+        facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
         for (label, mat), mesh in geo.meshes.items():
             counts["meshes"] += author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, material(mat),
@@ -377,7 +391,7 @@ def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecor
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances
     if len(inst.proto_indices):
-        _instancer(author, prim, inst, lambda key: prototype(key, geo.modules))
+        _instancer(author, body, inst, lambda key: prototype(key, geo.modules))
         counts["instances"] += len(inst.proto_indices)
     counts["buildings"] += 1
 
@@ -391,7 +405,7 @@ def _instancer(author: _Author, parent: Sdf.PrimSpec, inst: Instances, prototype
         ref = author.prim(holder, f"p{k}", "Xform")
         ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototype(key)))
         ref.SetInfo("instanceable", True)  # one shared prototype per element kind: DCCs load it once
-        targets.append(ref.path)
+        targets.append(ref.path.StripAllVariantSelections())  # (inside a lod variant: a composed path)
     author.rel(pi, "prototypes", targets)
     author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
     author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(inst.positions.astype(np.float32)))

@@ -1,5 +1,6 @@
 import json
 
+import numpy as np
 import pytest
 from pxr import Kind, Usd, UsdGeom, UsdSemantics
 
@@ -7,7 +8,7 @@ from citygen.cli import main
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
-from tests.usd_util import element_labels
+from tests.usd_util import buildings, element_labels
 
 
 def generate(scene_path, registry, out, **kw):
@@ -164,3 +165,25 @@ def test_no_uvs_unless_asked(small_scene, test_registry, tmp_path):
     generate(small_scene, test_registry, out)
     stage = Usd.Stage.Open(str(out))
     assert not any(p.HasAttribute("primvars:st") for p in stage.Traverse())
+
+
+def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small_scene, test_registry, tmp_path):
+    plain = generate(small_scene, test_registry, tmp_path / "plain.usda")
+    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nlod = true')
+    small_scene.write_text(text)
+    report = generate(small_scene, test_registry, None)
+    assert errors(report.stats.path) == []
+    stage, before = Usd.Stage.Open(str(report.stats.path)), Usd.Stage.Open(str(plain.stats.path))
+    detailed = sorted(str(p.GetPath()) for p in stage.Traverse())
+    assert detailed == sorted(str(p.GetPath()) for p in before.Traverse())  # "full" composes as without variants
+    for prim in buildings(stage):
+        lods = prim.GetVariantSets().GetVariantSet("lod")
+        assert lods.GetVariantNames() == ["full", "mass"] and lods.GetVariantSelection() == "full"
+        faces = len(UsdGeom.Mesh(prim.GetChild("Roof")).GetFaceVertexCountsAttr().Get()) > 0
+        assert faces and prim.GetChild("Facade") and not prim.GetChild("Walls")
+        lods.SetVariantSelection("mass")
+        walls = UsdGeom.Mesh(prim.GetChild("Walls"))
+        assert walls and prim.GetChild("Roof") and not prim.GetChild("Facade") and not prim.GetChild("Elements")
+        z = np.array(walls.GetPointsAttr().Get())[:, 2]
+        height = prim.GetAttribute("citygen:height").Get()
+        assert z.max() - z.min() == pytest.approx(height, abs=1e-3)

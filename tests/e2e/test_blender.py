@@ -29,12 +29,13 @@ print("BUILDINGS", len(buildings), "MESHES", len(meshes), "INSTANCERS",
 """
 
 
-@pytest.mark.parametrize("tile_layers, uvs", [(False, False), (True, False), (False, True)],
-                         ids=["one-layer", "tile-layers", "uvs"])
-def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs):
+@pytest.mark.parametrize("tile_layers, uvs, lod", [(False, False, False), (True, False, False), (False, True, False),
+                                                   (True, False, True)], ids=["one-layer", "tile-layers", "uvs", "lod"])
+def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs, lod):
     out = tmp_path / "delft.usdc"
     scene = load_scene(REPO / "scenes" / "delft.toml")
-    scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0, uvs=uvs))
+    scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0, uvs=uvs,
+                                                         lod=lod))
     report = generate_city(scene, out=out)
     assert len(list(tmp_path.glob("delft_tiles/*.usdc"))) == (5 if tile_layers else 0)
     # bpy bundles its own USD; run it in a separate interpreter so it never meets usd-core in one process
