@@ -75,7 +75,8 @@ def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, in file order
     made: set[str] = set()
     try:
-        for obj in osmium.FileProcessor(str(path)).with_locations().with_areas():
+        areas_of = osmium.filter.KeyFilter("building", "building:part")  # only building relations are assembled
+        for obj in osmium.FileProcessor(str(path)).with_locations().with_areas(areas_of):
             if not _is_building(obj.tags):
                 continue
             if obj.is_area():
