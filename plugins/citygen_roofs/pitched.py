@@ -274,12 +274,13 @@ class _Bands:
 def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables: bool,
                   party: frozenset[int] = frozenset(), orientation: str | None = None) -> MeshData:
     """A roof over the weighted straight skeleton of ``part`` (:func:`edge_weights`) with ``shape``'s profile;
-    faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too. Where every edge is a
-    party wall, or the weighted skeleton fails, the part is roofed as if free (with a :class:`RoofWarning`)."""
+    faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too. A part enclosed by
+    party walls on every side (a building inside a block, seen only from above) is roofed as if free; where the
+    weighted skeleton fails, so is the part, with a :class:`RoofWarning`."""
     weights = edge_weights(part, party, orientation, gables)
+    if party and not weights.any():
+        return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
     try:
-        if party and not weights.any():
-            raise RoofError("every wall is a party wall")
         points, faces = skeleton_faces(part, weights)
     except RoofError as exc:
         if not party:
