@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import MultiPolygon
 
-from citygen.coordinator import PARTY_RISE
+from citygen.coordinator import party_walls
 from citygen.mass import build_mass, neighbour_cover
 from citygen.registry import default_registry
-from citygen.roof import party_edges, roof_spec
+from citygen.roof import roof_spec
 from citygen_footprints.plugin import read_footprints
 
 REPO = Path(__file__).resolve().parents[1]
@@ -44,7 +44,8 @@ def main() -> None:
         covers = neighbour_cover(masses) if args.party else [np.zeros(len(m.faces)) for m in masses]
         times, failures, attached, ignored = [], [], 0, []
         for mass, cover in zip(masses, covers):
-            party = party_edges(cover, mass.height, PARTY_RISE)
+            party = tuple(int(k) for k in np.flatnonzero(party_walls(cover, [f.width for f in mass.faces],
+                                                                        mass.height)))
             attached += bool(party)
             spec = roof_spec({"roof:shape": args.shape}, mass.height, party=party)
             runs = []

@@ -15,17 +15,17 @@ from warnings import catch_warnings, simplefilter, warn_explicit
 import numpy as np
 from shapely.geometry import MultiPolygon
 
-from citygen.coordinator import PARTY_RISE, plan_building
+from citygen.coordinator import face_bins, party_walls, plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
-from citygen.layout import FacadeLayout, Region, check_partition, hidden_below
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
 from citygen.mass import Mass
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import RoofWarning, party_edges, rectangle_like, roof_spec
+from citygen.roof import RoofWarning, rectangle_like, roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
 from citygen.usd.writer import BuildingRecord
@@ -75,7 +75,8 @@ class Builder:
               tile: tuple[int, int]) -> BuildingOutcome:
         warnings: list[str] = []
         try:
-            plan = plan_building(footprint, mass, cover, self.scene.defaults, self.seed)
+            bins = face_bins(cover)
+            plan = plan_building(footprint, mass, bins, self.scene.defaults, self.seed)
             layouts: dict[int, FacadeLayout] = {}
             used: list[str] = []
             for scope, courtyard in (("street", False), ("courtyard", True)):
@@ -91,7 +92,7 @@ class Builder:
                 used.append(f"{kind.id}:{path.name}")
                 for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
                     face = request.context.face_index
-                    layouts[face] = hidden_below(self._checked(layout, request, kind.id, warnings), cover[face])
+                    layouts[face] = hidden_behind(self._checked(layout, request, kind.id, warnings), bins[face])
             palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
             wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
@@ -118,7 +119,8 @@ class Builder:
         spec = roof_spec(footprint.attributes, mass.height,
                          shape=(rule and rule.roof_shape) or defaults.roof_shape,
                          pitch=(rule and rule.roof_pitch) or defaults.roof_pitch,
-                         party=party_edges(cover, mass.height, PARTY_RISE))
+                         party=tuple(int(k) for k in np.flatnonzero(
+                             party_walls(cover, [f.width for f in mass.faces], mass.height))))
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
         if spec.shape not in self.roofs:

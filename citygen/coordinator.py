@@ -8,9 +8,11 @@
 * **Corners** -- a wall strip at each corner, the same width on both faces meeting there, so openings of two faces
   never collide at a corner and corners meet with equal margins.
 
-Party walls (faces against a neighbouring building that reaches within ``PARTY_RISE`` of their top) and faces
-narrower than ``min_face_width`` get no facade. A face against a lower neighbour gets a facade (it is seen above
-the neighbour) but is no street face and gets no entrance: its foot is hidden.
+Party walls (faces a neighbouring building covers to within ``PARTY_RISE`` of their top, but for less than
+``MIN_SEEN`` metres of their width) and faces narrower than ``min_face_width`` get no facade. A face partly
+against a neighbour -- a lower one, or one covering only part of its width -- gets a facade (the part the
+neighbour hides is turned to plain wall, :func:`citygen.layout.hidden_behind`) but is no street face and gets no
+entrance: its foot is not free.
 """
 from __future__ import annotations
 
@@ -25,8 +27,10 @@ from citygen.mass import Mass
 from citygen.request import FaceContext, FacadeRequest
 from citygen.scene import Defaults
 
-#: A face whose neighbours reach this close (m) to its top is a party wall (no facade).
+#: A face whose neighbours reach this close (m) to its top is a party wall (no facade) ...
 PARTY_RISE = 1.0
+#: ... unless at least this width (m) of it rises above them.
+MIN_SEEN = 2.0
 
 
 @dataclass(frozen=True)
@@ -62,17 +66,33 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lift
     return tuple(float(v) for v in np.linspace(0.0, height, levels + 1))
 
 
+def party_walls(cover: np.ndarray, widths: np.ndarray, height: float) -> np.ndarray:
+    """Per face, whether it is a party wall: ``cover`` (per face, or per face and bin, from
+    :func:`citygen.mass.neighbour_cover`) reaches within ``PARTY_RISE`` of ``height`` on all but less than
+    ``MIN_SEEN`` metres of its width."""
+    cover = face_bins(cover)
+    seen = (cover < height - PARTY_RISE).mean(axis=1) * np.asarray(widths, dtype=float)
+    return (cover > 0.0).any(axis=1) & (seen < MIN_SEEN)
+
+
+def face_bins(cover: np.ndarray) -> np.ndarray:
+    """Neighbour cover as ``(faces, bins)``; one value per face is a cover over the whole width."""
+    cover = np.asarray(cover, dtype=float)
+    return cover[:, None] if cover.ndim == 1 else cover
+
+
 def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults,
                   seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
     """Decide floor lines, entrance face and corner strips; build one request per facade face. ``cover`` is per
-    face the height up to which neighbours stand against it (``citygen.mass.neighbour_cover``)."""
+    face (and bin across its width) the height up to which neighbours stand against it
+    (``citygen.mass.neighbour_cover``)."""
     lifted = footprint.lift > 0.0
     floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults, lifted)
     faces = mass.faces
     widths = np.array([f.width for f in faces])
-    cover = np.asarray(cover, dtype=float)
-    facade = (cover < mass.height - PARTY_RISE) & (widths >= defaults.min_face_width)
-    free_foot = (cover <= 0.0) & (not lifted)
+    cover = face_bins(cover)
+    facade = ~party_walls(cover, widths, mass.height) & (widths >= defaults.min_face_width)
+    free_foot = (cover.max(axis=1) <= 0.0) & (not lifted)
     street = facade & free_foot & np.array([not f.is_courtyard for f in faces])
     door_candidates = np.flatnonzero(street & (widths >= 1.5))
     if door_candidates.size == 0:

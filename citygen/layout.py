@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import operator
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any
 
@@ -268,18 +268,28 @@ def require_partition(layout: FacadeLayout, where: str = "<layout>", plugin: str
     return layout
 
 
-def hidden_below(layout: FacadeLayout, height: float, tol: float = 1e-6) -> FacadeLayout:
-    """``layout`` with every subtree lying wholly below ``height`` replaced by one plain wall region: the part of a
-    face that a lower neighbour hides is a party wall (no openings, no attachments inside the neighbour)."""
-    if height <= tol:
+def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol: float = 1e-6) -> FacadeLayout:
+    """``layout`` with every subtree that neighbours hide replaced by one plain wall region: no openings or
+    attachments inside a neighbour. ``cover`` holds, for equal bins across the face's width (left to right), the
+    height up to which a neighbour stands against it (one value: the whole width); a subtree is hidden when every
+    bin its width overlaps is covered up to its top."""
+    cover = np.atleast_1d(np.asarray(cover, dtype=float))
+    highest = float(cover.max(initial=0.0))
+    if highest <= tol:
         return layout
+    step = layout.width / cover.size
+
+    def hidden_to(x0: float, x1: float) -> float:
+        k0 = min(max(int(np.floor(x0 / step + tol)), 0), cover.size - 1)
+        k1 = min(max(int(np.ceil(x1 / step - tol)), k0 + 1), cover.size)
+        return float(cover[k0:k1].min())
 
     def cull(region: Region) -> Region:
-        if region.y + region.h <= height + tol:
+        if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
             if region.children or region.label not in (None, "wall") or region.depth:
                 return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
             return region
-        if not region.children or region.y >= height - tol:
+        if not region.children or region.y >= highest - tol:
             return region
         children = tuple(cull(c) for c in region.children)
         if all(map(operator.is_, children, region.children)):

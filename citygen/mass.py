@@ -143,17 +143,21 @@ def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float
     return Mass(outline=outline, base=footprint.base, height=footprint.height, faces=tuple(faces))
 
 
-def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5) -> list[np.ndarray]:
-    """Per mass, per face the height (metres above the mass's base, 0..its height) up to which other buildings
-    stand against the face: 0 for a free face.
+#: Equal parts of a face's width in which the neighbour cover is measured (one sample each).
+COVER_BINS = 10
 
-    A face stands against other buildings when most of the points sampled just outside it (``offset`` metres along
-    the normal at 10%, 30%, 50%, 70%, 90% of its width) fall inside their outlines; its cover is then the lowest
-    top among those neighbours (the face is seen above it), taken over the face's whole width.
+
+def neighbour_cover(masses: list[Mass], offset: float = 0.3, bins: int = COVER_BINS) -> list[np.ndarray]:
+    """Per mass, an ``(n_faces, bins)`` array: per face and per bin (equal parts of its width, left to right seen
+    from outside) the height (metres above the mass's base, 0..its height) up to which other buildings stand
+    against it there; 0 where none does.
+
+    A bin's sample lies ``offset`` metres outside the wall at the bin's centre; it is hidden up to the lowest top
+    among the neighbours it falls in (the wall is seen above them).
     """
     outlines = [m.outline for m in masses]
     tree = shapely.STRtree(outlines)
-    fractions = np.array([0.1, 0.3, 0.5, 0.7, 0.9])
+    fractions = (np.arange(bins) + 0.5) / bins
     owner, samples = [], []
     for mi, mass in enumerate(masses):
         for face in mass.faces:
@@ -161,9 +165,9 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5)
             samples.append(o + np.outer(fractions * face.width, u) + n * offset)
             owner.append(mi)
     if not samples:
-        return [np.zeros(0) for _ in masses]
+        return [np.zeros((0, bins)) for _ in masses]
     pts = np.concatenate(samples)
-    point_owner = np.repeat(np.asarray(owner), len(fractions))
+    point_owner = np.repeat(np.asarray(owner), bins)
     hit_pt, hit_poly = tree.query(shapely.points(pts), predicate="within")
     other = hit_poly != point_owner[hit_pt]
     hit_pt, hit_poly = hit_pt[other], hit_poly[other]
@@ -171,9 +175,8 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, share: float = 0.5)
     top = base + height
     covered = np.full(len(pts), np.inf)  # per sample the lowest neighbour top above the face's base
     np.minimum.at(covered, hit_pt, top[hit_poly] - base[point_owner[hit_pt]])
-    covered = covered.reshape(-1, len(fractions))
-    against = np.isfinite(covered).mean(axis=1) >= share
-    per_face = np.where(against, np.clip(covered.min(axis=1), 0.0, height[owner]), 0.0)
+    covered = np.where(np.isfinite(covered), covered, 0.0).reshape(-1, bins)
+    per_face = np.clip(covered, 0.0, height[np.asarray(owner)][:, None])
     result, start = [], 0
     for mass in masses:
         result.append(per_face[start:start + len(mass.faces)])

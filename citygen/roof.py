@@ -6,8 +6,8 @@ slope faces, i.e. downhill), ``roof:orientation`` (``along``: ridge parallel to 
 perpendicular to it; rectangle-like outlines only, see :func:`rectangle_like`). A tag that does not parse is
 ignored, so the scene's default applies.
 
-*Party walls* -- outline edges a neighbour stands against up to the eave (:func:`party_edges`) -- are passed to
-the builder in :attr:`RoofSpec.party`: a pitched roof must not slope down onto the neighbour.
+*Party walls* -- outline edges a neighbour stands against up to the eave (``citygen.coordinator.party_walls``) --
+are passed to the builder in :attr:`RoofSpec.party`: a pitched roof must not slope down onto the neighbour.
 """
 from __future__ import annotations
 
@@ -17,7 +17,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 from shapely.geometry import Polygon
 
 #: A pitch outside this range (degrees) is clamped: flatter is a flat roof, steeper a tower.
@@ -79,13 +78,6 @@ def parse_direction(value: Any) -> float | None:
         return cardinal
     number = _number(value)
     return None if number is None else number % 360.0
-
-
-def party_edges(cover: np.ndarray, wall_height: float, rise: float) -> tuple[int, ...]:
-    """The faces that are party walls: a neighbour stands against them (``cover``, per face, from
-    ``citygen.mass.neighbour_cover``) up to within ``rise`` metres of the wall top, as the coordinator decides."""
-    cover = np.asarray(cover, dtype=float)
-    return tuple(int(k) for k in np.flatnonzero((cover > 0) & (cover >= wall_height - rise)))
 
 
 def rectangle_like(part: Polygon) -> bool:

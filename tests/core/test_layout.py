@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, strategies as st
 
 from citygen.errors import LayoutError
-from citygen.layout import FacadeLayout, Region, check_partition, hidden_below, leaf, require_partition
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind, leaf, require_partition
 
 
 def two_by_one(**override):
@@ -96,7 +96,7 @@ def test_regression_partition_check_with_a_region_exactly_eps_wide():
         assert any("uncovered" in p for p in check_partition(hole))
 
 
-def test_hidden_below_walls_up_what_a_lower_neighbour_hides():
+def test_hidden_behind_walls_up_what_neighbours_hide():
     """Subtrees wholly below the neighbour's top become one plain wall region each; ones reaching above it keep
     their content above and lose their module key; the result still partitions the face."""
     floor0 = Region(0, 0, 10, 3, "Floor", key=7, children=(
@@ -106,11 +106,19 @@ def test_hidden_below_walls_up_what_a_lower_neighbour_hides():
         leaf(0, 3, 4, 3, "Wall", "wall"), leaf(4, 3, 2, 2, "Window", "window"), leaf(4, 5, 2, 1, "Wall", "wall"),
         leaf(6, 3, 4, 3, "Wall", "wall")))
     layout = FacadeLayout(10, 6, Region(0, 0, 10, 6, "Facade", children=(floor0, floor1)))
-    assert hidden_below(layout, 0.0) is layout
-    hidden = hidden_below(layout, 4.0)
+    assert hidden_behind(layout, 0.0) is layout
+    hidden = hidden_behind(layout, 4.0)
     assert check_partition(hidden) == []
     assert hidden.root.children[0] == Region(0, 0, 10, 3, "Wall", "wall")
     assert hidden.root.children[1] is floor1  # reaches above 4 m: untouched (its window starts at 3 m)
-    hidden = hidden_below(layout, 5.5)
+    hidden = hidden_behind(layout, [5.5])
     assert [t.label for t in hidden.root.children[1].terminals()] == ["wall", "wall", "wall", "wall"]
     assert hidden.root.children[1].key is None and floor1.key == 7
+    # a neighbour along x 0-6 only, taller than the face: the door and window there go, the rest stays
+    hidden = hidden_behind(layout, [6.0] * 6 + [0.0] * 4)
+    assert check_partition(hidden) == []
+    labels = {(t.x, t.y): t.label for t in hidden.leaves}
+    assert labels[(4, 0)] == "wall" and labels[(4, 3)] == "wall"  # the door's and window's bays (x 4-6) lie in it
+    assert labels[(6, 0)] == "wall" and (6, 3) in labels  # the rest keeps its regions as they were
+    partly = hidden_behind(layout, [6.0] * 4 + [0.0] * 6)  # covers x 0-4 only: the door bay (x 4-6) is seen
+    assert [t.label for t in partly.leaves if t.label != "wall"] == ["door", "window"]

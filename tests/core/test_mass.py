@@ -53,8 +53,8 @@ def test_party_walls_detected_between_touching_buildings():
     a = build_mass(fp([(0, 0), (10, 0), (10, 10), (0, 10)], id="a"))
     b = build_mass(fp([(10, 0), (20, 0), (20, 10), (10, 10)], id="b"))
     pa, pb = neighbour_cover([a, b])
-    assert pa.tolist() == [0, a.height, 0, 0]
-    assert pb.tolist() == [0, 0, 0, b.height]
+    assert pa.shape == (4, 10) and pa.max(axis=1).tolist() == [0, a.height, 0, 0] and pa[1].min() == a.height
+    assert pb.max(axis=1).tolist() == [0, 0, 0, b.height] and pb[3].min() == b.height
 
 
 def test_neighbour_cover_is_the_lowest_neighbour_top():
@@ -64,5 +64,17 @@ def test_neighbour_cover_is_the_lowest_neighbour_top():
     low = build_mass(fp([(10, 0), (20, 0), (20, 6), (10, 6)], id="low", height=3.3))
     lower = build_mass(fp([(10, 6), (20, 6), (20, 10), (10, 10)], id="lower", height=6.6))
     ct, cl, cr = neighbour_cover([tall, low, lower])
-    assert ct.tolist() == [0, 3.3, 0, 0]  # east wall: low covers 3 of 5 samples, lower 2; the lowest top counts
+    assert ct.max(axis=1).tolist() == [0, 6.6, 0, 0] and ct[[0, 2, 3]].max() == 0
+    # the east wall (u runs from y = 0 to 10): its first 6 m stand against low, its last 4 m against lower
+    assert ct[1].tolist() == [3.3] * 6 + [6.6] * 4
     assert cl.max() == 3.3 and cr.max() == 6.6  # the lower buildings' west walls are covered to their own tops
+
+
+def test_a_neighbour_along_part_of_a_wall_covers_only_those_bins():
+    """Bug fixture: a wall half covered by a taller neighbour was a party wall over its whole width (a blank
+    slab where the rest is seen) or, under half, not covered at all (windows and doors inside the neighbour)."""
+    wide = build_mass(fp([(0, 0), (10, 0), (10, 20), (0, 20)], id="wide", height=12.0))
+    short = build_mass(fp([(10, 0), (20, 0), (20, 8), (10, 8)], id="short", height=15.0))
+    cw, _ = neighbour_cover([wide, short])
+    east = cw[1]  # runs from y = 0 to 20: the neighbour stands along its first 8 m
+    assert east.tolist() == [12.0] * 4 + [0.0] * 6

@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 from shapely import affinity
 from shapely.geometry import Polygon
 
-from citygen.roof import RoofSpec, party_edges
+from citygen.coordinator import party_walls
+from citygen.roof import RoofSpec
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
                                    RoundRoof, SkillionRoof)
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
@@ -132,10 +133,16 @@ def test_pyramidal_house_with_a_party_wall_does_not_slope_onto_it():
     assert len(walls) and not np.any(n[:, 0] > 1e-3 * np.linalg.norm(n, axis=1))
 
 
-def test_party_edges_follow_the_coordinator():
-    """A face is a party wall when a neighbour covers it up to within PARTY_RISE of the top, never when free."""
-    assert party_edges(np.array([0.0, 9.5, 8.9, 12.0]), 10.0, 1.0) == (1, 3)
-    assert party_edges(np.zeros(4), 0.5, 1.0) == ()
+def test_party_walls_are_covered_to_the_top_on_all_but_a_sliver():
+    """A face is a party wall when neighbours cover it to within PARTY_RISE of its top on all but less than
+    MIN_SEEN (2 m) of its width; never when free; a lower neighbour leaves a facade."""
+    widths = np.array([10.0, 10.0, 10.0, 10.0])
+    assert party_walls(np.array([0.0, 9.5, 8.9, 12.0]), widths, 10.0).tolist() == [False, True, False, True]
+    assert not party_walls(np.zeros(4), widths, 0.5).any()
+    bins = np.zeros((2, 10))
+    bins[0, :9] = 10.0  # 1 m of 10 rises above the neighbour: too little to dress
+    bins[1, :7] = 10.0  # 3 m do: a facade, its covered part walled up
+    assert party_walls(bins, widths[:2], 10.0).tolist() == [True, False]
 
 
 @st.composite
