@@ -5,8 +5,9 @@
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
 detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5); windows both as the reported element
-boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary is given for the development
-half (cmp_b0001-0020, the only photos to tune on), the held-out half (cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
+boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary
+is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
+(cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
 """
 from __future__ import annotations
 
@@ -46,7 +47,9 @@ def evaluate(jpg: Path) -> dict:
     terminals = layout_boxes(result.layout)
     door_pred = result.boxes("door")
     return {**row, "floors": len(result.floor_lines) - 1, "tiles": len(result.tile_lines) - 1, "pred": len(pred),
-            "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred), "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start, "size": (crop[2] - crop[0], crop[3] - crop[1])}
+            "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred),
+            "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start,
+            "size": (crop[2] - crop[0], crop[3] - crop[1])}
 
 
 def main(argv: list[str] | None = None) -> int:
