@@ -4,8 +4,10 @@
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
-detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5). The summary is given for the development
-half (cmp_b0001-0020, the only photos to tune on), the held-out half (cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
+detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5); windows both as the reported element
+boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary
+is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
+(cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from pathlib import Path
 from citygen.errors import CitygenError
 from citygen_inverse.photo import analyse, load_photo
 from citygen_inverse.cmp import count_groups
-from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
+from citygen_inverse.photo_score import cmp_boxes, facade_box, layout_boxes, matches
 
 #: Development photos (cmp_b0001-0020): tune only on these; cmp_b0021-0040 are held out.
 DEV = range(1, 21)
@@ -42,9 +44,12 @@ def evaluate(jpg: Path) -> dict:
         return {**row, "error": exc.message, "cpu": time.process_time() - start}
     pred = result.boxes("window")
     tp = matches(pred, ref)
+    terminals = layout_boxes(result.layout)
     door_pred = result.boxes("door")
     return {**row, "floors": len(result.floor_lines) - 1, "tiles": len(result.tile_lines) - 1, "pred": len(pred),
-            "tp": tp, "door_pred": len(door_pred), "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start, "size": (crop[2] - crop[0], crop[3] - crop[1])}
+            "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred),
+            "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start,
+            "size": (crop[2] - crop[0], crop[3] - crop[1])}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: no cmp_b*.jpg photos in {data}", file=sys.stderr)
         return 2
     print(f"{'photo':10} {'crop':>9} {'rows':>4} {'floors':>6} {'cols':>4} {'tiles':>5} {'ref':>4} {'pred':>4} "
-          f"{'tp':>4} {'prec':>5} {'rec':>5} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
+          f"{'tp':>4} {'prec':>5} {'rec':>5} {'lay':>4} {'ltp':>4} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
     rows = []
     for jpg in photos:
         r = evaluate(jpg)
@@ -72,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
         prec = r["tp"] / r["pred"] if r["pred"] else 0.0
         rec = r["tp"] / r["ref"] if r["ref"] else 0.0
         print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['cols']:4d} "
-              f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['door_ref']:5d} "
+              f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['lay_pred']:4d} "
+              f"{r['lay_tp']:4d} {r['door_ref']:5d} "
               f"{r['door_pred']:4d} {r['door_tp']:3d} {r['cpu']:6.2f}")
     for name, part in split(rows):
         summary(name, part)
@@ -100,6 +106,10 @@ def summary(name: str, rows: list[dict]) -> None:
     print(f"windows (IoU >= 0.5): precision {tp / max(pred, 1):.3f} ({tp}/{pred}), recall {tp / max(ref, 1):.3f} "
           f"({tp}/{ref}) on analysed photos, {tp / max(ref_all, 1):.3f} over all {ref_all} annotated windows; "
           f"photos without a matched window {sum(r['tp'] == 0 for r in ok)}")
+    ltp, lpred = (sum(r[k] for r in ok) for k in ("lay_tp", "lay_pred"))
+    print(f"layout window terminals (IoU >= 0.5): precision {ltp / max(lpred, 1):.3f} ({ltp}/{lpred}), recall "
+          f"{ltp / max(ref, 1):.3f} ({ltp}/{ref}); photos without a matched terminal "
+          f"{sum(r['lay_tp'] == 0 for r in ok)}")
     dtp, dpred, dref = (sum(r[k] for r in ok) for k in ("door_tp", "door_pred", "door_ref"))
     print(f"doors (IoU >= 0.5): precision {dtp / max(dpred, 1):.3f} ({dtp}/{dpred}), recall {dtp / max(dref, 1):.3f} "
           f"({dtp}/{dref}); photos with more detected than annotated doors {sum(r['door_pred'] > r['door_ref'] for r in ok)}")

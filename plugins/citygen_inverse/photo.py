@@ -27,6 +27,7 @@ from scipy.ndimage import gaussian_filter
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.photo_elements import library
+from citygen_inverse.photo_refit import carry
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
 from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
 from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
@@ -46,6 +47,8 @@ SIGMA = 0.25
 MERGE_GAP = 6
 #: Window sides are refined at full resolution within this fraction of the box's width (height).
 REFINE = 0.3
+#: Depth of a tile in the layout tree (Facade -> floor -> tile): refined window sides move only inside it.
+TILE_DEPTH = 2
 #: Tile clustering: thumbnail size and least normalised correlation with a group's first tile.
 THUMB = 16
 SIMILAR = 0.5
@@ -164,21 +167,40 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P
-    layout, elements = _layout(floors, tiles, regular, trees, H, scale)
+    layout, elements, paths = _layout(floors, tiles, regular, trees, H, scale)
+    root, boxes, sides = _refined(layout.root, luminance(image), elements, paths, f, scale, H)
     meta = dict(meta or {}, importer="photo (mueller2007)", metres_per_pixel=scale / f,
                 scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
                 floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
                 floors=int(floors.size - 1), tiles_per_floor=int(tiles.size - 1),
-                mi_prominence={"floors": round(vsym.prominence, 4), "tiles": round(hsym.prominence, 4)})
-    layout = FacadeLayout(layout.width, layout.height, layout.root, meta)
+                mi_prominence={"floors": round(vsym.prominence, 4), "tiles": round(hsym.prominence, 4)},
+                refined_sides=sides)
+    layout = FacadeLayout(layout.width, layout.height, root, meta)
     problems = check_partition(layout)
     if problems:
         raise LayoutError("photo analysis did not give a partition: " + "; ".join(problems[:3]), where=source)
-    full = luminance(image)
-    boxes = tuple((refine_box(full, (c0 * f, r0 * f, c1 * f, r1 * f)) if lab == "window" else
-                   (c0 * f, r0 * f, c1 * f, r1 * f), lab) for (r0, r1, c0, c1), lab in merge_elements(elements))
     return PhotoAnalysis(layout, tuple(float(v * f) for v in floors), tuple(float(v * f) for v in tiles), boxes,
                          float(P * f), float(Q * f))
+
+
+def _refined(root: Region, full: np.ndarray, elements: list, paths: list, f: float, s: float,
+             H: int) -> tuple[Region, tuple[tuple[Box, str], ...], dict[str, int]]:
+    """The element boxes in crop pixels, windows refined at full resolution (:func:`refine_box`), and the layout
+    root with the refined sides carried into the window terminals where the tile's structure allows
+    (``photo_refit.carry``); counts of the window sides moved in the layout and of those that differed."""
+    def metres(box: Box) -> Box:
+        x0, y0, x1, y1 = box
+        return x0 * s / f, (H - y1 / f) * s, x1 * s / f, (H - y0 / f) * s
+    eps = 1e-9 * max(root.w, root.h)
+    boxes, moved, wanted = [], 0, 0
+    for (r0, r1, c0, c1), lab, members in merge_elements(elements):
+        box = (c0 * f, r0 * f, c1 * f, r1 * f)
+        if lab == "window":
+            new = refine_box(full, box)
+            root, m, w = carry(root, [paths[k] for k in members], metres(box), metres(new), TILE_DEPTH, s / f, eps)
+            moved, wanted, box = moved + m, wanted + w, new
+        boxes.append((box, lab))
+    return root, tuple(boxes), {"moved": moved, "refined": wanted}
 
 
 def refine_box(gray: np.ndarray, box: Box) -> Box:
@@ -252,10 +274,10 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
     return groups
 
 
-def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str]]:
+def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str, tuple[int, ...]]]:
     """One box per element: terminals of one label and tile that share an edge, or face each other across at
     most ``MERGE_GAP`` pixels, are one window (a window split at its mullion, or into frame and glass, is still
-    one window), as their bounding box."""
+    one window), as their bounding box, with the indices of its terminals in ``elements``."""
     parent = list(range(len(elements)))
 
     def find(k: int) -> int:
@@ -272,20 +294,24 @@ def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tu
             cols = min(ra[3], rb[3]) - max(ra[2], rb[2])
             if (rows > 0 and -MERGE_GAP <= cols <= 0) or (cols > 0 and -MERGE_GAP <= rows <= 0):
                 parent[find(a)] = find(b)
-    merged: dict[int, tuple[Rect, str]] = {}
+    merged: dict[int, tuple[Rect, str, tuple[int, ...]]] = {}
     for k, (rect, label, _) in enumerate(elements):
         root = find(k)
+        members: tuple[int, ...] = (k,)
         if root in merged:
-            (r0, r1, c0, c1), _ = merged[root]
+            (r0, r1, c0, c1), _, members = merged[root]
             rect = (min(r0, rect[0]), max(r1, rect[1]), min(c0, rect[2]), max(c1, rect[3]))
-        merged[root] = (rect, label)
+            members += (k,)
+        merged[root] = (rect, label, members)
     return [merged[k] for k in sorted(merged)]
 
 
 def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,
-            s: float) -> tuple[FacadeLayout, list]:
-    """Region tree in metres (y up) and the element rectangles in working pixels."""
+            s: float) -> tuple[FacadeLayout, list, list]:
+    """Region tree in metres (y up), the element rectangles in working pixels and the paths of their terminals
+    from the root (child indices; the tile is at depth ``TILE_DEPTH``)."""
     elements: list = []
+    paths: list = []
 
     def region(rect, symbol, label=None, children=(), element=None):
         r0, r1, c0, c1 = rect
@@ -294,13 +320,15 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
         return Region(x=x0, y=y0, w=x1 - x0, h=y1 - y0, symbol=symbol, label=label, depth=e.depth if e else 0.0,
                       material=e.material if e else None, children=tuple(children))
 
-    def build(node: Node, m: int, symbol: str, i: int, j: int):
+    def build(node: Node, m: int, symbol: str, i: int, j: int, path: tuple[int, ...]):
         if node.children:  # regions that the proportional mapping shrank to nothing are left out
-            kids = [build(c, m, f"{symbol}_{k}", i, j) for k, c in enumerate(node.children)
+            kept = [(k, c) for k, c in enumerate(node.children)
                     if c.rects[m][0] < c.rects[m][1] and c.rects[m][2] < c.rects[m][3]]
+            kids = [build(c, m, f"{symbol}_{k}", i, j, path + (n,)) for n, (k, c) in enumerate(kept)]
             return region(node.rects[m], symbol, children=kids)
         if node.element is not None:
             elements.append((node.rects[m], node.label, (i, j)))
+            paths.append(path)
         return region(node.rects[m], (node.label or "wall").capitalize(), node.label or "wall", element=node.element)
 
     floor_regions = []
@@ -310,10 +338,10 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
         row = []
         for j in range(tiles.size - 1):
             symbol, node, m = trees[(i, j)]
-            row.append(build(node, m, symbol, i, j))
+            row.append(build(node, m, symbol, i, j, (floors.size - 2 - i, j)))
         floor_regions.append(region((floors[i], floors[i + 1], tiles[0], tiles[-1]), name, children=row))
     root = region((0, H, tiles[0], tiles[-1]), "Facade", children=reversed(floor_regions))
-    return FacadeLayout(root.w, root.h, root), elements
+    return FacadeLayout(root.w, root.h, root), elements, paths
 
 
 def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,

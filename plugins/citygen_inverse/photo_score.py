@@ -30,6 +30,14 @@ def facade_box(boxes: dict[str, list[Box]]) -> Box:
     return float(a[:, 0].min()), float(a[:, 1].min()), float(a[:, 2].max()), float(a[:, 3].max())
 
 
+def layout_boxes(layout, label: str = "window") -> list[Box]:
+    """The ``label`` terminals of a photo's FacadeLayout as crop-pixel boxes (y down), through the layout's
+    ``metres_per_pixel``: what ``citygen layout from-photo`` writes, scored like the element boxes."""
+    m = layout.meta["metres_per_pixel"]
+    return [(r.x / m, (layout.height - r.y - r.h) / m, (r.x + r.w) / m, (layout.height - r.y) / m)
+            for r in layout.leaves if r.label == label]
+
+
 def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Pairwise intersection over union of boxes ``(n, 4)`` and ``(m, 4)``."""
     ix = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]), 0, None)
