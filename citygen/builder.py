@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-from warnings import catch_warnings, simplefilter, warn_explicit
 
 import numpy as np
 from shapely.geometry import MultiPolygon
@@ -25,7 +24,7 @@ from citygen.mass import Mass
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import RoofWarning, rectangle_like, roof_spec
+from citygen.roof import rectangle_like, roof_notes, roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE
 from citygen.usd.writer import BuildingRecord
@@ -134,16 +133,9 @@ class Builder:
         if builder is None or builder is flat:
             return flat.build(mass.outline, top, spec) if flat else None
         try:
-            with catch_warnings(record=True) as caught:
-                simplefilter("always", RoofWarning)
+            with roof_notes() as notes:  # what the builder reports is this building's warning
                 roof = builder.build(mass.outline, top, spec)
-            # (the warnings module's state is per process: on a worker running several threads a RoofWarning
-            # may be reported with another building; docs/distributed.md advises one thread per worker)
-            for w in caught:  # a builder's RoofWarning is the building's warning; others pass on
-                if issubclass(w.category, RoofWarning):
-                    warnings.append(f"{footprint.id}: {spec.shape} roof: {w.message}")
-                else:
-                    warn_explicit(w.message, w.category, w.filename, w.lineno)
+            warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
             return roof
         except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")

@@ -13,7 +13,10 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+import threading
+import warnings
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +38,31 @@ _NUMBER = re.compile(r"^\s*(-?\d+(?:\.\d*)?)\s*(m|deg|°)?\s*$")
 
 
 class RoofWarning(UserWarning):
-    """A roof builder built something other than asked (e.g. ignored party walls); the pipeline reports it."""
+    """A roof builder built something other than asked (e.g. ignored party walls), outside :func:`roof_notes`."""
+
+
+_NOTES = threading.local()
+
+
+@contextmanager
+def roof_notes() -> Iterator[list[str]]:
+    """Collect what roof builders :func:`note` in this thread (the pipeline: per building, as its warnings)."""
+    outer = getattr(_NOTES, "items", None)
+    _NOTES.items = items = []
+    try:
+        yield items
+    finally:
+        _NOTES.items = outer
+
+
+def note(message: str) -> None:
+    """Report that a roof was built other than asked: to the enclosing :func:`roof_notes` of this thread (so
+    concurrent threads never mix their buildings' reports), else as a :class:`RoofWarning`."""
+    items = getattr(_NOTES, "items", None)
+    if items is None:
+        warnings.warn(message, RoofWarning, stacklevel=2)
+    else:
+        items.append(message)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,6 @@ triangles wound outward. A failure raises :class:`RoofError`; the pipeline then 
 from __future__ import annotations
 
 import math
-import warnings
 
 import mapbox_earcut
 import numpy as np
@@ -28,7 +27,7 @@ from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
-from citygen.roof import ORIENTATIONS, RoofSpec, RoofWarning, rectangle_like
+from citygen.roof import ORIENTATIONS, RoofSpec, note, rectangle_like
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 
 
@@ -276,7 +275,7 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     """A roof over the weighted straight skeleton of ``part`` (:func:`edge_weights`) with ``shape``'s profile;
     faces of weight-0 edges are gable walls; ``gables``: hip ends turned into gables too. A part enclosed by
     party walls on every side (a building inside a block, seen only from above) is roofed as if free; where the
-    weighted skeleton fails, so is the part, with a :class:`RoofWarning`."""
+    weighted skeleton fails, so is the part, with a :func:`citygen.roof.note`."""
     weights = edge_weights(part, party, orientation, gables)
     if party and not weights.any():
         return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
@@ -285,7 +284,7 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     except RoofError as exc:
         if not party:
             raise
-        warnings.warn(f"party walls ignored: {exc}", RoofWarning, stacklevel=2)
+        note(f"party walls ignored: {exc}")
         return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
     standing = {k for k in range(len(faces)) if weights[k] == 0}
     walls = [faces[k] for k in sorted(standing)]

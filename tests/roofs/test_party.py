@@ -222,3 +222,61 @@ def test_helsinki_pent_roof_over_a_party_step_falls_back_to_the_free_roof():
         mesh = HippedRoof().build(outline, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3, 4)))
     edges, z = _open_edges(mesh)
     assert _same_edges(edges, _outline_edges(outline))
+
+
+def test_roof_notes_are_collected_per_thread():
+    """Bug fixture: the builder captured RoofWarnings with warnings.catch_warnings, whose state is per process, so
+    on a worker running threads one building's report could land with another. Notes go to their own thread."""
+    import threading
+
+    from citygen.roof import note, roof_notes
+    seen: dict[int, list[str]] = {}
+    start = threading.Barrier(4)
+
+    def build(k: int) -> None:
+        with roof_notes() as notes:
+            start.wait()
+            for i in range(200):
+                note(f"building {k} note {i}")
+        seen[k] = notes
+    threads = [threading.Thread(target=build, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert all(notes == [f"building {k} note {i}" for i in range(200)] for k, notes in seen.items())
+    with roof_notes() as outer:
+        with roof_notes() as inner:
+            note("inner")
+        note("outer")
+    assert (outer, inner) == (["outer"], ["inner"])
+
+
+def test_a_roof_builder_note_becomes_its_buildings_warning(small_scene):
+    """What a builder reports with ``citygen.roof.note`` reaches the report as that building's warning."""
+    from citygen.hookspecs import hookimpl
+    from citygen.pipeline import generate_city
+    from citygen.registry import RoofBuilder, load_registry
+    from citygen.roof import note
+    from citygen.scene import load_scene
+    from citygen_roofs.plugin import FlatRoof
+    from tests.core.fakes import FakePlugin
+
+    class Noting(RoofBuilder):
+        id, description = "noting", "a flat roof that says so"
+
+        def build(self, outline, top, spec=None):
+            note("built flat on purpose")
+            return FlatRoof().build(outline, top, spec)
+
+    class Plugin:
+        @hookimpl
+        def citygen_roof_builders(self):
+            return [Noting()]
+
+    text = small_scene.read_text().replace("floor_height = 3.0", 'floor_height = 3.0\nroof_shape = "noting"')
+    small_scene.write_text(text)
+    registry = load_registry(extra_plugins=[FakePlugin(), Plugin()])
+    report = generate_city(load_scene(small_scene, roof_shapes=registry.roof_builders), registry=registry, jobs=1)
+    noted = [w for w in report.warnings if w.endswith("noting roof: built flat on purpose")]
+    assert len(noted) == report.written and {w.split(":")[0] for w in noted} == {"way/1", "way/2", "way/3"}
