@@ -30,6 +30,9 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.scene import Scene
 from citygen.usd.writer import StageStats, StageWriter, prim_name
 
+#: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
+GROUND_MARGIN = 20.0
+
 
 @dataclass
 class Report:
@@ -113,6 +116,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         except Exception as exc:
             report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
     cover = neighbour_cover(masses)
+    ground = _ground(masses) if scene.output.ground and masses else None
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in footprints]
     size = scene.output.tile_size
@@ -131,13 +135,15 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if executor == "dask":
         _generate_on_dask(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs, scheduler, report,
-                          progress)
+                          progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **report.timings,
                           "total": time.perf_counter() - t0}
         return report
     usd = 0.0
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
                      tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod) as writer:
+        if ground:
+            writer.ground(*ground)
         for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
             report.warnings += outcome.warnings
             if outcome.record is None:
@@ -154,13 +160,24 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     return report
 
 
+def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
+    """The ground quad: the masses' bounds plus ``GROUND_MARGIN`` on every side, at the lowest base."""
+    bounds = np.array([m.outline.bounds for m in masses])
+    x0, y0 = bounds[:, :2].min(axis=0) - GROUND_MARGIN
+    x1, y1 = bounds[:, 2:].max(axis=0) + GROUND_MARGIN
+    return float(x0), float(y0), float(x1), float(y1), float(min(m.base for m in masses))
+
+
 def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
                       out: Path, layer_data: dict[str, Any], jobs: int, scheduler: str | None, report: Report,
-                      progress: Callable[[int, int], None] | None) -> None:
-    """Tiles built and written by dask workers; the root layer listing them written here."""
+                      progress: Callable[[int, int], None] | None,
+                      ground: tuple[float, float, float, float, float] | None) -> None:
+    """Tiles built and written by dask workers; the root layer listing them (and the ground) written here."""
     t0 = time.perf_counter()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod) as writer:
+        if ground:
+            writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
         results = run_tiles(work, job, scheduler, jobs, progress)
         t1 = time.perf_counter()

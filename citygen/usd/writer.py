@@ -233,6 +233,15 @@ class StageWriter:
                 self.materials[name] = self.author.material(self.looks, prim_name(name, self.material_names))
         return self.materials[name]
 
+    def ground(self, x0: float, y0: float, x1: float, y1: float, z: float) -> None:
+        """``/World/Ground``: one flat quad (material and semantic label ``ground``) under the city at height ``z``."""
+        quad = MeshData(np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=np.float32),
+                        np.array([4], dtype=np.int32), np.arange(4, dtype=np.int32))
+        with Sdf.ChangeBlock():
+            self.author.mesh(self.world, "Ground", quad, self.material("ground"), "ground")
+        self.counts["meshes"] += 1
+        self.counts["polygons"] += 1
+
     def prototype(self, key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
         """The ``/Prototypes`` prim of an element kind or module, authored on first use."""
         if key in self.prototypes:

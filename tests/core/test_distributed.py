@@ -6,6 +6,7 @@ import json
 import socket
 import sys
 import threading
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -235,3 +236,20 @@ def test_a_failed_tile_task_stops_the_run_and_keeps_the_old_stage(small_scene, t
         generate_city(scene, registry=test_registry, executor="dask", scheduler=cluster.scheduler_address)
     assert {p.name: p.read_bytes() for p in [out, *(out.parent / "small_tiles").iterdir()]} == before
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]
+
+
+def test_output_options_compose_the_same_on_dask(small_scene, test_registry, cluster):
+    """ground, lod and uvs reach the dask workers' tile layers and the root layer as they reach the local ones."""
+    def scene(path):
+        s = _scene(small_scene, path)
+        return replace(s, output=replace(s.output, ground=True, lod=True, uvs=True))
+    local = generate_city(scene("local/small.usda"), registry=test_registry)
+    dask = generate_city(scene("dask/small.usda"), registry=test_registry, executor="dask",
+                         scheduler=cluster.scheduler_address)
+    composed = _composed(dask.stats.path)
+    assert composed == _composed(local.stats.path)
+    assert "/World/Ground" in composed
+    stage = Usd.Stage.Open(str(dask.stats.path))
+    assert all(p.GetVariantSets().HasVariantSet("lod") for p in buildings(stage))
+    assert all(p.HasAttribute("primvars:st") for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert _errors(dask.stats.path) == []

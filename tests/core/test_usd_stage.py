@@ -187,3 +187,21 @@ def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small
         z = np.array(walls.GetPointsAttr().Get())[:, 2]
         height = prim.GetAttribute("citygen:height").Get()
         assert z.max() - z.min() == pytest.approx(height, abs=1e-3)
+
+
+def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
+    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nground = true')
+    small_scene.write_text(text)
+    report = generate(small_scene, test_registry, None)
+    assert errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    ground = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Ground"))
+    points = np.array(ground.GetPointsAttr().Get())
+    feet = np.array([[p.GetAttribute("citygen:base").Get()] for p in buildings(stage)])
+    assert len(points) == 4 and np.all(points[:, 2] == feet.min())
+    roofs = np.concatenate([np.array(UsdGeom.Mesh(p.GetChild("Roof")).GetPointsAttr().Get())
+                            for p in buildings(stage)])
+    assert np.all(points[:, :2].min(axis=0) < roofs[:, :2].min(axis=0) - 19)  # 20 m beyond every building
+    assert np.all(points[:, :2].max(axis=0) > roofs[:, :2].max(axis=0) + 19)
+    labels = UsdSemantics.LabelsAPI(ground.GetPrim(), "class").GetLabelsAttr().Get()
+    assert list(labels) == ["ground"]
