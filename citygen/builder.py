@@ -26,7 +26,7 @@ from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.roof import rectangle_like, roof_notes, roof_spec
 from citygen.scene import Assignment, Scene
-from citygen.usd.materials import WALL_PALETTE
+from citygen.usd.materials import WALL_PALETTE, colour_material
 from citygen.usd.writer import BuildingRecord
 
 
@@ -92,11 +92,11 @@ class Builder:
                 for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
                     face = request.context.face_index
                     layouts[face] = hidden_behind(self._checked(layout, request, kind.id, warnings), bins[face])
-            palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
-            wall = "brick" if footprint.attributes.get("building:material") == "brick" else WALL_PALETTE[palette]
+            wall, roof_material = self._materials(footprint)
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
             roof = self._roof(footprint, mass, cover, warnings)
-            geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules")
+            geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules",
+                                      roof_material=roof_material)
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
         except Exception as exc:  # a plugin bug must skip one building, not the city
@@ -107,6 +107,16 @@ class Builder:
                       "ruleset": ", ".join(used) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
         return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+
+    def _materials(self, footprint: Footprint) -> tuple[str, str]:
+        """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for
+        ``building:material = brick``, else a wall drawn from the palette (per building seed) and a dark roof."""
+        attrs = footprint.attributes
+        wall = colour_material(attrs.get("building:colour"))
+        if wall is None:
+            palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
+            wall = "brick" if attrs.get("building:material") == "brick" else WALL_PALETTE[palette]
+        return wall, colour_material(attrs.get("roof:colour")) or "roof_dark"
 
     def _roof(self, footprint: Footprint, mass: Mass, cover: np.ndarray, warnings: list[str]) -> MeshData | None:
         """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule

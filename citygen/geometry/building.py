@@ -82,6 +82,7 @@ class BuildingGeometry:
     modules: Mapping[ModuleKey, ModuleProto]
     roof: MeshData | None
     walls: MeshData | None = None
+    roof_material: str = "roof_dark"
 
 
 class _Sink:
@@ -234,7 +235,7 @@ def _build_module_proto(key: ModuleKey, region: Region) -> ModuleProto:
 
 
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
-                   roof: MeshData | None, modules: bool = True) -> BuildingGeometry:
+                   roof: MeshData | None, modules: bool = True, roof_material: str = "roof_dark") -> BuildingGeometry:
     """Geometry of one building from its faces and their layouts (``None``: a plain wall face).
 
     With ``modules``, repeated subtrees become module instances (:mod:`citygen.geometry.modules`); the remaining
@@ -267,4 +268,5 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), face.matrix())
              for face, _ in layouts]
     walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
-    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof, walls=walls)
+    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof, walls=walls,
+                            roof_material=roof_material)

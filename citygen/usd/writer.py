@@ -395,7 +395,7 @@ def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecor
                                             label) is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        author.mesh(prim, "Roof", geo.roof, material("roof_dark"), "roof")
+        author.mesh(prim, "Roof", geo.roof, material(geo.roof_material), "roof")
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances

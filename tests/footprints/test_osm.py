@@ -158,9 +158,10 @@ def test_a_scene_reads_an_osm_file_and_writes_a_valid_stage(tmp_path):
     from pxr import Usd
 
     outline, low, tower = _square(1, 0, 0, 30, 20), _square(11, 0, 0, 20, 20), _square(21, 20, 0, 10, 20)
-    ways = [(100, _ring(outline), {"building": "church", "height": "30"}),
-            (101, _ring(low), {"building:part": "yes", "height": "12"}),
-            (102, _ring(tower), {"building:part": "yes", "height": "30", "min_height": "12"})]
+    ways = [(100, _ring(outline), {"building": "church", "height": "30", "building:colour": "#ffffff"}),
+            (101, _ring(low), {"building:part": "yes", "height": "12", "roof:colour": "#b4c9b3"}),
+            (102, _ring(tower), {"building:part": "yes", "height": "30", "min_height": "12",
+                                 "building:colour": "brown"})]
     _osm(tmp_path / "church.osm", outline + low + tower, ways)
     (tmp_path / "scene.toml").write_text(
         f'[footprints]\npath = "church.osm"\n[[assign]]\nruleset = "{(ROOT / "rulesets" / "historic.grammar").as_posix()}"\n'
@@ -172,3 +173,11 @@ def test_a_scene_reads_an_osm_file_and_writes_a_valid_stage(tmp_path):
     bases = {p.GetAttribute("citygen:sourceId").Get(): p.GetAttribute("citygen:base").Get()
              for p in stage.Traverse() if p.HasAttribute("citygen:sourceId")}
     assert bases == {"way/101": 0.0, "way/102": pytest.approx(12.0)}
+    # colour tags: the low part takes the outline's white walls and has its own roof colour; the tower is brown
+    looks = {p.GetName() for p in stage.GetPrimAtPath("/World/Looks").GetChildren()}
+    assert {"colour_ffffff", "colour_a52a2a", "colour_b4c9b3"} <= looks
+    assert not any(name.startswith("plaster_") for name in looks)  # no palette wall where the data has a colour
+    parts = {p.GetAttribute("citygen:sourceId").Get(): p for p in stage.Traverse() if p.HasAttribute("citygen:sourceId")}
+    roofs = [parts[i].GetChild("Roof").GetRelationship("material:binding").GetTargets()[0].name
+             for i in ("way/101", "way/102")]
+    assert roofs == ["colour_b4c9b3", "roof_dark"]
