@@ -53,7 +53,8 @@ def test_a_closed_building_way_is_a_footprint_with_its_tags(tmp_path):
     result = _read(_osm(tmp_path / "a.osm", nodes, [(100, _ring(nodes), {"building": "house", "height": "7"})]))
     (fp,) = result.footprints
     assert fp.id == "way/100" and fp.height == 7.0 and fp.height_source == "height"
-    assert fp.attributes["building"] == "house" and fp.attributes["osm_type"] == "way" and fp.attributes["osm_id"] == 100
+    assert fp.attributes["building"] == "house"
+    assert fp.attributes["osm_type"] == "way" and fp.attributes["osm_id"] == 100
     assert fp.polygon.area == pytest.approx(200.0, rel=0.01)
     assert result.skipped == () and result.georef.crs.endswith("4326")
 
@@ -164,7 +165,8 @@ def test_a_scene_reads_an_osm_file_and_writes_a_valid_stage(tmp_path):
                                  "building:colour": "brown"})]
     _osm(tmp_path / "church.osm", outline + low + tower, ways)
     (tmp_path / "scene.toml").write_text(
-        f'[footprints]\npath = "church.osm"\n[[assign]]\nruleset = "{(ROOT / "rulesets" / "historic.grammar").as_posix()}"\n'
+        f'[footprints]\npath = "church.osm"\n[[assign]]\n'
+        f'ruleset = "{(ROOT / "rulesets" / "historic.grammar").as_posix()}"\n'
         '[output]\npath = "church.usda"\n')
     report = generate_city(load_scene(tmp_path / "scene.toml"), jobs=1)
     assert report.written == 2 and not report.skipped
@@ -177,7 +179,8 @@ def test_a_scene_reads_an_osm_file_and_writes_a_valid_stage(tmp_path):
     looks = {p.GetName() for p in stage.GetPrimAtPath("/World/Looks").GetChildren()}
     assert {"colour_ffffff", "colour_a52a2a", "colour_b4c9b3"} <= looks
     assert not any(name.startswith("plaster_") for name in looks)  # no palette wall where the data has a colour
-    parts = {p.GetAttribute("citygen:sourceId").Get(): p for p in stage.Traverse() if p.HasAttribute("citygen:sourceId")}
+    parts = {p.GetAttribute("citygen:sourceId").Get(): p for p in stage.Traverse()
+             if p.HasAttribute("citygen:sourceId")}
     roofs = [parts[i].GetChild("Roof").GetRelationship("material:binding").GetTargets()[0].name
              for i in ("way/101", "way/102")]
     assert roofs == ["colour_b4c9b3", "roof_dark"]
