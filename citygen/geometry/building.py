@@ -24,7 +24,12 @@ from citygen.geometry.modules import CM, ModuleKey, Signatures
 from citygen.geometry.quads import box_quads, merge_rects, to_world, weld
 from citygen.layout import FacadeLayout, Region
 from citygen.mass import Face, Mass
+from citygen.usd.materials import COLOUR_PREFIX
 
+#: A ruleset's material for the building's own plaster render: painted in the building's wall material (its
+#: palette pick, or the OSM ``building:colour``, which paints every wall), so rulesets shared by a street still give
+#: each house its colour.
+BUILDING_RENDER = "render"
 #: Depth of trim labels whose regions say 0 (metres along the normal).
 TRIM_DEPTH = {"cornice": 0.3, "ledge": 0.12, "molding": 0.05, "deco": 0.04, "pillar": 0.1}
 #: Material of a label when neither the region nor the building palette says otherwise.
@@ -134,6 +139,8 @@ def _terminal_arrays(regions: Iterable[Region], wall_material: str, dx: float = 
         if label is None or r.w <= 1e-6 or r.h <= 1e-6:
             continue
         material = r.material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
+        if material == BUILDING_RENDER or (label == "wall" and wall_material.startswith(COLOUR_PREFIX)):
+            material = wall_material  # the building's colour; a colour from the data paints every wall
         depth = r.depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
         code = styles.setdefault((label, material), len(styles))
         rows.append((r.x, r.y, r.x + r.w, r.y + r.h, depth, code))

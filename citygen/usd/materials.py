@@ -39,6 +39,8 @@ WALL_PALETTE = ("plaster_ochre", "plaster_cream", "plaster_white", "plaster_pink
                 "brick")
 
 
+#: Material names of colours from the data (``colour_rrggbb``).
+COLOUR_PREFIX = "colour_"
 #: OSM colour names in use (https://wiki.openstreetmap.org/wiki/Key:building:colour) as sRGB hex.
 COLOUR_NAMES = {"white": "ffffff", "black": "000000", "grey": "808080", "gray": "808080", "silver": "c0c0c0",
                 "lightgrey": "d3d3d3", "lightgray": "d3d3d3", "darkgrey": "a9a9a9", "darkgray": "a9a9a9",
@@ -57,7 +59,7 @@ def colour_material(value: object) -> str | None:
     if not match:
         return None
     digits = match.group(1)
-    return "colour_" + (digits if len(digits) == 6 else "".join(c * 2 for c in digits))
+    return COLOUR_PREFIX + (digits if len(digits) == 6 else "".join(c * 2 for c in digits))
 
 
 def look(name: str) -> tuple[tuple[float, float, float], float, float, float]:

@@ -75,3 +75,26 @@ def test_a_floor_of_identical_bays_instances_the_bay():
     facade = _facade(False)
     mods, loose = Signatures([facade]).split(facade)
     assert len(mods) == 30 and {m.symbol for m in mods} == {"Bay"} and loose == []
+
+
+def test_render_walls_take_the_buildings_colour_and_a_data_colour_paints_every_wall():
+    """Bug fixture: the shipped grammars' walls say `material: render`, a fixed colour, so the per-building palette
+    never showed and the demo city was one colour; `render` is the building's own plaster."""
+    from shapely.geometry import Polygon
+
+    from citygen.footprints import Footprint
+    from citygen.geometry.building import build_geometry
+    from citygen.layout import FacadeLayout, Region
+    from citygen.mass import build_mass
+
+    mass = build_mass(Footprint("b", Polygon([(0, 0), (6, 0), (6, 4), (0, 4)]), 3.0, "height"))
+    face = mass.faces[0]
+    kids = (Region(0, 0, 2, 3, "W", "wall", material="render"), Region(2, 0, 2, 0.5, "P", "wall", material="stone"),
+            Region(2, 0.5, 2, 2.5, "C", "cornice", material="stone"), Region(4, 0, 2, 3, "X", "wall"))
+    layout = FacadeLayout(6, 3, Region(0, 0, 6, 3, "Facade", children=kids))
+
+    def styles(wall):
+        meshes = build_geometry(mass, [(face, layout)], wall, None, modules=False).meshes
+        return {key for key in meshes if key[0] in ("wall", "cornice")}
+    assert styles("plaster_ochre") == {("wall", "plaster_ochre"), ("wall", "stone"), ("cornice", "stone")}
+    assert styles("colour_ff0000") == {("wall", "colour_ff0000"), ("cornice", "stone")}
