@@ -25,6 +25,12 @@ def copy_city(scene_path, copies):
         for k in range(1, copies + 1) for f in features]))
 
 
+def with_output(scene_path, option):
+    """The small scene with one more ``[output]`` option line (e.g. ``uvs = true``)."""
+    text = scene_path.read_text()
+    scene_path.write_text(text.replace('path = "out/small.usda"', f'path = "out/small.usda"\n{option}'))
+
+
 def errors(path):
     return [f for f in validate_stage(path) if f.severity == "error"]
 
@@ -91,8 +97,7 @@ def test_one_door_per_building(small_scene, test_registry, tmp_path):
 
 
 def test_up_axis_y(small_scene, test_registry, tmp_path):
-    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nup_axis = "Y"')
-    small_scene.write_text(text)
+    with_output(small_scene, 'up_axis = "Y"')
     report = generate(small_scene, test_registry, None)
     stage = Usd.Stage.Open(str(report.stats.path))
     assert UsdGeom.GetStageUpAxis(stage) == "Y"
@@ -118,8 +123,7 @@ def test_element_instancing_places_the_same_elements(small_scene, test_registry,
     from tests.usd_util import buildings
     modules_out = tmp_path / "modules.usda"
     generate(small_scene, test_registry, modules_out)
-    small_scene.write_text(small_scene.read_text().replace('path = "out/small.usda"',
-                                                           'path = "out/small.usda"\ninstancing = "elements"'))
+    with_output(small_scene, 'instancing = "elements"')
     elements_out = tmp_path / "elements.usda"
     report = generate(small_scene, test_registry, elements_out)
     assert errors(elements_out) == []
@@ -147,8 +151,7 @@ def test_a_registry_workers_cannot_rebuild_runs_in_one_job(small_scene, test_reg
 
 
 def test_uvs_are_metres_on_every_mesh_and_validate(small_scene, test_registry, tmp_path):
-    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nuvs = true')
-    small_scene.write_text(text)
+    with_output(small_scene, 'uvs = true')
     report = generate(small_scene, test_registry, None)
     assert errors(report.stats.path) == []
     stage = Usd.Stage.Open(str(report.stats.path))
@@ -169,8 +172,7 @@ def test_no_uvs_unless_asked(small_scene, test_registry, tmp_path):
 
 def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small_scene, test_registry, tmp_path):
     plain = generate(small_scene, test_registry, tmp_path / "plain.usda")
-    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nlod = true')
-    small_scene.write_text(text)
+    with_output(small_scene, 'lod = true')
     report = generate(small_scene, test_registry, None)
     assert errors(report.stats.path) == []
     stage, before = Usd.Stage.Open(str(report.stats.path)), Usd.Stage.Open(str(plain.stats.path))
@@ -190,8 +192,7 @@ def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small
 
 
 def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
-    text = small_scene.read_text().replace('path = "out/small.usda"', 'path = "out/small.usda"\nground = true')
-    small_scene.write_text(text)
+    with_output(small_scene, 'ground = true')
     report = generate(small_scene, test_registry, None)
     assert errors(report.stats.path) == []
     stage = Usd.Stage.Open(str(report.stats.path))
