@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from shapely.geometry import MultiPolygon
 
-from citygen.coordinator import face_bins, party_walls, plan_building
+from citygen.coordinator import face_bins, plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
@@ -94,9 +94,9 @@ class Builder:
                     layouts[face] = hidden_behind(self._checked(layout, request, kind.id, warnings), bins[face])
             wall, roof_material = self._materials(footprint)
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof = self._roof(footprint, mass, cover, warnings)
+            roof = self._roof(footprint, mass, plan.party_faces, warnings)
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules",
-                                      roof_material=roof_material)
+                                      roof_material=roof_material, walls=self.scene.output.lod)
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
         except Exception as exc:  # a plugin bug must skip one building, not the city
@@ -118,18 +118,18 @@ class Builder:
             wall = "brick" if attrs.get("building:material") == "brick" else WALL_PALETTE[palette]
         return wall, colour_material(attrs.get("roof:colour")) or "roof_dark"
 
-    def _roof(self, footprint: Footprint, mass: Mass, cover: np.ndarray, warnings: list[str]) -> MeshData | None:
+    def _roof(self, footprint: Footprint, mass: Mass, party: tuple[int, ...], warnings: list[str]
+              ) -> MeshData | None:
         """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
         that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning).
-        Faces that are party walls (``cover``, as the coordinator decides) are passed on in the spec."""
+        The faces the coordinator found to be party walls (``party``) are passed on in the spec."""
         attrs = assign_attributes(footprint, mass)
         rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
         defaults = self.scene.defaults
         spec = roof_spec(footprint.attributes, mass.height,
                          shape=(rule and rule.roof_shape) or defaults.roof_shape,
                          pitch=(rule and rule.roof_pitch) or defaults.roof_pitch,
-                         party=tuple(int(k) for k in np.flatnonzero(
-                             party_walls(cover, [f.width for f in mass.faces], mass.height))))
+                         party=party)
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
         if spec.shape not in self.roofs:

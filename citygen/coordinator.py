@@ -43,6 +43,7 @@ class BuildingPlan:
     entrance_face: int | None
     requests: tuple[FacadeRequest, ...]
     plain_faces: tuple[int, ...]
+    party_faces: tuple[int, ...] = ()  # party walls (also plain): a pitched roof must not slope onto them
 
 
 def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lifted: bool = False
@@ -91,7 +92,8 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
     faces = mass.faces
     widths = np.array([f.width for f in faces])
     cover = face_bins(cover)
-    facade = ~party_walls(cover, widths, mass.height) & (widths >= defaults.min_face_width)
+    party = party_walls(cover, widths, mass.height)
+    facade = ~party & (widths >= defaults.min_face_width)
     free_foot = (cover.max(axis=1) <= 0.0) & (not lifted)
     street = facade & free_foot & np.array([not f.is_courtyard for f in faces])
     door_candidates = np.flatnonzero(street & (widths >= 1.5))
@@ -113,7 +115,8 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
                                       context=context, seed=(seed, footprint.id, face.index)))
     return BuildingPlan(building_id=footprint.id, levels=len(floor_lines) - 1, floor_lines=floor_lines,
                         entrance_face=entrance, requests=tuple(requests),
-                        plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)))
+                        plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)),
+                        party_faces=tuple(int(i) for i in np.flatnonzero(party)))
 
 
 def _corner_strips(mass: Mass, widths: np.ndarray, facade: np.ndarray, corner_width: float) -> np.ndarray:

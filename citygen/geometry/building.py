@@ -242,11 +242,13 @@ def _build_module_proto(key: ModuleKey, region: Region) -> ModuleProto:
 
 
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
-                   roof: MeshData | None, modules: bool = True, roof_material: str = "roof_dark") -> BuildingGeometry:
+                   roof: MeshData | None, modules: bool = True, roof_material: str = "roof_dark",
+                   walls: bool = False) -> BuildingGeometry:
     """Geometry of one building from its faces and their layouts (``None``: a plain wall face).
 
     With ``modules``, repeated subtrees become module instances (:mod:`citygen.geometry.modules`); the remaining
-    terminals become facade quads and element instances.
+    terminals become facade quads and element instances. With ``walls``, the mass is also kept as plain walls
+    (the ``mass`` level of detail).
     """
     sink = _Sink()
     protos: dict[ModuleKey, ModuleProto] = {}
@@ -273,7 +275,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m), face_quaternion(m),
                            np.asarray(scale))
     plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), face.matrix())
-             for face, _ in layouts]
-    walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
-    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof, walls=walls,
+             for face, _ in layouts] if walls else []
+    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof,
+                            walls=MeshData.from_quads(np.concatenate(plain)) if plain else None,
                             roof_material=roof_material)

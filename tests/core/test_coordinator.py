@@ -47,6 +47,7 @@ def test_party_walls_get_no_request_and_no_door():
     plan = plan_building(foot, mass, cover, Defaults(), 1)
     assert 0 in plan.plain_faces and all(r.context.face_index != 0 for r in plan.requests)
     assert plan.entrance_face == 2
+    assert plan.party_faces == (0,)  # the roof builder gets them from the plan
 
 
 def test_a_wall_above_a_lower_neighbour_gets_a_facade_but_no_door():

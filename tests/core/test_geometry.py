@@ -98,3 +98,17 @@ def test_render_walls_take_the_buildings_colour_and_a_data_colour_paints_every_w
         return {key for key in meshes if key[0] in ("wall", "cornice")}
     assert styles("plaster_ochre") == {("wall", "plaster_ochre"), ("wall", "stone"), ("cornice", "stone")}
     assert styles("colour_ff0000") == {("wall", "colour_ff0000"), ("cornice", "stone")}
+
+
+def test_plain_walls_are_built_only_for_the_mass_level_of_detail():
+    """The ``mass`` variant's plain walls were meshed for every building even without ``[output] lod``."""
+    from citygen.footprints import Footprint
+    from citygen.geometry.building import build_geometry
+    from citygen.mass import build_mass
+    from shapely.geometry import Polygon
+
+    mass = build_mass(Footprint("b", Polygon([(0, 0), (6, 0), (6, 4), (0, 4)]), 3.0, "height"))
+    faces = [(f, None) for f in mass.faces]
+    assert build_geometry(mass, faces, "plaster_ochre", None).walls is None
+    walls = build_geometry(mass, faces, "plaster_ochre", None, walls=True).walls
+    assert len(walls.counts) == 4 and np.isclose(walls.points[:, 2].max(), 3.0)
