@@ -3,7 +3,9 @@
     python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
-facade box; detected floors are compared with the annotated rows of windows, tiles with the columns of windows,
+facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors
+without windows such as a shop ground floor or an attic, and whether every row of windows lies in a floor of its
+own), tiles with the columns of windows,
 detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5); windows both as the reported element
 boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary
 is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
@@ -15,6 +17,8 @@ import argparse
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from citygen.errors import CitygenError
 from citygen_inverse.photo import analyse, load_photo
@@ -46,10 +50,26 @@ def evaluate(jpg: Path) -> dict:
     tp = matches(pred, ref)
     terminals = layout_boxes(result.layout)
     door_pred = result.boxes("door")
-    return {**row, "floors": len(result.floor_lines) - 1, "tiles": len(result.tile_lines) - 1, "pred": len(pred),
+    return {**row, "floors": len(result.floor_lines) - 1, "rows_ok": rows_in_floors(result.floor_lines, ref),
+            "tiles": len(result.tile_lines) - 1, "pred": len(pred),
             "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred),
             "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start,
             "size": (crop[2] - crop[0], crop[3] - crop[1])}
+
+
+def rows_in_floors(floor_lines: list[float], ref: list[tuple[float, ...]]) -> int:
+    """How many rows of annotated windows (groups of overlapping y intervals) have every window centre in one
+    floor band (between consecutive ``floor_lines``) that no other row's windows reach."""
+    lines = np.sort(np.asarray(floor_lines, dtype=float))
+    rows: list[list[tuple[float, ...]]] = []
+    end = -np.inf
+    for box in sorted(ref, key=lambda b: b[1]):
+        if box[1] >= end:
+            rows.append([])
+        rows[-1].append(box)
+        end = box[3] if box[1] >= end else max(end, box[3])
+    bands = [{int(np.searchsorted(lines, (b[1] + b[3]) / 2)) for b in row} for row in rows]
+    return sum(len(mine) == 1 and all(not mine & other for other in bands if other is not mine) for mine in bands)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -64,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     if not photos:
         print(f"error: no cmp_b*.jpg photos in {data}", file=sys.stderr)
         return 2
-    print(f"{'photo':10} {'crop':>9} {'rows':>4} {'floors':>6} {'cols':>4} {'tiles':>5} {'ref':>4} {'pred':>4} "
+    print(f"{'photo':10} {'crop':>9} {'rows':>4} {'floors':>6} {'ok':>3} {'cols':>4} {'tiles':>5} {'ref':>4} "
+          f"{'pred':>4} "
           f"{'tp':>4} {'prec':>5} {'rec':>5} {'lay':>4} {'ltp':>4} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
     rows = []
     for jpg in photos:
@@ -76,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
             continue
         prec = r["tp"] / r["pred"] if r["pred"] else 0.0
         rec = r["tp"] / r["ref"] if r["ref"] else 0.0
-        print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['cols']:4d} "
+        print(f"{r['photo']:10} {r['size'][0]:4d}x{r['size'][1]:<4d} {r['rows']:4d} {r['floors']:6d} {r['rows_ok']:3d} "
+              f"{r['cols']:4d} "
               f"{r['tiles']:5d} {r['ref']:4d} {r['pred']:4d} {r['tp']:4d} {prec:5.2f} {rec:5.2f} {r['lay_pred']:4d} "
               f"{r['lay_tp']:4d} {r['door_ref']:5d} "
               f"{r['door_pred']:4d} {r['door_tp']:3d} {r['cpu']:6.2f}")
@@ -101,6 +123,8 @@ def summary(name: str, rows: list[dict]) -> None:
     print(f"\n== {name}: photos {len(rows)}, analysed {len(ok)}, refused (no repetition) {len(rows) - len(ok)}")
     print(f"floors == window rows: {sum(r['floors'] == r['rows'] for r in ok)}/{len(ok)}, within 1: "
           f"{sum(abs(r['floors'] - r['rows']) <= 1 for r in ok)}/{len(ok)}")
+    print(f"window rows each in a floor of its own: all rows on {sum(r['rows_ok'] == r['rows'] for r in ok)}/"
+          f"{len(ok)} photos, {sum(r['rows_ok'] for r in ok)}/{sum(r['rows'] for r in ok)} rows")
     print(f"tiles == window columns: {sum(r['tiles'] == r['cols'] for r in ok)}/{len(ok)}, within 1: "
           f"{sum(abs(r['tiles'] - r['cols']) <= 1 for r in ok)}/{len(ok)}")
     print(f"windows (IoU >= 0.5): precision {tp / max(pred, 1):.3f} ({tp}/{pred}), recall {tp / max(ref, 1):.3f} "
@@ -112,7 +136,8 @@ def summary(name: str, rows: list[dict]) -> None:
           f"{sum(r['lay_tp'] == 0 for r in ok)}")
     dtp, dpred, dref = (sum(r[k] for r in ok) for k in ("door_tp", "door_pred", "door_ref"))
     print(f"doors (IoU >= 0.5): precision {dtp / max(dpred, 1):.3f} ({dtp}/{dpred}), recall {dtp / max(dref, 1):.3f} "
-          f"({dtp}/{dref}); photos with more detected than annotated doors {sum(r['door_pred'] > r['door_ref'] for r in ok)}")
+          f"({dtp}/{dref}); photos with more detected than annotated doors "
+          f"{sum(r['door_pred'] > r['door_ref'] for r in ok)}")
     print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
     return 0
 
