@@ -36,7 +36,7 @@ from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_gro
 WORK = 400
 MI_WORK = 300
 #: Floor periods searched, as fractions of the facade height; tile periods as fractions of its width.
-FLOOR_RANGE = (1 / 14, 1 / 2)
+FLOOR_RANGE = (1 / 20, 1 / 2)
 TILE_RANGE = (1 / 25, 1 / 2)
 #: Least height of the top and bottom floor and least width of the first and last tile, in periods.
 END_FLOOR = 0.35

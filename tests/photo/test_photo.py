@@ -49,6 +49,16 @@ def test_synthetic_floors_tiles_and_windows(case):
     assert matches(boxes, truth) == len(truth)
 
 
+def test_a_tall_facade_of_sixteen_floors_keeps_one_floor_per_row():
+    """Bug fixture (cmp_b0011, 12 window rows in 15 floors): floor periods below 1/14 of the facade height were
+    not searched, so two rows made one floor. Now down to 1/20 (tests: 16 floors of 40 px)."""
+    image, truth, _ = facade(floors=16, cols=4, floor_h=40, tile_w=60, win=(24, 30), off=(8, 15), seed=4)
+    result = analyse(image)
+    assert len(result.floor_lines) - 1 == 16
+    assert result.floor_period == pytest.approx(40, abs=2)
+    assert matches(result.boxes("window"), truth) == len(truth)
+
+
 def test_layout_partitions_and_scales():
     image, truth, _ = facade()
     by_floor = analyse(image, floor_height=3.0).layout
