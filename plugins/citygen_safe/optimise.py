@@ -24,6 +24,9 @@ WEIGHT_CAP = 10.0
 MIN_SIZE = 1e-3  #: the bound standing for x > 0 (metres)
 SAME_SIZE_TOL = 0.01  #: grid elements of one label whose widths agree within this fraction have the same size
 ACTIVE_SET_ROUNDS = 12  #: KKT solves before the DAQP fallback
+#: variables up to which the dense DAQP fallback runs: its time grows with their cube (2,000: ~3 s), and it is
+#: not counted in the work budget, so one face of a 400 m tower must not hold up its city
+DENSE_LIMIT = 2000
 DAQP_EQUALITY = 5  #: DAQP constraint sense ACTIVE | IMMUTABLE
 KKT_REG = 1e-9
 REFINEMENTS = 4  #: iterative refinement steps of the regularised KKT solve
@@ -212,7 +215,7 @@ def _solve(weight: np.ndarray, x_star: np.ndarray, A: sp.spmatrix, b: np.ndarray
     Active-set loop on the sparse KKT system, which tolerates redundant equality rows (so no rank test): violated
     inequality rows join the active set, active rows whose multiplier has the wrong sign leave it. When the loop
     does not settle (adding every violated row at once can over-constrain), DAQP's dual active set, which also
-    copes with dependent rows, solves the dense problem."""
+    copes with dependent rows, solves the dense problem -- up to ``DENSE_LIMIT`` variables; beyond, None."""
     P = 2 * weight**2
     q = -P * x_star
     A, G = sp.csr_matrix(A), sp.csr_matrix(G)
@@ -234,7 +237,7 @@ def _solve(weight: np.ndarray, x_star: np.ndarray, A: sp.spmatrix, b: np.ndarray
         if not violated:
             return x
         active += violated
-    return _dual_active_set(P, q, A, b, G, h)
+    return _dual_active_set(P, q, A, b, G, h) if P.size <= DENSE_LIMIT else None
 
 
 def _dual_active_set(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, G: sp.spmatrix,

@@ -111,3 +111,21 @@ def test_edit_command_lists_variations(capsys):
     main(["edit", str(ROOT / "rulesets" / "cmp_b0035.safe"), "--size", "12", "12", "--count", "2", "--json"])
     layouts = json.loads(capsys.readouterr().out)
     assert 1 <= len(layouts) <= 2 and all(lay["width"] == 12 for lay in layouts)
+
+
+def test_a_sliver_face_of_a_400_m_tower_falls_back_without_the_dense_solver(cmp_ruleset, monkeypatch):
+    """Bug fixture (fuzzed city: a 1.2 x 60 m hotel 400 m tall): the sizing QP of its 1.2 m face has ~5,000
+    variables; the KKT loop did not settle and the dense DAQP fallback (time growing with the cube) ran for
+    minutes per state, holding up the whole city. Beyond ``DENSE_LIMIT`` variables the state is given up instead
+    (here the face falls back to a plain wall, with the reason)."""
+    from dataclasses import replace
+
+    import citygen_safe.optimise as optimise
+    sizes = []
+    dense = optimise._dual_active_set
+    monkeypatch.setattr(optimise, "_dual_active_set", lambda P, *rest: sizes.append(P.size) or dense(P, *rest))
+    request = replace(FacadeRequest.preview(1.19, 400.0, 3.3, ground_height=4.4, entrance=False),
+                      corner_widths=(0.18, 0.18))
+    result = edit(cmp_ruleset, request)
+    assert all(n <= optimise.DENSE_LIMIT for n in sizes)
+    assert check_partition(result.layout) == [] and result.layout.meta.get("fallback")
