@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 from pathlib import Path
@@ -26,6 +27,9 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
                            registry=registry, progress=None if args.quiet else terminal_progress,
                            executor=args.executor, scheduler=args.scheduler)
     print(report.summary())
+    if args.report:
+        Path(args.report).write_text(json.dumps(report.to_dict(), indent=1) + "\n")
+        print(f"report: {args.report}")
     return 1 if args.strict and report.skipped else 0
 
 
@@ -104,6 +108,9 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
                    help="with --executor dask: the scheduler to use (e.g. tcp://host:8786); default: a local "
                         "cluster of --jobs workers")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g.add_argument("--report", metavar="FILE.json",
+                   help="also write the whole report as JSON: every skipped building (id, reason, where) and every "
+                        "warning (the summary shows the first 20), the stage's figures, timings")
     g.set_defaults(run=_cmd_generate)
     v = sub.add_parser("validate", help="run UsdValidation and mesh topology checks on stages")
     v.add_argument("stages", nargs="+")

@@ -15,7 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +57,12 @@ class Report:
                          f"{s.polygons} polygons, {s.instances} instances of {s.prototypes} prototypes")
         lines.append("time " + ", ".join(f"{k} {v:.2f}s" for k, v in self.timings.items()))
         return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The whole report as JSON-ready data (every skipped building and warning, the stage's figures)."""
+        stats = None if self.stats is None else {**asdict(self.stats), "path": str(self.stats.path)}
+        return {"written": self.written, "skipped": [asdict(s) for s in self.skipped], "warnings": self.warnings,
+                "stage": stats, "timings": self.timings}
 
 
 _Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]

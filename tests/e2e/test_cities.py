@@ -78,6 +78,12 @@ def test_generate_cli_reports_skips_and_strict_fails(tmp_path, capsys):
     assert "written 1 buildings, skipped 1" in text and "way/2" in text
     assert main(["generate", str(tmp_path / "mini.toml"), "-q", "--strict"]) == 1
     assert main(["validate", str(tmp_path / "mini.usda")]) == 0
+    assert main(["generate", str(tmp_path / "mini.toml"), "-q", "--report", str(tmp_path / "report.json")]) == 0
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["written"] == 1 and [s["id"] for s in report["skipped"]] == ["way/2"]
+    assert report["skipped"][0]["reason"] and "mini.geojson" in report["skipped"][0]["where"]
+    assert report["stage"]["buildings"] == 1 and report["stage"]["path"].endswith("mini.usda")
+    assert set(report["timings"]) >= {"import", "usd", "total"} and isinstance(report["warnings"], list)
 
 
 @pytest.mark.parametrize("scene_path", sorted((REPO / "scenes").glob("*.toml")), ids=lambda p: p.name)
