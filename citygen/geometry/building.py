@@ -80,7 +80,7 @@ class ModuleProto:
 @dataclass(frozen=True)
 class BuildingGeometry:
     """A building's facade meshes, element and module instances, roof, and ``walls``: its mass as plain wall
-    quads (the light level of detail a stage may offer instead of the facades)."""
+    quads (the light level of detail a stage may offer instead of the facades; None unless asked for)."""
 
     meshes: Mapping[tuple[str, str], MeshData]
     instances: Instances
