@@ -10,8 +10,10 @@ wu2014 §6.3) gets a ``grid`` rule over its terminals.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from functools import lru_cache
-from operator import eq
+from itertools import compress
+from operator import eq, ne, sub
 
 import numpy as np
 
@@ -108,31 +110,72 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             # per repeated region, the boundaries inside any of its instances, which a grouping keeping every
             # instance whole drops; distinct rows in lexicographic order (the first region's score), by f(a, o)
             per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
-            first: dict[bytes, int] = {}
-            flat = per_group.tobytes()
-            for g in range(per_group.shape[0]):
-                first.setdefault(flat[g * (m - 1):(g + 1) * (m - 1)], g)
-            rows = sorted(first)
-            ranked = sorted(range(len(rows)), key=lambda r: score[first[rows[r]]])
-            for r in ranked[:max_groupings]:
-                groupings.add(tuple(k + 1 for k, cut in enumerate(rows[r]) if not cut))
+            rows = per_group.view(np.dtype((np.void, m - 1))).ravel().tolist()  # each row's bytes
+            first = dict(zip(rows[::-1], range(len(rows) - 1, -1, -1)))  # distinct row -> its first group
+            kept = (~per_group).tolist()
+            for row in sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]:
+                groupings.add(tuple(compress(range(1, m), kept[first[row]])))
         bl = bounds.tolist()
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
-        seen = set()
         piece = _Pieces(index, box, axis, bl, atom_sigs)
-        for keep in groupings:
-            edges = [0, *keep, m]
-            sigs = [piece[ab] for ab in zip(edges, edges[1:])]
-            merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
-            for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
-                if len(e) < 3 or tuple(e) in seen:
-                    continue
-                seen.add(tuple(e))
-                actions.add(axis, bl, e, sg, line)
+        if actions.bound is None:
+            _add_all(actions, axis, bl, m, groupings, piece, line)
+        else:
+            _add_best(actions, axis, bl, m, groupings, piece, line)
     if not len(actions):
         actions.add_action(_grid(index, sig, model))
     return actions
+
+
+def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
+             ) -> None:
+    """Every grouping's rule, then the rule with its runs of identical children merged, in order (once each)."""
+    seen = set()
+    for keep in groupings:
+        edges = [0, *keep, m]
+        sigs = [piece[ab] for ab in zip(edges, edges[1:])]
+        merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+        for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
+            if len(e) < 3 or tuple(e) in seen:
+                continue
+            seen.add(tuple(e))
+            actions.add(axis, bl, e, sg, line)
+
+
+def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
+              ) -> None:
+    """The rules of ``_add_all`` for a greedy run (``actions.bound`` set), which keeps the first of least H: the
+    groupings are visited by a lower bound on H, known before any piece is looked up (the operator bound plus the
+    line costs of the boundaries that no merge of equal-size neighbours can drop), and those that cannot win are
+    never looked up. Each rule competes with its rank in ``_add_all``'s order (the first, when it comes twice), so
+    the kept rule is the one ``_add_all`` keeps."""
+    low, lam = actions.bound
+    order = []
+    for g, keep in enumerate(groupings):
+        edges = [0, *keep, m]
+        at = list(map(bl.__getitem__, edges))
+        sizes = list(map(sub, at[1:], at[:-1]))
+        kept = sum(compress(map(line.__getitem__, keep), map(ne, sizes, sizes[1:])))
+        order.append((low + lam * kept, g, edges))
+    order.sort(key=lambda t: t[:2])
+    seen: dict[tuple[int, ...], int] = {}
+    base = axis << 20
+    for bound, g, edges in order:
+        best = actions.best
+        if best is not None:
+            if bound > best[0]:
+                break
+            if bound == best[0] and base + 2 * g > best[1]:
+                continue
+        sigs = [piece[ab] for ab in zip(edges, edges[1:])]
+        merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+        for rank, (e, sg) in enumerate(((edges, sigs), merged) if merged else ((edges, sigs),), base + 2 * g):
+            key = tuple(e)
+            if len(e) < 3 or seen.get(key, rank + 1) <= rank:
+                continue
+            seen[key] = rank
+            actions.add(axis, bl, e, sg, line, rank=rank)
 
 
 def _line_costs(terms: np.ndarray, n: int, cov: np.ndarray) -> list[float]:
@@ -172,15 +215,20 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
         starts: dict[tuple[int, ...], list[int]] = {}
         for i in range(m - length + 1):
             starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
+        inner = [False] * (length - 1)
         for occ in starts.values():
+            if len(occ) < 2:
+                continue
             chosen, end = [], -1
             for i in occ:
                 if i >= end:
                     chosen.append(i)
                     end = i + length
             if len(chosen) >= 2:
-                inner = {i + d for i in chosen for d in range(1, length)}
-                found.append(((length - 1) * (len(chosen) - 1), tuple(k for k in range(1, m) if k not in inner)))
+                kept = [True] * m  # per boundary: not strictly inside a chosen occurrence
+                for i in chosen:
+                    kept[i + 1:i + length] = inner
+                found.append(((length - 1) * (len(chosen) - 1), tuple(compress(range(1, m), kept[1:]))))
                 repeated = True
         if not repeated:  # a substring twice apart has its prefix twice apart: no longer one repeats either
             break
@@ -231,9 +279,10 @@ class Candidates:
         self.index, self.box, self.model = index, box, model
         # least operator cost of >= 2 children: split into 2, repeat of 1 tile (symsplit, repeatABA cost more)
         low = min(model.split + 2, model.repeat + 1)
-        self._bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
+        self.bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
             else None
         self._best_only = best_only
+        self.best: tuple[float, float] | None = None  # with ``best_only``: H and rank of the kept candidate
         self.cost: list[float] = []
         self.heuristic: list[float] = []
         self._specs: list[tuple] = []
@@ -252,21 +301,24 @@ class Candidates:
         return (self[k] for k in range(len(self.cost)))
 
     def add(self, axis: int, bl: list[int], edges: list[int], sigs: list[int], line: list[float],
-            only: str | None = None) -> None:
+            only: str | None = None, rank: int | None = None) -> None:
         """The rule splitting the box at the atom boundaries ``edges`` (of the lines ``bl``) into ``sigs``;
-        ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``."""
+        ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``.
+        With ``best_only``, ``rank`` orders candidates of equal H (default: after every one added before)."""
         line_cost = sum(map(line.__getitem__, edges[1:-1]))
-        if self._bound is not None and self.heuristic and \
-                self._bound[0] + self._bound[1] * line_cost > self.heuristic[0]:
+        if self.bound is not None and self.heuristic and self.bound[0] + self.bound[1] * line_cost > self.best[0]:
             return
         op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], self.model)
         if only is not None and op != only:
             return
         heuristic = self.model.lambda1 * cost + self.model.lambda2 * line_cost
-        if self._best_only and self.heuristic:
-            if not heuristic < self.heuristic[0]:
-                return
-            self.cost.clear(), self.heuristic.clear(), self._specs.clear(), self.built.clear()
+        if self._best_only:
+            if self.heuristic:
+                if not (heuristic < self.best[0] or heuristic == self.best[0] and rank is not None
+                        and rank < self.best[1]):
+                    return
+                self.cost.clear(), self.heuristic.clear(), self._specs.clear(), self.built.clear()
+            self.best = (heuristic, math.inf if rank is None else rank)
         self.cost.append(cost)
         self.heuristic.append(heuristic)
         self._specs.append((axis, bl, edges, sigs, op, cost, k, heuristic))
