@@ -116,26 +116,28 @@ class LayoutIndex:
             self._boxes[box] = -1
             return -1
         cell, n, inner_x, inner_y = found
-        i0, j0, i1, j1 = cell
-        x0, y0, x1, y1 = box
         free_w = self.free_extents and inner_x == 0
         free_h = self.free_extents and inner_y == 0
+        variant = free_w + 2 * free_h
         key = None
         if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
-                    g.period(box, cell, axis, (free_w, free_h), n)
+                if free:
+                    continue
+                counts = _divisors(gcd(n, box[axis + 2] - box[axis]))
+                p = g.period(box, cell, axis, variant, counts) if counts else None
                 if p is not None:
+                    x0, y0, x1, y1 = box
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
                     key = (-2 - axis, p, self.sig(tile))
                     break
         if key is None:
-            key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
+            key = (variant, *g.content(cell, variant))
         sid = self._sig_ids.get(key)
         if sid is None:
             sid = len(self.sigs)
             self._sig_ids[key] = sid
-            self.sigs.append(SigInfo(box, n, int(self.sym[g.owner[i0][j0]]) if n == 1 else None,
+            self.sigs.append(SigInfo(box, n, int(self.sym[g.owner[cell[0]][cell[1]]]) if n == 1 else None,
                                      None if key[0] >= 0 else (-2 - key[0], key[1])))
         self._boxes[box] = sid
         return sid
@@ -185,7 +187,8 @@ class _Grid:
         horz = owner[1:-1, 1:] != owner[1:-1, :-1]  # (nx, ny + 1)
         self.along = (_prefix1(vert), _prefix1(horz.T))  # per line, edge count along it
         self.interior = (_prefix2(vert), _prefix2(horz.T))  # per axis: line index, then the other axis
-        self.gap = _prefix2(owner[1:-1, 1:-1] < 0)
+        gap = owner[1:-1, 1:-1] < 0
+        self.gap = _prefix2(gap) if gap.any() else None  # (only joint extraction leaves gaps between facades)
         corner = np.zeros((nx, ny), dtype=np.int64)
         corner[a0, b0] = 1
         self.n = _prefix2(corner)
@@ -204,7 +207,7 @@ class _Grid:
         # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
         self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v)) for C, v in ((A, xs), (B, ys)))
         inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
-        self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
+        self.inv = [(inv_x[k], inv_y[k]) for k in range(lanes)]  # per lane, per grid line
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
         self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
@@ -214,77 +217,89 @@ class _Grid:
 
     def cells(self, box: Box) -> tuple[int, int, int, int] | None:
         """Grid indices of an exactly tiled ``box``, None when it is not tiled."""
-        i0, j0 = self.xi.get(box[0]), self.yi.get(box[1])
-        i1, j1 = self.xi.get(box[2]), self.yi.get(box[3])
-        if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
-            return None
-        if _sum(self.gap, i0, j0, i1, j1):
-            return None
-        av, ah = self.along
-        if av[i0][j1] - av[i0][j0] != j1 - j0 or av[i1][j1] - av[i1][j0] != j1 - j0 or \
-                ah[j0][i1] - ah[j0][i0] != i1 - i0 or ah[j1][i1] - ah[j1][i0] != i1 - i0:
-            return None
-        return i0, j0, i1, j1
+        found = self.region(box)
+        return None if found is None else found[0]
 
     def region(self, box: Box) -> tuple[tuple[int, int, int, int], int, int, int] | None:
         """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
-        segments on lines strictly inside it, perpendicular to x and to y (``cells``, ``n`` and ``interior``
-        inlined: this is the signature lookup's hot path)."""
-        cell = self.cells(box)
-        if cell is None:
+        segments on lines strictly inside it, perpendicular to x and to y (prefix sums inlined: this is the
+        signature lookup's hot path)."""
+        xi, yi = self.xi, self.yi
+        i0, j0, i1, j1 = xi.get(box[0]), yi.get(box[1]), xi.get(box[2]), yi.get(box[3])
+        if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
             return None
-        i0, j0, i1, j1 = cell
+        gap = self.gap
+        if gap is not None and gap[i1][j1] - gap[i0][j1] - gap[i1][j0] + gap[i0][j0]:
+            return None
+        av, ah = self.along
+        a, b = av[i0], av[i1]
+        if a[j1] - a[j0] != j1 - j0 or b[j1] - b[j0] != j1 - j0:
+            return None
+        a, b = ah[j0], ah[j1]
+        if a[i1] - a[i0] != i1 - i0 or b[i1] - b[i0] != i1 - i0:
+            return None
         n, (vx, vy) = self.n, self.interior
-        count = n[i1][j1] - n[i0][j1] - n[i1][j0] + n[i0][j0]
-        inner_x = vx[i1][j1] - vx[i0 + 1][j1] - vx[i1][j0] + vx[i0 + 1][j0] if i1 > i0 + 1 else 0
-        inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
-        return cell, count, inner_x, inner_y
+        a, b = n[i0], n[i1]
+        count = b[j1] - a[j1] - b[j0] + a[j0]
+        if i1 > i0 + 1:
+            a, b = vx[i0 + 1], vx[i1]
+            inner_x = b[j1] - a[j1] - b[j0] + a[j0]
+        else:
+            inner_x = 0
+        if j1 > j0 + 1:
+            a, b = vy[j0 + 1], vy[j1]
+            inner_y = b[i1] - a[i1] - b[i0] + a[i0]
+        else:
+            inner_y = 0
+        return (i0, j0, i1, j1), count, inner_x, inner_y
 
-    def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
-        """The two content hashes of a tiled box, translated to its corner."""
-        (t, u), ((ia, ib), (ja, jb)) = self.hash[free[0] + 2 * free[1]], self.inv
+    def content(self, cell: tuple[int, int, int, int], variant: int) -> tuple[int, int]:
+        """The two content hashes of the tiled box on grid cells ``cell``, translated to its corner (``variant``:
+        free width + 2 free height)."""
+        t, u = self.hash[variant]
+        (ia, ib), (ja, jb) = self.inv
         i0, j0, i1, j1 = cell
-        ti, ui = t[i0], u[i0]
-        tk, uk = t[i1], u[i1]
-        x, y = box[0], box[1]
-        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[x] * ib[y]) & self.MASK,
-                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[x] * jb[y]) & self.MASK)
+        ti, tk, ui, uk = t[i0], t[i1], u[i0], u[i1]
+        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[i0] * ib[j0]) & self.MASK,
+                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[i0] * jb[j0]) & self.MASK)
 
     def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
         """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
         a = self.along[axis][line]
         return a[hi] - a[lo] == hi - lo
 
-    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool], n: int
+    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, variant: int, counts: tuple[int, ...]
                ) -> int | None:
         """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
-        along ``axis``. ``k`` identical tiles hold ``k`` times a tile's terminals, so only the tile counts ``k`` that
-        divide both the terminal count ``n`` and ``length`` are tried (the largest first: the smallest ``p`` first)."""
+        along ``axis``, trying the tile ``counts`` given (largest first: the smallest ``p`` first). ``k``
+        identical tiles hold ``k`` times a tile's terminals, so the caller passes the counts that divide both the
+        terminal count and the length."""
         start, length = box[axis], box[axis + 2] - box[axis]
-        counts = _divisors(gcd(n, length))
-        if not counts:
-            return None
-        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
-        i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
+        index = self.xi if axis == 0 else self.yi
+        if axis == 0:
+            i0, lo, i1, hi = cell
+        else:
+            lo, i0, hi, i1 = cell
+        along = self.along[axis]
+        span = hi - lo
         for count in counts:
             if count > i1 - i0:
                 continue
             p = length // count
-            i = index.get(start + p)
-            if i is None or not self.full_line(axis, i, lo, hi):
-                continue
-            tiles = []
-            for k in range(length // p + 1):
+            tiles = [i0]
+            for k in range(1, count):
                 t = index.get(start + k * p)
-                if t is None or (0 < k < length // p and not self.full_line(axis, t, lo, hi)):
+                if t is None:
+                    break
+                a = along[t]
+                if a[hi] - a[lo] != span:
                     break
                 tiles.append(t)
             else:
+                tiles.append(i1)
                 first = None
                 for a, b in zip(tiles, tiles[1:]):
-                    sub = (a, lo, b, hi) if axis == 0 else (lo, a, hi, b)
-                    corner = (lines[a], box[1]) if axis == 0 else (box[0], lines[a])
-                    h = self.content((*corner, 0, 0), sub, free)
+                    h = self.content((a, lo, b, hi) if axis == 0 else (lo, a, hi, b), variant)
                     if first is None:
                         first = h
                     elif h != first:
@@ -331,6 +346,3 @@ def _prefix2(a: np.ndarray) -> list[list[int]]:
     out[1:, 1:] = np.cumsum(np.cumsum(a, axis=0, dtype=out.dtype), axis=1, dtype=out.dtype)
     return out.tolist()
 
-
-def _sum(t: list[list[int]], i0: int, j0: int, i1: int, j1: int) -> int:
-    return t[i1][j1] - t[i0][j1] - t[i1][j0] + t[i0][j0]

@@ -116,15 +116,24 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         boxes = np.concatenate([groups[s] for s in batch])
         owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
         starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
+        sig = index.sig
         for g in range(len(batch)):
             if len(groups) >= max_groups:
                 break
+            lo = starts[4 * g]
+            sigs = [sig(box) for box in firsts[lo:starts[4 * g + 4]]]  # (in class order)
             for gd in range(4 * g, 4 * g + 4):
-                if starts[gd] == starts[gd + 1]:
+                a, b = starts[gd] - lo, starts[gd + 1] - lo
+                if b - a == 1 or len(set(sigs[a:b])) == b - a:  # (each class its own signature)
+                    for k, new_sig in enumerate(sigs[a:b], lo + a):
+                        size = bounds[k][1] - bounds[k][0]
+                        if new_sig > 0 and size > 1 and new_sig not in groups:
+                            groups[new_sig] = grown[bounds[k][0]:bounds[k][1]]
+                            queue.append(new_sig)
                     continue
                 same: dict[int, list[int]] = defaultdict(list)
-                for k in range(starts[gd], starts[gd + 1]):
-                    same[index.sig(tuple(firsts[k]))].append(k)
+                for k, new_sig in enumerate(sigs[a:b], lo + a):
+                    same[new_sig].append(k)
                 for new_sig, ks in same.items():
                     if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
                             and new_sig not in groups:
@@ -139,7 +148,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
 
 
 def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int
-                 ) -> tuple[list[int], list[tuple[int, int]], list[list[int]], np.ndarray]:
+                 ) -> tuple[list[int], list[tuple[int, int]], list[tuple[int, ...]], np.ndarray]:
     """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in every direction, in classes
     of equal group, direction, size and strip content (by a 128-bit hash). Returns per (group, direction) the
     range of its classes (``starts``, index ``4 group + direction``; a group's classes in order of their first
@@ -156,4 +165,4 @@ def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: in
     starts = np.searchsorted(gd[first[classes]], np.arange(4 * groups + 1)).tolist()
     ends = np.append(first[1:], gd.size)
     bounds = list(zip(first[classes].tolist(), ends[classes].tolist()))
-    return starts, bounds, grown[first[classes]].tolist(), grown
+    return starts, bounds, list(map(tuple, grown[first[classes]].tolist())), grown
