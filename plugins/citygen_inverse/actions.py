@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from bisect import bisect_left, bisect_right
 from functools import lru_cache
 from itertools import compress
 from operator import eq, ne, sub
@@ -74,23 +75,29 @@ def _divisors_below(k: int) -> tuple[int, ...]:
     return tuple(p for p in range(1, k) if k % p == 0)
 
 
+SMALL = 48  # regions with at most this many repeated instances inside: plain Python (numpy's per-call cost dominates)
+
+
 def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
                    max_groupings: int = 24, best_only: bool = False) -> Candidates:
     """Candidate rules for the region signature ``sig`` (its representative box); per axis at most
     ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7). With
     ``best_only``, only the first of least heuristic (see ``Candidates``)."""
-    box = index.sigs[sig].box
-    x0, y0, x1, y1 = box
-    c0, c1, c2, c3 = sym.columns
-    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1))
-    inst = sym.boxes[inside]
-    proper = (inst != box).any(axis=1)  # the region itself is not inside
-    inside, inst = inside[proper], inst[proper]
+    info = index.sigs[sig]
+    box, n = info.box, info.n
+    inside = sym.within(box)
     terms = sym.terminals[inside]
-    if index.sigs[sig].period is not None:
-        return _periodic(index, sig, model, inst, terms, best_only)
+    proper = terms != n  # the region itself (the one instance inside with all its terminals) is not inside
+    inside, terms = inside[proper], terms[proper]
+    if info.period is not None:
+        return _periodic(index, sig, model, sym.boxes[inside], terms, best_only)
     actions = Candidates(index, box, model, best_only)
-    if inside.size:
+    small = inside.size <= SMALL
+    if small:
+        instances = list(zip(sym.boxes[inside].tolist(), terms.tolist(), sym.group[inside].tolist()))
+        score = dict(zip(sym.group[inside].tolist(), (-sym.importance[inside]).tolist()))
+    else:
+        inst = sym.boxes[inside]
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
         order = np.argsort(sym.group[inside], kind="stable")
         grp = sym.group[inside][order]
@@ -100,22 +107,25 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         cuts = index.cuts(box, axis)
         if cuts.size == 0:
             continue
-        bounds = np.concatenate([[box[axis]], cuts, [box[axis + 2]]])
-        m = bounds.size - 1
-        # cov[i, k]: boundary k lies strictly inside repeated instance i; line[k]: Eq. 5 cost of cutting there
-        cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-        line = _line_costs(terms, index.sigs[sig].n, cov)
+        bl = [box[axis], *cuts.tolist(), box[axis + 2]]
+        m = len(bl) - 1
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
-        if inst.size:
-            # per repeated region, the boundaries inside any of its instances, which a grouping keeping every
-            # instance whole drops; distinct rows in lexicographic order (the first region's score), by f(a, o)
+        # line[k]: Eq. 5 cost of cutting at boundary k; per repeated region, the boundaries inside any of its
+        # instances, which a grouping keeping every instance whole drops: distinct rows in lexicographic order (the
+        # first region's score), by f(a, o)
+        if small:
+            line, ranked = _small_coverage(instances, score, axis, bl, n, max_groupings)
+        else:
+            bounds = np.array(bl)
+            cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
+            line = _line_costs(terms, n, cov)
             per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
             rows = per_group.view(np.dtype((np.void, m - 1))).ravel().tolist()  # each row's bytes
             first = dict(zip(rows[::-1], range(len(rows) - 1, -1, -1)))  # distinct row -> its first group
             kept = (~per_group).tolist()
-            for row in sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]:
-                groupings.add(tuple(compress(range(1, m), kept[first[row]])))
-        bl = bounds.tolist()
+            ranked = [tuple(compress(range(1, m), kept[first[row]]))
+                      for row in sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]]
+        groupings.update(ranked)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         piece = _Pieces(index, box, axis, bl, atom_sigs)
@@ -126,6 +136,25 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     if not len(actions):
         actions.add_action(_grid(index, sig, model))
     return actions
+
+
+def _small_coverage(instances: list[tuple[list[int], int, int]], score: dict[int, float], axis: int, bl: list[int],
+                    n: int, max_groupings: int) -> tuple[list[float], list[tuple[int, ...]]]:
+    """The line costs and ranked groupings of ``region_actions`` for a few instances (box, terminals, group): a
+    region's row is a bit mask, boundary k at bit m - 1 - k (so that masks order as the rows do)."""
+    m = len(bl) - 1
+    crossed = [0] * (m + 1)
+    masks: dict[int, int] = {}
+    for inst, terms, group in instances:
+        lo, hi = bisect_right(bl, inst[axis]), bisect_left(bl, inst[axis + 2])  # boundaries lo..hi-1 inside
+        for k in range(lo, hi):
+            crossed[k] += terms
+        masks[group] = masks.get(group, 0) | ((1 << (m - lo)) - (1 << (m - hi)) if lo < hi else 0)
+    first: dict[int, int] = {}
+    for group in sorted(masks):
+        first.setdefault(masks[group], group)
+    ranked = sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]
+    return [c / n for c in crossed], [tuple(k for k in range(1, m) if not row >> (m - 1 - k) & 1) for row in ranked]
 
 
 def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]

@@ -6,6 +6,7 @@ occurs two or more times enters the hash table (signature -> instances) and is g
 """
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from collections import defaultdict
 from dataclasses import dataclass
 from functools import cached_property
@@ -24,10 +25,22 @@ class RepeatedRegions:
     occurrences: np.ndarray
     group: np.ndarray
 
+    def within(self, box: tuple[int, int, int, int]) -> np.ndarray:
+        """Indices of the instances inside ``box`` (the box itself included, when it is an instance)."""
+        (xs, ys), (x0, y0, x1, y1) = self._containment
+        return np.flatnonzero(x0[bisect_left(xs, box[0])] & y0[bisect_left(ys, box[1])] &
+                              x1[bisect_right(xs, box[2])] & y1[bisect_right(ys, box[3])])
+
     @cached_property
-    def columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """x0, y0, x1, y1 of the instances as contiguous arrays (fast containment tests)."""
-        return tuple(np.ascontiguousarray(self.boxes[:, k]) for k in range(4))
+    def _containment(self) -> tuple[tuple[list[int], list[int]], tuple[np.ndarray, ...]]:
+        """The instances' distinct x and y lines, and per side a table: row r holds which instances have their
+        x0 (y0) at line r or beyond, or their x1 (y1) before line r."""
+        lines = [np.unique(self.boxes[:, axis::2]) for axis in (0, 1)]
+        tables = []
+        for k in range(4):
+            rank, rows = np.searchsorted(lines[k % 2], self.boxes[:, k]), np.arange(lines[k % 2].size + 1)[:, None]
+            tables.append(rank[None, :] >= rows if k < 2 else rank[None, :] < rows)
+        return (lines[0].tolist(), lines[1].tolist()), tuple(tables)
 
     @cached_property
     def importance(self) -> np.ndarray:

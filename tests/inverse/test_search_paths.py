@@ -104,3 +104,31 @@ def test_repeated_runs_match_their_definition():
             want += row
         want.sort(key=lambda t: -t[0])
         assert _repeated_runs(atoms) == [keep for _, keep in want[:16]]
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+def test_small_regions_in_plain_python_get_the_candidates_of_the_array_path(periodic, monkeypatch):
+    """Regions with few repeated instances inside build their line costs and grouping rows in plain Python
+    (``actions.SMALL``): the same candidates, in the same order, as the numpy path."""
+    from citygen_inverse import actions
+    for layout in _layouts():
+        index = LayoutIndex([layout], periodic=periodic)
+        search = GrammarSearch(index)
+        search.run("adp", 20, seed=1)
+        for sig in list(search._actions):
+            got = []
+            for small in (0, 10 ** 9):
+                monkeypatch.setattr(actions, "SMALL", small)
+                acts = region_actions(index, sig, search.sym, CostModel())
+                got.append((acts.cost, acts.heuristic, list(acts)))
+            assert got[0] == got[1]
+
+
+def test_instances_within_a_box_are_those_inside_it():
+    layout = random_layout(np.random.default_rng(11), depth=5)
+    index = LayoutIndex([layout], periodic=True)
+    sym = GrammarSearch(index).sym
+    b = sym.boxes
+    for box in [*index.roots, *map(tuple, b[::7].tolist()), (1, 1, 10 ** 9, 10 ** 9)]:
+        want = np.flatnonzero((b[:, 0] >= box[0]) & (b[:, 1] >= box[1]) & (b[:, 2] <= box[2]) & (b[:, 3] <= box[3]))
+        assert sym.within(box).tolist() == want.tolist()
