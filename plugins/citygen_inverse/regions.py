@@ -81,16 +81,13 @@ class LayoutIndex:
         arr[:, 0::2] += e[:, :1].astype(np.int64)
         rows = arr.tolist()
         self.X0, self.Y0, self.X1, self.Y1 = arr.T.copy()
-        self.kinds: list[TerminalKind] = []
-        kind_ids: dict[TerminalKind, int] = {}
+        kind_ids: dict[tuple, int] = {}
         materials: dict[tuple, int] = {}
         sym, mat = [], []
         for (label, depth), (x0, y0, x1, y1) in zip(kinds, rows):
-            kind = TerminalKind(label, depth, x1 - x0, y1 - y0)
-            sym.append(kind_ids.setdefault(kind, len(kind_ids)))
+            sym.append(kind_ids.setdefault((label, depth, x1 - x0, y1 - y0), len(kind_ids)))
             mat.append(materials.setdefault((label, depth), len(materials)))
-            if len(kind_ids) > len(self.kinds):
-                self.kinds.append(kind)
+        self.kinds: list[TerminalKind] = [TerminalKind(*kind) for kind in kind_ids]
         self.sym = np.array(sym, dtype=np.int64)
         self.material = np.array(mat, dtype=np.int64)
         self.sigs: list[SigInfo] = [SigInfo((0, 0, 0, 0), 0, None)]  # id 0: the empty dummy
@@ -142,6 +139,15 @@ class LayoutIndex:
         self._boxes[box] = sid
         return sid
 
+    def terminal_sigs(self) -> list[int]:
+        """``sig`` of every terminal's box, in terminal order (the same lookups, in the same order)."""
+        boxes = zip(self.X0.tolist(), self.Y0.tolist(), self.X1.tolist(), self.Y1.tolist())
+        if not self.free_extents:
+            return [self.sig(box) for box in boxes]
+        first: dict[int, int] = {}  # with free extents a lone terminal's signature is its material's
+        return [first[mat] if mat in first else first.setdefault(mat, self.sig(box))
+                for mat, box in zip(self.material.tolist(), boxes)]
+
     @property
     def grid_powers(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
         """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
@@ -180,8 +186,11 @@ class _Grid:
             raise LayoutError(f"{len(self.xs)} x {len(self.ys)} distinct edge lines: too irregular to index",
                               hint="regularise the layout (snap and align edges) before extraction")
         owner = np.full((nx + 2, ny + 2), -1, dtype=np.int64)  # padded by one cell on every side
-        for k in range(X0.size):
-            owner[a0[k] + 1:a1[k] + 1, b0[k] + 1:b1[k] + 1] = k
+        w, h = a1 - a0, b1 - b0
+        k = np.repeat(np.arange(X0.size), w * h)  # every cell of every terminal
+        start = np.repeat(np.cumsum(w * h) - w * h, w * h)
+        cell = np.arange(k.size) - start  # row-major within the terminal: (cell // h, cell % h)
+        owner[a0[k] + 1 + cell // h[k], b0[k] + 1 + cell % h[k]] = k
         self.owner = owner[1:-1, 1:-1].tolist()
         vert = owner[1:, 1:-1] != owner[:-1, 1:-1]  # (nx + 1, ny): an edge on line x_i along row j
         horz = owner[1:-1, 1:] != owner[1:-1, :-1]  # (nx, ny + 1)
@@ -203,9 +212,9 @@ class _Grid:
         r = np.random.default_rng(20140801).integers(0, 1 << 63, (kind.max() + 1, lanes), dtype=np.uint64)
         r = (r * np.uint64(2) + np.uint64(1))[kind].reshape(4, X0.size, lanes)
         A, B = ([lane[axis] for lane in self.LANES] for axis in (0, 1))
-        xs, ys = np.array(self.xs, dtype=np.uint64), np.array(self.ys, dtype=np.uint64)
         # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
-        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v)) for C, v in ((A, xs), (B, ys)))
+        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v))
+                            for C, v in ((A, self.xs), (B, self.ys)))
         inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
         self.inv = [(inv_x[k], inv_y[k]) for k in range(lanes)]  # per lane, per grid line
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
@@ -321,16 +330,9 @@ def _divisors(n: int) -> tuple[int, ...]:
     return tuple(k for k in range(n, 1, -1) if n % k == 0)
 
 
-def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
-    """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
-    out = np.ones((len(bases), exps.size), dtype=np.uint64)
-    e = exps.astype(np.uint64)
-    square = np.array(bases, dtype=np.uint64)[:, None]
-    one = np.uint64(1)
-    while e.any():
-        out *= np.where(e & one, square, one)
-        square, e = square * square, e >> one
-    return out
+def _upow(bases: list[int], exps: list[int]) -> np.ndarray:
+    """base ** exps modulo 2^64 per base (rows)."""
+    return np.array([[pow(b, e, 1 << 64) for e in exps] for b in bases], dtype=np.uint64)
 
 
 def _prefix1(a: np.ndarray) -> list[list[int]]:

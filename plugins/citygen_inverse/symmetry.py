@@ -120,8 +120,8 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
     sides = _Sides(index)
     terminals = np.column_stack([index.X0, index.Y0, index.X1, index.Y1])
     table: dict[int, list[int]] = defaultdict(list)
-    for k, box in enumerate(terminals.tolist()):
-        table[index.sig(tuple(box))].append(k)
+    for k, s in enumerate(index.terminal_sigs()):
+        table[s].append(k)
     groups = {s: terminals[rows] for s, rows in table.items() if len(rows) >= 2}
     queue = sorted(groups)
     while queue and len(groups) < max_groups:
