@@ -102,7 +102,7 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         order = np.argsort(sym.group[inside], kind="stable")
         grp = sym.group[inside][order]
         starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
-        score = (-sym.importance[inside[order[starts]]]).tolist()
+        score = -sym.importance[inside[order[starts]]]
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
         if cuts.size == 0:
@@ -120,11 +120,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
             line = _line_costs(terms, n, cov)
             per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
-            rows = per_group.view(np.dtype((np.void, m - 1))).ravel().tolist()  # each row's bytes
-            first = dict(zip(rows[::-1], range(len(rows) - 1, -1, -1)))  # distinct row -> its first group
-            kept = (~per_group).tolist()
-            ranked = [tuple(compress(range(1, m), kept[first[row]]))
-                      for row in sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]]
+            _, first = np.unique(per_group.view(np.dtype((np.void, m - 1))).ravel(), return_index=True)
+            top = first[np.argsort(score[first], kind="stable")[:max_groupings]]  # (rows sort as their bytes)
+            ranked = [tuple(compress(range(1, m), kept)) for kept in (~per_group[top]).tolist()]
         groupings.update(ranked)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
