@@ -92,11 +92,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     if info.period is not None:
         return _periodic(index, sig, model, sym.boxes[inside], terms, best_only)
     actions = Candidates(index, box, model, best_only)
-    small = inside.size <= SMALL
-    if small:
-        instances = list(zip(sym.boxes[inside].tolist(), terms.tolist(), sym.group[inside].tolist()))
-        score = dict(zip(sym.group[inside].tolist(), (-sym.importance[inside]).tolist()))
-    else:
+    instances = None
+    if inside.size > SMALL:
         inst = sym.boxes[inside]
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
         order = np.argsort(sym.group[inside], kind="stable")
@@ -109,21 +106,20 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             continue
         bl = [box[axis], *cuts.tolist(), box[axis + 2]]
         m = len(bl) - 1
-        groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
         # line[k]: Eq. 5 cost of cutting at boundary k; per repeated region, the boundaries inside any of its
-        # instances, which a grouping keeping every instance whole drops: distinct rows in lexicographic order (the
-        # first region's score), by f(a, o)
-        if small:
-            line, ranked = _small_coverage(instances, score, axis, bl, n, max_groupings)
+        # instances (which a grouping keeping every instance whole drops) as a bit mask, boundary k at bit
+        # m - 1 - k, so that masks order as the rows of boundaries do: the distinct masks, in lexicographic order
+        # (the first region's score), by f(a, o)
+        if inside.size > SMALL and m <= 62:  # (a mask fits in int64)
+            line, rows = _coverage(inst, terms, order, starts, score, axis, bl, n, max_groupings)
         else:
-            bounds = np.array(bl)
-            cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-            line = _line_costs(terms, n, cov)
-            per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
-            _, first = np.unique(per_group.view(np.dtype((np.void, m - 1))).ravel(), return_index=True)
-            top = first[np.argsort(score[first], kind="stable")[:max_groupings]]  # (rows sort as their bytes)
-            ranked = [tuple(compress(range(1, m), kept)) for kept in (~per_group[top]).tolist()]
-        groupings.update(ranked)
+            if instances is None:
+                group = sym.group[inside].tolist()
+                instances = list(zip(sym.boxes[inside].tolist(), terms.tolist(), group))
+                scores = dict(zip(group, (-sym.importance[inside]).tolist()))
+            line, rows = _small_coverage(instances, scores, axis, bl, n, max_groupings)
+        groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
+        groupings.update(tuple(k for k in range(1, m) if not row >> (m - 1 - k) & 1) for row in rows)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         piece = _Pieces(index, box, axis, bl, atom_sigs)
@@ -137,9 +133,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
 
 
 def _small_coverage(instances: list[tuple[list[int], int, int]], score: dict[int, float], axis: int, bl: list[int],
-                    n: int, max_groupings: int) -> tuple[list[float], list[tuple[int, ...]]]:
-    """The line costs and ranked groupings of ``region_actions`` for a few instances (box, terminals, group): a
-    region's row is a bit mask, boundary k at bit m - 1 - k (so that masks order as the rows do)."""
+                    n: int, max_groupings: int) -> tuple[list[float], list[int]]:
+    """The line costs and the ranked masks of ``region_actions`` in plain Python, from the instances (box,
+    terminals, group) and each group's score."""
     m = len(bl) - 1
     crossed = [0] * (m + 1)
     masks: dict[int, int] = {}
@@ -147,12 +143,27 @@ def _small_coverage(instances: list[tuple[list[int], int, int]], score: dict[int
         lo, hi = bisect_right(bl, inst[axis]), bisect_left(bl, inst[axis + 2])  # boundaries lo..hi-1 inside
         for k in range(lo, hi):
             crossed[k] += terms
-        masks[group] = masks.get(group, 0) | ((1 << (m - lo)) - (1 << (m - hi)) if lo < hi else 0)
+        masks[group] = masks.get(group, 0) | ((1 << (m - lo)) - (1 << (m - hi)))
     first: dict[int, int] = {}
     for group in sorted(masks):
         first.setdefault(masks[group], group)
-    ranked = sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]
-    return [c / n for c in crossed], [tuple(k for k in range(1, m) if not row >> (m - 1 - k) & 1) for row in ranked]
+    return [c / n for c in crossed], sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]
+
+
+def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np.ndarray, score: np.ndarray,
+              axis: int, bl: list[int], n: int, max_groupings: int) -> tuple[list[float], list[int]]:
+    """``_small_coverage`` with arrays: the instances in ``order`` of group, each group from ``starts`` with its
+    ``score``; the terminals crossed at each boundary by a difference array (exact integer sums in float64)."""
+    m = len(bl) - 1
+    bounds = np.array(bl)
+    lo = np.searchsorted(bounds, inst[:, axis], "right")
+    hi = np.searchsorted(bounds, inst[:, axis + 2], "left")
+    weights = terms.astype(float)
+    crossed = np.cumsum(np.bincount(lo, weights, m + 1) - np.bincount(hi, weights, m + 1))
+    masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi)))[order], starts)
+    _, first = np.unique(masks, return_index=True)
+    top = first[np.argsort(score[first], kind="stable")[:max_groupings]]
+    return (crossed / n).tolist(), masks[top].tolist()
 
 
 def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
