@@ -102,9 +102,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         score = -sym.importance[inside[order[starts]]]
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
-        if cuts.size == 0:
+        if not cuts:
             continue
-        bl = [box[axis], *cuts.tolist(), box[axis + 2]]
+        bl = [box[axis], *cuts, box[axis + 2]]
         m = len(bl) - 1
         # line[k]: Eq. 5 cost of cutting at boundary k; per repeated region, the boundaries inside any of its
         # instances (which a grouping keeping every instance whole drops) as a bit mask, boundary k at bit
@@ -155,15 +155,11 @@ def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np
     """``_small_coverage`` with arrays: the instances in ``order`` of group, each group from ``starts`` with its
     ``score``; the terminals crossed at each boundary by a difference array (exact integer sums in float64)."""
     m = len(bl) - 1
-    bounds = np.array(bl)
-    lo = np.searchsorted(bounds, inst[:, axis], "right")
-    hi = np.searchsorted(bounds, inst[:, axis + 2], "left")
-    weights = terms.astype(float)
-    crossed = np.cumsum(np.bincount(lo, weights, m + 1) - np.bincount(hi, weights, m + 1))
+    line, lo, hi = _line_costs(inst, terms, axis, bl, n)
     masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi)))[order], starts)
     _, first = np.unique(masks, return_index=True)
     top = first[np.argsort(score[first], kind="stable")[:max_groupings]]
-    return (crossed / n).tolist(), masks[top].tolist()
+    return line, masks[top].tolist()
 
 
 def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
@@ -216,11 +212,17 @@ def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, 
             actions.add(axis, bl, e, sg, line, rank=rank)
 
 
-def _line_costs(terms: np.ndarray, n: int, cov: np.ndarray) -> list[float]:
-    """Eq. 5's cost of cutting at each boundary: the terminals of the repeated instances it crosses (``cov``, one
-    row per instance) over the region's ``n``. The integer sum is exact in any order (a float product of a bool
-    matrix takes numpy's slow mixed-type loop)."""
-    return ((terms @ cov) / n).tolist() if terms.size else [0.0] * cov.shape[1]
+def _line_costs(inst: np.ndarray, terms: np.ndarray, axis: int, bl: list[int], n: int
+                ) -> tuple[list[float], np.ndarray, np.ndarray]:
+    """Eq. 5's cost of cutting at each boundary ``bl``: the terminals of the repeated instances it crosses over
+    the region's ``n`` (a difference array: exact integer sums in float64); and per instance the range lo..hi-1 of
+    the boundaries it crosses."""
+    bounds = np.array(bl)
+    lo = np.searchsorted(bounds, inst[:, axis], "right")
+    hi = np.searchsorted(bounds, inst[:, axis + 2], "left")
+    weights = terms.astype(float)
+    crossed = np.cumsum(np.bincount(lo, weights, len(bl)) - np.bincount(hi, weights, len(bl)))
+    return (crossed / n).tolist(), lo, hi
 
 
 def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, terms: np.ndarray,
@@ -230,10 +232,8 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     box = index.sigs[sig].box
     axis, p = index.sigs[sig].period
     cuts = index.cuts(box, axis)
-    bl = [box[axis], *cuts.tolist(), box[axis + 2]]
-    bounds = np.array(bl)
-    cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-    line = _line_costs(terms, index.sigs[sig].n, cov)
+    bl = [box[axis], *cuts, box[axis + 2]]
+    line = _line_costs(inst, terms, axis, bl, index.sigs[sig].n)[0]
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
     out = Candidates(index, box, model, best_only)
     for edges in (tiles, list(range(len(bl)))):
@@ -247,13 +247,12 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
 def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[int, ...]]:
     """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis)."""
     m = len(atoms)
-    found: list[tuple[float, tuple[int, ...]]] = []
+    found: list[tuple[int, int, list[int]]] = []  # (weight, length, occurrences kept whole)
     for length in range(2, m // 2 + 1):
         repeated = False
         starts: dict[tuple[int, ...], list[int]] = {}
         for i in range(m - length + 1):
             starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
-        inner = [False] * (length - 1)
         for occ in starts.values():
             if len(occ) < 2:
                 continue
@@ -263,15 +262,19 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
                     chosen.append(i)
                     end = i + length
             if len(chosen) >= 2:
-                kept = [True] * m  # per boundary: not strictly inside a chosen occurrence
-                for i in chosen:
-                    kept[i + 1:i + length] = inner
-                found.append(((length - 1) * (len(chosen) - 1), tuple(compress(range(1, m), kept[1:]))))
+                found.append(((length - 1) * (len(chosen) - 1), length, chosen))
                 repeated = True
         if not repeated:  # a substring twice apart has its prefix twice apart: no longer one repeats either
             break
     found.sort(key=lambda t: -t[0])
-    return [keep for _, keep in found[:limit]]
+    out = []
+    for _, length, chosen in found[:limit]:
+        kept = [True] * m  # per boundary: not strictly inside a chosen occurrence
+        inner = [False] * (length - 1)
+        for i in chosen:
+            kept[i + 1:i + length] = inner
+        out.append(tuple(compress(range(1, m), kept[1:])))
+    return out
 
 
 def _piece(box: Box, axis: int, a: int, b: int) -> Box:

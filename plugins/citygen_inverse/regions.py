@@ -153,7 +153,7 @@ class LayoutIndex:
         """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
         return self._grid.powers
 
-    def cuts(self, box: Box, axis: int) -> np.ndarray:
+    def cuts(self, box: Box, axis: int) -> list[int]:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
         return self._grid.cuts(box, axis)
 
@@ -317,11 +317,11 @@ class _Grid:
                     return p
         return None
 
-    def cuts(self, box: Box, axis: int) -> np.ndarray:
+    def cuts(self, box: Box, axis: int) -> list[int]:
         cell = self.cells(box)
         i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        lines = self.xs if axis == 0 else self.ys
-        return np.array([lines[i] for i in range(i0 + 1, i1) if self.full_line(axis, i, lo, hi)], dtype=np.int64)
+        lines, along, span = (self.xs, self.along[0], hi - lo) if axis == 0 else (self.ys, self.along[1], hi - lo)
+        return [lines[i] for i in range(i0 + 1, i1) if along[i][hi] - along[i][lo] == span]
 
 
 @lru_cache(maxsize=None)
