@@ -14,7 +14,7 @@ import math
 from bisect import bisect_left, bisect_right
 from functools import lru_cache
 from itertools import compress
-from operator import eq, ne, sub
+from operator import eq
 
 import numpy as np
 
@@ -185,23 +185,20 @@ def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, 
     never looked up. Each rule competes with its rank in ``_add_all``'s order (the first, when it comes twice), so
     the kept rule is the one ``_add_all`` keeps."""
     low, lam = actions.bound
-    order = []
-    for g, keep in enumerate(groupings):
-        edges = [0, *keep, m]
-        at = list(map(bl.__getitem__, edges))
-        sizes = list(map(sub, at[1:], at[:-1]))
-        kept = sum(compress(map(line.__getitem__, keep), map(ne, sizes, sizes[1:])))
-        order.append((low + lam * kept, g, edges))
-    order.sort(key=lambda t: t[:2])
+    groupings = list(groupings)
+    twice = [2 * v for v in bl]  # boundary k has equal-size neighbours p, q when 2 bl[k] == bl[p] + bl[q]
+    bounds = [low + lam * sum([line[k] for p, k, q in zip((0, *keep[:-1]), keep, (*keep[1:], m))
+                               if twice[k] != bl[p] + bl[q]]) for keep in groupings]
     seen: dict[tuple[int, ...], int] = {}
     base = axis << 20
-    for bound, g, edges in order:
-        best = actions.best
+    for g in sorted(range(len(bounds)), key=bounds.__getitem__):
+        bound, best = bounds[g], actions.best
         if best is not None:
             if bound > best[0]:
                 break
             if bound == best[0] and base + 2 * g > best[1]:
                 continue
+        edges = [0, *groupings[g], m]
         sigs = [piece[ab] for ab in zip(edges, edges[1:])]
         merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
         for rank, (e, sg) in enumerate(((edges, sigs), merged) if merged else ((edges, sigs),), base + 2 * g):
