@@ -57,7 +57,7 @@ class _Sides:
     MATERIAL = np.array([0xBF58476D1CE4E5B9, 0x94D049BB133111EB], dtype=np.uint64)  # R(material) per lane
     MIX = np.array([[0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D],
                     [0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F]], dtype=np.uint64)
-    NEAR, START, END = (2, 0, 3, 1), (1, 1, 0, 0), (3, 3, 2, 2)  # per side: the box column of its line, a, b
+    NEAR, START, END = [2, 0, 3, 1], [1, 1, 0, 0], [3, 3, 2, 2]  # per side: the box column of its line, a, b
 
     def __init__(self, index: LayoutIndex) -> None:
         X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
@@ -91,21 +91,18 @@ class _Sides:
         that side and its far edges align, Fig. 7), in every direction: per grown box its row, its direction,
         the grown box and two 64-bit hash lanes of (box size, strip thickness, terminal count, strip content)."""
         n = boxes.shape[0]
-        ranks = np.column_stack([np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)])
-        rows, direction = np.tile(np.arange(n), 4), np.repeat(np.arange(4), n)
-        near = np.array(self.NEAR)[direction]
-        line = (direction * self.stride + ranks[rows, near]) * self.stride
-        qa = line + ranks[rows, np.array(self.START)[direction]]
-        qb = line + ranks[rows, np.array(self.END)[direction]]
+        ranks = np.stack([np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)])  # (side, box)
+        line = (np.arange(4)[:, None] * self.stride + ranks[self.NEAR, :]) * self.stride  # (direction, box)
+        qa, qb = (line + ranks[self.START, :]).ravel(), (line + ranks[self.END, :]).ravel()
         i = np.minimum(np.searchsorted(self.by_start, qa), self.by_start.size - 1)
         j = np.minimum(np.searchsorted(self.by_end, qb), self.by_end.size - 1)
         ok = np.flatnonzero((self.by_start[i] == qa) & (self.by_end[j] == qb) & (i <= j) & (self.run[i] == self.run[j]))
-        i, j, rows, direction, near = i[ok], j[ok], rows[ok], direction[ok], near[ok]
+        i, j, (direction, rows) = i[ok], j[ok], np.divmod(ok, n)
         grown = boxes[rows]
-        f = self.far[i]
+        at, near, f = np.arange(ok.size), np.array(self.NEAR)[direction], self.far[i]
         parts = np.column_stack([grown[:, 2] - grown[:, 0], grown[:, 3] - grown[:, 1],
-                                 np.abs(f - grown[np.arange(ok.size), near]), j - i]).astype(np.uint64)
-        grown[np.arange(ok.size), near] = f
+                                 np.abs(f - grown[at, near]), j - i]).astype(np.uint64)
+        grown[at, near] = f
         hashes = (self.prefix[:, j + 1] - self.prefix[:, i]) * self.inverse[:, i] + self.MIX @ parts.T
         return rows, direction, grown, hashes
 
