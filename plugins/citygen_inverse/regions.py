@@ -331,8 +331,15 @@ def _divisors(n: int) -> tuple[int, ...]:
 
 
 def _upow(bases: list[int], exps: list[int]) -> np.ndarray:
-    """base ** exps modulo 2^64 per base (rows)."""
-    return np.array([[pow(b, e, 1 << 64) for e in exps] for b in bases], dtype=np.uint64)
+    """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
+    out = np.ones((len(bases), len(exps)), dtype=np.uint64)
+    e = np.array(exps, dtype=np.uint64)
+    square = np.array(bases, dtype=np.uint64)[:, None]
+    one = np.uint64(1)
+    while e.any():
+        out *= np.where(e & one, square, one)
+        square, e = square * square, e >> one
+    return out
 
 
 def _prefix1(a: np.ndarray) -> list[list[int]]:
