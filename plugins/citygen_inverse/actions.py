@@ -86,20 +86,20 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     info = index.sigs[sig]
     box, n = info.box, info.n
     inside = sym.within(box)
-    terms = sym.terminals[inside]
+    terms = sym.terminals.take(inside)
     proper = terms != n  # the region itself (the one instance inside with all its terminals) is not inside
     inside, terms = inside[proper], terms[proper]
     if info.period is not None:
-        return _periodic(index, sig, model, sym.boxes[inside], terms, best_only)
+        return _periodic(index, sig, model, sym.boxes.take(inside, 0), terms, best_only)
     actions = Candidates(index, box, model, best_only)
     instances = None
     if inside.size > SMALL:
-        inst = sym.boxes[inside]
+        inst = sym.boxes.take(inside, 0)
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
-        order = np.argsort(sym.group[inside], kind="stable")
-        grp = sym.group[inside][order]
+        order = np.argsort(sym.group.take(inside), kind="stable")
+        grp = sym.group.take(inside.take(order))
         starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
-        score = -sym.importance[inside[order[starts]]]
+        score = -sym.importance.take(inside.take(order.take(starts)))
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
         if not cuts:
@@ -114,9 +114,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
             line, rows = _coverage(inst, terms, order, starts, score, axis, bl, n, max_groupings)
         else:
             if instances is None:
-                group = sym.group[inside].tolist()
-                instances = list(zip(sym.boxes[inside].tolist(), terms.tolist(), group))
-                scores = dict(zip(group, (-sym.importance[inside]).tolist()))
+                group = sym.group.take(inside).tolist()
+                instances = list(zip(sym.boxes.take(inside, 0).tolist(), terms.tolist(), group))
+                scores = dict(zip(group, (-sym.importance.take(inside)).tolist()))
             line, rows = _small_coverage(instances, scores, axis, bl, n, max_groupings)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
         groupings.update(tuple(k for k in range(1, m) if not row >> (m - 1 - k) & 1) for row in rows)
@@ -156,10 +156,10 @@ def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np
     ``score``; the terminals crossed at each boundary by a difference array (exact integer sums in float64)."""
     m = len(bl) - 1
     line, lo, hi = _line_costs(inst, terms, axis, bl, n)
-    masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi)))[order], starts)
+    masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi))).take(order), starts)
     _, first = np.unique(masks, return_index=True)
-    top = first[np.argsort(score[first], kind="stable")[:max_groupings]]
-    return line, masks[top].tolist()
+    top = first.take(np.argsort(score.take(first), kind="stable")[:max_groupings])
+    return line, masks.take(top).tolist()
 
 
 def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
