@@ -96,9 +96,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
     if inside.size > SMALL:
         inst = sym.boxes.take(inside, 0)
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
-        order = np.argsort(sym.group.take(inside), kind="stable")
+        order = sym.group.take(inside).argsort(kind="stable")
         grp = sym.group.take(inside.take(order))
-        starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
+        starts = np.concatenate([[True], grp[1:] != grp[:-1]]).nonzero()[0]
         score = -sym.importance.take(inside.take(order.take(starts)))
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
@@ -158,7 +158,7 @@ def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np
     line, lo, hi = _line_costs(inst, terms, axis, bl, n)
     masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi))).take(order), starts)
     _, first = np.unique(masks, return_index=True)
-    top = first.take(np.argsort(score.take(first), kind="stable")[:max_groupings])
+    top = first.take(score.take(first).argsort(kind="stable")[:max_groupings])
     return line, masks.take(top).tolist()
 
 
@@ -215,10 +215,10 @@ def _line_costs(inst: np.ndarray, terms: np.ndarray, axis: int, bl: list[int], n
     the region's ``n`` (a difference array: exact integer sums in float64); and per instance the range lo..hi-1 of
     the boundaries it crosses."""
     bounds = np.array(bl)
-    lo = np.searchsorted(bounds, inst[:, axis], "right")
-    hi = np.searchsorted(bounds, inst[:, axis + 2], "left")
+    lo = bounds.searchsorted(inst[:, axis], "right")
+    hi = bounds.searchsorted(inst[:, axis + 2], "left")
     weights = terms.astype(float)
-    crossed = np.cumsum(np.bincount(lo, weights, len(bl)) - np.bincount(hi, weights, len(bl)))
+    crossed = (np.bincount(lo, weights, len(bl)) - np.bincount(hi, weights, len(bl))).cumsum()
     return (crossed / n).tolist(), lo, hi
 
 

@@ -28,8 +28,8 @@ class RepeatedRegions:
     def within(self, box: tuple[int, int, int, int]) -> np.ndarray:
         """Indices of the instances inside ``box`` (the box itself included, when it is an instance)."""
         (xs, ys), (x0, y0, x1, y1) = self._containment
-        return np.flatnonzero(x0[bisect_left(xs, box[0])] & y0[bisect_left(ys, box[1])] &
-                              x1[bisect_right(xs, box[2])] & y1[bisect_right(ys, box[3])])
+        return (x0[bisect_left(xs, box[0])] & y0[bisect_left(ys, box[1])] &
+                x1[bisect_right(xs, box[2])] & y1[bisect_right(ys, box[3])]).nonzero()[0]
 
     @cached_property
     def _containment(self) -> tuple[tuple[list[int], list[int]], tuple[np.ndarray, ...]]:
@@ -91,13 +91,13 @@ class _Sides:
         that side and its far edges align, Fig. 7), in every direction: per grown box its row, its direction,
         the grown box and two 64-bit hash lanes of (box size, strip thickness, terminal count, strip content)."""
         n = boxes.shape[0]
-        ranks = np.stack([np.searchsorted(self.lines[k % 2], boxes[:, k]) for k in range(4)])  # (side, box)
+        ranks = np.stack([self.lines[k % 2].searchsorted(boxes[:, k]) for k in range(4)])  # (side, box)
         line = (np.arange(4)[:, None] * self.stride + ranks.take(self.NEAR, 0)) * self.stride  # (direction, box)
         qa, qb = (line + ranks.take(self.START, 0)).ravel(), (line + ranks.take(self.END, 0)).ravel()
-        i = np.minimum(np.searchsorted(self.by_start, qa), self.by_start.size - 1)
-        j = np.minimum(np.searchsorted(self.by_end, qb), self.by_end.size - 1)
-        ok = np.flatnonzero((self.by_start.take(i) == qa) & (self.by_end.take(j) == qb) & (i <= j) &
-                            (self.run.take(i) == self.run.take(j)))
+        i = np.minimum(self.by_start.searchsorted(qa), self.by_start.size - 1)
+        j = np.minimum(self.by_end.searchsorted(qb), self.by_end.size - 1)
+        ok = ((self.by_start.take(i) == qa) & (self.by_end.take(j) == qb) & (i <= j) &
+              (self.run.take(i) == self.run.take(j))).nonzero()[0]
         i, j, (direction, rows) = i.take(ok), j.take(ok), np.divmod(ok, n)
         grown = boxes.take(rows, 0)  # (take: much faster than fancy indexing here)
         side, f = np.arange(0, 4 * ok.size, 4) + np.take(self.NEAR, direction), self.far.take(i)
@@ -171,9 +171,9 @@ def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: in
     gd, h0, h1, grown = gd.take(order), h0.take(order), h1.take(order), grown.take(order, 0)
     cut = np.ones(gd.size, dtype=bool)
     cut[1:] = (gd[1:] != gd[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
-    first = np.flatnonzero(cut)
+    first = cut.nonzero()[0]
     classes = np.lexsort((order.take(first), gd.take(first)))
-    starts = np.searchsorted(gd.take(first.take(classes)), np.arange(4 * groups + 1)).tolist()
+    starts = gd.take(first.take(classes)).searchsorted(np.arange(4 * groups + 1)).tolist()
     ends = np.append(first[1:], gd.size)
     bounds = list(zip(first.take(classes).tolist(), ends.take(classes).tolist()))
     return starts, bounds, list(map(tuple, grown.take(first.take(classes), 0).tolist())), grown
