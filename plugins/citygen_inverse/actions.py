@@ -119,7 +119,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
                 scores = dict(zip(group, (-sym.importance.take(inside)).tolist()))
             line, rows = _small_coverage(instances, scores, axis, bl, n, max_groupings)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
-        groupings.update(tuple(k for k in range(1, m) if not row >> (m - 1 - k) & 1) for row in rows)
+        bits = [(k, 1 << (m - 1 - k)) for k in range(1, m)]
+        groupings.update(tuple(k for k, bit in bits if not row & bit) for row in rows)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         piece = _Pieces(index, box, axis, bl, atom_sigs)
