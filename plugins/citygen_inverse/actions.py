@@ -243,19 +243,30 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
 
 
 def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[int, ...]]:
-    """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis)."""
+    """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis).
+
+    Substrings are grown one atom at a time as integer ids (the id of the one an atom shorter, then the atom), from
+    the starts whose shorter substring occurs more than once (no other can repeat)."""
     m = len(atoms)
+    ids: dict[tuple[int, int], int] = {}
+    code = [ids.setdefault(a, len(ids)) for a in atoms]  # per start, the id of its substring of length 1
+    width = len(ids)
+    cur, live = code, range(m)
     found: list[tuple[int, int, list[int]]] = []  # (weight, length, occurrences kept whole)
     for length in range(2, m // 2 + 1):
+        starts: dict[int, list[int]] = {}  # distinct substrings of this length, by first occurrence
+        for i in live:
+            if i <= m - length:
+                starts.setdefault(cur[i] * width + code[i + length - 1], []).append(i)
         repeated = False
-        starts: dict[tuple[int, ...], list[int]] = {}
-        for i in range(m - length + 1):
-            starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
-        for occ in starts.values():
+        cur, live = [0] * m, []
+        for n, occ in enumerate(starts.values()):
             if len(occ) < 2:
                 continue
+            live += occ
             chosen, end = [], -1
             for i in occ:
+                cur[i] = n
                 if i >= end:
                     chosen.append(i)
                     end = i + length
@@ -264,6 +275,7 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
                 repeated = True
         if not repeated:  # a substring twice apart has its prefix twice apart: no longer one repeats either
             break
+        live.sort()
     found.sort(key=lambda t: -t[0])
     out = []
     for _, length, chosen in found[:limit]:
