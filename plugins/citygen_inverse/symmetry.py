@@ -126,29 +126,26 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
         batch, queue = queue, []
         boxes = np.concatenate([groups[s] for s in batch])
         owner = np.repeat(np.arange(len(batch)), [len(groups[s]) for s in batch])
-        starts, bounds, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
+        starts, begin, size, firsts, grown = _same_strips(sides, boxes, owner, len(batch))
         sig = index.sig
         for g in range(len(batch)):
             if len(groups) >= max_groups:
                 break
-            lo = starts[4 * g]
-            sigs = [sig(box) for box in firsts[lo:starts[4 * g + 4]]]  # (in class order)
-            for gd in range(4 * g, 4 * g + 4):
-                a, b = starts[gd] - lo, starts[gd + 1] - lo
-                if b - a == 1 or len(set(sigs[a:b])) == b - a:  # (each class its own signature)
-                    for k, new_sig in enumerate(sigs[a:b], lo + a):
-                        size = bounds[k][1] - bounds[k][0]
-                        if new_sig > 0 and size > 1 and new_sig not in groups:
-                            groups[new_sig] = grown[bounds[k][0]:bounds[k][1]]
-                            queue.append(new_sig)
-                    continue
+            lo, hi = starts[4 * g], starts[4 * g + 4]
+            sigs = [sig(box) for box in firsts[lo:hi]]  # (in class order)
+            if len(set(sigs)) == hi - lo:  # each class its own signature: a class of 2+ instances is a group
+                for k, new_sig in zip(range(lo, hi), sigs):
+                    if size[k] > 1 and new_sig > 0 and new_sig not in groups:
+                        groups[new_sig] = grown[begin[k]:begin[k] + size[k]]
+                        queue.append(new_sig)
+                continue
+            for gd in range(4 * g, 4 * g + 4):  # classes of one direction with one signature are merged
                 same: dict[int, list[int]] = defaultdict(list)
-                for k, new_sig in enumerate(sigs[a:b], lo + a):
-                    same[new_sig].append(k)
+                for k in range(starts[gd], starts[gd + 1]):
+                    same[sigs[k - lo]].append(k)
                 for new_sig, ks in same.items():
-                    if new_sig > 0 and (len(ks) > 1 or bounds[ks[0]][1] - bounds[ks[0]][0] > 1) \
-                            and new_sig not in groups:
-                        groups[new_sig] = np.concatenate([grown[slice(*bounds[k])] for k in ks])
+                    if new_sig > 0 and (len(ks) > 1 or size[ks[0]] > 1) and new_sig not in groups:
+                        groups[new_sig] = np.concatenate([grown[begin[k]:begin[k] + size[k]] for k in ks])
                         queue.append(new_sig)
     sizes = [len(instances) for instances in groups.values()]
     return RepeatedRegions(
@@ -159,12 +156,12 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
 
 
 def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: int
-                 ) -> tuple[list[int], list[tuple[int, int]], list[tuple[int, ...]], np.ndarray]:
+                 ) -> tuple[list[int], list[int], list[int], list[tuple[int, ...]], np.ndarray]:
     """The instances of ``groups`` groups (``owner`` per row of ``boxes``) grown in every direction, in classes
     of equal group, direction, size and strip content (by a 128-bit hash). Returns per (group, direction) the
     range of its classes (``starts``, index ``4 group + direction``; a group's classes in order of their first
-    instance), per class the range of its members (in instance order) in the grown boxes, which are sorted by
-    class, and per class the first member."""
+    instance), per class the start and size of its members (in instance order) in the grown boxes, which are
+    sorted by class, and per class the first member."""
     rows, direction, grown, (h0, h1) = sides.grow(boxes)
     gd = owner.take(rows) * 4 + direction
     order = np.lexsort((h1, h0, gd))  # stable: equal keys stay in instance order
@@ -173,7 +170,7 @@ def _same_strips(sides: _Sides, boxes: np.ndarray, owner: np.ndarray, groups: in
     cut[1:] = (gd[1:] != gd[:-1]) | (h0[1:] != h0[:-1]) | (h1[1:] != h1[:-1])
     first = cut.nonzero()[0]
     classes = np.lexsort((order.take(first), gd.take(first)))
-    starts = gd.take(first.take(classes)).searchsorted(np.arange(4 * groups + 1)).tolist()
-    ends = np.append(first[1:], gd.size)
-    bounds = list(zip(first.take(classes).tolist(), ends.take(classes).tolist()))
-    return starts, bounds, list(map(tuple, grown.take(first.take(classes), 0).tolist())), grown
+    begin = first.take(classes)
+    starts = gd.take(begin).searchsorted(np.arange(4 * groups + 1)).tolist()
+    size = (np.append(first[1:], gd.size) - first).take(classes)
+    return starts, begin.tolist(), size.tolist(), list(map(tuple, grown.take(begin, 0).tolist())), grown
