@@ -58,6 +58,7 @@ class _Sides:
     MIX = np.array([[0xA24BAED4963EE407, 0x9FB21C651E98DF25, 0xC13FA9A902A6328F, 0x91E10DA5C79E7B1D],
                     [0xE7037ED1A0B428DB, 0x8EBC6AF09C88C6E3, 0x589965CC75374CC3, 0x1D8E4E27C47D124F]], dtype=np.uint64)
     NEAR, START, END = [2, 0, 3, 1], [1, 1, 0, 0], [3, 3, 2, 2]  # per side: the box column of its line, a, b
+    DENSE = 1 << 20
 
     def __init__(self, index: LayoutIndex) -> None:
         X0, Y0, X1, Y1 = index.X0, index.Y0, index.X1, index.Y1
@@ -79,6 +80,10 @@ class _Sides:
         new_run[1:] = (self.by_start[1:] // self.stride != self.by_start[:-1] // self.stride) | \
             (self.by_start[1:] != self.by_end[:-1]) | (self.far[1:] != self.far[:-1])
         self.run = np.cumsum(new_run)
+        self.start_at = self.end_at = None  # a dense table of both sorted keys when small (a few MB at most)
+        if 4 * self.stride ** 2 <= self.DENSE:
+            self.start_at, self.end_at = np.full(4 * self.stride ** 2, -1), np.full(4 * self.stride ** 2, -1)
+            self.start_at[self.by_start] = self.end_at[self.by_end] = np.arange(order.size)
         (ax, inv_ax), (ay, inv_ay) = index.grid_powers  # along y for sides 0 and 1, along x for 2 and 3
         at = np.concatenate(at)[order]
         power, self.inverse = np.concatenate([ay, ax], axis=1)[:, at], np.concatenate([inv_ay, inv_ax], axis=1)[:, at]
@@ -94,10 +99,14 @@ class _Sides:
         ranks = np.stack([self.lines[k % 2].searchsorted(boxes[:, k]) for k in range(4)])  # (side, box)
         line = (np.arange(4)[:, None] * self.stride + ranks.take(self.NEAR, 0)) * self.stride  # (direction, box)
         qa, qb = (line + ranks.take(self.START, 0)).ravel(), (line + ranks.take(self.END, 0)).ravel()
-        i = np.minimum(self.by_start.searchsorted(qa), self.by_start.size - 1)
-        j = np.minimum(self.by_end.searchsorted(qb), self.by_end.size - 1)
-        ok = ((self.by_start.take(i) == qa) & (self.by_end.take(j) == qb) & (i <= j) &
-              (self.run.take(i) == self.run.take(j))).nonzero()[0]
+        if self.start_at is not None:
+            i, j = self.start_at.take(qa), self.end_at.take(qb)
+            ok = ((i >= 0) & (i <= j) & (self.run.take(i) == self.run.take(j))).nonzero()[0]
+        else:
+            i = np.minimum(self.by_start.searchsorted(qa), self.by_start.size - 1)
+            j = np.minimum(self.by_end.searchsorted(qb), self.by_end.size - 1)
+            ok = ((self.by_start.take(i) == qa) & (self.by_end.take(j) == qb) & (i <= j) &
+                  (self.run.take(i) == self.run.take(j))).nonzero()[0]
         i, j, (direction, rows) = i.take(ok), j.take(ok), np.divmod(ok, n)
         grown = boxes.take(rows, 0)  # (take: much faster than fancy indexing here)
         side, f = np.arange(0, 4 * ok.size, 4) + np.take(self.NEAR, direction), self.far.take(i)
