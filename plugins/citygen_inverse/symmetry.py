@@ -148,14 +148,15 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
                         groups[new_sig] = grown[begin[k]:begin[k] + size[k]]
                         queue.append(new_sig)
                 continue
-            for gd in range(4 * g, 4 * g + 4):  # classes of one direction with one signature are merged
-                same: dict[int, list[int]] = defaultdict(list)
+            same: dict[tuple[int, int], list[int]] = {}  # classes of one direction with one signature merge
+            for gd in range(4 * g, 4 * g + 4):
                 for k in range(starts[gd], starts[gd + 1]):
-                    same[sigs[k - lo]].append(k)
-                for new_sig, ks in same.items():
-                    if new_sig > 0 and (len(ks) > 1 or size[ks[0]] > 1) and new_sig not in groups:
-                        groups[new_sig] = np.concatenate([grown[begin[k]:begin[k] + size[k]] for k in ks])
-                        queue.append(new_sig)
+                    same.setdefault((gd, sigs[k - lo]), []).append(k)
+            for (_, new_sig), ks in same.items():
+                if new_sig > 0 and (len(ks) > 1 or size[ks[0]] > 1) and new_sig not in groups:
+                    groups[new_sig] = np.concatenate([grown[begin[k]:begin[k] + size[k]] for k in ks]) \
+                        if len(ks) > 1 else grown[begin[ks[0]]:begin[ks[0]] + size[ks[0]]]
+                    queue.append(new_sig)
     sizes = [len(instances) for instances in groups.values()]
     return RepeatedRegions(
         boxes=np.concatenate(list(groups.values())) if groups else np.zeros((0, 4), dtype=np.int64),
