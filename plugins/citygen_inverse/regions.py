@@ -102,13 +102,14 @@ class LayoutIndex:
         x0, y0, x1, y1 = box
         return np.flatnonzero((self.X0 >= x0) & (self.X1 <= x1) & (self.Y0 >= y0) & (self.Y1 <= y1))
 
-    def sig(self, box: Box) -> int:
-        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not)."""
+    def sig(self, box: Box, tiled: bool = False) -> int:
+        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not). A caller that knows
+        the box is tiled may say so (``tiled``), which skips the tiling test."""
         found = self._boxes.get(box)
         if found is not None:
             return found
         g = self._grid
-        found = g.region(box)
+        found = g.region(box, tiled)
         if found is None:
             self._boxes[box] = -1
             return -1
@@ -229,24 +230,27 @@ class _Grid:
         found = self.region(box)
         return None if found is None else found[0]
 
-    def region(self, box: Box) -> tuple[tuple[int, int, int, int], int, int, int] | None:
+    def region(self, box: Box, tiled: bool = False) -> tuple[tuple[int, int, int, int], int, int, int] | None:
         """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
         segments on lines strictly inside it, perpendicular to x and to y (prefix sums inlined: this is the
         signature lookup's hot path)."""
         xi, yi = self.xi, self.yi
-        i0, j0, i1, j1 = xi.get(box[0]), yi.get(box[1]), xi.get(box[2]), yi.get(box[3])
-        if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
-            return None
-        gap = self.gap
-        if gap is not None and gap[i1][j1] - gap[i0][j1] - gap[i1][j0] + gap[i0][j0]:
-            return None
-        av, ah = self.along
-        a, b = av[i0], av[i1]
-        if a[j1] - a[j0] != j1 - j0 or b[j1] - b[j0] != j1 - j0:
-            return None
-        a, b = ah[j0], ah[j1]
-        if a[i1] - a[i0] != i1 - i0 or b[i1] - b[i0] != i1 - i0:
-            return None
+        if tiled:
+            i0, j0, i1, j1 = xi[box[0]], yi[box[1]], xi[box[2]], yi[box[3]]
+        else:
+            i0, j0, i1, j1 = xi.get(box[0]), yi.get(box[1]), xi.get(box[2]), yi.get(box[3])
+            if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
+                return None
+            gap = self.gap
+            if gap is not None and gap[i1][j1] - gap[i0][j1] - gap[i1][j0] + gap[i0][j0]:
+                return None
+            av, ah = self.along
+            a, b = av[i0], av[i1]
+            if a[j1] - a[j0] != j1 - j0 or b[j1] - b[j0] != j1 - j0:
+                return None
+            a, b = ah[j0], ah[j1]
+            if a[i1] - a[i0] != i1 - i0 or b[i1] - b[i0] != i1 - i0:
+                return None
         n, (vx, vy) = self.n, self.interior
         a, b = n[i0], n[i1]
         count = b[j1] - a[j1] - b[j0] + a[j0]

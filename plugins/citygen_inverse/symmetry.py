@@ -141,7 +141,7 @@ def detect_symmetry(index: LayoutIndex, max_groups: int = 1500) -> RepeatedRegio
             if len(groups) >= max_groups:
                 break
             lo, hi = starts[4 * g], starts[4 * g + 4]
-            sigs = [sig(box) for box in firsts[lo:hi]]  # (in class order)
+            sigs = [sig(box, True) for box in firsts[lo:hi]]  # (in class order; grown boxes are tiled)
             if len(set(sigs)) == hi - lo:  # each class its own signature: a class of 2+ instances is a group
                 for k, new_sig in zip(range(lo, hi), sigs):
                     if size[k] > 1 and new_sig > 0 and new_sig not in groups:
