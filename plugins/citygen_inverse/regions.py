@@ -216,8 +216,8 @@ class _Grid:
         # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
         self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v))
                             for C, v in ((A, self.xs), (B, self.ys)))
-        inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
-        self.inv = [(inv_x[k], inv_y[k]) for k in range(lanes)]  # per lane, per grid line
+        (_, inv_x), (_, inv_y) = self.powers
+        self.inv = [(inv_x[k][:, None] * inv_y[k][None, :]).tolist() for k in range(lanes)]  # per lane, corner
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
         self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
@@ -270,11 +270,11 @@ class _Grid:
         """The two content hashes of the tiled box on grid cells ``cell``, translated to its corner (``variant``:
         free width + 2 free height)."""
         t, u = self.hash[variant]
-        (ia, ib), (ja, jb) = self.inv
+        a, b = self.inv
         i0, j0, i1, j1 = cell
         ti, tk, ui, uk = t[i0], t[i1], u[i0], u[i1]
-        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[i0] * ib[j0]) & self.MASK,
-                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[i0] * jb[j0]) & self.MASK)
+        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * a[i0][j0] & self.MASK,
+                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * b[i0][j0] & self.MASK)
 
     def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
         """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
