@@ -9,9 +9,9 @@ wu2014 §6.3) gets a ``grid`` rule over its terminals.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 import math
 from bisect import bisect_left, bisect_right
+from dataclasses import dataclass
 from functools import lru_cache
 from itertools import compress
 from operator import eq
@@ -330,6 +330,7 @@ class Candidates:
         self.index, self.box, self.model = index, box, model
         # least operator cost of >= 2 children: split into 2, repeat of 1 tile (symsplit, repeatABA cost more)
         low = min(model.split + 2, model.repeat + 1)
+        # with ``best_only``: any candidate's H >= bound[0] + bound[1] x its line cost
         self.bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
             else None
         self._best_only = best_only

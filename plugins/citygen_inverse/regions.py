@@ -276,11 +276,6 @@ class _Grid:
         return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * a[i0][j0] & self.MASK,
                 (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * b[i0][j0] & self.MASK)
 
-    def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
-        """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
-        a = self.along[axis][line]
-        return a[hi] - a[lo] == hi - lo
-
     def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, variant: int, counts: tuple[int, ...]
                ) -> int | None:
         """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
