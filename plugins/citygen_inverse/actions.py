@@ -9,8 +9,11 @@ wu2014 §6.3) gets a ``grid`` rule over its terminals.
 """
 from __future__ import annotations
 
+import math
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
 from functools import lru_cache
+from itertools import compress
 from operator import eq
 
 import numpy as np
@@ -72,74 +75,152 @@ def _divisors_below(k: int) -> tuple[int, ...]:
     return tuple(p for p in range(1, k) if k % p == 0)
 
 
+SMALL = 48  # regions with at most this many repeated instances inside: plain Python (numpy's per-call cost dominates)
+
+
 def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
                    max_groupings: int = 24, best_only: bool = False) -> Candidates:
     """Candidate rules for the region signature ``sig`` (its representative box); per axis at most
     ``max_groupings`` groupings from repeated regions (the most important first, f(a, o) of §4.7). With
     ``best_only``, only the first of least heuristic (see ``Candidates``)."""
-    box = index.sigs[sig].box
-    x0, y0, x1, y1 = box
-    c0, c1, c2, c3 = sym.columns
-    inside = np.flatnonzero((c0 >= x0) & (c1 >= y0) & (c2 <= x1) & (c3 <= y1))
-    inst = sym.boxes[inside]
-    proper = (inst != box).any(axis=1)  # the region itself is not inside
-    inside, inst = inside[proper], inst[proper]
-    terms = sym.terminals[inside]
-    if index.sigs[sig].period is not None:
-        return _periodic(index, sig, model, inst, terms, best_only)
+    info = index.sigs[sig]
+    box, n = info.box, info.n
+    inside = sym.within(box)
+    terms = sym.terminals.take(inside)
+    proper = terms != n  # the region itself (the one instance inside with all its terminals) is not inside
+    inside, terms = inside[proper], terms[proper]
+    if info.period is not None:
+        return _periodic(index, sig, model, sym.boxes.take(inside, 0), terms, best_only)
     actions = Candidates(index, box, model, best_only)
-    if inside.size:
+    instances = None
+    if inside.size > SMALL:
+        inst = sym.boxes.take(inside, 0)
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
-        order = np.argsort(sym.group[inside], kind="stable")
-        grp = sym.group[inside][order]
-        starts = np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]))
-        score = (-sym.importance[inside[order[starts]]]).tolist()
+        order = sym.group.take(inside).argsort(kind="stable")
+        grp = sym.group.take(inside.take(order))
+        starts = np.concatenate([[True], grp[1:] != grp[:-1]]).nonzero()[0]
+        score = -sym.importance.take(inside.take(order.take(starts)))
     for axis in (0, 1):
         cuts = index.cuts(box, axis)
-        if cuts.size == 0:
+        if not cuts:
             continue
-        bounds = np.concatenate([[box[axis]], cuts, [box[axis + 2]]])
-        m = bounds.size - 1
-        # cov[i, k]: boundary k lies strictly inside repeated instance i; line[k]: Eq. 5 cost of cutting there
-        cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-        line = _line_costs(terms, index.sigs[sig].n, cov)
+        bl = [box[axis], *cuts, box[axis + 2]]
+        m = len(bl) - 1
+        # line[k]: Eq. 5 cost of cutting at boundary k; per repeated region, the boundaries inside any of its
+        # instances (which a grouping keeping every instance whole drops) as a bit mask, boundary k at bit
+        # m - 1 - k, so that masks order as the rows of boundaries do: the distinct masks, in lexicographic order
+        # (the first region's score), by f(a, o)
+        if inside.size > SMALL and m <= 62:  # (a mask fits in int64)
+            line, rows = _coverage(inst, terms, order, starts, score, axis, bl, n, max_groupings)
+        else:
+            if instances is None:
+                group = sym.group.take(inside).tolist()
+                instances = list(zip(sym.boxes.take(inside, 0).tolist(), terms.tolist(), group))
+                scores = dict(zip(group, (-sym.importance.take(inside)).tolist()))
+            line, rows = _small_coverage(instances, scores, axis, bl, n, max_groupings)
         groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
-        if inst.size:
-            # per repeated region, the boundaries inside any of its instances, which a grouping keeping every
-            # instance whole drops; distinct rows in lexicographic order (the first region's score), by f(a, o)
-            per_group = np.logical_or.reduceat(cov[order][:, 1:m], starts, axis=0)
-            first: dict[bytes, int] = {}
-            flat = per_group.tobytes()
-            for g in range(per_group.shape[0]):
-                first.setdefault(flat[g * (m - 1):(g + 1) * (m - 1)], g)
-            rows = sorted(first)
-            ranked = sorted(range(len(rows)), key=lambda r: score[first[rows[r]]])
-            for r in ranked[:max_groupings]:
-                groupings.add(tuple(k + 1 for k, cut in enumerate(rows[r]) if not cut))
-        bl = bounds.tolist()
+        bits = [(k, 1 << (m - 1 - k)) for k in range(1, m)]
+        groupings.update(tuple(k for k, bit in bits if not row & bit) for row in rows)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
-        seen = set()
         piece = _Pieces(index, box, axis, bl, atom_sigs)
-        for keep in groupings:
-            edges = [0, *keep, m]
-            sigs = [piece[ab] for ab in zip(edges, edges[1:])]
-            merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
-            for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
-                if len(e) < 3 or tuple(e) in seen:
-                    continue
-                seen.add(tuple(e))
-                actions.add(axis, bl, e, sg, line)
+        if actions.bound is None:
+            _add_all(actions, axis, bl, m, groupings, piece, line)
+        else:
+            _add_best(actions, axis, bl, m, groupings, piece, line)
     if not len(actions):
         actions.add_action(_grid(index, sig, model))
     return actions
 
 
-def _line_costs(terms: np.ndarray, n: int, cov: np.ndarray) -> list[float]:
-    """Eq. 5's cost of cutting at each boundary: the terminals of the repeated instances it crosses (``cov``, one
-    row per instance) over the region's ``n``. The integer sum is exact in any order (a float product of a bool
-    matrix takes numpy's slow mixed-type loop)."""
-    return ((terms @ cov) / n).tolist() if terms.size else [0.0] * cov.shape[1]
+def _small_coverage(instances: list[tuple[list[int], int, int]], score: dict[int, float], axis: int, bl: list[int],
+                    n: int, max_groupings: int) -> tuple[list[float], list[int]]:
+    """The line costs and the ranked masks of ``region_actions`` in plain Python, from the instances (box,
+    terminals, group) and each group's score."""
+    m = len(bl) - 1
+    crossed = [0] * (m + 1)
+    masks: dict[int, int] = {}
+    for inst, terms, group in instances:
+        lo, hi = bisect_right(bl, inst[axis]), bisect_left(bl, inst[axis + 2])  # boundaries lo..hi-1 inside
+        for k in range(lo, hi):
+            crossed[k] += terms
+        masks[group] = masks.get(group, 0) | ((1 << (m - lo)) - (1 << (m - hi)))
+    first: dict[int, int] = {}
+    for group in sorted(masks):
+        first.setdefault(masks[group], group)
+    return [c / n for c in crossed], sorted(sorted(first), key=lambda r: score[first[r]])[:max_groupings]
+
+
+def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np.ndarray, score: np.ndarray,
+              axis: int, bl: list[int], n: int, max_groupings: int) -> tuple[list[float], list[int]]:
+    """``_small_coverage`` with arrays: the instances in ``order`` of group, each group from ``starts`` with its
+    ``score``; the terminals crossed at each boundary by a difference array (exact integer sums in float64)."""
+    m = len(bl) - 1
+    line, lo, hi = _line_costs(inst, terms, axis, bl, n)
+    masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi))).take(order), starts)
+    _, first = np.unique(masks, return_index=True)
+    top = first.take(score.take(first).argsort(kind="stable")[:max_groupings])
+    return line, masks.take(top).tolist()
+
+
+def _add_all(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
+             ) -> None:
+    """Every grouping's rule, then the rule with its runs of identical children merged, in order (once each)."""
+    seen = set()
+    for keep in groupings:
+        edges = [0, *keep, m]
+        sigs = [piece[ab] for ab in zip(edges, edges[1:])]
+        merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+        for e, sg in ((edges, sigs), merged) if merged else ((edges, sigs),):
+            if len(e) < 3 or tuple(e) in seen:
+                continue
+            seen.add(tuple(e))
+            actions.add(axis, bl, e, sg, line)
+
+
+def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, piece: _Pieces, line: list[float]
+              ) -> None:
+    """The rules of ``_add_all`` for a greedy run (``actions.bound`` set), which keeps the first of least H: the
+    groupings are visited by a lower bound on H, known before any piece is looked up (the operator bound plus the
+    line costs of the boundaries that no merge of equal-size neighbours can drop), and those that cannot win are
+    never looked up. Each rule competes with its rank in ``_add_all``'s order (the first, when it comes twice), so
+    the kept rule is the one ``_add_all`` keeps."""
+    low, lam = actions.bound
+    groupings = list(groupings)
+    twice = [2 * v for v in bl]  # boundary k has equal-size neighbours p, q when 2 bl[k] == bl[p] + bl[q]
+    bounds = [low + lam * sum([line[k] for p, k, q in zip((0, *keep[:-1]), keep, (*keep[1:], m))
+                               if twice[k] != bl[p] + bl[q]]) for keep in groupings]
+    seen: dict[tuple[int, ...], int] = {}
+    base = axis << 20
+    for g in sorted(range(len(bounds)), key=bounds.__getitem__):
+        bound, best = bounds[g], actions.best
+        if best is not None:
+            if bound > best[0]:
+                break
+            if bound == best[0] and base + 2 * g > best[1]:
+                continue
+        edges = [0, *groupings[g], m]
+        sigs = [piece[ab] for ab in zip(edges, edges[1:])]
+        merged = _merge_runs(piece, bl, edges, sigs) if any(map(eq, sigs, sigs[1:])) else None
+        for rank, (e, sg) in enumerate(((edges, sigs), merged) if merged else ((edges, sigs),), base + 2 * g):
+            key = tuple(e)
+            if len(e) < 3 or seen.get(key, rank + 1) <= rank:
+                continue
+            seen[key] = rank
+            actions.add(axis, bl, e, sg, line, rank=rank)
+
+
+def _line_costs(inst: np.ndarray, terms: np.ndarray, axis: int, bl: list[int], n: int
+                ) -> tuple[list[float], np.ndarray, np.ndarray]:
+    """Eq. 5's cost of cutting at each boundary ``bl``: the terminals of the repeated instances it crosses over
+    the region's ``n`` (a difference array: exact integer sums in float64); and per instance the range lo..hi-1 of
+    the boundaries it crosses."""
+    bounds = np.array(bl)
+    lo = bounds.searchsorted(inst[:, axis], "right")
+    hi = bounds.searchsorted(inst[:, axis + 2], "left")
+    weights = terms.astype(float)
+    crossed = (np.bincount(lo, weights, len(bl)) - np.bincount(hi, weights, len(bl))).cumsum()
+    return (crossed / n).tolist(), lo, hi
 
 
 def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, terms: np.ndarray,
@@ -149,10 +230,8 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     box = index.sigs[sig].box
     axis, p = index.sigs[sig].period
     cuts = index.cuts(box, axis)
-    bl = [box[axis], *cuts.tolist(), box[axis + 2]]
-    bounds = np.array(bl)
-    cov = (bounds[None, :] > inst[:, axis, None]) & (bounds[None, :] < inst[:, axis + 2, None])
-    line = _line_costs(terms, index.sigs[sig].n, cov)
+    bl = [box[axis], *cuts, box[axis + 2]]
+    line = _line_costs(inst, terms, axis, bl, index.sigs[sig].n)[0]
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
     out = Candidates(index, box, model, best_only)
     for edges in (tiles, list(range(len(bl)))):
@@ -164,28 +243,48 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
 
 
 def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[int, ...]]:
-    """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis)."""
+    """Groupings that keep every occurrence of a repeated atom substring whole (1-D symmetry along the axis).
+
+    Substrings are grown one atom at a time as integer ids (the id of the one an atom shorter, then the atom), from
+    the starts whose shorter substring occurs more than once (no other can repeat)."""
     m = len(atoms)
-    found: list[tuple[float, tuple[int, ...]]] = []
+    ids: dict[tuple[int, int], int] = {}
+    code = [ids.setdefault(a, len(ids)) for a in atoms]  # per start, the id of its substring of length 1
+    width = len(ids)
+    cur, live = code, range(m)
+    found: list[tuple[int, int, list[int]]] = []  # (weight, length, occurrences kept whole)
     for length in range(2, m // 2 + 1):
+        starts: dict[int, list[int]] = {}  # distinct substrings of this length, by first occurrence
+        for i in live:
+            if i <= m - length:
+                starts.setdefault(cur[i] * width + code[i + length - 1], []).append(i)
         repeated = False
-        starts: dict[tuple[int, ...], list[int]] = {}
-        for i in range(m - length + 1):
-            starts.setdefault(tuple(atoms[i:i + length]), []).append(i)
-        for occ in starts.values():
+        cur, live = [0] * m, []
+        for n, occ in enumerate(starts.values()):
+            if len(occ) < 2:
+                continue
+            live += occ
             chosen, end = [], -1
             for i in occ:
+                cur[i] = n
                 if i >= end:
                     chosen.append(i)
                     end = i + length
             if len(chosen) >= 2:
-                inner = {i + d for i in chosen for d in range(1, length)}
-                found.append(((length - 1) * (len(chosen) - 1), tuple(k for k in range(1, m) if k not in inner)))
+                found.append(((length - 1) * (len(chosen) - 1), length, chosen))
                 repeated = True
         if not repeated:  # a substring twice apart has its prefix twice apart: no longer one repeats either
             break
+        live.sort()
     found.sort(key=lambda t: -t[0])
-    return [keep for _, keep in found[:limit]]
+    out = []
+    for _, length, chosen in found[:limit]:
+        kept = [True] * m  # per boundary: not strictly inside a chosen occurrence
+        inner = [False] * (length - 1)
+        for i in chosen:
+            kept[i + 1:i + length] = inner
+        out.append(tuple(compress(range(1, m), kept[1:])))
+    return out
 
 
 def _piece(box: Box, axis: int, a: int, b: int) -> Box:
@@ -231,9 +330,11 @@ class Candidates:
         self.index, self.box, self.model = index, box, model
         # least operator cost of >= 2 children: split into 2, repeat of 1 tile (symsplit, repeatABA cost more)
         low = min(model.split + 2, model.repeat + 1)
-        self._bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
+        # with ``best_only``: any candidate's H >= bound[0] + bound[1] x its line cost
+        self.bound = (model.lambda1 * low, model.lambda2) if best_only and model.lambda1 >= 0 <= model.lambda2 \
             else None
         self._best_only = best_only
+        self.best: tuple[float, float] | None = None  # with ``best_only``: H and rank of the kept candidate
         self.cost: list[float] = []
         self.heuristic: list[float] = []
         self._specs: list[tuple] = []
@@ -252,21 +353,24 @@ class Candidates:
         return (self[k] for k in range(len(self.cost)))
 
     def add(self, axis: int, bl: list[int], edges: list[int], sigs: list[int], line: list[float],
-            only: str | None = None) -> None:
+            only: str | None = None, rank: int | None = None) -> None:
         """The rule splitting the box at the atom boundaries ``edges`` (of the lines ``bl``) into ``sigs``;
-        ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``."""
+        ``line`` the Eq. 5 cost of cutting at each boundary. With ``only``, kept when its operator is ``only``.
+        With ``best_only``, ``rank`` orders candidates of equal H (default: after every one added before)."""
         line_cost = sum(map(line.__getitem__, edges[1:-1]))
-        if self._bound is not None and self.heuristic and \
-                self._bound[0] + self._bound[1] * line_cost > self.heuristic[0]:
+        if self.bound is not None and self.heuristic and self.bound[0] + self.bound[1] * line_cost > self.best[0]:
             return
         op, cost, k = _ops([(s, bl[b] - bl[a]) for s, a, b in zip(sigs, edges, edges[1:])], self.model)
         if only is not None and op != only:
             return
         heuristic = self.model.lambda1 * cost + self.model.lambda2 * line_cost
-        if self._best_only and self.heuristic:
-            if not heuristic < self.heuristic[0]:
-                return
-            self.cost.clear(), self.heuristic.clear(), self._specs.clear(), self.built.clear()
+        if self._best_only:
+            if self.heuristic:
+                if not (heuristic < self.best[0] or heuristic == self.best[0] and rank is not None
+                        and rank < self.best[1]):
+                    return
+                self.cost.clear(), self.heuristic.clear(), self._specs.clear(), self.built.clear()
+            self.best = (heuristic, math.inf if rank is None else rank)
         self.cost.append(cost)
         self.heuristic.append(heuristic)
         self._specs.append((axis, bl, edges, sigs, op, cost, k, heuristic))

@@ -81,16 +81,13 @@ class LayoutIndex:
         arr[:, 0::2] += e[:, :1].astype(np.int64)
         rows = arr.tolist()
         self.X0, self.Y0, self.X1, self.Y1 = arr.T.copy()
-        self.kinds: list[TerminalKind] = []
-        kind_ids: dict[TerminalKind, int] = {}
+        kind_ids: dict[tuple, int] = {}
         materials: dict[tuple, int] = {}
         sym, mat = [], []
         for (label, depth), (x0, y0, x1, y1) in zip(kinds, rows):
-            kind = TerminalKind(label, depth, x1 - x0, y1 - y0)
-            sym.append(kind_ids.setdefault(kind, len(kind_ids)))
+            sym.append(kind_ids.setdefault((label, depth, x1 - x0, y1 - y0), len(kind_ids)))
             mat.append(materials.setdefault((label, depth), len(materials)))
-            if len(kind_ids) > len(self.kinds):
-                self.kinds.append(kind)
+        self.kinds: list[TerminalKind] = [TerminalKind(*kind) for kind in kind_ids]
         self.sym = np.array(sym, dtype=np.int64)
         self.material = np.array(mat, dtype=np.int64)
         self.sigs: list[SigInfo] = [SigInfo((0, 0, 0, 0), 0, None)]  # id 0: the empty dummy
@@ -105,47 +102,59 @@ class LayoutIndex:
         x0, y0, x1, y1 = box
         return np.flatnonzero((self.X0 >= x0) & (self.X1 <= x1) & (self.Y0 >= y0) & (self.Y1 <= y1))
 
-    def sig(self, box: Box) -> int:
-        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not)."""
+    def sig(self, box: Box, tiled: bool = False) -> int:
+        """Signature id of the region ``box`` (which must be exactly tiled; -1 when it is not). A caller that knows
+        the box is tiled may say so (``tiled``), which skips the tiling test."""
         found = self._boxes.get(box)
         if found is not None:
             return found
         g = self._grid
-        found = g.region(box)
+        found = g.region(box, tiled)
         if found is None:
             self._boxes[box] = -1
             return -1
         cell, n, inner_x, inner_y = found
-        i0, j0, i1, j1 = cell
-        x0, y0, x1, y1 = box
         free_w = self.free_extents and inner_x == 0
         free_h = self.free_extents and inner_y == 0
+        variant = free_w + 2 * free_h
         key = None
         if self.periodic and n > 1:
             for axis, free in ((0, free_w), (1, free_h)):
-                p = None if free or gcd(n, box[axis + 2] - box[axis]) == 1 else \
-                    g.period(box, cell, axis, (free_w, free_h), n)
+                if free:
+                    continue
+                counts = _divisors(gcd(n, box[axis + 2] - box[axis]))
+                p = g.period(box, cell, axis, variant, counts) if counts else None
                 if p is not None:
+                    x0, y0, x1, y1 = box
                     tile = (x0, y0, x0 + p, y1) if axis == 0 else (x0, y0, x1, y0 + p)
                     key = (-2 - axis, p, self.sig(tile))
                     break
         if key is None:
-            key = (int(free_w) + 2 * int(free_h), *g.content(box, cell, (free_w, free_h)))
+            key = (variant, *g.content(cell, variant))
         sid = self._sig_ids.get(key)
         if sid is None:
             sid = len(self.sigs)
             self._sig_ids[key] = sid
-            self.sigs.append(SigInfo(box, n, int(self.sym[g.owner[i0][j0]]) if n == 1 else None,
+            self.sigs.append(SigInfo(box, n, int(self.sym[g.owner[cell[0]][cell[1]]]) if n == 1 else None,
                                      None if key[0] >= 0 else (-2 - key[0], key[1])))
         self._boxes[box] = sid
         return sid
+
+    def terminal_sigs(self) -> list[int]:
+        """``sig`` of every terminal's box, in terminal order (the same lookups, in the same order)."""
+        boxes = zip(self.X0.tolist(), self.Y0.tolist(), self.X1.tolist(), self.Y1.tolist())
+        if not self.free_extents:
+            return [self.sig(box) for box in boxes]
+        first: dict[int, int] = {}  # with free extents a lone terminal's signature is its material's
+        return [first[mat] if mat in first else first.setdefault(mat, self.sig(box))
+                for mat, box in zip(self.material.tolist(), boxes)]
 
     @property
     def grid_powers(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
         """Per axis, (lanes, edge lines) arrays of the hash bases to the power of each line and their inverses."""
         return self._grid.powers
 
-    def cuts(self, box: Box, axis: int) -> np.ndarray:
+    def cuts(self, box: Box, axis: int) -> list[int]:
         """Valid split lines of ``box`` along ``axis`` (0 = x): interior edges no terminal inside crosses."""
         return self._grid.cuts(box, axis)
 
@@ -178,14 +187,18 @@ class _Grid:
             raise LayoutError(f"{len(self.xs)} x {len(self.ys)} distinct edge lines: too irregular to index",
                               hint="regularise the layout (snap and align edges) before extraction")
         owner = np.full((nx + 2, ny + 2), -1, dtype=np.int64)  # padded by one cell on every side
-        for k in range(X0.size):
-            owner[a0[k] + 1:a1[k] + 1, b0[k] + 1:b1[k] + 1] = k
+        w, h = a1 - a0, b1 - b0
+        k = np.repeat(np.arange(X0.size), w * h)  # every cell of every terminal
+        start = np.repeat(np.cumsum(w * h) - w * h, w * h)
+        cell = np.arange(k.size) - start  # row-major within the terminal: (cell // h, cell % h)
+        owner[a0[k] + 1 + cell // h[k], b0[k] + 1 + cell % h[k]] = k
         self.owner = owner[1:-1, 1:-1].tolist()
         vert = owner[1:, 1:-1] != owner[:-1, 1:-1]  # (nx + 1, ny): an edge on line x_i along row j
         horz = owner[1:-1, 1:] != owner[1:-1, :-1]  # (nx, ny + 1)
         self.along = (_prefix1(vert), _prefix1(horz.T))  # per line, edge count along it
         self.interior = (_prefix2(vert), _prefix2(horz.T))  # per axis: line index, then the other axis
-        self.gap = _prefix2(owner[1:-1, 1:-1] < 0)
+        gap = owner[1:-1, 1:-1] < 0
+        self.gap = _prefix2(gap) if gap.any() else None  # (only joint extraction leaves gaps between facades)
         corner = np.zeros((nx, ny), dtype=np.int64)
         corner[a0, b0] = 1
         self.n = _prefix2(corner)
@@ -200,11 +213,11 @@ class _Grid:
         r = np.random.default_rng(20140801).integers(0, 1 << 63, (kind.max() + 1, lanes), dtype=np.uint64)
         r = (r * np.uint64(2) + np.uint64(1))[kind].reshape(4, X0.size, lanes)
         A, B = ([lane[axis] for lane in self.LANES] for axis in (0, 1))
-        xs, ys = np.array(self.xs, dtype=np.uint64), np.array(self.ys, dtype=np.uint64)
         # per axis (lanes, lines): A^x or B^y and its inverse (also the strip hashes of symmetry detection)
-        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v)) for C, v in ((A, xs), (B, ys)))
-        inv_x, inv_y = (inverse.tolist() for _, inverse in self.powers)
-        self.inv = [(dict(zip(self.xs, inv_x[k])), dict(zip(self.ys, inv_y[k]))) for k in range(lanes)]
+        self.powers = tuple((_upow(C, v), _upow([pow(c, -1, 1 << 64) for c in C], v))
+                            for C, v in ((A, self.xs), (B, self.ys)))
+        (_, inv_x), (_, inv_y) = self.powers
+        self.inv = [(inv_x[k][:, None] * inv_y[k][None, :]).tolist() for k in range(lanes)]  # per lane, corner
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
         self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
         for variant in range(4):
@@ -214,77 +227,87 @@ class _Grid:
 
     def cells(self, box: Box) -> tuple[int, int, int, int] | None:
         """Grid indices of an exactly tiled ``box``, None when it is not tiled."""
-        i0, j0 = self.xi.get(box[0]), self.yi.get(box[1])
-        i1, j1 = self.xi.get(box[2]), self.yi.get(box[3])
-        if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
-            return None
-        if _sum(self.gap, i0, j0, i1, j1):
-            return None
-        av, ah = self.along
-        if av[i0][j1] - av[i0][j0] != j1 - j0 or av[i1][j1] - av[i1][j0] != j1 - j0 or \
-                ah[j0][i1] - ah[j0][i0] != i1 - i0 or ah[j1][i1] - ah[j1][i0] != i1 - i0:
-            return None
-        return i0, j0, i1, j1
+        found = self.region(box)
+        return None if found is None else found[0]
 
-    def region(self, box: Box) -> tuple[tuple[int, int, int, int], int, int, int] | None:
+    def region(self, box: Box, tiled: bool = False) -> tuple[tuple[int, int, int, int], int, int, int] | None:
         """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
-        segments on lines strictly inside it, perpendicular to x and to y (``cells``, ``n`` and ``interior``
-        inlined: this is the signature lookup's hot path)."""
-        cell = self.cells(box)
-        if cell is None:
-            return None
-        i0, j0, i1, j1 = cell
+        segments on lines strictly inside it, perpendicular to x and to y (prefix sums inlined: this is the
+        signature lookup's hot path)."""
+        xi, yi = self.xi, self.yi
+        if tiled:
+            i0, j0, i1, j1 = xi[box[0]], yi[box[1]], xi[box[2]], yi[box[3]]
+        else:
+            i0, j0, i1, j1 = xi.get(box[0]), yi.get(box[1]), xi.get(box[2]), yi.get(box[3])
+            if i0 is None or j0 is None or i1 is None or j1 is None or i1 <= i0 or j1 <= j0:
+                return None
+            gap = self.gap
+            if gap is not None and gap[i1][j1] - gap[i0][j1] - gap[i1][j0] + gap[i0][j0]:
+                return None
+            av, ah = self.along
+            a, b = av[i0], av[i1]
+            if a[j1] - a[j0] != j1 - j0 or b[j1] - b[j0] != j1 - j0:
+                return None
+            a, b = ah[j0], ah[j1]
+            if a[i1] - a[i0] != i1 - i0 or b[i1] - b[i0] != i1 - i0:
+                return None
         n, (vx, vy) = self.n, self.interior
-        count = n[i1][j1] - n[i0][j1] - n[i1][j0] + n[i0][j0]
-        inner_x = vx[i1][j1] - vx[i0 + 1][j1] - vx[i1][j0] + vx[i0 + 1][j0] if i1 > i0 + 1 else 0
-        inner_y = vy[j1][i1] - vy[j0 + 1][i1] - vy[j1][i0] + vy[j0 + 1][i0] if j1 > j0 + 1 else 0
-        return cell, count, inner_x, inner_y
+        a, b = n[i0], n[i1]
+        count = b[j1] - a[j1] - b[j0] + a[j0]
+        if i1 > i0 + 1:
+            a, b = vx[i0 + 1], vx[i1]
+            inner_x = b[j1] - a[j1] - b[j0] + a[j0]
+        else:
+            inner_x = 0
+        if j1 > j0 + 1:
+            a, b = vy[j0 + 1], vy[j1]
+            inner_y = b[i1] - a[i1] - b[i0] + a[i0]
+        else:
+            inner_y = 0
+        return (i0, j0, i1, j1), count, inner_x, inner_y
 
-    def content(self, box: Box, cell: tuple[int, int, int, int], free: tuple[bool, bool]) -> tuple[int, int]:
-        """The two content hashes of a tiled box, translated to its corner."""
-        (t, u), ((ia, ib), (ja, jb)) = self.hash[free[0] + 2 * free[1]], self.inv
+    def content(self, cell: tuple[int, int, int, int], variant: int) -> tuple[int, int]:
+        """The two content hashes of the tiled box on grid cells ``cell``, translated to its corner (``variant``:
+        free width + 2 free height)."""
+        t, u = self.hash[variant]
+        a, b = self.inv
         i0, j0, i1, j1 = cell
-        ti, ui = t[i0], u[i0]
-        tk, uk = t[i1], u[i1]
-        x, y = box[0], box[1]
-        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * (ia[x] * ib[y]) & self.MASK,
-                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * (ja[x] * jb[y]) & self.MASK)
+        ti, tk, ui, uk = t[i0], t[i1], u[i0], u[i1]
+        return ((tk[j1] - ti[j1] - tk[j0] + ti[j0]) * a[i0][j0] & self.MASK,
+                (uk[j1] - ui[j1] - uk[j0] + ui[j0]) * b[i0][j0] & self.MASK)
 
-    def full_line(self, axis: int, line: int, lo: int, hi: int) -> bool:
-        """A terminal edge runs along grid line ``line`` (perpendicular to ``axis``) over cells lo..hi."""
-        a = self.along[axis][line]
-        return a[hi] - a[lo] == hi - lo
-
-    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, free: tuple[bool, bool], n: int
+    def period(self, box: Box, cell: tuple[int, int, int, int], axis: int, variant: int, counts: tuple[int, ...]
                ) -> int | None:
         """Smallest tile length ``p`` (``length / p >= 2``) such that the box is ``length / p`` identical tiles
-        along ``axis``. ``k`` identical tiles hold ``k`` times a tile's terminals, so only the tile counts ``k`` that
-        divide both the terminal count ``n`` and ``length`` are tried (the largest first: the smallest ``p`` first)."""
+        along ``axis``, trying the tile ``counts`` given (largest first: the smallest ``p`` first). ``k``
+        identical tiles hold ``k`` times a tile's terminals, so the caller passes the counts that divide both the
+        terminal count and the length."""
         start, length = box[axis], box[axis + 2] - box[axis]
-        counts = _divisors(gcd(n, length))
-        if not counts:
-            return None
-        lines, index = (self.xs, self.xi) if axis == 0 else (self.ys, self.yi)
-        i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
+        index = self.xi if axis == 0 else self.yi
+        if axis == 0:
+            i0, lo, i1, hi = cell
+        else:
+            lo, i0, hi, i1 = cell
+        along = self.along[axis]
+        span = hi - lo
         for count in counts:
             if count > i1 - i0:
                 continue
             p = length // count
-            i = index.get(start + p)
-            if i is None or not self.full_line(axis, i, lo, hi):
-                continue
-            tiles = []
-            for k in range(length // p + 1):
+            tiles = [i0]
+            for k in range(1, count):
                 t = index.get(start + k * p)
-                if t is None or (0 < k < length // p and not self.full_line(axis, t, lo, hi)):
+                if t is None:
+                    break
+                a = along[t]
+                if a[hi] - a[lo] != span:
                     break
                 tiles.append(t)
             else:
+                tiles.append(i1)
                 first = None
                 for a, b in zip(tiles, tiles[1:]):
-                    sub = (a, lo, b, hi) if axis == 0 else (lo, a, hi, b)
-                    corner = (lines[a], box[1]) if axis == 0 else (box[0], lines[a])
-                    h = self.content((*corner, 0, 0), sub, free)
+                    h = self.content((a, lo, b, hi) if axis == 0 else (lo, a, hi, b), variant)
                     if first is None:
                         first = h
                     elif h != first:
@@ -293,11 +316,11 @@ class _Grid:
                     return p
         return None
 
-    def cuts(self, box: Box, axis: int) -> np.ndarray:
+    def cuts(self, box: Box, axis: int) -> list[int]:
         cell = self.cells(box)
         i0, lo, i1, hi = (cell[0], cell[1], cell[2], cell[3]) if axis == 0 else (cell[1], cell[0], cell[3], cell[2])
-        lines = self.xs if axis == 0 else self.ys
-        return np.array([lines[i] for i in range(i0 + 1, i1) if self.full_line(axis, i, lo, hi)], dtype=np.int64)
+        lines, along, span = (self.xs, self.along[0], hi - lo) if axis == 0 else (self.ys, self.along[1], hi - lo)
+        return [lines[i] for i in range(i0 + 1, i1) if along[i][hi] - along[i][lo] == span]
 
 
 @lru_cache(maxsize=None)
@@ -306,10 +329,10 @@ def _divisors(n: int) -> tuple[int, ...]:
     return tuple(k for k in range(n, 1, -1) if n % k == 0)
 
 
-def _upow(bases: list[int], exps: np.ndarray) -> np.ndarray:
+def _upow(bases: list[int], exps: list[int]) -> np.ndarray:
     """base ** exps modulo 2^64 per base (rows), by binary exponentiation (uint64 arithmetic wraps)."""
-    out = np.ones((len(bases), exps.size), dtype=np.uint64)
-    e = exps.astype(np.uint64)
+    out = np.ones((len(bases), len(exps)), dtype=np.uint64)
+    e = np.array(exps, dtype=np.uint64)
     square = np.array(bases, dtype=np.uint64)[:, None]
     one = np.uint64(1)
     while e.any():
@@ -331,6 +354,3 @@ def _prefix2(a: np.ndarray) -> list[list[int]]:
     out[1:, 1:] = np.cumsum(np.cumsum(a, axis=0, dtype=out.dtype), axis=1, dtype=out.dtype)
     return out.tolist()
 
-
-def _sum(t: list[list[int]], i0: int, j0: int, i1: int, j1: int) -> int:
-    return t[i1][j1] - t[i0][j1] - t[i1][j0] + t[i0][j0]

@@ -53,7 +53,7 @@ def test_grid_signatures_match_brute_force_content(seed):
             assert by_key.setdefault(key, sid) == sid, box  # same content, same signature
             assert index.sigs[sid].n == len(key[2])
             for axis in (0, 1):
-                assert index.cuts(box, axis).tolist() == _brute_cuts(index, box, axis)
+                assert index.cuts(box, axis) == _brute_cuts(index, box, axis)
     assert len(set(by_key.values())) == len(by_key)  # different content, different signatures
 
 
@@ -103,3 +103,16 @@ def test_too_irregular_layout_is_rejected_clearly(monkeypatch):
     monkeypatch.setattr(_Grid, "MAX_CELLS", 10)
     with pytest.raises(LayoutError, match="too irregular"):
         LayoutIndex([random_layout(np.random.default_rng(1), 12.0, 9.0, depth=5)])
+
+
+@pytest.mark.parametrize("free_extents", [False, True])
+def test_terminal_sigs_are_the_lookups_of_every_terminal_in_order(free_extents):
+    """With free extents a lone terminal's signature is its material's, so only each material's first terminal is
+    looked up: the ids (and the signatures interned) are those of looking up every terminal in order."""
+    for seed in range(5):
+        layout = random_layout(np.random.default_rng(seed), depth=5)
+        fast = LayoutIndex([layout], free_extents, periodic=free_extents)
+        slow = LayoutIndex([layout], free_extents, periodic=free_extents)
+        boxes = zip(*(v.tolist() for v in (slow.X0, slow.Y0, slow.X1, slow.Y1)))
+        assert fast.terminal_sigs() == [slow.sig(box) for box in boxes]
+        assert fast.sigs == slow.sigs

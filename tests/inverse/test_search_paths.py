@@ -59,3 +59,76 @@ def test_repeated_runs_stop_early_without_losing_a_grouping():
         apart = [_repeats_apart(atoms, length) for length in range(2, m // 2 + 1)]
         assert apart == sorted(apart, reverse=True)  # True ... True False ... False
         assert bool(_repeated_runs(atoms)) == any(apart)
+
+
+@pytest.mark.parametrize("model", [CostModel(), CostModel(split=0.5, repeat=0.1, lambda2=3.0)])
+def test_greedy_visiting_groupings_by_bound_costs_what_the_full_candidate_lists_cost(model):
+    """A greedy run looks up the pieces of a grouping only when its bound on H can still win (its pieces are
+    looked up in another order, so other boxes represent signatures): the grammar costs what the first of least
+    H over every region's full candidate list costs, with the lookups in the order of the full lists."""
+    for layout in _layouts():
+        greedy = GrammarSearch(LayoutIndex([layout], periodic=True), model).run("greedy")
+        full = GrammarSearch(LayoutIndex([layout], periodic=True), model)
+        assert greedy.cost == full.iterate(full._greedy, 0)[1]
+
+
+@pytest.mark.parametrize("name, cost", [("cmp_b0002", 171.4999999999999), ("cmp_b0005", 162.0999999999999),
+                                        ("cmp_b0009", 154.49999999999994), ("cmp_b0012", 131.89999999999995)])
+def test_greedy_cost_on_cmp_fixtures_is_unchanged_by_the_bounded_candidates(name, cost):
+    """Greedy costs before the bounded visit of groupings (main de25bf3), to the last bit."""
+    assert GrammarSearch(LayoutIndex([import_cmp(DATA / f"{name}.xml")], periodic=True)).run("greedy").cost == cost
+
+
+def test_repeated_runs_match_their_definition():
+    """Per length (while any repeats), per distinct substring in order of first occurrence, the occurrences
+    taken left to right without overlap; two or more give the grouping without their inner boundaries, ranked
+    by (length - 1)(count - 1), the first 16."""
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        m = int(rng.integers(1, 30))
+        atoms = [(int(a), int(b)) for a, b in zip(rng.integers(0, 3, m), rng.integers(1, 3, m))]
+        want = []
+        for length in range(2, m // 2 + 1):
+            subs = list(dict.fromkeys(tuple(atoms[i:i + length]) for i in range(m - length + 1)))
+            row = []
+            for s in subs:
+                chosen = []
+                for i in range(m - length + 1):
+                    if tuple(atoms[i:i + length]) == s and (not chosen or i >= chosen[-1] + length):
+                        chosen.append(i)
+                if len(chosen) >= 2:
+                    inner = {i + d for i in chosen for d in range(1, length)}
+                    row.append(((length - 1) * (len(chosen) - 1), tuple(k for k in range(1, m) if k not in inner)))
+            if not row:
+                break
+            want += row
+        want.sort(key=lambda t: -t[0])
+        assert _repeated_runs(atoms) == [keep for _, keep in want[:16]]
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+def test_small_regions_in_plain_python_get_the_candidates_of_the_array_path(periodic, monkeypatch):
+    """Regions with few repeated instances inside build their line costs and grouping rows in plain Python
+    (``actions.SMALL``): the same candidates, in the same order, as the numpy path."""
+    from citygen_inverse import actions
+    for layout in _layouts():
+        index = LayoutIndex([layout], periodic=periodic)
+        search = GrammarSearch(index)
+        search.run("adp", 20, seed=1)
+        for sig in list(search._actions):
+            got = []
+            for small in (0, 10 ** 9):
+                monkeypatch.setattr(actions, "SMALL", small)
+                acts = region_actions(index, sig, search.sym, CostModel())
+                got.append((acts.cost, acts.heuristic, list(acts)))
+            assert got[0] == got[1]
+
+
+def test_instances_within_a_box_are_those_inside_it():
+    layout = random_layout(np.random.default_rng(11), depth=5)
+    index = LayoutIndex([layout], periodic=True)
+    sym = GrammarSearch(index).sym
+    b = sym.boxes
+    for box in [*index.roots, *map(tuple, b[::7].tolist()), (1, 1, 10 ** 9, 10 ** 9)]:
+        want = np.flatnonzero((b[:, 0] >= box[0]) & (b[:, 1] >= box[1]) & (b[:, 2] <= box[2]) & (b[:, 3] <= box[3]))
+        assert sym.within(box).tolist() == want.tolist()

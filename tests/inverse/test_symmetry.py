@@ -60,9 +60,13 @@ def _layouts():
     yield from (import_cmp(xml) for xml in sorted(DATA.glob("*.xml"))[:2])
 
 
+@pytest.mark.parametrize("dense", [True, False])
 @pytest.mark.parametrize("max_groups", [1500, 12])
-def test_batched_growing_matches_per_instance_reference(max_groups):
-    """Same groups, instances and order as growing one instance at a time (also when the cap stops early)."""
+def test_batched_growing_matches_per_instance_reference(max_groups, dense, monkeypatch):
+    """Same groups, instances and order as growing one instance at a time (also when the cap stops early), with
+    the side table's keys found in a dense table or (large grids) by binary search."""
+    from citygen_inverse.symmetry import _Sides
+    monkeypatch.setattr(_Sides, "DENSE", _Sides.DENSE if dense else 0)
     for layout in _layouts():
         found = detect_symmetry(LayoutIndex([layout], periodic=True), max_groups)
         expected = _reference(LayoutIndex([layout], periodic=True), max_groups)
