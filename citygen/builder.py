@@ -89,9 +89,14 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
+                outside: list[tuple[FacadeRequest, str]] = []
                 for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
                     face = request.context.face_index
+                    if layout.meta.get("outside_range"):
+                        outside.append((request, layout.meta["fallback"]))
                     layouts[face] = hidden_behind(self._checked(layout, request, kind.id, warnings), bins[face])
+                if outside:
+                    warnings.append(_outside_range(footprint.id, kind.id, outside))
             wall, roof_material = self._materials(footprint)
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
             roof = self._roof(footprint, mass, plan.party_faces, warnings)
@@ -178,10 +183,21 @@ class Builder:
         if problems:
             raise CitygenError(f"{where}: layout is not a partition: {problems[0]}", plugin=kind_id,
                                hint="this is a bug in the ruleset kind; please report it with the ruleset")
-        if layout.meta.get("fallback"):  # a kind that could not dress the face says why (e.g. relayout)
-            warnings.append(f"{where}: {kind_id} fell back to plain walls: {layout.meta['fallback']}")
+        if layout.meta.get("fallback") and not layout.meta.get("outside_range"):  # a kind that could not dress
+            warnings.append(f"{where}: {kind_id} fell back to plain walls: {layout.meta['fallback']}")  # the face
         layout, note = enforce_entrance(layout, request)
         if note:
             warnings.append(f"{where}: {note}")
         warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
         return layout
+
+
+def _outside_range(building: str, kind_id: str, faces: list[tuple[FacadeRequest, str]]) -> str:
+    """One warning for the faces of a building whose size lies outside every size its ruleset can take (plain
+    walls): which faces, their sizes, and the first face's reason."""
+    widths = [r.width for r, _ in faces]
+    heights = [r.height for r, _ in faces]
+    size = lambda v: f"{min(v):.2f}" if max(v) - min(v) < 0.005 else f"{min(v):.2f}-{max(v):.2f}"  # noqa: E731
+    which = ", ".join(str(r.context.face_index) for r, _ in faces)
+    return (f"{building}: {len(faces)} face(s) outside the ruleset's size range are plain walls ({kind_id}; faces "
+            f"{which}: {size(widths)} x {size(heights)} m): {faces[0][1]}")

@@ -32,7 +32,7 @@ def generate_face(model: Model, request: FacadeRequest, shared: dict | None = No
     result = solve_face(model, request, shared)
     if result.success:
         return result.layout
-    return fallback_layout(request, result.message)
+    return fallback_layout(request, result.message, outside_range=result.status == "infeasible")
 
 
 def generate_building(model: Model, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
@@ -44,8 +44,10 @@ def generate_building(model: Model, requests: Sequence[FacadeRequest]) -> list[F
     return [out[i] for i in range(len(requests))]
 
 
-def fallback_layout(request: FacadeRequest, reason: str) -> FacadeLayout:
-    """Wall bands per floor, with a door centred between the corner strips on an entrance face."""
+def fallback_layout(request: FacadeRequest, reason: str, outside_range: bool = False) -> FacadeLayout:
+    """Wall bands per floor, with a door centred between the corner strips on an entrance face. ``outside_range``:
+    the face's size lies outside every size the model can take (``meta["outside_range"]``; the pipeline reports
+    such faces once per building)."""
     w, h = request.width, request.height
     lines = list(request.floor_lines)
     bands = []
@@ -55,7 +57,8 @@ def fallback_layout(request: FacadeRequest, reason: str) -> FacadeLayout:
         else:
             bands.append(Region(0.0, y0, w, y1 - y0, "FallbackWall", "wall"))
     root = Region(0.0, 0.0, w, h, "Fallback", None, children=tuple(bands))
-    return FacadeLayout(w, h, root, meta={"kind": PLUGIN_ID, "fallback": reason})
+    meta = {"kind": PLUGIN_ID, "fallback": reason, **({"outside_range": True} if outside_range else {})}
+    return FacadeLayout(w, h, root, meta=meta)
 
 
 def _door_band(request: FacadeRequest, y: float, fh: float) -> Region:

@@ -16,7 +16,8 @@ def test_townhouse_model_dresses_a_small_scene(tmp_path):
                  (5, (60, 0, 1.6, 1.6), 1)]
     report, out = generate_mini_scene(tmp_path, buildings, REPO / "rulesets" / "townhouse.relayout", seed=3)
     assert report.written == 5 and not report.skipped
-    fell_back = [w for w in report.warnings if "fell back" in w]
-    assert fell_back and all(w.startswith("way/5") for w in fell_back), fell_back  # only the kiosk
-    assert not [w for w in report.warnings if not w.startswith("way/5")], report.warnings
+    # only the kiosk, in one warning for its four faces (it was one per face)
+    assert report.warnings == [w for w in report.warnings if w.startswith("way/5")]
+    assert len(report.warnings) == 1 and "4 face(s) outside the ruleset's size range" in report.warnings[0]
+    assert "faces 0, 1, 2, 3: 1.60 x" in report.warnings[0] and "must lie in" in report.warnings[0]
     assert [f for f in validate_stage(out) if f.severity == "error"] == []
