@@ -50,7 +50,8 @@ class Report:
         shown = self.warnings[:20]
         lines += [f"  warning: {w}" for w in shown]
         if len(self.warnings) > len(shown):
-            lines.append(f"  ... and {len(self.warnings) - len(shown)} more warnings")
+            lines.append(f"  ... and {len(self.warnings) - len(shown)} more warnings (all of them: citygen generate "
+                         f"--report FILE.json)")
         if self.stats:
             s = self.stats
             lines.append(f"stage {s.path.name}: {s.bytes / 1e6:.1f} MB, {s.prims} prims, {s.meshes} meshes, "
