@@ -169,19 +169,22 @@ def profile(shape: str, spec: RoofSpec, run: float) -> tuple[np.ndarray, np.ndar
     return ts, zs * min(1.0, spec.cap / zs[-1])
 
 
-def skeleton_faces(part: Polygon, weights: np.ndarray | None = None) -> tuple[np.ndarray, list[list[int]]]:
+def skeleton_faces(part: Polygon, weights: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, list[list[int]], list[list[int]], list[list[int]]]:
     """The (weighted) straight skeleton of one part as points ``(k, 3)`` -- x, y and the time (distance swept at
-    unit speed) -- and one face (point indices, CCW, starting with its outline edge) per outline edge; checked to
-    cover the part once (faces of weight-0 edges, vertical walls, have no area)."""
+    unit speed) -- one face (point indices, CCW, starting with its outline edge) per outline edge, the plateaus a
+    weighted skeleton leaves where party walls (weight 0) wall in what the free edges cannot reach, and the vertical
+    walls standing inside (:meth:`~citygen_roofs.skeleton._Wavefront.add_edge`); checked to cover the part once
+    (faces of weight-0 edges, vertical walls, have no area)."""
     try:
         skeleton = straight_skeleton(part, weights=weights)
     except SkeletonError as exc:
         raise RoofError(f"no straight skeleton: {exc}") from exc
-    faces = [list(f) for f in skeleton.faces]
-    areas = np.array([_area(skeleton.nodes[f]) for f in faces])
+    faces, flats = [list(f) for f in skeleton.faces], [list(f) for f in skeleton.flats]
+    areas = np.array([_area(skeleton.nodes[f]) for f in faces + flats])
     if np.any(areas < -1e-6 * part.area) or not math.isclose(areas.sum(), part.area, rel_tol=1e-6):
         raise RoofError(f"skeleton faces cover {areas.sum():.3f} m² of a {part.area:.3f} m² outline")
-    return np.column_stack([skeleton.nodes, skeleton.times]), faces
+    return np.column_stack([skeleton.nodes, skeleton.times]), faces, flats, [list(f) for f in skeleton.walls]
 
 
 class _Bands:
@@ -280,25 +283,44 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     if party and not weights.any():
         return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
     try:
-        points, faces = skeleton_faces(part, weights)
+        points, faces, flats, inner = skeleton_faces(part, weights)
+        walls = [f for f, w in zip(faces, weights) if w == 0] + inner
+        faces = [f for f, w in zip(faces, weights) if w != 0]
+        if gables:
+            points, faces, walls = gable(points, faces, walls, len(weights),
+                                         HALF_HIP if shape == "half-hipped" else 1.0, flats)
+        else:
+            faces += flats
+        ts, zs = profile(shape, spec, float(points[:, 2].max()))
+        mesh = _Bands(points, ts).mesh(faces, walls, top, zs)
+        cracks = _cracks(mesh, top)
+        if cracks:
+            raise RoofError(f"the skeleton's faces leave {cracks} open edge(s) above the eaves")
     except RoofError as exc:
         if not party:
             raise
         note(f"party walls ignored: {exc}")
         return skeleton_roof(part, top, spec, shape, gables, frozenset(), orientation)
-    standing = {k for k in range(len(faces)) if weights[k] == 0}
-    walls = [faces[k] for k in sorted(standing)]
-    faces = [f for k, f in enumerate(faces) if k not in standing]
-    if gables:
-        points, faces, walls = gable(points, faces, walls, len(weights), HALF_HIP if shape == "half-hipped" else 1.0)
-    ts, zs = profile(shape, spec, float(points[:, 2].max()))
-    return _Bands(points, ts).mesh(faces, walls, top, zs)
+    return mesh
+
+
+def _cracks(mesh: MeshData, top: float) -> int:
+    """Mesh edges with no twin (used once, not in the opposite direction) that do not lie at the wall top: every
+    open edge of a closed roof is an eave."""
+    tris = mesh.indices.reshape(-1, 3).astype(np.int64)
+    a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
+    n = len(mesh.points)
+    lone = ~np.isin(a * n + b, b * n + a)
+    z = mesh.points[:, 2].astype(float)
+    high = (np.abs(z[a] - top) > 1e-3) | (np.abs(z[b] - top) > 1e-3)
+    return int(np.count_nonzero(lone & high))
 
 
 def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], outline_nodes: int,
-          clip: float = 1.0) -> tuple[np.ndarray, list[list[int]], list[list[int]]]:
+          clip: float = 1.0, flats: list[list[int]] = ()) -> tuple[np.ndarray, list[list[int]], list[list[int]]]:
     """Turn hip ends into gable walls: ``points`` are x, y, time; ``walls`` the faces already standing (party
-    walls). Returns points (new points appended), roof faces and walls (the new ones outward).
+    walls), ``flats`` plateaus (kept as they are). Returns points (new points appended), roof faces (the flats
+    last) and walls (the new ones outward).
 
     A hip end ``[a, b, apex]`` whose apex ends a ridge becomes the wall ``[a, b, A]``, A where the ridge, extended,
     meets the edge. With ``clip`` < 1 (half-hipped) the wall stops at ``clip`` of the ridge's time: the wall is
@@ -306,7 +328,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
     P = apex + clip (A - apex) on the ridge, and the side faces run a -> Ra -> P (their planes are unchanged)."""
     neighbours: dict[int, set[int]] = {}
     owners: dict[int, int] = {}
-    for f in faces + walls:
+    for f in [*faces, *walls, *flats]:
         for k, n in enumerate(f):
             owners[n] = owners.get(n, 0) + 1
             neighbours.setdefault(n, set()).update((f[k - 1], f[(k + 1) % len(f)]))
@@ -361,7 +383,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
             out.append(top)
             out += [rb] if after == b and rb != top else []
         return out
-    return np.vstack(rows), [remap(f) for f in roof], [remap(w) for w in walls]
+    return np.vstack(rows), [remap(f) for f in [*roof, *flats]], [remap(w) for w in walls]
 
 
 def pyramid(part: Polygon, top: float, spec: RoofSpec) -> MeshData | None:

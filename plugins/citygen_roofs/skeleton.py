@@ -33,12 +33,15 @@ class SkeletonError(ValueError):
 
 @dataclass(frozen=True)
 class Skeleton:
-    """Nodes ``(k, 2)`` with ``times (k,)`` (distance swept by the wavefront; 0 on the outline) and one face per
-    input edge: node indices counter-clockwise, starting with the edge's start and end node."""
+    """Nodes ``(k, 2)`` with ``times (k,)`` (distance swept by the wavefront; 0 on the outline), one face per
+    input edge (node indices counter-clockwise, starting with the edge's start and end node) and the plateaus
+    (counter-clockwise, all nodes at one time) that a weighted wavefront left unswept."""
 
     nodes: np.ndarray
     times: np.ndarray
     faces: tuple[tuple[int, ...], ...]
+    flats: tuple[tuple[int, ...], ...] = ()
+    walls: tuple[tuple[int, ...], ...] = ()  # vertical faces of standing edges born inside (see ``add_edge``)
 
     def face_polygon(self, k: int) -> np.ndarray:
         return self.nodes[list(self.faces[k])]
@@ -78,6 +81,7 @@ class _Wavefront:
         self.nodes: list[tuple[float, float]] = [tuple(p) for p in starts]
         self.times: list[float] = [0.0] * len(starts)
         self.arcs: list[set[tuple[int, int]]] = [set() for _ in starts]
+        self.flats: list[tuple[int, ...]] = []
         self.edge_nodes = []
         self.rings: list[list[_Vertex]] = []
         first = 0
@@ -120,11 +124,12 @@ class _Wavefront:
         return np.mean(points, axis=0) if points else (v.at(t) + u.at(t)) / 2
 
     def node(self, p: np.ndarray, t: float) -> int:
-        """The node at ``p`` (reusing one within tolerance: simultaneous events meet in one node)."""
+        """The node at ``p`` and time ``t`` (reusing one within tolerance: simultaneous events meet in one node; a
+        standing vertex stays at one place over time, in distinct nodes)."""
         tol = 1e-7 * self.scale
         for k in range(len(self.nodes) - 1, -1, -1):
             q = self.nodes[k]
-            if abs(q[0] - p[0]) < tol and abs(q[1] - p[1]) < tol and self.times[k] > 0:
+            if abs(q[0] - p[0]) < tol and abs(q[1] - p[1]) < tol and self.times[k] > 0 and abs(self.times[k] - t) < tol:
                 return k
         self.nodes.append((float(p[0]), float(p[1])))
         self.times.append(float(t))
@@ -192,12 +197,27 @@ class _Wavefront:
         node = self.node(self.meet(v, u, t), t)
         self.end(v, node)
         self.end(u, node)
-        w = self.vertex(node, t, v.e_in, u.e_out)
-        if (i + 1) % len(ring) == 0:
-            self.rings[r] = [w] + ring[1:-1]
+        a, c, b = v.e_in, v.e_out, u.e_out
+        if self.W[c] == 0 and self.W[a] != self.W[b] and self.N[a] @ self.N[b] > 1 - 1e-12:
+            # a standing edge swept to nothing between parallel edges of different speeds: it does not vanish
+            # but turns round, a standing edge on its own line that grows between them as they part
+            flip = self.add_edge(c, node)
+            new = [self.vertex(node, t, a, flip), self.vertex(node, t, flip, b)]
         else:
-            self.rings[r] = ring[:i] + [w] + ring[i + 2:]
+            new = [self.vertex(node, t, a, b)]
+        if (i + 1) % len(ring) == 0:
+            self.rings[r] = new + ring[1:-1]
+        else:
+            self.rings[r] = ring[:i] + new + ring[i + 2:]
         self.settle(t)
+
+    def add_edge(self, c: int, node: int) -> int:
+        """A new standing edge (weight 0) on the line of edge ``c``, pointing the other way, born at ``node``."""
+        self.D, self.N = np.vstack([self.D, -self.D[c]]), np.vstack([self.N, -self.N[c]])
+        self.C, self.W = np.append(self.C, -self.C[c]), np.append(self.W, 0.0)
+        self.arcs.append(set())
+        self.edge_nodes.append((node, None))
+        return len(self.W) - 1
 
     def split_event(self, t: float, r: int, i: int, s: int, j: int) -> None:
         ring, other = self.rings[r], self.rings[s]
@@ -220,13 +240,18 @@ class _Wavefront:
     # -- clean-up after an event -----------------------------------------------------------------------------------
 
     def settle(self, t: float) -> None:
-        """Fold spikes and finish rings that have collapsed (two vertices, or a strip with no area left)."""
+        """Fold spikes and finish rings that have collapsed (two vertices, or a strip with no area left) or stopped
+        (no edge moves: a plateau)."""
         changed = True
         while changed:
             changed = False
             for r, ring in enumerate(self.rings):
-                if len(ring) <= 2 or self.collapsed(ring, t):
-                    self.finish(ring, t)
+                plateau = len(ring) > 2 and self.stopped(r, t)
+                if len(ring) <= 2 or plateau or self.collapsed(ring, t):
+                    nodes = self.finish(ring, t)
+                    flat = [n for k, n in enumerate(nodes) if n != nodes[k - 1]]
+                    if plateau and len(flat) > 2 and self.area(ring, t) > 1e-9 * self.scale ** 2:
+                        self.flats.append(tuple(flat))
                     del self.rings[r]
                     changed = True
                     break
@@ -235,6 +260,22 @@ class _Wavefront:
                     self.rings[r] = self.fold(ring, k, t)
                     changed = True
                     break
+
+    def stopped(self, r: int, t: float) -> bool:
+        """Ring ``r`` encloses a region (counter-clockwise) none of whose edges moves, and no other ring inside it
+        can still sweep into it: it is a plateau."""
+        ring = self.rings[r]
+        if any(self.W[v.e_out] > 0 for v in ring):
+            return False
+        outline = np.array([v.at(t) for v in ring])
+        if _signed_area(outline) <= 0:
+            return False  # a static courtyard: moving edges around it will reach it
+        inside = [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
+        if any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in inside):
+            return False
+        if inside:
+            raise SkeletonError("a plateau around a courtyard that nothing sweeps")
+        return True
 
     def collapsed(self, ring: list[_Vertex], t: float) -> bool:
         """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
@@ -272,11 +313,12 @@ class _Wavefront:
                 out.append(v)
         return out
 
-    def finish(self, ring: list[_Vertex], t: float) -> None:
-        """A collapsed ring: its vertices stop where they are and each of its edges becomes a ridge arc of that
-        edge's face, passing through every other node of the ring on it (so the faces on both sides of a ridge
-        have the same nodes, without T-junctions). Vertices within ``1e-4`` of the outline's size of an earlier
-        one stop on it: rounding, not a ridge, set them apart."""
+    def finish(self, ring: list[_Vertex], t: float) -> list[int]:
+        """A collapsed (or stopped) ring: its vertices stop where they are and each of its edges becomes a ridge
+        (or plateau rim) arc of that edge's face, passing through every other node of the ring on it (so the faces
+        on both sides of a ridge have the same nodes, without T-junctions). Vertices within ``1e-4`` of the
+        outline's size of an earlier one stop on it: rounding, not a ridge, set them apart. Returns the node each
+        vertex stopped at."""
         at = np.array([v.at(t) for v in ring])
         for k in range(1, len(at)):
             near = np.flatnonzero(np.hypot(*(at[:k] - at[k]).T) < 1e-4 * self.scale)
@@ -286,7 +328,7 @@ class _Wavefront:
         for v, node in zip(ring, nodes):
             self.end(v, node)
         if len(ring) < 2:
-            return
+            return nodes
         xy = np.array([self.nodes[n] for n in nodes])
         for k, v in enumerate(ring):
             a, b = nodes[k], nodes[(k + 1) % len(ring)]
@@ -302,16 +344,36 @@ class _Wavefront:
             for p, q in zip(chain, chain[1:]):
                 if p != q:
                     self.arcs[v.e_out].add((min(p, q), max(p, q)))
+        return nodes
 
     # -- faces ---------------------------------------------------------------------------------------------------
 
+    def check_planes(self, faces: tuple[tuple[int, ...], ...]) -> None:
+        """Every node of edge ``e``'s face lies where the wavefront of ``e`` passes at the node's time (its
+        weighted distance from the edge line is its time): the roof plane of ``e`` holds the face. A degenerate
+        event the wavefront cannot resolve (e.g. adjacent parallel edges of different weights) breaks this."""
+        xy, times = np.asarray(self.nodes), np.asarray(self.times)
+        k = np.fromiter((n for face in faces for n in face), dtype=np.int64)
+        e = np.repeat(np.arange(len(faces)), [len(face) for face in faces])
+        off = np.abs(np.einsum("ij,ij->i", xy[k], self.N[e]) - self.C[e] - self.W[e] * times[k])
+        if off.size and off.max() > 1e-3 * self.scale:
+            raise SkeletonError(f"face of edge {e[off.argmax()]} leaves its plane by {off.max():.3g} "
+                                "(a degenerate event of the weighted wavefront)")
+
     def face(self, e: int) -> tuple[int, ...]:
-        """Walk the arcs of edge ``e``'s face from its end node back to its start, keeping the face on the left."""
+        """Walk the arcs of edge ``e``'s face from its end node back to its start, keeping the face on the left. An
+        edge born during the propagation (:meth:`add_edge`) starts where it was born and ends where its front
+        vertex stopped, the node of its arcs furthest along it."""
         a, b = self.edge_nodes[e]
         nbrs: dict[int, list[int]] = {}
         for p, q in self.arcs[e]:
             nbrs.setdefault(p, []).append(q)
             nbrs.setdefault(q, []).append(p)
+        born = b is None
+        if born:
+            if not nbrs.get(a):
+                return ()  # swept away in the instant it was born
+            b = max(nbrs[a], key=lambda n: float(np.asarray(self.nodes[n]) @ self.D[e]))
         path, prev, cur = [a, b], a, b
         for _ in range(len(self.arcs[e]) + 1):
             options = [n for n in nbrs.get(cur, []) if n != prev and (n == a or n not in path)]
@@ -328,9 +390,27 @@ class _Wavefront:
                 options.sort(key=turn)
             prev, cur = cur, options[0]
             if cur == a:
+                if born:  # start with the side that advances furthest along the edge: the wall's foot
+                    along = np.asarray([self.nodes[n] for n in path]) @ self.D[e]
+                    k = int(np.argmax(np.roll(along, -1) - along))
+                    path = path[k:] + path[:k]
                 return tuple(path)
             path.append(cur)
         raise SkeletonError(f"face of edge {e} does not close")
+
+
+def _signed_area(p: np.ndarray) -> float:
+    q = np.roll(p, -1, axis=0)
+    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+
+
+def _contains(ring: np.ndarray, point: np.ndarray) -> bool:
+    """Whether ``point`` lies inside the polygon ``ring`` (even-odd rule)."""
+    a, b = ring, np.roll(ring, -1, axis=0)
+    crosses = (a[:, 1] > point[1]) != (b[:, 1] > point[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = a[:, 0] + (point[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return bool(np.count_nonzero(crosses & (point[0] < x)) % 2)
 
 
 def _rings(polygon: Polygon) -> list[np.ndarray]:
@@ -353,7 +433,8 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
 
     ``weights`` (one per edge, default 1) is each edge's speed: a *weighted* straight skeleton (Eppstein & Erickson
     1999), where a node's time is still the wavefront's. An edge of weight 0 stays where it is: its face is the
-    edge line itself (points along it, rising with time) -- a vertical gable in a roof."""
+    edge line itself (points along it, rising with time) -- a vertical gable in a roof. Where edges of weight 0
+    wall in a region that no moving edge reaches, the skeleton ends there in a plateau (``Skeleton.flats``)."""
     if not polygon.is_valid or polygon.is_empty or polygon.area <= 0:
         raise SkeletonError("invalid or empty polygon")
     rings = _rings(polygon)
@@ -377,5 +458,7 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
             wf.split_event(t, *event[2])
     else:
         raise SkeletonError(f"no convergence after {limit} events")
-    faces = tuple(wf.face(e) for e in range(n))
-    return Skeleton(np.asarray(wf.nodes, dtype=float), np.asarray(wf.times, dtype=float), faces)
+    faces = tuple(wf.face(e) for e in range(len(wf.W)))
+    wf.check_planes(faces)
+    return Skeleton(np.asarray(wf.nodes, dtype=float), np.asarray(wf.times, dtype=float), faces[:n], tuple(wf.flats),
+                    tuple(f for f in faces[n:] if f))

@@ -182,7 +182,7 @@ def test_roofs_cover_the_outline_and_close_the_walls(outline, builder, pitch, di
 @given(polygons)
 def test_skeleton_faces_are_planes(outline):
     """A face's points have the time (hence the height, at any pitch) of their distance to its outline edge."""
-    points, faces = skeleton_faces(outline)
+    points, faces, _, _ = skeleton_faces(outline)
     for face in faces:
         a, b = points[face[0], :2], points[face[1], :2]
         d = (b - a) / np.hypot(*(b - a))

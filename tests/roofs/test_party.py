@@ -9,9 +9,10 @@ from shapely import affinity
 from shapely.geometry import Polygon
 
 from citygen.coordinator import party_walls
-from citygen.roof import RoofSpec
+from citygen.roof import RoofSpec, roof_notes
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
                                    RoundRoof, SkillionRoof)
+from tests.roofs.shapes import polygons
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
 
 SLOPE = math.tan(math.radians(30))
@@ -211,17 +212,62 @@ def test_all_party_walls_roof_as_free_without_a_warning():
     assert np.array_equal(mesh.points, plain.points)
 
 
-def test_helsinki_pent_roof_over_a_party_step_falls_back_to_the_free_roof():
+def _plateau(roof, normals):
+    """The flat roof triangles: their heights and their area."""
+    flat = np.abs(normals[:, 0]) + np.abs(normals[:, 1]) < 1e-6 * np.linalg.norm(normals, axis=1)
+    return np.unique(roof[flat][:, :, 2].round(4)), normals[flat][:, 2].sum() / 2
+
+
+def test_helsinki_pent_roof_over_a_party_step_keeps_its_party_walls():
     """Regression: the one Helsinki outline whose only free wall sweeps over a party-wall step (the moving edge
-    becomes collinear with a standing one) stuck the weighted skeleton; the roof is built as if free."""
-    from citygen.roof import RoofWarning
+    becomes collinear with a standing one) stuck the weighted skeleton, and the roof was built as if free. The
+    free edge's slope now rises until the party walls stop it, and the rest is a plateau: no warning, one eave."""
     outline = Polygon([(150.31611266805214, -779.06728694852), (167.70571787762862, -778.03037268876),
                        (167.95576201732632, -782.2418513042077), (178.27182497847977, -781.6285813925218),
                        (177.72170676039295, -772.4480053831785), (150.0160878010167, -774.0981866017828)])
-    with pytest.warns(RoofWarning, match="wavefront stuck"):
+    with roof_notes() as notes:
         mesh = HippedRoof().build(outline, TOP, RoofSpec("hipped", 30.0, party=(0, 1, 2, 3, 4)))
+    assert notes == []
     edges, z = _open_edges(mesh)
-    assert _same_edges(edges, _outline_edges(outline))
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert _eave_edges_cover(roof, _outline_edges(outline)[5:])
+    heights, area = _plateau(roof, n)
+    assert len(heights) == 1 and heights[0] > TOP + 1 and 0 < area < outline.area
+
+
+def test_a_tower_walled_in_by_party_walls_is_a_slope_up_to_a_plateau():
+    """Bug fixture (way/28775756, Helsinki demo): a round tower with party walls on 13 of its 14 edges stuck the
+    weighted skeleton ("wavefront stuck at time 2.382 with 12 vertices"), so the party walls were ignored with a
+    warning. Its one free edge now slopes up (1.38 m at 30 degrees) to a plateau over the rest."""
+    tower = Polygon([(-442.975, -175.018), (-442.919, -176.132), (-442.658, -177.224), (-444.224, -178.694),
+                     (-442.908, -179.719), (-441.199, -180.054), (-439.239, -179.72), (-438.273, -178.572),
+                     (-437.518, -176.857), (-437.795, -175.208), (-438.844, -173.648), (-440.132, -173.124),
+                     (-441.198, -173.28), (-442.136, -173.87)])
+    with roof_notes() as notes:
+        mesh = HippedRoof().build(tower, TOP, RoofSpec("hipped", 30.0, party=tuple(k for k in range(14) if k != 2)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(tower)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert _eave_edges_cover(roof, _outline_edges(tower)[2:3])
+    heights, area = _plateau(roof, n)
+    assert heights == pytest.approx([TOP + 2.382 * SLOPE], abs=1e-3) and area == pytest.approx(28.57, abs=0.01)
+
+
+@settings(max_examples=60, deadline=None)
+@given(polygons, st.data())
+def test_roofs_with_any_party_walls_are_closed(outline, data):
+    """Property: whatever edges are party walls, the roof is closed and its open boundary is the outline at the wall
+    top. Before, 8 of 600 generated cases (L shapes, courtyards) came out cracked without a word; now a skeleton
+    that would crack falls back to the free roof with a note."""
+    n = sum(len(r.coords) - 1 for r in (outline.exterior, *outline.interiors))
+    party = tuple(sorted(data.draw(st.sets(st.integers(0, n - 1), max_size=n - 1))))
+    builder = data.draw(st.sampled_from([HippedRoof(), GabledRoof(), MansardRoof()]))
+    with roof_notes():
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=party))
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
 
 
 def test_roof_notes_are_collected_per_thread():
@@ -229,7 +275,7 @@ def test_roof_notes_are_collected_per_thread():
     on a worker running threads one building's report could land with another. Notes go to their own thread."""
     import threading
 
-    from citygen.roof import note, roof_notes
+    from citygen.roof import note
     seen: dict[int, list[str]] = {}
     start = threading.Barrier(4)
 
@@ -280,3 +326,22 @@ def test_a_roof_builder_note_becomes_its_buildings_warning(small_scene):
     report = generate_city(load_scene(small_scene, roof_shapes=registry.roof_builders), registry=registry, jobs=1)
     noted = [w for w in report.warnings if w.endswith("noting roof: built flat on purpose")]
     assert len(noted) == report.written and {w.split(":")[0] for w in noted} == {"way/1", "way/2", "way/3"}
+
+
+def test_a_standing_corner_keeps_its_foot_and_its_top_apart():
+    """Bug fixture (way/89544468 and three more Helsinki demo roofs): a corner between two party walls stays in
+    place while the roof rises, and its node at the eave was reused for its node at the top (nodes were matched by
+    position only), so a roof face dipped down to the eave there (9.85 m too low) instead of ending in a wall."""
+    outline = Polygon([(125.79955530224832, -195.48692463099138), (180.14177619409327, -192.98895759652964),
+                       (178.73029741864872, -163.60884570038758), (163.58078005191973, -164.3894591233409),
+                       (124.28858266125759, -165.9730970997095)])
+    slope = math.tan(math.radians(25.0))
+    with roof_notes() as notes:
+        mesh = HippedRoof().build(outline, TOP, RoofSpec("hipped", 25.0, party=(2, 4)))
+    assert notes == []
+    roof, _, _ = _split(mesh)
+    edges = _outline_edges(outline)
+    for tri in roof:  # every sloped triangle lies in the roof plane of a free edge
+        dist = [((tri[:, :2] - e[:2]) @ np.array([-(e[3] - e[1]), e[2] - e[0]])) / np.hypot(*(e[2:] - e[:2]))
+                for k, e in enumerate(edges) if k not in (2, 4)]
+        assert any(np.allclose(tri[:, 2] - TOP, slope * d, atol=1e-3) for d in dist)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from shapely.geometry import Polygon, box
+from shapely.geometry.polygon import orient
 
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 from tests.roofs.shapes import polygons
@@ -92,3 +93,50 @@ def test_faces_partition_the_polygon(polygon):
         d = (b - a) / np.hypot(*(b - a))
         dist = (sk.nodes[list(face)] - a) @ np.array([-d[1], d[0]])
         assert np.allclose(dist, sk.times[list(face)], atol=1e-6 * max(1.0, sk.times.max()))
+
+
+def _l_shape():
+    """An L: body 10 x 4 m, arm 3 x 3 m on its left; edges 0 body top (right part), 1 arm's inner side, 2 arm top,
+    3 left side, 4 bottom, 5 right side."""
+    return orient(Polygon([(10, 4), (3, 4), (3, 7), (0, 7), (0, 0), (10, 0)]), 1.0)
+
+
+def _in_plane(sk, faces, weights):
+    """Every node of a face lies where its edge's wavefront passes at the node's time."""
+    for e, face in faces:
+        p = sk.nodes[list(face)]
+        a, b = p[0], p[1]
+        d = (b - a) / np.hypot(*(b - a))
+        inward = (p - a) @ np.array([-d[1], d[0]])
+        assert np.allclose(inward, weights[e] * sk.times[list(face)], atol=1e-9), e
+
+
+def test_weighted_skeleton_ends_in_a_plateau_where_standing_edges_wall_in_the_rest():
+    """Bug fixture (way/28775756, Helsinki): a round tower with party walls (weight 0) on all but one short edge
+    stuck the wavefront once that edge was swept away ("wavefront stuck at time 2.382 with 12 vertices"). The
+    region nothing reaches is a plateau at the time its last moving edge vanished. Here the arm's top (edge 2)
+    sweeps the arm and the body's left 3 m, reaching the bottom at time 7; the rest of the body, walled in by
+    standing edges and the wall left by the arm's inner side (next test), is a plateau at time 7."""
+    weights = np.array([0, 0, 1, 0, 0, 0], dtype=float)
+    sk = straight_skeleton(_l_shape(), weights=weights)
+    assert len(sk.flats) == 1 and np.allclose(sk.times[list(sk.flats[0])], 7.0)
+    flat = Polygon(sk.nodes[list(sk.flats[0])])
+    assert flat.exterior.is_ccw and flat.equals(box(3, 0, 10, 4))
+    assert Polygon(sk.face_polygon(2)).area + flat.area == pytest.approx(_l_shape().area)
+    _in_plane(sk, enumerate(sk.faces), weights)
+
+
+def test_a_standing_edge_between_parallel_edges_of_different_speeds_turns_round():
+    """Bug fixture (found by a property test of party-wall roofs): when the arm's inner side (standing) is swept
+    to nothing, its neighbours -- the body's top (standing) and the arm's top (moving) -- are parallel with
+    different speeds, so no vertex can join them. The roof came out cracked (a face out of its plane). The
+    standing edge turns round instead: a wall along its line grows between the two as the arm's top moves on."""
+    weights = np.array([0, 0, 1, 0, 0, 1], dtype=float)
+    sk = straight_skeleton(_l_shape(), weights=weights)
+    _in_plane(sk, enumerate(sk.faces), weights)
+    assert len(sk.walls) == 1 and not sk.flats
+    wall = sk.nodes[list(sk.walls[0])]
+    assert np.allclose(wall[:, 0], 3.0) and wall[1, 1] < wall[0, 1]  # on x = 3, its foot running down the line
+    assert sorted(np.round(sk.times[list(sk.walls[0])], 9)) == [3.0, 7.0, 7.0]
+    covered = sum(Polygon(sk.face_polygon(k)).area for k in (2, 5))
+    assert covered == pytest.approx(_l_shape().area)
