@@ -14,6 +14,12 @@ ring left with two vertices, or a thin ring with no area left, ends in skeleton 
 two antiparallel edges (a zero-width spike) is folded back at once. Every arc the wavefront's vertices trace
 borders the faces of their two edges, so each input edge's *face* is collected from those arcs.
 
+Weighted (edges of speed 0 stand still): a ring none of whose edges moves (a region walled in by standing edges
+that no moving edge reaches) ends as a *plateau* at the time its last moving edge vanished; a standing edge swept
+to nothing between parallel edges of different speeds turns round into a new standing edge on its line (a wall
+inside the roof), since no vertex can join two parallel edges that part. Faces are checked to lie in their edges'
+planes.
+
 API: :func:`straight_skeleton` returns a :class:`Skeleton` (nodes with their offset time, one face per input
 edge) or raises :class:`SkeletonError` for input it cannot handle; callers fall back to something simpler.
 """
