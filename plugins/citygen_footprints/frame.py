@@ -25,7 +25,8 @@ AREA_MARGIN_DEG = 5.0
 
 @dataclass(frozen=True)
 class LocalFrame:
-    """Maps source coordinates to the local frame and back; ``(n, 2)`` float arrays in, ``(n, 2)`` out."""
+    """Maps source coordinates to the local frame and back; ``(n, 2)`` float arrays in, ``(n, 2)`` out (handed to
+    pyproj as lists: it takes a one-element array for a scalar, which NumPy deprecates)."""
 
     georef: GeoReference
     forward: Transformer | None = None
@@ -34,14 +35,14 @@ class LocalFrame:
     def to_local(self, xy: np.ndarray) -> np.ndarray:
         xy = np.asarray(xy, dtype=float).reshape(-1, 2)
         if self.forward is not None:
-            x, y = self.forward.transform(xy[:, 0], xy[:, 1])
+            x, y = self.forward.transform(xy[:, 0].tolist(), xy[:, 1].tolist())
             return np.column_stack([x, y])
         return xy - np.asarray(self.offset)
 
     def to_source(self, xy: np.ndarray) -> np.ndarray:
         xy = np.asarray(xy, dtype=float).reshape(-1, 2)
         if self.forward is not None:
-            x, y = self.forward.transform(xy[:, 0], xy[:, 1], direction="INVERSE")
+            x, y = self.forward.transform(xy[:, 0].tolist(), xy[:, 1].tolist(), direction="INVERSE")
             return np.column_stack([x, y])
         return xy + np.asarray(self.offset)
 

@@ -45,7 +45,10 @@ def test_lonlat_round_trips_through_the_local_frame_within_a_millimetre(rings):
         assert dist.min() < 1e-3
 
 
+@pytest.mark.filterwarnings("error::DeprecationWarning")
 def test_tmerc_frame_is_conformal_and_centred():
+    """Also a bug fixture: one point (a one-element array) went to pyproj's scalar path, which NumPy >= 1.25 warns
+    about and will refuse ("Conversion of an array with ndim > 0 to a scalar")."""
     points = np.array([[24.93, 60.16], [24.96, 60.18]])
     frame = make_frame(CRS("OGC:CRS84"), points, None, "x")
     assert frame.to_local(np.array([[24.945, 60.17]]))[0] == pytest.approx([0, 0], abs=1e-6)
