@@ -119,6 +119,12 @@ def _mesh(points: np.ndarray, roof_faces: list[list[int]], walls: list[list[int]
         a, b = points[w[0], :2], points[w[1], :2]
         u = (b - a) / math.hypot(*(b - a))
         tris += _triangulate(np.column_stack([(points[:, :2] - a) @ u, points[:, 2]]), w)
+    return welded_mesh(points, tris)
+
+
+def welded_mesh(points: np.ndarray, tris: list[tuple[int, int, int]] | np.ndarray) -> MeshData:
+    """Triangles over ``points`` as float32 with points that round to the same float32 point welded (triangles they
+    collapse dropped) and unused points dropped."""
     welded, weld = np.unique(points.astype(np.float32), axis=0, return_inverse=True)
     idx = weld.reshape(-1)[np.asarray(tris, dtype=np.int64).reshape(-1, 3)]
     idx = idx[(idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 0])]
@@ -388,19 +394,26 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
 
 def pyramid(part: Polygon, top: float, spec: RoofSpec) -> MeshData | None:
     """One apex over the centroid, or None when the outline has courtyards or is not star-shaped around it."""
+    star = star_around_centroid(part)
+    if star is None:
+        return None
+    ring, c, run = star
+    points = np.vstack([np.column_stack([ring, np.full(len(ring), top)]), [*c, top + run * _rise(spec, run)]])
+    apex = len(ring)
+    return _mesh(points, [[k, (k + 1) % apex, apex] for k in range(apex)], [])
+
+
+def star_around_centroid(part: Polygon) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """The outline ring (counter-clockwise), its centroid and the centroid's distance to the nearest edge line, when
+    the part has no courtyard and every edge faces the centroid (star-shaped around it); else None."""
     if part.interiors:
         return None
     ring = np.asarray(part.exterior.coords)[:-1, :2]
     c = np.asarray(part.centroid.coords[0])
     a, b = ring - c, np.roll(ring, -1, axis=0) - c
     cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    edge = np.hypot(*(b - a).T)
-    run = float(np.min(cross / edge))  # distance from the centroid to the nearest edge line
-    if run <= 1e-6 * math.sqrt(part.area):
-        return None
-    points = np.vstack([np.column_stack([ring, np.full(len(ring), top)]), [*c, top + run * _rise(spec, run)]])
-    apex = len(ring)
-    return _mesh(points, [[k, (k + 1) % apex, apex] for k in range(apex)], [])
+    run = float(np.min(cross / np.hypot(*(b - a).T)))
+    return (ring, c, run) if run > 1e-6 * math.sqrt(part.area) else None
 
 
 def skillion(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] = frozenset()) -> MeshData:

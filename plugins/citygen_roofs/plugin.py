@@ -1,6 +1,6 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
 :mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
-``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``)."""
+``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``) and ``onion`` (:mod:`citygen_roofs.onion`)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -11,6 +11,7 @@ from citygen.geometry.building import MeshData
 from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
+from citygen_roofs.onion import OnionRoof
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof, MansardRoof,
                                    PyramidalRoof, RoundRoof, SkillionRoof)
 
@@ -46,4 +47,4 @@ class FlatRoof(RoofBuilder):
 @hookimpl
 def citygen_roof_builders():
     return [FlatRoof(), HippedRoof(), GabledRoof(), HalfHippedRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
-            GambrelRoof(), DomeRoof(), RoundRoof()]
+            GambrelRoof(), DomeRoof(), RoundRoof(), OnionRoof()]
