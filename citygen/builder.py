@@ -7,7 +7,7 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -57,10 +57,13 @@ class Builder:
     def ruleset(self, assignment: Assignment, path: Path):
         kind = (self.registry.ruleset_kind(assignment.kind) if assignment.kind
                 else self.registry.kind_for_path(path))
+        return kind, self._loaded(kind, path)
+
+    def _loaded(self, kind: RulesetKind, path: Path) -> Any:
         key = (kind.id, path)
         if key not in self.rulesets:
             self.rulesets[key] = kind.load(path)
-        return kind, self.rulesets[key]
+        return self.rulesets[key]
 
     def choose(self, footprint: Footprint, mass: Mass, scope: str) -> tuple[Assignment, Path] | None:
         attrs = assign_attributes(footprint, mass)
@@ -89,8 +92,11 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
+                dressed = self._generate(kind, ruleset, requests)
+                if assignment.fallback is not None:
+                    dressed = self._fall_back(assignment.fallback, requests, dressed, used)
                 outside: list[tuple[FacadeRequest, str]] = []
-                for request, layout in zip(requests, self._generate(kind, ruleset, requests, warnings)):
+                for request, layout in zip(requests, dressed):
                     face = request.context.face_index
                     if layout.meta.get("outside_range"):
                         outside.append((request, layout.meta["fallback"]))
@@ -109,7 +115,7 @@ class Builder:
             return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
         attributes = {"sourceId": footprint.id, "height": float(footprint.height),
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
-                      "ruleset": ", ".join(used) or "none", "seed": self.seed,
+                      "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
         return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
 
@@ -157,10 +163,9 @@ class Builder:
             return flat.build(mass.outline, top, spec) if flat else None
 
     @staticmethod
-    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
-                  warnings: list[str]) -> list[FacadeLayout]:
+    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest]) -> list[FacadeLayout]:
         """Layouts for a building's faces; if the kind fails on the building, face by face, so one face it cannot
-        dress becomes a plain wall (reported) instead of costing the building."""
+        dress becomes a plain wall (``meta["fallback"]``: reported later) instead of costing the building."""
         try:
             return kind.generate_building(ruleset, requests)
         except CitygenError:
@@ -170,11 +175,32 @@ class Builder:
             try:
                 layouts.append(kind.generate(ruleset, request))
             except CitygenError as exc:
-                warnings.append(f"{request.context.building_id} face {request.context.face_index}: plain wall, "
-                                f"the ruleset failed: {exc}")
                 layouts.append(FacadeLayout(request.width, request.height,
-                                            Region(0.0, 0.0, request.width, request.height, "Wall", "wall")))
+                                            Region(0.0, 0.0, request.width, request.height, "Wall", "wall"),
+                                            meta={"fallback": f"the ruleset failed: {exc}"}))
         return layouts
+
+    def _fall_back(self, path: Path, requests: list[FacadeRequest], layouts: list[FacadeLayout],
+                   used: list[str]) -> list[FacadeLayout]:
+        """The faces the assigned ruleset left plain (``meta["fallback"]``) dressed by the ``fallback`` ruleset, face
+        by face on the same floor lines and entrance; where it cannot dress one either, the face stays plain.
+        The faces it dressed are named in ``used`` (the building's ruleset attribute)."""
+        plain = [k for k, layout in enumerate(layouts) if layout.meta.get("fallback")]
+        if not plain:
+            return layouts
+        kind = self.registry.kind_for_path(path)
+        ruleset, out, dressed = self._loaded(kind, path), list(layouts), []
+        for k in plain:
+            try:
+                layout = kind.generate(ruleset, requests[k])
+            except CitygenError:
+                continue
+            if not layout.meta.get("fallback"):
+                out[k] = replace(layout, meta={**layout.meta, "fell_back_from": layouts[k].meta["fallback"]})
+                dressed.append(requests[k].context.face_index)
+        if dressed:
+            used.append(f"{kind.id}:{path.name} (fallback on faces {', '.join(map(str, dressed))})")
+        return out
 
     @staticmethod
     def _checked(layout: FacadeLayout, request: FacadeRequest, kind_id: str, warnings: list[str]) -> FacadeLayout:

@@ -60,7 +60,9 @@ _COMPARISON = re.compile(r"^\s*(>=|<=|==|!=|>|<)\s*(-?\d+(?:\.\d*)?)\s*$")
 
 @dataclass(frozen=True)
 class Assignment:
-    """``[[assign]]``: buildings matching every condition get one of ``rulesets`` (chosen per building)."""
+    """``[[assign]]``: buildings matching every condition get one of ``rulesets`` (chosen per building); faces that
+    ruleset cannot dress (it gives up or falls back to a plain wall) get the ``fallback`` ruleset when there is
+    one (its kind from its suffix)."""
 
     rulesets: tuple[Path, ...]
     conditions: tuple[Condition, ...] = ()
@@ -69,6 +71,7 @@ class Assignment:
     line: int | None = None
     roof_shape: str | None = None
     roof_pitch: float | None = None
+    fallback: Path | None = None
 
     def matches(self, attrs: Mapping[str, Any]) -> bool:
         return all(c.holds(attrs) for c in self.conditions)
@@ -214,7 +217,7 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         header = r.text.find("[[assign]]", search_from)
         line = r.text.count("\n", 0, header) + 1 if header >= 0 else None
         search_from = header + 1 if header >= 0 else search_from
-        keys = {"ruleset", "when", "faces", "kind", "roof_shape", "roof_pitch"}
+        keys = {"ruleset", "when", "faces", "kind", "roof_shape", "roof_pitch", "fallback"}
         unknown = sorted(set(item) - keys)
         if unknown:
             r.fail(f"unknown key {unknown[0]!r} in [[assign]] #{index + 1}", line=line,
@@ -223,8 +226,12 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         names = [rulesets] if isinstance(rulesets, str) else rulesets
         if not names or not isinstance(names, list) or not all(isinstance(n, str) for n in names):
             r.fail(f"[[assign]] #{index + 1} needs ruleset = \"path\" or a list of paths", line=line)
+        fallback = item.get("fallback")
+        if fallback is not None and not isinstance(fallback, str):
+            r.fail(f"[[assign]] #{index + 1}: fallback must be a ruleset path", line=line)
         paths = tuple((r.path.parent / n).resolve() for n in names)
-        for p in paths:
+        fallback = (r.path.parent / fallback).resolve() if fallback else None
+        for p in paths + ((fallback,) if fallback else ()):
             if not p.exists():
                 r.fail(f"ruleset {p.name} does not exist ({p})", line=line, hint="paths are relative to the scene file")
         faces = item.get("faces", "all")
@@ -235,7 +242,8 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         shape = r.roof_shape(item["roof_shape"], shape_line) if "roof_shape" in item else None
         pitch = r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None
         result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), line),
-                                 faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch))
+                                 faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch,
+                                 fallback=fallback))
     return tuple(result)
 
 

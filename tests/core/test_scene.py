@@ -49,6 +49,10 @@ def test_scene_parses_and_matches(tmp_path):
     (("floor_height = 3.0", "floor_height = 0"), "floor_height must be a positive number", 10),
     (("[defaults]", "[defaults]\nfloorheight = 3"), "unknown key 'floorheight'", 10),
     (('ruleset = "b.grammar"\n', 'ruleset = "missing.grammar"\n'), "missing.grammar does not exist", 20),
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nfallback = "gone.grammar"\n'), "gone.grammar does not exist",
+     20),
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nfallback = ["a.grammar"]\n'), "fallback must be a ruleset",
+     20),
     (("seed = 1", "seed = = 1"), "not valid TOML", 3),
     (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\n[output]\nuvs = "yes"\n'), "uvs must be true or false", 23),
 ])
@@ -57,6 +61,13 @@ def test_scene_errors_name_file_and_line(tmp_path, edit, message, line):
     with pytest.raises(SceneError, match=message) as info:
         load_scene(path)
     assert f"s.toml:{line}" in str(info.value)
+
+
+def test_fallback_ruleset_is_read_relative_to_the_scene(tmp_path):
+    scene = load_scene(write(tmp_path, BASE.replace('ruleset = "b.grammar"\n',
+                                                    'ruleset = "b.grammar"\nfallback = "a.grammar"\n')))
+    assert scene.assignments[2].fallback == (tmp_path / "a.grammar").resolve()
+    assert scene.assignments[0].fallback is None
 
 
 def test_missing_footprints_table(tmp_path):

@@ -52,6 +52,16 @@ def test_helsinki_one_door_per_building_and_attributes(helsinki):
     assert {"height", "building:levels", "default"} <= sources
 
 
+def test_helsinki_narrow_relayout_faces_get_the_fallback_grammar(helsinki):
+    """The demo's relayout rule has a fallback: its faces narrower than the model allows (0.9-1.9 m, 15 faces of
+    three buildings, plain walls with a warning before) are dressed by the house grammar."""
+    report, out = helsinki
+    assert not [w for w in report.warnings if "outside the ruleset's size range" in w]
+    stage = Usd.Stage.Open(str(out))
+    rulesets = [p.GetAttribute("citygen:ruleset").Get() for p in buildings(stage)]
+    assert len([r for r in rulesets if "split:house.grammar (fallback on faces" in r]) == 3
+
+
 def test_delft_cityjson_scene(tmp_path):
     out = tmp_path / "delft.usda"
     report = generate_city(load_scene(REPO / "scenes" / "delft.toml"), out=out)
