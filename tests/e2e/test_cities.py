@@ -104,7 +104,7 @@ def test_every_shipped_scene_loads_with_its_rulesets(scene_path):
     assert scene.footprints.exists()
     kinds = set()
     for assignment in scene.assignments:
-        for path in assignment.rulesets:
+        for path in assignment.rulesets + ((assignment.fallback,) if assignment.fallback else ()):
             kind = registry.kind_for_path(path)
             kind.load(path)
             kinds.add(kind.id)
