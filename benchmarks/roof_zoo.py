@@ -77,7 +77,8 @@ def t_shape(rng) -> Polygon:
 
 
 def h_shape(rng) -> Polygon:
-    a, b, s, h = _u(rng, 3, 10), _u(rng, 3, 10), _u(rng, 3, 12), _u(rng, 10, 40)
+    a, b, h = _u(rng, 3, 10), _u(rng, 3, 10), _u(rng, 10, 40)
+    s = _u(rng, 3, min(12.0, h - 1))
     gap = _u(rng, 4, 25)
     y = _u(rng, 0, h - s)
     return _union([box(0, 0, a, h), box(a + gap, _u(rng, -5, 5), a + gap + b, h + _u(rng, -5, 5)),
@@ -113,7 +114,11 @@ RECTILINEAR = (l_shape, u_shape, t_shape, h_shape, courtyard, staircase, grid)
 
 
 def any_shape(rng) -> Polygon:
-    return RECTILINEAR[rng.integers(len(RECTILINEAR))](rng) if rng.random() < 0.7 else star(rng)
+    """A rectilinear shape (70 %) or a star polygon."""
+    shape = None
+    while shape is None:
+        shape = RECTILINEAR[rng.integers(len(RECTILINEAR))](rng) if rng.random() < 0.7 else star(rng)
+    return shape
 
 
 def rotated(rng) -> Polygon:
