@@ -166,6 +166,9 @@ class _Wavefront:
         d = self.D[e_out]
         length = np.einsum("ij,ij->i", d, pos[nxt] - pos)
         rate = np.einsum("ij,ij->i", d, vel[nxt] - vel)
+        # an edge already of no length whose ends move together (the two vertices left where a spike folded onto
+        # both its neighbours at once) is collapsing now: it would never shrink
+        rate[(np.abs(length) < 1e-7 * self.scale) & (np.abs(rate) <= 1e-12)] = -1.0
         shrinking = np.flatnonzero(rate < -1e-12)
         if len(shrinking):
             te = t + np.maximum(length[shrinking], 0.0) / -rate[shrinking]

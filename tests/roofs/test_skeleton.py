@@ -42,6 +42,18 @@ def test_t_shape_split_event_leaves_a_ridge_along_the_stem():
     assert np.allclose(stem[:, 0], 15) and stem[:, 1].max() == pytest.approx(17)
 
 
+def test_t_shape_whose_stem_collapses_as_its_corners_meet_ends_the_stem_ridge_at_the_body():
+    """Regression (roof_zoo): a stem thinner than the body collapses just as the two reflex corners meet below it;
+    the spike left was folded onto one corner, leaving a zero-length edge whose ends moved together and never
+    collapsed, so the stem's side face ran off into the body (every T shape with a thin stem: no roof)."""
+    polygon = Polygon([(0, 0), (30, 0), (30, 10), (18, 10), (18, 20), (12, 20), (12, 10), (0, 10)])
+    sk, faces = _faces(polygon)
+    assert math.isclose(sum(f.area for f in faces), polygon.area)
+    assert all(f.is_valid for f in faces)
+    stem_sides = [sk.nodes[list(sk.faces[k])] for k in (3, 5)]
+    assert all(len(side) == 4 and np.allclose(side[2:, 0], 15) for side in stem_sides)
+    assert sorted(sk.nodes[sk.times > 0].round(9).tolist()) == [[5, 5], [15, 5], [15, 7], [15, 17], [25, 5]]
+
 def test_courtyard_ring_collapsing_at_once_has_no_t_junctions():
     """A ring strip collapsing along its length: the ridge has the same nodes seen from both sides."""
     polygon = Polygon([(0, 0), (11.998172341876696, 0.2094288772474021), (11.788743464629293, 12.207601219124099),
