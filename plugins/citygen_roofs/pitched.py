@@ -299,7 +299,7 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
             faces += flats
         ts, zs = profile(shape, spec, float(points[:, 2].max()))
         mesh = _Bands(points, ts).mesh(faces, walls, top, zs)
-        cracks = _cracks(mesh, top)
+        cracks = _cracks(mesh, top, part)
         if cracks:
             raise RoofError(f"the skeleton's faces leave {cracks} open edge(s) above the eaves")
     except RoofError as exc:
@@ -310,15 +310,27 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     return mesh
 
 
-def _cracks(mesh: MeshData, top: float) -> int:
-    """Mesh edges with no twin (used once, not in the opposite direction) that do not lie at the wall top: every
-    open edge of a closed roof is an eave."""
+def _cracks(mesh: MeshData, top: float, part: Polygon) -> int:
+    """Mesh edges with no twin (used once, not in the opposite direction) that are no eave: not at the wall top, or
+    off the outline there (a crack just above the eave). Every open edge of a closed roof is an eave."""
     tris = mesh.indices.reshape(-1, 3).astype(np.int64)
     a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
     n = len(mesh.points)
     lone = ~np.isin(a * n + b, b * n + a)
-    z = mesh.points[:, 2].astype(float)
-    high = (np.abs(z[a] - top) > 1e-3) | (np.abs(z[b] - top) > 1e-3)
+    p = mesh.points.astype(float)
+    high = (np.abs(p[a, 2] - top) > 1e-3) | (np.abs(p[b, 2] - top) > 1e-3)
+    eaves = np.flatnonzero(lone & ~high)
+    if len(eaves):
+        rings = [np.asarray(r.coords)[:, :2] for r in (part.exterior, *part.interiors)]
+        starts = np.concatenate([r[:-1] for r in rings])
+        d = np.concatenate([np.diff(r, axis=0) for r in rings])
+        off = np.zeros(len(eaves))
+        for q in (p[a[eaves], :2], p[b[eaves], :2], (p[a[eaves], :2] + p[b[eaves], :2]) / 2):
+            s = np.clip(np.einsum("ijk,jk->ij", q[:, None, :] - starts[None], d) / np.einsum("ij,ij->i", d, d),
+                        0.0, 1.0)
+            gap = np.hypot(*(q[:, None, :] - starts[None] - s[..., None] * d[None]).transpose(2, 0, 1)).min(axis=1)
+            off = np.maximum(off, gap)
+        high[eaves[off > 1e-3]] = True
     return int(np.count_nonzero(lone & high))
 
 

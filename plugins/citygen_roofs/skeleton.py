@@ -222,8 +222,13 @@ class _Wavefront:
 
     def add_edge(self, c: int, node: int) -> int:
         """A new standing edge (weight 0) on the line of edge ``c``, pointing the other way, born at ``node``."""
-        self.D, self.N = np.vstack([self.D, -self.D[c]]), np.vstack([self.N, -self.N[c]])
-        self.C, self.W = np.append(self.C, -self.C[c]), np.append(self.W, 0.0)
+        return self.add_wall(node, -self.D[c])
+
+    def add_wall(self, node: int, d: np.ndarray) -> int:
+        """A new standing edge (weight 0) through ``node`` in direction ``d`` (the interior on its left)."""
+        normal = np.array([-d[1], d[0]])
+        self.D, self.N = np.vstack([self.D, d]), np.vstack([self.N, normal])
+        self.C, self.W = np.append(self.C, normal @ np.asarray(self.nodes[node])), np.append(self.W, 0.0)
         self.arcs.append(set())
         self.edge_nodes.append((node, None))
         return len(self.W) - 1
@@ -266,7 +271,7 @@ class _Wavefront:
                     break
                 k = next((k for k, v in enumerate(ring) if self.antiparallel(v)), None)
                 if k is not None:
-                    self.rings[r] = self.fold(ring, k, t)
+                    self.rings[r] = self.step(ring, k, t) if self.parting(ring[k]) else self.fold(ring, k, t)
                     changed = True
                     break
 
@@ -297,6 +302,21 @@ class _Wavefront:
         p = np.array([v.at(t) for v in ring])
         q = np.roll(p, -1, axis=0)
         return 0.5 * abs(float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1])))
+
+    def parting(self, v: _Vertex) -> bool:
+        """``v`` joins two edges on one line, facing the same way, that move at different speeds: from here they
+        part (a free wall running on as a party wall)."""
+        a, b = v.e_in, v.e_out
+        return self.W[a] != self.W[b] and self.N[a] @ self.N[b] > 1 - 1e-12
+
+    def step(self, ring: list[_Vertex], k: int, t: float) -> list[_Vertex]:
+        """Where two edges on one line part (:meth:`parting`), a standing edge across the line joins them: a vertical
+        wall inside the roof between the faster edge's slope and the roof above the slower one (no vertex can
+        follow both edges)."""
+        v = ring[k]
+        a, b = v.e_in, v.e_out
+        wall = self.add_wall(v.node, np.sign(self.W[b] - self.W[a]) * self.N[a])
+        return ring[:k] + [self.vertex(v.node, t, a, wall), self.vertex(v.node, t, wall, b)] + ring[k + 1:]
 
     def fold(self, ring: list[_Vertex], k: int, t: float) -> list[_Vertex]:
         """Remove the tip ``ring[k]`` of a zero-width spike: it runs to its nearer neighbour, which then takes
@@ -452,6 +472,7 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
     if weights.shape != (n,) or np.any(weights < 0) or not np.any(weights > 0):
         raise SkeletonError(f"need {n} edge weights >= 0, not all 0")
     wf = _Wavefront(rings, weights)
+    wf.settle(0.0)  # vertices between parallel edges of the input (spikes, collinear edges of different speeds)
     limit = max_events or 4 * n * n + 16
     t = 0.0
     for _ in range(limit):

@@ -345,3 +345,44 @@ def test_a_standing_corner_keeps_its_foot_and_its_top_apart():
         dist = [((tri[:, :2] - e[:2]) @ np.array([-(e[3] - e[1]), e[2] - e[0]])) / np.hypot(*(e[2:] - e[:2]))
                 for k, e in enumerate(edges) if k not in (2, 4)]
         assert any(np.allclose(tri[:, 2] - TOP, slope * d, atol=1e-3) for d in dist)
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()],
+                         ids=lambda b: b.id)
+def test_a_party_wall_running_on_from_a_free_wall_on_one_line_gets_a_step_wall(builder):
+    """Regression (benchmarks/roof_zoo.py, 78 of 560 near-collinear outlines fell back to the free roof): where a
+    free wall runs on as a party wall along one line (a neighbour covering part of a facade), the vertex between
+    them cannot follow both, and folding it away as a spike took a face off its plane ("face of edge 0 leaves its
+    plane by 5"). A standing edge across the line joins them instead: the free wall's slope (up to y = 5 on this
+    20 x 10 m block) ends at x = 8 in a vertical wall up to the roof over the party wall, which the back wall's
+    slope sweeps down to the party wall at x = 8..10."""
+    outline = Polygon([(0, 0), (8, 0), (20, 0), (20, 10), (0, 10)])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=(1,)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, walls, _ = _split(mesh)
+    front = _eaves(roof)
+    front = front[(np.abs(front[:, 1]) < 1e-6) & (np.abs(front[:, 3]) < 1e-6)]  # eaves along y = 0
+    assert front[:, [0, 2]].max() == pytest.approx(8) and np.abs(front[:, 2] - front[:, 0]).sum() == pytest.approx(8)
+    step = walls[np.all(np.abs(walls[:, :, 0] - 8) < 1e-4, axis=1)]  # wall triangles in the plane x = 8
+    assert len(step) and step[:, :, 1].max() == pytest.approx(5, abs=1e-4)
+
+
+def test_a_crack_just_above_the_eave_falls_back_to_the_free_roof():
+    """Regression (benchmarks/roof_zoo.py): three party walls meeting at reflex corners gave a weighted skeleton
+    whose faces overlap (their signed areas still add up to the outline's), and a round roof whose open edges ran
+    off the outline at the wall top, where the crack check took any open edge for an eave. An open edge at the
+    eave height must also lie on the outline: now it is a crack, and the roof is built free with a note."""
+    outline = Polygon([(-797.5011758654897, -137.88206568999328), (-796.5928438092227, -148.080614068199),
+                       (-796.6720668113945, -151.23676894106438), (-807.817590638347, -168.3002013059334),
+                       (-793.5187158472346, -165.3330581646175), (-782.2743824166228, -164.98060033928328),
+                       (-779.2624523933063, -154.34489430126467), (-770.0475072203475, -147.89267894912456),
+                       (-776.4701320322899, -143.61702473267513), (-787.2028906619616, -138.96989168790003),
+                       (-790.4128426299667, -147.29944002458632)])
+    with roof_notes() as notes:
+        mesh = RoundRoof().build(outline, TOP, RoofSpec("round", 30.0, party=(1, 7, 10)))
+    assert len(notes) == 1 and "open edge" in notes[0]
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
