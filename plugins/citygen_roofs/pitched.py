@@ -233,7 +233,9 @@ class _Bands:
         pieces = [ring]
         for level in self.ts[1:-1]:
             for p, q in self._chords(ring, float(level), along):
-                k = next(k for k, piece in enumerate(pieces) if p in piece and q in piece)
+                k = next((k for k, piece in enumerate(pieces) if p in piece and q in piece), None)
+                if k is None:  # a chord between a face's boundary and a hole in it, which joined them already
+                    raise RoofError("a profile break line cuts a roof face round a hole where it cannot split it")
                 piece = pieces[k]
                 i, j = sorted((piece.index(p), piece.index(q)))
                 pieces[k:k + 1] = [piece[i:j + 1], piece[j:] + piece[:i + 1]]

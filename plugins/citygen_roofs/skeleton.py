@@ -213,7 +213,8 @@ class _Wavefront:
             flip = self.add_edge(c, node)
             new = [self.vertex(node, t, a, flip), self.vertex(node, t, flip, b)]
         else:
-            new = [self.vertex(node, t, a, b)]
+            # two pieces of one edge (parted by a split event) meeting again join into one: no vertex between them
+            new = [self.vertex(node, t, a, b)] if a != b else []
         if (i + 1) % len(ring) == 0:
             self.rings[r] = new + ring[1:-1]
         else:
@@ -264,9 +265,13 @@ class _Wavefront:
                 if len(ring) <= 2 or plateau or self.collapsed(ring, t):
                     nodes = self.finish(ring, t)
                     flat = [n for k, n in enumerate(nodes) if n != nodes[k - 1]]
+                    inner = self.enclosed(r, t) if plateau else []
+                    holes = [self.finish(self.rings[s], t) for s in inner]  # standing courtyards: stop them
                     if plateau and len(flat) > 2 and self.area(ring, t) > 1e-9 * self.scale ** 2:
-                        self.flats.append(tuple(flat))
-                    del self.rings[r]
+                        holes = [[n for k, n in enumerate(h) if n != h[k - 1]] for h in holes]
+                        self.flats.append(tuple(_bridged(flat, [h for h in holes if len(h) > 2],
+                                                         np.asarray(self.nodes))))
+                    self.rings = [g for s, g in enumerate(self.rings) if s != r and s not in inner]
                     changed = True
                     break
                 k = next((k for k, v in enumerate(ring) if self.antiparallel(v)), None)
@@ -277,19 +282,19 @@ class _Wavefront:
 
     def stopped(self, r: int, t: float) -> bool:
         """Ring ``r`` encloses a region (counter-clockwise) none of whose edges moves, and no other ring inside it
-        can still sweep into it: it is a plateau."""
+        can still sweep into it: it is a plateau (with the rings inside, courtyards walled by standing edges, as its
+        holes)."""
         ring = self.rings[r]
         if any(self.W[v.e_out] > 0 for v in ring):
             return False
-        outline = np.array([v.at(t) for v in ring])
-        if _signed_area(outline) <= 0:
+        if _signed_area(np.array([v.at(t) for v in ring])) <= 0:
             return False  # a static courtyard: moving edges around it will reach it
-        inside = [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
-        if any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in inside):
-            return False
-        if inside:
-            raise SkeletonError("a plateau around a courtyard that nothing sweeps")
-        return True
+        return not any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in self.enclosed(r, t))
+
+    def enclosed(self, r: int, t: float) -> list[int]:
+        """The rings inside ring ``r``."""
+        outline = np.array([v.at(t) for v in self.rings[r]])
+        return [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
 
     def collapsed(self, ring: list[_Vertex], t: float) -> bool:
         """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
@@ -389,6 +394,30 @@ class _Wavefront:
             raise SkeletonError(f"face of edge {e[off.argmax()]} leaves its plane by {off.max():.3g} "
                                 "(a degenerate event of the weighted wavefront)")
 
+    def with_holes(self, e: int, path: list[int]) -> list[int]:
+        """``path`` (the outer boundary of edge ``e``'s face) with the loops of ``e``'s arcs it does not pass
+        joined in as holes: where pieces of the edge's wavefront met again round a region that stands (a courtyard
+        walled by party walls)."""
+        on_path = {(min(p, q), max(p, q)) for p, q in zip(path, path[1:] + path[:1])}
+        nbrs: dict[int, list[int]] = {}
+        for p, q in self.arcs[e] - on_path:
+            nbrs.setdefault(p, []).append(q)
+            nbrs.setdefault(q, []).append(p)
+        if not nbrs or any(len(v) != 2 for v in nbrs.values()):
+            return path  # nothing left, or no loops: left for the checks to reject
+        loops: list[list[int]] = []
+        for start in sorted(nbrs):
+            if any(start in loop for loop in loops):
+                continue
+            loop, prev, cur = [start], None, start
+            while True:
+                cur, prev = next(n for n in nbrs[cur] if n != prev), cur
+                if cur == start:
+                    break
+                loop.append(cur)
+            loops.append(loop)
+        return _bridged(path, loops, np.asarray(self.nodes))
+
     def face(self, e: int) -> tuple[int, ...]:
         """Walk the arcs of edge ``e``'s face from its end node back to its start, keeping the face on the left. An
         edge born during the propagation (:meth:`add_edge`) starts where it was born and ends where its front
@@ -423,7 +452,7 @@ class _Wavefront:
                     along = np.asarray([self.nodes[n] for n in path]) @ self.D[e]
                     k = int(np.argmax(np.roll(along, -1) - along))
                     path = path[k:] + path[:k]
-                return tuple(path)
+                return tuple(self.with_holes(e, path))
             path.append(cur)
         raise SkeletonError(f"face of edge {e} does not close")
 
@@ -431,6 +460,32 @@ class _Wavefront:
 def _signed_area(p: np.ndarray) -> float:
     q = np.roll(p, -1, axis=0)
     return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+
+
+def _bridged(ring: list[int], holes: list[list[int]], xy: np.ndarray) -> list[int]:
+    """``ring`` (node indices, counter-clockwise) with ``holes`` spliced in, each clockwise, at the shortest bridge
+    from one of its nodes to the ring that crosses no side of the ring or the holes (walked both ways: one ring
+    a triangulation takes as a polygon with holes). Holes it cannot bridge are left out (the area check fails)."""
+    holes = [h if _signed_area(xy[h]) < 0 else h[::-1] for h in holes]
+    sides = np.array([(p, q) for r in [ring, *holes] for p, q in zip(r, r[1:] + r[:1])])
+    for hole in holes:
+        gap = np.hypot(*(xy[ring][:, None, :] - xy[hole][None, :, :]).transpose(2, 0, 1))
+        for flat in np.argsort(gap, axis=None):
+            i, j = np.unravel_index(flat, gap.shape)
+            if not _crosses(xy[ring[i]], xy[hole[j]], xy[sides[:, 0]], xy[sides[:, 1]]):
+                ring = ring[:i + 1] + hole[j:] + hole[:j + 1] + ring[i:]
+                break
+    return ring
+
+
+def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the segment ``p q`` properly crosses any segment ``a[k] b[k]`` (touching at an end does not)."""
+    def side(u, v, w):
+        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0])
+    tol = 1e-12 * max(1.0, float(np.abs(p).max())) ** 2
+    s1, s2 = side(p, q, a), side(p, q, b)
+    s3, s4 = side(a, b, p), side(a, b, q)
+    return bool(np.any((s1 * s2 < -tol) & (s3 * s4 < -tol)))
 
 
 def _contains(ring: np.ndarray, point: np.ndarray) -> bool:

@@ -386,3 +386,48 @@ def test_a_crack_just_above_the_eave_falls_back_to_the_free_roof():
     assert len(notes) == 1 and "open edge" in notes[0]
     edges, z = _open_edges(mesh)
     assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+
+
+SKELETON_ROOFS = [HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()]
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_free_wall_sweeping_round_a_walled_in_courtyard_has_a_face_with_a_hole(builder):
+    """Regression (benchmarks/roof_zoo.py, near-touch courtyards): the one free wall of a block whose courtyard is
+    walled in by party walls (a building inside it) sweeps round the courtyard from both sides and meets itself
+    behind it; its face has a hole. The two pieces meeting left a vertex between an edge and itself, and the face
+    walk, taking the outer loop only, lost the hole ("face of edge 1 does not close", the free roof instead)."""
+    outline = Polygon([(0, 0), (12.714417238853766, 0), (12.714417238853766, 30.511471263655576),
+                       (0, 30.511471263655576)],
+                      [[(9.81826496201892, 22.93608380429691), (0.0700495741740771, 0.0207122610356676),
+                        (8.402984521943974, 25.9717222942299)]])
+    party = (0, 2, 3, 4, 5, 6)
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=party))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert _eave_edges_cover(roof, _outline_edges(outline)[1:2])
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_plateau_round_a_walled_in_courtyard_keeps_the_courtyard_open(builder):
+    """Regression (benchmarks/roof_zoo.py, grid outlines): with every wall but one a party wall, courtyard
+    included, the free wall's slope rises to a plateau that encloses the standing courtyard ("a plateau around a
+    courtyard that nothing sweeps", the free roof instead). The plateau now has the courtyard as a hole, whose
+    party walls stand up to it."""
+    outline = Polygon([(0, 13), (0, 0), (21, 0), (21, 7), (17, 7), (17, 16), (14, 16), (14, 20), (0, 20), (0, 16),
+                       (6, 16), (6, 13)], [[(11, 7), (11, 13), (14, 13), (14, 7)]])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=tuple(k for k in range(16) if k != 6)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, walls, n = _split(mesh)
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)
+    courtyard = walls[np.all((walls[:, :, 0] >= 11 - 1e-6) & (walls[:, :, 0] <= 14 + 1e-6) &
+                             (walls[:, :, 1] >= 7 - 1e-6) & (walls[:, :, 1] <= 13 + 1e-6), axis=1)]
+    heights, _ = _plateau(roof, n)
+    assert len(heights) == 1 and courtyard[:, :, 2].max() == pytest.approx(heights[0], abs=1e-4)
