@@ -301,7 +301,7 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
             faces += flats
         ts, zs = profile(shape, spec, float(points[:, 2].max()))
         mesh = _Bands(points, ts).mesh(faces, walls, top, zs)
-        cracks = _cracks(mesh, top, part)
+        cracks = _cracks(mesh, top, part, len(weights))
         if cracks:
             raise RoofError(f"the skeleton's faces leave {cracks} open edge(s) above the eaves")
     except RoofError as exc:
@@ -312,22 +312,24 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     return mesh
 
 
-def _cracks(mesh: MeshData, top: float, part: Polygon) -> int:
+def _cracks(mesh: MeshData, top: float, part: Polygon, edges: int) -> int:
     """Mesh edges with no twin (used once, not in the opposite direction) that are no eave: not at the wall top, or
-    off the outline there (a crack just above the eave). Every open edge of a closed roof is an eave."""
+    off the outline (``part``, with ``edges`` edges) there -- a crack just above the eave. Every open edge of a
+    closed roof is an eave."""
     tris = mesh.indices.reshape(-1, 3).astype(np.int64)
     a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
     n = len(mesh.points)
     lone = ~np.isin(a * n + b, b * n + a)
-    p = mesh.points.astype(float)
-    high = (np.abs(p[a, 2] - top) > 1e-3) | (np.abs(p[b, 2] - top) > 1e-3)
+    z = mesh.points[:, 2].astype(float)
+    high = (np.abs(z[a] - top) > 1e-3) | (np.abs(z[b] - top) > 1e-3)
     eaves = np.flatnonzero(lone & ~high)
-    if len(eaves):
+    if len(eaves) != edges:  # not one open edge at the wall top per outline edge: each must lie on the outline
+        pa, pb = mesh.points[a[eaves], :2].astype(float), mesh.points[b[eaves], :2].astype(float)
         rings = [np.asarray(r.coords)[:, :2] for r in (part.exterior, *part.interiors)]
         starts = np.concatenate([r[:-1] for r in rings])
         d = np.concatenate([np.diff(r, axis=0) for r in rings])
         off = np.zeros(len(eaves))
-        for q in (p[a[eaves], :2], p[b[eaves], :2], (p[a[eaves], :2] + p[b[eaves], :2]) / 2):
+        for q in (pa, pb, (pa + pb) / 2):
             s = np.clip(np.einsum("ijk,jk->ij", q[:, None, :] - starts[None], d) / np.einsum("ij,ij->i", d, d),
                         0.0, 1.0)
             gap = np.hypot(*(q[:, None, :] - starts[None] - s[..., None] * d[None]).transpose(2, 0, 1)).min(axis=1)

@@ -168,7 +168,9 @@ class _Wavefront:
         rate = np.einsum("ij,ij->i", d, vel[nxt] - vel)
         # an edge already of no length whose ends move together (the two vertices left where a spike folded onto
         # both its neighbours at once) is collapsing now: it would never shrink
-        rate[(np.abs(length) < 1e-7 * self.scale) & (np.abs(rate) <= 1e-12)] = -1.0
+        short = length < 1e-7 * self.scale
+        if short.any():
+            rate[short & (np.abs(rate) <= 1e-12)] = -1.0
         shrinking = np.flatnonzero(rate < -1e-12)
         if len(shrinking):
             te = t + np.maximum(length[shrinking], 0.0) / -rate[shrinking]
@@ -398,6 +400,8 @@ class _Wavefront:
         """``path`` (the outer boundary of edge ``e``'s face) with the loops of ``e``'s arcs it does not pass
         joined in as holes: where pieces of the edge's wavefront met again round a region that stands (a courtyard
         walled by party walls)."""
+        if len(self.arcs[e]) - len(path) < 2:
+            return path  # every arc but at most two is on the path (all but its first side): no loop left
         on_path = {(min(p, q), max(p, q)) for p, q in zip(path, path[1:] + path[:1])}
         nbrs: dict[int, list[int]] = {}
         for p, q in self.arcs[e] - on_path:
@@ -527,7 +531,8 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
     if weights.shape != (n,) or np.any(weights < 0) or not np.any(weights > 0):
         raise SkeletonError(f"need {n} edge weights >= 0, not all 0")
     wf = _Wavefront(rings, weights)
-    wf.settle(0.0)  # vertices between parallel edges of the input (spikes, collinear edges of different speeds)
+    if any(v.spike for ring in wf.rings for v in ring):
+        wf.settle(0.0)  # vertices between parallel edges of the input (spikes, collinear edges of different speeds)
     limit = max_events or 4 * n * n + 16
     t = 0.0
     for _ in range(limit):
