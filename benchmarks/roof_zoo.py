@@ -2,6 +2,7 @@
 
     python benchmarks/roof_zoo.py [--per-kind 40] [--seed 0] [--save out/roof_zoo_failures.jsonl]
     python benchmarks/roof_zoo.py --replay out/roof_zoo_failures.jsonl
+    python benchmarks/roof_zoo.py --kinds star --builders hipped --per-kind 3000  # one kind, one builder, more
 
 Per kind of outline (random star polygons; axis-aligned L, U, T, H, courtyard, staircase and grid-union shapes,
 the hard case for the weighted skeleton with their many parallel edges; the same rotated or moved ~1 km out like a
@@ -261,11 +262,12 @@ def roof(outline: Polygon, builder: str, party: tuple[int, ...], orientation: st
     return "ok", "", seconds
 
 
-def cases(per_kind: int, seed: int):
+def cases(per_kind: int, seed: int, kinds=tuple(KINDS), builders=tuple(BUILDERS)):
     """(kind, outline, builder, party, orientation) for every kind, outline and builder, free and with party
     walls."""
     rng = np.random.default_rng(seed)
-    for kind, make in KINDS.items():
+    for kind in kinds:
+        make = KINDS[kind]
         made = 0
         while made < per_kind:
             outline = make(rng)
@@ -275,7 +277,7 @@ def cases(per_kind: int, seed: int):
                 continue
             made += 1
             n = _n_edges(outline)
-            for builder in BUILDERS:
+            for builder in builders:
                 k = int(rng.integers(1, n))
                 party = tuple(sorted(int(e) for e in rng.choice(n, size=k, replace=False)))
                 for walls in ((), party):
@@ -292,6 +294,8 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--save", type=Path, default=Path("out/roof_zoo_failures.jsonl"))
     parser.add_argument("--replay", type=Path, help="rebuild the cases of a saved failures file")
+    parser.add_argument("--kinds", nargs="+", choices=list(KINDS), default=list(KINDS))
+    parser.add_argument("--builders", nargs="+", choices=list(BUILDERS), default=list(BUILDERS))
     args = parser.parse_args()
     if args.replay:
         for line in args.replay.read_text().splitlines():
@@ -304,7 +308,7 @@ def main() -> None:
     messages: Counter = Counter()
     failures, worst = [], (0.0, "")
     t0 = time.process_time()
-    for kind, outline, builder, party, orientation in cases(args.per_kind, args.seed):
+    for kind, outline, builder, party, orientation in cases(args.per_kind, args.seed, args.kinds, args.builders):
         outcome, message, seconds = roof(outline, builder, party, orientation)
         counts[kind, outcome] += 1
         if seconds > worst[0]:
@@ -314,7 +318,7 @@ def main() -> None:
             failures.append({"kind": kind, "builder": builder, "party": list(party), "orientation": orientation,
                              "outcome": outcome, "message": message, "wkt": outline.wkt})
     print(f"{'kind':<12}" + "".join(f"{o:>11}" for o in OUTCOMES))
-    for kind in [*KINDS, "total"]:
+    for kind in [*args.kinds, "total"]:
         row = [sum(v for (k, o), v in counts.items() if o == out and kind in (k, "total")) for out in OUTCOMES]
         print(f"{kind:<12}" + "".join(f"{v:>11}" for v in row))
     for (outcome, message), count in messages.most_common():
