@@ -265,10 +265,10 @@ class _Wavefront:
             for r, ring in enumerate(self.rings):
                 plateau = len(ring) > 2 and self.stopped(r, t)
                 if len(ring) <= 2 or plateau or self.collapsed(ring, t):
-                    nodes = self.finish(ring, t)
+                    nodes = self.finish(ring, t, snap=not plateau)
                     flat = [n for k, n in enumerate(nodes) if n != nodes[k - 1]]
                     inner = self.enclosed(r, t) if plateau else []
-                    holes = [self.finish(self.rings[s], t) for s in inner]  # standing courtyards: stop them
+                    holes = [self.finish(self.rings[s], t, snap=False) for s in inner]  # standing courtyards
                     if plateau and len(flat) > 2 and self.area(ring, t) > 1e-9 * self.scale ** 2:
                         holes = [[n for k, n in enumerate(h) if n != h[k - 1]] for h in holes]
                         self.flats.append(tuple(_bridged(flat, [h for h in holes if len(h) > 2],
@@ -349,14 +349,15 @@ class _Wavefront:
                 out.append(v)
         return out
 
-    def finish(self, ring: list[_Vertex], t: float) -> list[int]:
+    def finish(self, ring: list[_Vertex], t: float, snap: bool = True) -> list[int]:
         """A collapsed (or stopped) ring: its vertices stop where they are and each of its edges becomes a ridge
         (or plateau rim) arc of that edge's face, passing through every other node of the ring on it (so the faces
-        on both sides of a ridge have the same nodes, without T-junctions). Vertices within ``1e-4`` of the
-        outline's size of an earlier one stop on it: rounding, not a ridge, set them apart. Returns the node each
-        vertex stopped at."""
+        on both sides of a ridge have the same nodes, without T-junctions). With ``snap`` (a collapsed ring),
+        vertices within ``1e-4`` of the outline's size of an earlier one stop on it: rounding, not a ridge, set them
+        apart; a plateau's vertices stand where they are (a millimetre jog of a party wall is no rounding). Returns
+        the node each vertex stopped at."""
         at = np.array([v.at(t) for v in ring])
-        for k in range(1, len(at)):
+        for k in range(1, len(at) if snap else 0):
             near = np.flatnonzero(np.hypot(*(at[:k] - at[k]).T) < 1e-4 * self.scale)
             if len(near):
                 at[k] = at[near[0]]

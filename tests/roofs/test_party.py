@@ -431,3 +431,22 @@ def test_a_plateau_round_a_walled_in_courtyard_keeps_the_courtyard_open(builder)
                              (walls[:, :, 1] >= 7 - 1e-6) & (walls[:, :, 1] <= 13 + 1e-6), axis=1)]
     heights, _ = _plateau(roof, n)
     assert len(heights) == 1 and courtyard[:, :, 2].max() == pytest.approx(heights[0], abs=1e-4)
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_plateau_keeps_a_millimetre_jog_of_its_party_wall(builder):
+    """Regression (benchmarks/roof_zoo.py, collinear outlines): the one free wall sweeps the body of an L up to a
+    plateau over its arm; a party wall with a 1.4 mm jog leaves the plateau's corner 1.4 mm from the next one.
+    Finishing the plateau snapped the two together as rounding (1e-4 of the size), losing a sliver ("skeleton faces
+    cover 242.344 m² of a 242.349 m² outline", the free roof instead)."""
+    outline = Polygon([(24.131998203031326, 4.569747014585622), (20.667011815470183, 4.572258621255501),
+                       (7.662137503250117, 4.569747014585622), (7.662137503250117, 21.79836708721006),
+                       (0, 21.79836708721006), (0, 4.569747014585622), (0, 3.569747014585622), (0, 0),
+                       (8.26771200107172, -0.0035994066887269), (24.131998203031326, 0)])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=tuple(range(9)), orientation="along"))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)  # the 5 mm² sliver is 2e-5
