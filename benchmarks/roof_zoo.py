@@ -4,7 +4,7 @@
     python benchmarks/roof_zoo.py --replay out/roof_zoo_failures.jsonl
     python benchmarks/roof_zoo.py --kinds star --builders hipped --per-kind 3000  # one kind, one builder, more
 
-Per kind of outline (random star polygons; axis-aligned L, U, T, H, courtyard, staircase and grid-union shapes,
+Per kind of outline (random star polygons, and ones with a few repeated radii and angles; axis-aligned L, U, T, H, courtyard, staircase and grid-union shapes,
 the hard case for the weighted skeleton with their many parallel edges; the same rotated or moved ~1 km out like a
 city frame; near-degenerate ones: nearly collinear vertices, 1-5 cm edges, thin slivers, courtyards nearly touching
 the walls) every skeleton builder roofs each outline twice, free and with a random proper subset of party walls,
@@ -53,6 +53,16 @@ def star(rng) -> Polygon:
     angles = np.cumsum(rng.uniform(0.3, 1.0, n))
     angles = 2 * np.pi * angles / angles[-1]
     r = rng.uniform(5.0, 25.0, n)
+    return Polygon(np.column_stack([r * np.cos(angles), r * np.sin(angles)]))
+
+
+def symmetric_star(rng) -> Polygon:
+    """A star polygon with radii and gaps from a few values: repeated angles and lengths, so events coincide
+    (reflex vertices meeting each other, several edges vanishing at once)."""
+    n = int(rng.integers(3, 13))
+    angles = np.cumsum(rng.choice([0.3, 0.5, 1.0], n))
+    angles = 2 * np.pi * angles / angles[-1]
+    r = rng.choice([5.0, 15.0, 25.0], n)
     return Polygon(np.column_stack([r * np.cos(angles), r * np.sin(angles)]))
 
 
@@ -204,7 +214,7 @@ def near_touch(rng) -> Polygon:
 #: kinds the pipeline's outline cleaning (``clean_outline``: no edge under 0.8 m, no vertex within 0.1 m of its
 #: neighbours' line) would smooth away: these reach the builders as they are, only oriented
 RAW = {"collinear", "short edges", "sliver", "near-touch"}
-KINDS = {"star": star, "L": l_shape, "U": u_shape, "T": t_shape, "H": h_shape, "courtyard": courtyard,
+KINDS = {"star": star, "symmetric star": symmetric_star, "L": l_shape, "U": u_shape, "T": t_shape, "H": h_shape, "courtyard": courtyard,
          "staircase": staircase, "grid": grid, "rotated": rotated, "offset 1 km": offset_1km,
          "collinear": collinear, "short edges": short_edges, "sliver": sliver, "near-touch": near_touch}
 
@@ -317,10 +327,10 @@ def main() -> None:
             messages[outcome, _generic(message)] += 1
             failures.append({"kind": kind, "builder": builder, "party": list(party), "orientation": orientation,
                              "outcome": outcome, "message": message, "wkt": outline.wkt})
-    print(f"{'kind':<12}" + "".join(f"{o:>11}" for o in OUTCOMES))
+    print(f"{'kind':<15}" + "".join(f"{o:>11}" for o in OUTCOMES))
     for kind in [*args.kinds, "total"]:
         row = [sum(v for (k, o), v in counts.items() if o == out and kind in (k, "total")) for out in OUTCOMES]
-        print(f"{kind:<12}" + "".join(f"{v:>11}" for v in row))
+        print(f"{kind:<15}" + "".join(f"{v:>11}" for v in row))
     for (outcome, message), count in messages.most_common():
         print(f"  {count:5d} {outcome}: {message}")
     print(f"worst roof {worst[0] * 1000:.0f} ms ({worst[1]}); total CPU {time.process_time() - t0:.1f} s")

@@ -194,7 +194,12 @@ class _Wavefront:
         px = pos[jj] + dt[:, None] * vel[jj]
         along = np.einsum("ij,ij->i", pos[v] + dt[:, None] * vel[v] - px, f)
         span = np.einsum("ij,ij->i", pos[nxt[jj]] + dt[:, None] * vel[nxt[jj]] - px, f)
-        inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps))
+        # a vertex that already sits at an end of the edge (the two vertices a vertex event left) reaches the edge
+        # only if it moves into it, not out past its end
+        now = dt <= self.eps
+        leaving = now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) <= 1e-12)
+        leaving |= now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) >= -1e-12)
+        inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps) & ~leaving)
         if len(inside):
             k = inside[np.argmin(dt[inside])]
             te = t + float(dt[k])
@@ -241,6 +246,12 @@ class _Wavefront:
         v, x = ring[i], other[j]
         node = self.node(v.at(t), t)
         self.end(v, node)
+        at = np.asarray(self.nodes[node])
+        hit = next((h for h in (x, other[(j + 1) % len(other)])
+                    if np.abs(h.at(t) - at).max() < 1e-7 * self.scale), None)
+        if hit is not None:
+            self.vertex_event(t, r, i, s, other.index(hit), node)
+            return
         w1 = self.vertex(node, t, x.e_out, v.e_out)
         w2 = self.vertex(node, t, v.e_in, x.e_out)
         after_v = ring[i + 1:] + ring[:i]  # next(v) ... prev(v)
@@ -251,6 +262,24 @@ class _Wavefront:
         else:
             after_x = other[j + 1:] + other[:j + 1]  # y ... x
             merged = [w1] + after_v + [w2] + after_x
+            self.rings = [g for k, g in enumerate(self.rings) if k not in (r, s)] + [merged]
+        self.settle(t)
+
+    def vertex_event(self, t: float, r: int, i: int, s: int, h: int, node: int) -> None:
+        """Reflex vertex ``rings[r][i]`` reaches an edge at its end vertex ``rings[s][h]``, which arrives there
+        too (symmetric outlines): the two vertices meet, and each pairs its incoming edge with the other's outgoing
+        one. Splitting the edge there instead left a piece of it with no length on the wrong side, which split and
+        joined the rings again for ever."""
+        ring, other = self.rings[r], self.rings[s]
+        v, x = ring[i], other[h]
+        self.end(x, node)
+        a, b = self.vertex(node, t, x.e_in, v.e_out), self.vertex(node, t, v.e_in, x.e_out)
+        after_v = ring[i + 1:] + ring[:i]  # next(v) ... prev(v)
+        if r == s:
+            k = after_v.index(x)
+            self.rings[r:r + 1] = [[a] + after_v[:k], [b] + after_v[k + 1:]]
+        else:
+            merged = [a] + after_v + [b] + other[h + 1:] + other[:h]
             self.rings = [g for k, g in enumerate(self.rings) if k not in (r, s)] + [merged]
         self.settle(t)
 
