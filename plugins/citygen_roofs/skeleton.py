@@ -197,8 +197,8 @@ class _Wavefront:
         # a vertex that already sits at an end of the edge (the two vertices a vertex event left) reaches the edge
         # only if it moves into it, not out past its end
         now = dt <= self.eps
-        leaving = now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) <= 1e-12)
-        leaving |= now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) >= -1e-12)
+        leaving = now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) < -1e-12)
+        leaving |= now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) > 1e-12)
         inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps) & ~leaving)
         if len(inside):
             k = inside[np.argmin(dt[inside])]
