@@ -196,10 +196,12 @@ class _Wavefront:
         span = np.einsum("ij,ij->i", pos[nxt[jj]] + dt[:, None] * vel[nxt[jj]] - px, f)
         # a vertex that already sits at an end of the edge (the two vertices a vertex event left) reaches the edge
         # only if it moves into it, not out past its end
+        inside = (along >= -self.eps) & (along <= span + self.eps)
         now = dt <= self.eps
-        leaving = now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) < -1e-12)
-        leaving |= now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) > 1e-12)
-        inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps) & ~leaving)
+        if now.any():
+            inside &= ~(now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) < -1e-12))
+            inside &= ~(now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) > 1e-12))
+        inside = np.flatnonzero(inside)
         if len(inside):
             k = inside[np.argmin(dt[inside])]
             te = t + float(dt[k])
@@ -318,26 +320,30 @@ class _Wavefront:
         ring = self.rings[r]
         if any(self.W[v.e_out] > 0 for v in ring):
             return False
-        if _signed_area(np.array([v.at(t) for v in ring])) <= 0:
+        if _signed_area(self.positions(ring, t)) <= 0:
             return False  # a static courtyard: moving edges around it will reach it
         return not any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in self.enclosed(r, t))
 
     def enclosed(self, r: int, t: float) -> list[int]:
         """The rings inside ring ``r``."""
-        outline = np.array([v.at(t) for v in self.rings[r]])
+        outline = self.positions(self.rings[r], t)
         return [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
 
     def collapsed(self, ring: list[_Vertex], t: float) -> bool:
         """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
         against its diameter squared) is no strip: its own edge events close it exactly."""
         area = self.area(ring, t)
-        diameter = float(np.ptp([v.at(t) for v in ring], axis=0).max())
-        return area < 1e-9 * self.scale ** 2 and area <= 1e-3 * diameter ** 2
+        if area >= 1e-9 * self.scale ** 2:
+            return False
+        return area <= 1e-3 * float(np.ptp(self.positions(ring, t), axis=0).max()) ** 2
 
     def area(self, ring: list[_Vertex], t: float) -> float:
-        p = np.array([v.at(t) for v in ring])
-        q = np.roll(p, -1, axis=0)
-        return 0.5 * abs(float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1])))
+        return abs(_signed_area(self.positions(ring, t)))
+
+    @staticmethod
+    def positions(ring: list[_Vertex], t: float) -> np.ndarray:
+        """Where the vertices of ``ring`` are at time ``t``, as rows."""
+        return np.array([(v.p0[0] + (t - v.t0) * v.vel[0], v.p0[1] + (t - v.t0) * v.vel[1]) for v in ring])
 
     def parting(self, v: _Vertex) -> bool:
         """``v`` joins two edges on one line, facing the same way, that move at different speeds: from here they
@@ -385,7 +391,7 @@ class _Wavefront:
         vertices within ``1e-4`` of the outline's size of an earlier one stop on it: rounding, not a ridge, set them
         apart; a plateau's vertices stand where they are (a millimetre jog of a party wall is no rounding). Returns
         the node each vertex stopped at."""
-        at = np.array([v.at(t) for v in ring])
+        at = self.positions(ring, t)
         for k in range(1, len(at) if snap else 0):
             near = np.flatnonzero(np.hypot(*(at[:k] - at[k]).T) < 1e-4 * self.scale)
             if len(near):
@@ -492,8 +498,8 @@ class _Wavefront:
 
 
 def _signed_area(p: np.ndarray) -> float:
-    q = np.roll(p, -1, axis=0)
-    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 
 def _bridged(ring: list[int], holes: list[list[int]], xy: np.ndarray) -> list[int]:
