@@ -4,11 +4,12 @@
     python benchmarks/roof_zoo.py --replay out/roof_zoo_failures.jsonl
     python benchmarks/roof_zoo.py --kinds star --builders hipped --per-kind 3000  # one kind, one builder, more
 
-Per kind of outline (random star polygons, and ones with a few repeated radii and angles; axis-aligned L, U, T, H, courtyard, staircase and grid-union shapes,
-the hard case for the weighted skeleton with their many parallel edges; the same rotated or moved ~1 km out like a
-city frame; near-degenerate ones: nearly collinear vertices, 1-5 cm edges, thin slivers, courtyards nearly touching
-the walls) every skeleton builder roofs each outline twice, free and with a random proper subset of party walls,
-each with a random ``roof:orientation`` (none, along, across). Outcomes: ``ok`` (closed, party walls kept),
+Per kind of outline (random star polygons, and ones with a few repeated radii and angles; axis-aligned L, U, T,
+H, courtyard, staircase and grid-union shapes, the hard case for the weighted skeleton with their many parallel
+edges; the same rotated or moved ~1 km out like a city frame; near-degenerate ones: nearly collinear vertices,
+1-5 cm edges, thin slivers, courtyards nearly touching the walls) every skeleton builder roofs each outline
+twice, free and with a random proper subset of party walls, each with a random ``roof:orientation`` (none, along,
+across). Outcomes: ``ok`` (closed, party walls kept),
 ``fallback`` (a party-wall roof built as free, with a note), ``RoofError`` (the pipeline would build it flat),
 ``cracked`` (the mesh's open boundary is not exactly the outline at the wall top) and ``exception`` (any other
 error). Prints a table per kind, the failure messages grouped and the slowest roof (CPU time); failing cases
@@ -214,8 +215,8 @@ def near_touch(rng) -> Polygon:
 #: kinds the pipeline's outline cleaning (``clean_outline``: no edge under 0.8 m, no vertex within 0.1 m of its
 #: neighbours' line) would smooth away: these reach the builders as they are, only oriented
 RAW = {"collinear", "short edges", "sliver", "near-touch"}
-KINDS = {"star": star, "symmetric star": symmetric_star, "L": l_shape, "U": u_shape, "T": t_shape, "H": h_shape, "courtyard": courtyard,
-         "staircase": staircase, "grid": grid, "rotated": rotated, "offset 1 km": offset_1km,
+KINDS = {"star": star, "symmetric star": symmetric_star, "L": l_shape, "U": u_shape, "T": t_shape, "H": h_shape,
+         "courtyard": courtyard, "staircase": staircase, "grid": grid, "rotated": rotated, "offset 1 km": offset_1km,
          "collinear": collinear, "short edges": short_edges, "sliver": sliver, "near-touch": near_touch}
 
 
