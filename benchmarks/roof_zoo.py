@@ -13,7 +13,7 @@ across). Outcomes: ``ok`` (closed, party walls kept),
 ``fallback`` (a party-wall roof built as free, with a note), ``RoofError`` (the pipeline would build it flat),
 ``cracked`` (the mesh's open boundary is not exactly the outline at the wall top) and ``exception`` (any other
 error). Prints a table per kind, the failure messages grouped and the slowest roof (CPU time); failing cases
-(WKT, party walls, builder, orientation) go to ``--save`` as JSON lines for ``--replay``."""
+(WKT, exact coordinates, party walls, builder, orientation) go to ``--save`` as JSON lines for ``--replay``."""
 from __future__ import annotations
 
 import argparse
@@ -311,8 +311,8 @@ def main() -> None:
     if args.replay:
         for line in args.replay.read_text().splitlines():
             case = json.loads(line)
-            outcome, message, _ = roof(wkt.loads(case["wkt"]), case["builder"], tuple(case["party"]),
-                                       case["orientation"])
+            outline = Polygon(case["rings"][0], case["rings"][1:]) if "rings" in case else wkt.loads(case["wkt"])
+            outcome, message, _ = roof(outline, case["builder"], tuple(case["party"]), case["orientation"])
             print(f"{case['kind']}/{case['builder']}: was {case['outcome']}, now {outcome} {message}")
         return
     counts: Counter = Counter()
@@ -327,7 +327,9 @@ def main() -> None:
         if outcome != "ok":
             messages[outcome, _generic(message)] += 1
             failures.append({"kind": kind, "builder": builder, "party": list(party), "orientation": orientation,
-                             "outcome": outcome, "message": message, "wkt": outline.wkt})
+                             "outcome": outcome, "message": message, "wkt": outline.wkt,
+                             "rings": [np.asarray(r.coords)[:-1].tolist()  # exact: WKT rounds the last digit
+                                       for r in (outline.exterior, *outline.interiors)]})
     print(f"{'kind':<15}" + "".join(f"{o:>11}" for o in OUTCOMES))
     for kind in [*args.kinds, "total"]:
         row = [sum(v for (k, o), v in counts.items() if o == out and kind in (k, "total")) for out in OUTCOMES]
