@@ -356,6 +356,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
             neighbours.setdefault(n, set()).update((f[k - 1], f[(k + 1) % len(f)]))
     rows = [points]
     count = len(points)
+    tiny = 1e-7 * max(1.0, float(np.ptp(points[:, :2], axis=0).max()))
     roof, walls = [], list(walls)
     ends: dict[int, tuple[int, int, int, int, int]] = {}  # apex -> (a, b, Ra, Rb, new apex)
 
@@ -373,7 +374,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
         a, b, p, q = points[f[0]], points[f[1]], points[apex], points[ridge[0]]
         d, e = p[:2] - q[:2], b[:2] - a[:2]
         det = d[0] * -e[1] + e[0] * d[1]
-        if abs(det) < 1e-12:
+        if abs(det) < 1e-12 or math.hypot(*d) < tiny:  # parallel, or no ridge: a standing corner's foot and top
             roof.append(f)
             continue
         rhs = a[:2] - q[:2]
