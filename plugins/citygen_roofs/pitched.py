@@ -233,7 +233,9 @@ class _Bands:
         pieces = [ring]
         for level in self.ts[1:-1]:
             for p, q in self._chords(ring, float(level), along):
-                k = next(k for k, piece in enumerate(pieces) if p in piece and q in piece)
+                k = next((k for k, piece in enumerate(pieces) if p in piece and q in piece), None)
+                if k is None:  # a chord between a face's boundary and a hole in it, which joined them already
+                    raise RoofError("a profile break line cuts a roof face round a hole where it cannot split it")
                 piece = pieces[k]
                 i, j = sorted((piece.index(p), piece.index(q)))
                 pieces[k:k + 1] = [piece[i:j + 1], piece[j:] + piece[:i + 1]]
@@ -299,7 +301,7 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
             faces += flats
         ts, zs = profile(shape, spec, float(points[:, 2].max()))
         mesh = _Bands(points, ts).mesh(faces, walls, top, zs)
-        cracks = _cracks(mesh, top)
+        cracks = _cracks(mesh, top, part, len(weights))
         if cracks:
             raise RoofError(f"the skeleton's faces leave {cracks} open edge(s) above the eaves")
     except RoofError as exc:
@@ -310,15 +312,29 @@ def skeleton_roof(part: Polygon, top: float, spec: RoofSpec, shape: str, gables:
     return mesh
 
 
-def _cracks(mesh: MeshData, top: float) -> int:
-    """Mesh edges with no twin (used once, not in the opposite direction) that do not lie at the wall top: every
-    open edge of a closed roof is an eave."""
+def _cracks(mesh: MeshData, top: float, part: Polygon, edges: int) -> int:
+    """Mesh edges with no twin (used once, not in the opposite direction) that are no eave: not at the wall top, or
+    off the outline (``part``, with ``edges`` edges) there -- a crack just above the eave. Every open edge of a
+    closed roof is an eave."""
     tris = mesh.indices.reshape(-1, 3).astype(np.int64)
     a, b = tris.ravel(), np.roll(tris, -1, axis=1).ravel()
     n = len(mesh.points)
     lone = ~np.isin(a * n + b, b * n + a)
     z = mesh.points[:, 2].astype(float)
     high = (np.abs(z[a] - top) > 1e-3) | (np.abs(z[b] - top) > 1e-3)
+    eaves = np.flatnonzero(lone & ~high)
+    if len(eaves) != edges:  # not one open edge at the wall top per outline edge: each must lie on the outline
+        pa, pb = mesh.points[a[eaves], :2].astype(float), mesh.points[b[eaves], :2].astype(float)
+        rings = [np.asarray(r.coords)[:, :2] for r in (part.exterior, *part.interiors)]
+        starts = np.concatenate([r[:-1] for r in rings])
+        d = np.concatenate([np.diff(r, axis=0) for r in rings])
+        off = np.zeros(len(eaves))
+        for q in (pa, pb, (pa + pb) / 2):
+            s = np.clip(np.einsum("ijk,jk->ij", q[:, None, :] - starts[None], d) / np.einsum("ij,ij->i", d, d),
+                        0.0, 1.0)
+            gap = np.hypot(*(q[:, None, :] - starts[None] - s[..., None] * d[None]).transpose(2, 0, 1)).min(axis=1)
+            off = np.maximum(off, gap)
+        high[eaves[off > 1e-3]] = True
     return int(np.count_nonzero(lone & high))
 
 
@@ -340,6 +356,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
             neighbours.setdefault(n, set()).update((f[k - 1], f[(k + 1) % len(f)]))
     rows = [points]
     count = len(points)
+    tiny = 1e-7 * max(1.0, float(np.ptp(points[:, :2], axis=0).max()))
     roof, walls = [], list(walls)
     ends: dict[int, tuple[int, int, int, int, int]] = {}  # apex -> (a, b, Ra, Rb, new apex)
 
@@ -357,7 +374,7 @@ def gable(points: np.ndarray, faces: list[list[int]], walls: list[list[int]], ou
         a, b, p, q = points[f[0]], points[f[1]], points[apex], points[ridge[0]]
         d, e = p[:2] - q[:2], b[:2] - a[:2]
         det = d[0] * -e[1] + e[0] * d[1]
-        if abs(det) < 1e-12:
+        if abs(det) < 1e-12 or math.hypot(*d) < tiny:  # parallel, or no ridge: a standing corner's foot and top
             roof.append(f)
             continue
         rhs = a[:2] - q[:2]

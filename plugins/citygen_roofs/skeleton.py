@@ -166,6 +166,11 @@ class _Wavefront:
         d = self.D[e_out]
         length = np.einsum("ij,ij->i", d, pos[nxt] - pos)
         rate = np.einsum("ij,ij->i", d, vel[nxt] - vel)
+        # an edge already of no length whose ends move together (the two vertices left where a spike folded onto
+        # both its neighbours at once) is collapsing now: it would never shrink
+        short = length < 1e-7 * self.scale
+        if short.any():
+            rate[short & (np.abs(rate) <= 1e-12)] = -1.0
         shrinking = np.flatnonzero(rate < -1e-12)
         if len(shrinking):
             te = t + np.maximum(length[shrinking], 0.0) / -rate[shrinking]
@@ -189,7 +194,14 @@ class _Wavefront:
         px = pos[jj] + dt[:, None] * vel[jj]
         along = np.einsum("ij,ij->i", pos[v] + dt[:, None] * vel[v] - px, f)
         span = np.einsum("ij,ij->i", pos[nxt[jj]] + dt[:, None] * vel[nxt[jj]] - px, f)
-        inside = np.flatnonzero((along >= -self.eps) & (along <= span + self.eps))
+        # a vertex that already sits at an end of the edge (the two vertices a vertex event left) reaches the edge
+        # only if it moves into it, not out past its end
+        inside = (along >= -self.eps) & (along <= span + self.eps)
+        now = dt <= self.eps
+        if now.any():
+            inside &= ~(now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) < -1e-12))
+            inside &= ~(now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) > 1e-12))
+        inside = np.flatnonzero(inside)
         if len(inside):
             k = inside[np.argmin(dt[inside])]
             te = t + float(dt[k])
@@ -210,7 +222,8 @@ class _Wavefront:
             flip = self.add_edge(c, node)
             new = [self.vertex(node, t, a, flip), self.vertex(node, t, flip, b)]
         else:
-            new = [self.vertex(node, t, a, b)]
+            # two pieces of one edge (parted by a split event) meeting again join into one: no vertex between them
+            new = [self.vertex(node, t, a, b)] if a != b else []
         if (i + 1) % len(ring) == 0:
             self.rings[r] = new + ring[1:-1]
         else:
@@ -219,8 +232,13 @@ class _Wavefront:
 
     def add_edge(self, c: int, node: int) -> int:
         """A new standing edge (weight 0) on the line of edge ``c``, pointing the other way, born at ``node``."""
-        self.D, self.N = np.vstack([self.D, -self.D[c]]), np.vstack([self.N, -self.N[c]])
-        self.C, self.W = np.append(self.C, -self.C[c]), np.append(self.W, 0.0)
+        return self.add_wall(node, -self.D[c])
+
+    def add_wall(self, node: int, d: np.ndarray) -> int:
+        """A new standing edge (weight 0) through ``node`` in direction ``d`` (the interior on its left)."""
+        normal = np.array([-d[1], d[0]])
+        self.D, self.N = np.vstack([self.D, d]), np.vstack([self.N, normal])
+        self.C, self.W = np.append(self.C, normal @ np.asarray(self.nodes[node])), np.append(self.W, 0.0)
         self.arcs.append(set())
         self.edge_nodes.append((node, None))
         return len(self.W) - 1
@@ -230,6 +248,12 @@ class _Wavefront:
         v, x = ring[i], other[j]
         node = self.node(v.at(t), t)
         self.end(v, node)
+        at = np.asarray(self.nodes[node])
+        hit = next((h for h in (x, other[(j + 1) % len(other)])
+                    if np.abs(h.at(t) - at).max() < 1e-7 * self.scale), None)
+        if hit is not None:
+            self.vertex_event(t, r, i, s, other.index(hit), node)
+            return
         w1 = self.vertex(node, t, x.e_out, v.e_out)
         w2 = self.vertex(node, t, v.e_in, x.e_out)
         after_v = ring[i + 1:] + ring[:i]  # next(v) ... prev(v)
@@ -240,6 +264,24 @@ class _Wavefront:
         else:
             after_x = other[j + 1:] + other[:j + 1]  # y ... x
             merged = [w1] + after_v + [w2] + after_x
+            self.rings = [g for k, g in enumerate(self.rings) if k not in (r, s)] + [merged]
+        self.settle(t)
+
+    def vertex_event(self, t: float, r: int, i: int, s: int, h: int, node: int) -> None:
+        """Reflex vertex ``rings[r][i]`` reaches an edge at its end vertex ``rings[s][h]``, which arrives there
+        too (symmetric outlines): the two vertices meet, and each pairs its incoming edge with the other's outgoing
+        one. Splitting the edge there instead left a piece of it with no length on the wrong side, which split and
+        joined the rings again for ever."""
+        ring, other = self.rings[r], self.rings[s]
+        v, x = ring[i], other[h]
+        self.end(x, node)
+        a, b = self.vertex(node, t, x.e_in, v.e_out), self.vertex(node, t, v.e_in, x.e_out)
+        after_v = ring[i + 1:] + ring[:i]  # next(v) ... prev(v)
+        if r == s:
+            k = after_v.index(x)
+            self.rings[r:r + 1] = [[a] + after_v[:k], [b] + after_v[k + 1:]]
+        else:
+            merged = [a] + after_v + [b] + other[h + 1:] + other[:h]
             self.rings = [g for k, g in enumerate(self.rings) if k not in (r, s)] + [merged]
         self.settle(t)
 
@@ -254,46 +296,69 @@ class _Wavefront:
             for r, ring in enumerate(self.rings):
                 plateau = len(ring) > 2 and self.stopped(r, t)
                 if len(ring) <= 2 or plateau or self.collapsed(ring, t):
-                    nodes = self.finish(ring, t)
+                    nodes = self.finish(ring, t, snap=not plateau)
                     flat = [n for k, n in enumerate(nodes) if n != nodes[k - 1]]
+                    inner = self.enclosed(r, t) if plateau else []
+                    holes = [self.finish(self.rings[s], t, snap=False) for s in inner]  # standing courtyards
                     if plateau and len(flat) > 2 and self.area(ring, t) > 1e-9 * self.scale ** 2:
-                        self.flats.append(tuple(flat))
-                    del self.rings[r]
+                        holes = [[n for k, n in enumerate(h) if n != h[k - 1]] for h in holes]
+                        self.flats.append(tuple(_bridged(flat, [h for h in holes if len(h) > 2],
+                                                         np.asarray(self.nodes))))
+                    self.rings = [g for s, g in enumerate(self.rings) if s != r and s not in inner]
                     changed = True
                     break
                 k = next((k for k, v in enumerate(ring) if self.antiparallel(v)), None)
                 if k is not None:
-                    self.rings[r] = self.fold(ring, k, t)
+                    self.rings[r] = self.step(ring, k, t) if self.parting(ring[k]) else self.fold(ring, k, t)
                     changed = True
                     break
 
     def stopped(self, r: int, t: float) -> bool:
         """Ring ``r`` encloses a region (counter-clockwise) none of whose edges moves, and no other ring inside it
-        can still sweep into it: it is a plateau."""
+        can still sweep into it: it is a plateau (with the rings inside, courtyards walled by standing edges, as its
+        holes)."""
         ring = self.rings[r]
         if any(self.W[v.e_out] > 0 for v in ring):
             return False
-        outline = np.array([v.at(t) for v in ring])
-        if _signed_area(outline) <= 0:
+        if _signed_area(self.positions(ring, t)) <= 0:
             return False  # a static courtyard: moving edges around it will reach it
-        inside = [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
-        if any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in inside):
-            return False
-        if inside:
-            raise SkeletonError("a plateau around a courtyard that nothing sweeps")
-        return True
+        return not any(any(self.W[v.e_out] > 0 for v in self.rings[s]) for s in self.enclosed(r, t))
+
+    def enclosed(self, r: int, t: float) -> list[int]:
+        """The rings inside ring ``r``."""
+        outline = self.positions(self.rings[r], t)
+        return [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
 
     def collapsed(self, ring: list[_Vertex], t: float) -> bool:
         """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
         against its diameter squared) is no strip: its own edge events close it exactly."""
         area = self.area(ring, t)
-        diameter = float(np.ptp([v.at(t) for v in ring], axis=0).max())
-        return area < 1e-9 * self.scale ** 2 and area <= 1e-3 * diameter ** 2
+        if area >= 1e-9 * self.scale ** 2:
+            return False
+        return area <= 1e-3 * float(np.ptp(self.positions(ring, t), axis=0).max()) ** 2
 
     def area(self, ring: list[_Vertex], t: float) -> float:
-        p = np.array([v.at(t) for v in ring])
-        q = np.roll(p, -1, axis=0)
-        return 0.5 * abs(float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1])))
+        return abs(_signed_area(self.positions(ring, t)))
+
+    @staticmethod
+    def positions(ring: list[_Vertex], t: float) -> np.ndarray:
+        """Where the vertices of ``ring`` are at time ``t``, as rows."""
+        return np.array([(v.p0[0] + (t - v.t0) * v.vel[0], v.p0[1] + (t - v.t0) * v.vel[1]) for v in ring])
+
+    def parting(self, v: _Vertex) -> bool:
+        """``v`` joins two edges on one line, facing the same way, that move at different speeds: from here they
+        part (a free wall running on as a party wall)."""
+        a, b = v.e_in, v.e_out
+        return self.W[a] != self.W[b] and self.N[a] @ self.N[b] > 1 - 1e-12
+
+    def step(self, ring: list[_Vertex], k: int, t: float) -> list[_Vertex]:
+        """Where two edges on one line part (:meth:`parting`), a standing edge across the line joins them: a vertical
+        wall inside the roof between the faster edge's slope and the roof above the slower one (no vertex can
+        follow both edges)."""
+        v = ring[k]
+        a, b = v.e_in, v.e_out
+        wall = self.add_wall(v.node, np.sign(self.W[b] - self.W[a]) * self.N[a])
+        return ring[:k] + [self.vertex(v.node, t, a, wall), self.vertex(v.node, t, wall, b)] + ring[k + 1:]
 
     def fold(self, ring: list[_Vertex], k: int, t: float) -> list[_Vertex]:
         """Remove the tip ``ring[k]`` of a zero-width spike: it runs to its nearer neighbour, which then takes
@@ -319,14 +384,15 @@ class _Wavefront:
                 out.append(v)
         return out
 
-    def finish(self, ring: list[_Vertex], t: float) -> list[int]:
+    def finish(self, ring: list[_Vertex], t: float, snap: bool = True) -> list[int]:
         """A collapsed (or stopped) ring: its vertices stop where they are and each of its edges becomes a ridge
         (or plateau rim) arc of that edge's face, passing through every other node of the ring on it (so the faces
-        on both sides of a ridge have the same nodes, without T-junctions). Vertices within ``1e-4`` of the
-        outline's size of an earlier one stop on it: rounding, not a ridge, set them apart. Returns the node each
-        vertex stopped at."""
-        at = np.array([v.at(t) for v in ring])
-        for k in range(1, len(at)):
+        on both sides of a ridge have the same nodes, without T-junctions). With ``snap`` (a collapsed ring),
+        vertices within ``1e-4`` of the outline's size of an earlier one stop on it: rounding, not a ridge, set them
+        apart; a plateau's vertices stand where they are (a millimetre jog of a party wall is no rounding). Returns
+        the node each vertex stopped at."""
+        at = self.positions(ring, t)
+        for k in range(1, len(at) if snap else 0):
             near = np.flatnonzero(np.hypot(*(at[:k] - at[k]).T) < 1e-4 * self.scale)
             if len(near):
                 at[k] = at[near[0]]
@@ -366,6 +432,32 @@ class _Wavefront:
             raise SkeletonError(f"face of edge {e[off.argmax()]} leaves its plane by {off.max():.3g} "
                                 "(a degenerate event of the weighted wavefront)")
 
+    def with_holes(self, e: int, path: list[int]) -> list[int]:
+        """``path`` (the outer boundary of edge ``e``'s face) with the loops of ``e``'s arcs it does not pass
+        joined in as holes: where pieces of the edge's wavefront met again round a region that stands (a courtyard
+        walled by party walls)."""
+        if len(self.arcs[e]) - len(path) < 2:
+            return path  # every arc but at most two is on the path (all but its first side): no loop left
+        on_path = {(min(p, q), max(p, q)) for p, q in zip(path, path[1:] + path[:1])}
+        nbrs: dict[int, list[int]] = {}
+        for p, q in self.arcs[e] - on_path:
+            nbrs.setdefault(p, []).append(q)
+            nbrs.setdefault(q, []).append(p)
+        if not nbrs or any(len(v) != 2 for v in nbrs.values()):
+            return path  # nothing left, or no loops: left for the checks to reject
+        loops: list[list[int]] = []
+        for start in sorted(nbrs):
+            if any(start in loop for loop in loops):
+                continue
+            loop, prev, cur = [start], None, start
+            while True:
+                cur, prev = next(n for n in nbrs[cur] if n != prev), cur
+                if cur == start:
+                    break
+                loop.append(cur)
+            loops.append(loop)
+        return _bridged(path, loops, np.asarray(self.nodes))
+
     def face(self, e: int) -> tuple[int, ...]:
         """Walk the arcs of edge ``e``'s face from its end node back to its start, keeping the face on the left. An
         edge born during the propagation (:meth:`add_edge`) starts where it was born and ends where its front
@@ -400,14 +492,40 @@ class _Wavefront:
                     along = np.asarray([self.nodes[n] for n in path]) @ self.D[e]
                     k = int(np.argmax(np.roll(along, -1) - along))
                     path = path[k:] + path[:k]
-                return tuple(path)
+                return tuple(self.with_holes(e, path))
             path.append(cur)
         raise SkeletonError(f"face of edge {e} does not close")
 
 
 def _signed_area(p: np.ndarray) -> float:
-    q = np.roll(p, -1, axis=0)
-    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
+
+
+def _bridged(ring: list[int], holes: list[list[int]], xy: np.ndarray) -> list[int]:
+    """``ring`` (node indices, counter-clockwise) with ``holes`` spliced in, each clockwise, at the shortest bridge
+    from one of its nodes to the ring that crosses no side of the ring or the holes (walked both ways: one ring
+    a triangulation takes as a polygon with holes). Holes it cannot bridge are left out (the area check fails)."""
+    holes = [h if _signed_area(xy[h]) < 0 else h[::-1] for h in holes]
+    sides = np.array([(p, q) for r in [ring, *holes] for p, q in zip(r, r[1:] + r[:1])])
+    for hole in holes:
+        gap = np.hypot(*(xy[ring][:, None, :] - xy[hole][None, :, :]).transpose(2, 0, 1))
+        for flat in np.argsort(gap, axis=None):
+            i, j = np.unravel_index(flat, gap.shape)
+            if not _crosses(xy[ring[i]], xy[hole[j]], xy[sides[:, 0]], xy[sides[:, 1]]):
+                ring = ring[:i + 1] + hole[j:] + hole[:j + 1] + ring[i:]
+                break
+    return ring
+
+
+def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the segment ``p q`` properly crosses any segment ``a[k] b[k]`` (touching at an end does not)."""
+    def side(u, v, w):
+        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0])
+    tol = 1e-12 * max(1.0, float(np.abs(p).max())) ** 2
+    s1, s2 = side(p, q, a), side(p, q, b)
+    s3, s4 = side(a, b, p), side(a, b, q)
+    return bool(np.any((s1 * s2 < -tol) & (s3 * s4 < -tol)))
 
 
 def _contains(ring: np.ndarray, point: np.ndarray) -> bool:
@@ -449,6 +567,8 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
     if weights.shape != (n,) or np.any(weights < 0) or not np.any(weights > 0):
         raise SkeletonError(f"need {n} edge weights >= 0, not all 0")
     wf = _Wavefront(rings, weights)
+    if any(v.spike for ring in wf.rings for v in ring):
+        wf.settle(0.0)  # vertices between parallel edges of the input (spikes, collinear edges of different speeds)
     limit = max_events or 4 * n * n + 16
     t = 0.0
     for _ in range(limit):

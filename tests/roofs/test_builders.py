@@ -131,6 +131,16 @@ def test_dome_over_a_courtyard_has_no_cracks_where_a_ridge_lies_on_a_band_line()
     test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, DomeRoof(), 30.0, None)
 
 
+@pytest.mark.parametrize("builder", BUILDERS, ids=lambda b: b.id)
+def test_t_shape_with_a_thin_stem_is_roofed_and_closed(builder):
+    """Regression (benchmarks/roof_zoo.py): a T whose stem (4.6 m) is thinner than its body (9.7 m) raised "the
+    skeleton's faces leave 3 open edge(s) above the eaves" for every skeleton roof."""
+    outline = Polygon([(21.323902945973018, 9.667995866293673), (17.128660085085023, 9.667995866293673),
+                       (17.128660085085023, 15.832151856253988), (12.512205417437082, 15.832151856253988),
+                       (12.512205417437082, 9.667995866293673), (0, 9.667995866293673), (0, 0),
+                       (21.323902945973018, 0)])
+    test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, builder, 30.0, None)
+
 def test_round_rectangle_is_a_half_cylinder_the_length_of_the_building():
     """A barrel vault: ridge the full length along the long side, as high as half the width (a semicircle in six
     planar bands a side), closed by two vertical end walls whose top follows the arc."""

@@ -9,9 +9,10 @@ from shapely import affinity
 from shapely.geometry import Polygon
 
 from citygen.coordinator import party_walls
+from citygen.geometry.building import MeshData
 from citygen.roof import RoofSpec, roof_notes
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HippedRoof, MansardRoof, PyramidalRoof,
-                                   RoundRoof, SkillionRoof)
+                                   RoundRoof, SkillionRoof, _cracks)
 from tests.roofs.shapes import polygons
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
 
@@ -345,3 +346,131 @@ def test_a_standing_corner_keeps_its_foot_and_its_top_apart():
         dist = [((tri[:, :2] - e[:2]) @ np.array([-(e[3] - e[1]), e[2] - e[0]])) / np.hypot(*(e[2:] - e[:2]))
                 for k, e in enumerate(edges) if k not in (2, 4)]
         assert any(np.allclose(tri[:, 2] - TOP, slope * d, atol=1e-3) for d in dist)
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()],
+                         ids=lambda b: b.id)
+def test_a_party_wall_running_on_from_a_free_wall_on_one_line_gets_a_step_wall(builder):
+    """Regression (benchmarks/roof_zoo.py, 78 of 560 near-collinear outlines fell back to the free roof): where a
+    free wall runs on as a party wall along one line (a neighbour covering part of a facade), the vertex between
+    them cannot follow both, and folding it away as a spike took a face off its plane ("face of edge 0 leaves its
+    plane by 5"). A standing edge across the line joins them instead: the free wall's slope (up to y = 5 on this
+    20 x 10 m block) ends at x = 8 in a vertical wall up to the roof over the party wall, which the back wall's
+    slope sweeps down to the party wall at x = 8..10."""
+    outline = Polygon([(0, 0), (8, 0), (20, 0), (20, 10), (0, 10)])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=(1,)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, walls, _ = _split(mesh)
+    front = _eaves(roof)
+    front = front[(np.abs(front[:, 1]) < 1e-6) & (np.abs(front[:, 3]) < 1e-6)]  # eaves along y = 0
+    assert front[:, [0, 2]].max() == pytest.approx(8) and np.abs(front[:, 2] - front[:, 0]).sum() == pytest.approx(8)
+    step = walls[np.all(np.abs(walls[:, :, 0] - 8) < 1e-4, axis=1)]  # wall triangles in the plane x = 8
+    assert len(step) and step[:, :, 1].max() == pytest.approx(5, abs=1e-4)
+
+
+def test_a_crack_just_above_the_eave_is_a_crack():
+    """Regression (benchmarks/roof_zoo.py): the crack check took every open edge at the wall top for an eave, so a
+    round roof whose faces ran off the outline at the eave height (its hip end at a standing corner gabled to far
+    below the eaves, see test_a_hip_end_at_a_standing_corner_stays_hipped) came out open with its party walls. An open edge at the wall top must lie
+    on the outline: here a notch 1 cm into a square's eave is two cracks."""
+    a, b, c, d, x = range(5)
+    mesh = MeshData(np.array([(0, 0, TOP), (1, 0, TOP), (1, 1, TOP), (0, 1, TOP), (0.5, 0.01, TOP)], np.float32),
+                    np.full(3, 3, np.int32), np.array([a, x, d, x, b, c, x, c, d], np.int32))
+    assert _cracks(mesh, TOP, Polygon([(0, 0), (1, 0), (1, 1), (0, 1)]), 4) == 2
+    outline = Polygon([(-797.5011758654897, -137.88206568999328), (-796.5928438092227, -148.080614068199),
+                       (-796.6720668113945, -151.23676894106438), (-807.817590638347, -168.3002013059334),
+                       (-793.5187158472346, -165.3330581646175), (-782.2743824166228, -164.98060033928328),
+                       (-779.2624523933063, -154.34489430126467), (-770.0475072203475, -147.89267894912456),
+                       (-776.4701320322899, -143.61702473267513), (-787.2028906619616, -138.96989168790003),
+                       (-790.4128426299667, -147.29944002458632)])
+    with roof_notes() as notes:
+        mesh = RoundRoof().build(outline, TOP, RoofSpec("round", 30.0, party=(1, 7, 10)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+
+
+SKELETON_ROOFS = [HippedRoof(), GabledRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof()]
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_free_wall_sweeping_round_a_walled_in_courtyard_has_a_face_with_a_hole(builder):
+    """Regression (benchmarks/roof_zoo.py, near-touch courtyards): the one free wall of a block whose courtyard is
+    walled in by party walls (a building inside it) sweeps round the courtyard from both sides and meets itself
+    behind it; its face has a hole. The two pieces meeting left a vertex between an edge and itself, and the face
+    walk, taking the outer loop only, lost the hole ("face of edge 1 does not close", the free roof instead)."""
+    outline = Polygon([(0, 0), (12.714417238853766, 0), (12.714417238853766, 30.511471263655576),
+                       (0, 30.511471263655576)],
+                      [[(9.81826496201892, 22.93608380429691), (0.0700495741740771, 0.0207122610356676),
+                        (8.402984521943974, 25.9717222942299)]])
+    party = (0, 2, 3, 4, 5, 6)
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=party))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert _eave_edges_cover(roof, _outline_edges(outline)[1:2])
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_plateau_round_a_walled_in_courtyard_keeps_the_courtyard_open(builder):
+    """Regression (benchmarks/roof_zoo.py, grid outlines): with every wall but one a party wall, courtyard
+    included, the free wall's slope rises to a plateau that encloses the standing courtyard ("a plateau around a
+    courtyard that nothing sweeps", the free roof instead). The plateau now has the courtyard as a hole, whose
+    party walls stand up to it."""
+    outline = Polygon([(0, 13), (0, 0), (21, 0), (21, 7), (17, 7), (17, 16), (14, 16), (14, 20), (0, 20), (0, 16),
+                       (6, 16), (6, 13)], [[(11, 7), (11, 13), (14, 13), (14, 7)]])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=tuple(k for k in range(16) if k != 6)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, walls, n = _split(mesh)
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)
+    courtyard = walls[np.all((walls[:, :, 0] >= 11 - 1e-6) & (walls[:, :, 0] <= 14 + 1e-6) &
+                             (walls[:, :, 1] >= 7 - 1e-6) & (walls[:, :, 1] <= 13 + 1e-6), axis=1)]
+    heights, _ = _plateau(roof, n)
+    assert len(heights) == 1 and courtyard[:, :, 2].max() == pytest.approx(heights[0], abs=1e-4)
+
+
+@pytest.mark.parametrize("builder", SKELETON_ROOFS, ids=lambda b: b.id)
+def test_a_plateau_keeps_a_millimetre_jog_of_its_party_wall(builder):
+    """Regression (benchmarks/roof_zoo.py, collinear outlines): the one free wall sweeps the body of an L up to a
+    plateau over its arm; a party wall with a 1.4 mm jog leaves the plateau's corner 1.4 mm from the next one.
+    Finishing the plateau snapped the two together as rounding (1e-4 of the size), losing a sliver ("skeleton faces
+    cover 242.344 m² of a 242.349 m² outline", the free roof instead)."""
+    outline = Polygon([(24.131998203031326, 4.569747014585622), (20.667011815470183, 4.572258621255501),
+                       (7.662137503250117, 4.569747014585622), (7.662137503250117, 21.79836708721006),
+                       (0, 21.79836708721006), (0, 4.569747014585622), (0, 3.569747014585622), (0, 0),
+                       (8.26771200107172, -0.0035994066887269), (24.131998203031326, 0)])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=tuple(range(9)), orientation="along"))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    roof, _, n = _split(mesh)
+    assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)  # the 5 mm² sliver is 2e-5
+
+
+@pytest.mark.parametrize("builder", [GabledRoof(), GambrelRoof(), RoundRoof()], ids=lambda b: b.id)
+def test_a_hip_end_at_a_standing_corner_stays_hipped(builder):
+    """Regression (benchmarks/roof_zoo.py, 1 km offsets): a hip end whose apex is the foot of a corner standing
+    between two party walls has, as its only "ridge", the vertical arc up that corner (no length in plan, but for
+    rounding). Extending it to the wall put the gable's top 4.5e13 m below the eaves ("the skeleton's faces leave 1
+    open edge(s) above the eaves", the free roof); now a ridge of no length keeps the hip."""
+    outline = Polygon([(1435.2465216088272, -528.3037857597643), (1422.7548463058024, -522.8344108929059),
+                       (1418.7131883774928, -528.8765459460205), (1410.9065131107905, -528.8460029503335),
+                       (1417.1520635424733, -539.2263604177173), (1423.5116661502593, -551.0247604793763),
+                       (1432.6010023480846, -555.4897845864925), (1426.6554598602745, -538.7330645743149),
+                       (1430.391555854341, -535.4862535698462)])
+    with roof_notes() as notes:
+        mesh = builder.build(outline, TOP, RoofSpec(builder.id, 30.0, party=(2, 4, 5)))
+    assert notes == []
+    edges, z = _open_edges(mesh)
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
+    assert mesh.points[:, 2].min() >= TOP - 1e-4

@@ -42,6 +42,33 @@ def test_t_shape_split_event_leaves_a_ridge_along_the_stem():
     assert np.allclose(stem[:, 0], 15) and stem[:, 1].max() == pytest.approx(17)
 
 
+def test_t_shape_whose_stem_collapses_as_its_corners_meet_ends_the_stem_ridge_at_the_body():
+    """Regression (roof_zoo): a stem thinner than the body collapses just as the two reflex corners meet below it;
+    the spike left was folded onto one corner, leaving a zero-length edge whose ends moved together and never
+    collapsed, so the stem's side face ran off into the body (every T shape with a thin stem: no roof)."""
+    polygon = Polygon([(0, 0), (30, 0), (30, 10), (18, 10), (18, 20), (12, 20), (12, 10), (0, 10)])
+    sk, faces = _faces(polygon)
+    assert math.isclose(sum(f.area for f in faces), polygon.area)
+    assert all(f.is_valid for f in faces)
+    stem_sides = [sk.nodes[list(sk.faces[k])] for k in (3, 5)]
+    assert all(len(side) == 4 and np.allclose(side[2:, 0], 15) for side in stem_sides)
+    assert sorted(sk.nodes[sk.times > 0].round(9).tolist()) == [[5, 5], [15, 5], [15, 7], [15, 17], [25, 5]]
+
+def test_two_reflex_vertices_meeting_each_other_split_the_ring_once():
+    """Regression (benchmarks/roof_zoo.py, symmetric stars): two reflex vertices arriving at one point at once.
+    The split left a piece of no length of the edge hit on the wrong side, which the other vertex split again,
+    joining the rings, for ever ("no convergence after 416 events": every skeleton roof was flat). Now the two
+    vertices meet (a vertex event) and a vertex at the end of an edge splits it only when it moves into it."""
+    polygon = Polygon([(7.725424859373682, 23.77641290737884), (-12.135254915624214, 8.816778784387092),
+                       (-25, -8.040613248383184e-15), (-23.24441214720628, -9.203113817116957),
+                       (-3.644843137107058, -3.4227355296434436), (-4.684532864643116, -24.557181268217217),
+                       (4.684532864643106, -24.557181268217217), (13.395669874474919, -21.108198137550374),
+                       (4.648882429441257, -1.8406227634233894), (25, -6.123233995736766e-15)])
+    sk, faces = _faces(polygon)
+    assert all(f.is_valid for f in faces) and math.isclose(sum(f.area for f in faces), polygon.area)
+    meet = set(sk.faces[3]) & set(sk.faces[4]) & set(sk.faces[7]) & set(sk.faces[8])  # the edges at corners 4, 8
+    assert len(meet) == 1 and np.allclose(sk.nodes[meet.pop()], [-0.186, 0.974], atol=1e-3)
+
 def test_courtyard_ring_collapsing_at_once_has_no_t_junctions():
     """A ring strip collapsing along its length: the ridge has the same nodes seen from both sides."""
     polygon = Polygon([(0, 0), (11.998172341876696, 0.2094288772474021), (11.788743464629293, 12.207601219124099),
