@@ -540,6 +540,11 @@ class PyramidalRoof(RoofBuilder):
                        for part, party in _parts(outline, spec.party)])
 
 
+class ConeRoof(PyramidalRoof):
+    id = "cone"
+    description = "cone (OSM roof:shape=cone, round towers): the pyramidal roof, one apex over the centroid"
+
+
 class SkillionRoof(RoofBuilder):
     id = "skillion"
     description = "skillion (shed) roof: one plane falling towards roof:direction, closed by walls"

@@ -1,6 +1,6 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
 :mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
-``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``) and ``onion`` (:mod:`citygen_roofs.onion`)."""
+``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``, ``cone``) and ``onion`` (:mod:`citygen_roofs.onion`)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -12,7 +12,7 @@ from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
 from citygen_roofs.onion import OnionRoof
-from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof, MansardRoof,
+from citygen_roofs.pitched import (ConeRoof, DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof, MansardRoof,
                                    PyramidalRoof, RoundRoof, SkillionRoof)
 
 
@@ -47,4 +47,4 @@ class FlatRoof(RoofBuilder):
 @hookimpl
 def citygen_roof_builders():
     return [FlatRoof(), HippedRoof(), GabledRoof(), HalfHippedRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
-            GambrelRoof(), DomeRoof(), RoundRoof(), OnionRoof()]
+            GambrelRoof(), DomeRoof(), RoundRoof(), OnionRoof(), ConeRoof()]

@@ -1,4 +1,5 @@
-"""The onion dome: the outline scaled about its centroid, out past the walls and in to a point."""
+"""Roofs of round towers: the onion dome (the outline scaled about its centroid, out past the walls and in to a
+point) and the cone."""
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ from shapely.geometry.polygon import orient
 
 from citygen.roof import RoofSpec
 from citygen_roofs.onion import ONION_BANDS, ONION_HEIGHT, OnionRoof, onion_profile
-from citygen_roofs.pitched import DomeRoof
+from citygen_roofs.pitched import ConeRoof, DomeRoof, PyramidalRoof
 from tests.roofs.shapes import outlines
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
 
@@ -69,3 +70,13 @@ def test_onion_roofs_close_the_walls(outline, cap):
     assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
     assert p[:, 2].min() >= TOP - 1e-4 and p[:, 2].max() <= TOP + cap + 1e-3
     assert _normals(p, tris)[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-5)
+
+
+def test_cone_is_the_pyramidal_roof_over_a_round_tower():
+    """OSM tags round towers ``roof:shape=cone``: one apex over the centroid, at the pitch."""
+    tower = Point(0, 0).buffer(4.0, 4)
+    cone = ConeRoof().build(tower, TOP, RoofSpec("cone", 40.0))
+    pyramid = PyramidalRoof().build(tower, TOP, RoofSpec("pyramidal", 40.0))
+    assert np.array_equal(cone.points, pyramid.points) and np.array_equal(cone.indices, pyramid.indices)
+    p, _ = _triangles(cone)
+    assert p[:, 2].max() == pytest.approx(TOP + 4.0 * math.cos(math.pi / 16) * math.tan(math.radians(40.0)), rel=1e-5)

@@ -42,8 +42,8 @@ def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     report, out = demo
     assert report.written == 13 and not report.skipped
     assert report.warnings == ["way/13: flat roof instead of roof:shape='sawtooth', which no roof builder makes "
-                               "(known: dome, flat, gabled, gambrel, half-hipped, hipped, mansard, onion, pyramidal, "
-                               "round, skillion)"]
+                               "(known: cone, dome, flat, gabled, gambrel, half-hipped, hipped, mansard, onion, "
+                               "pyramidal, round, skillion)"]
     assert main(["validate", str(out)]) == 0
     roofs = _roofs(out)
     assert roofs["way/1"][1] == 2 and roofs["way/6"][1] == 2  # gabled rectangle and U: a gable at each ridge end
