@@ -65,9 +65,9 @@ def test_partition_check_scales_to_thousands_of_regions():
     n = 110
     cells = tuple(Region(i * 0.5, j * 0.25, 0.5, 0.25, "C", "wall") for i in range(n) for j in range(n))
     layout = FacadeLayout(n * 0.5, n * 0.25, Region(0, 0, n * 0.5, n * 0.25, "F", children=cells))
-    t = time.perf_counter()
+    t = time.process_time()
     assert check_partition(layout) == []
-    assert time.perf_counter() - t < 2.0  # 12100 regions; the old pairwise sweep took tens of seconds
+    assert time.process_time() - t < 2.0  # 12100 regions; the old pairwise sweep took tens of seconds
 
 
 def test_stamped_regions_equal_constructed_ones():

@@ -60,11 +60,11 @@ def test_input_size_reproduces_a_valid_layout(models):
 
 
 def test_too_small_target_names_the_bound_immediately(models):
-    t = time.perf_counter()
+    t = time.process_time()
     result = relayout(models["fig7_walkthrough"], 25.0, 5.0)
     assert not result.success and result.status == "infeasible"
     assert "height must lie in" in result.message
-    assert time.perf_counter() - t < 0.5
+    assert time.process_time() - t < 0.5
 
 
 def test_conflicting_constraints_report_what_blocked_within_budget():
@@ -83,9 +83,9 @@ size C 3.5..3.7
 align A.min = C.min
 """
     model = parse_model(text, "clash.relayout")
-    t = time.perf_counter()
+    t = time.process_time()
     result = relayout(model, 6.0, 6.0, backtrack_budget=3000)
-    assert time.perf_counter() - t < 3.0
+    assert time.process_time() - t < 3.0
     assert not result.success
     assert "align A.min = C.min (line 12)" in result.message
     assert result.blockers
