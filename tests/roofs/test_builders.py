@@ -10,12 +10,14 @@ from shapely.geometry import MultiPolygon, Polygon, box
 from citygen.roof import RoofSpec
 from citygen_roofs.pitched import (HALF_HIP, DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof,
                                    MansardRoof, PyramidalRoof, RoofError, RoundRoof, SkillionRoof, skeleton_faces)
+from citygen_roofs.osm_shapes import ButterflyRoof, CrosspitchedRoof, SaltboxRoof, SawtoothRoof, SideHippedRoof
 from citygen_roofs.plugin import FlatRoof
 from tests.roofs.shapes import outlines, polygons
 
 TOP = 12.0
 BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof(), RoundRoof(), HalfHippedRoof()]
+            DomeRoof(), RoundRoof(), HalfHippedRoof(), SaltboxRoof(), SideHippedRoof(), CrosspitchedRoof(), ButterflyRoof(),
+            SawtoothRoof()]
 
 
 def _triangles(mesh):
