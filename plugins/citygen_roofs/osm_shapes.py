@@ -161,8 +161,9 @@ def butterfly(part: Polygon, top: float, spec: RoofSpec, orientation: str | None
 
 
 def sawtooth(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-    """Teeth whose slopes face ``roof:direction`` (default: out over the longest outer wall that is no party wall);
-    a direction that would bring a gutter down onto a party wall gives way to the next longest free wall's."""
+    """Teeth whose slopes face ``roof:direction`` (default: out over the longest outer wall that is no party wall).
+    Where a gutter would lie along a party wall the teeth move half a tooth; where they still would, the direction
+    gives way to the next longest free wall's."""
     rings = [np.asarray(r.coords)[:-1, :2] for r in (part.exterior, *part.interiors)]
     _ring(part)
     outer = rings[0]
@@ -172,8 +173,9 @@ def sawtooth(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -
     if spec.direction is not None:
         candidates.insert(0, _compass(spec.direction))
     for k, down in enumerate(candidates):
-        teeth = _Teeth(part, down)
-        if not teeth.gutter_on(rings, party):
+        teeth = next((t for t in (_Teeth(part, down, 0.0), _Teeth(part, down, 0.5)) if not t.gutter_on(rings, party)),
+                     None)
+        if teeth is not None:
             if k and spec.direction is not None:
                 note(f"roof:direction={spec.direction:g} brings a gutter down onto a party wall: the teeth face "
                      f"{math.degrees(math.atan2(down[0], down[1])) % 360:.0f} degrees instead")
@@ -183,14 +185,16 @@ def sawtooth(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -
 
 class _Teeth:
     """Sawtooth teeth over ``part`` falling towards ``down``: as many ``SAWTOOTH_TOOTH`` wide strips across it as
-    fit, each rising from its gutter (its ``down`` end) to its glazed wall."""
+    fit, each rising from its gutter (its ``down`` end) to its glazed wall; ``shift``: the strips moved uphill by
+    that share of a tooth (half a tooth: the part's lowest wall is no gutter but meets a tooth half way up)."""
 
-    def __init__(self, part: Polygon, down: np.ndarray) -> None:
+    def __init__(self, part: Polygon, down: np.ndarray, shift: float) -> None:
         s = np.asarray(part.exterior.coords)[:, :2] @ down
-        self.down, self.start = down, float(s.min())
-        run = float(s.max()) - self.start
+        run = float(s.max() - s.min())
         self.count = max(1, round(run / SAWTOOTH_TOOTH))
         self.width = run / self.count
+        self.down, self.start = down, float(s.min()) - shift * self.width
+        self.count += shift > 0
         self.tol = 1e-7 * max(1.0, run)
 
     def cuts(self) -> list[tuple[np.ndarray, np.ndarray]]:

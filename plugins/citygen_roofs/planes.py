@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import mapbox_earcut
 import numpy as np
 import shapely
 from shapely.geometry import LineString, Polygon
@@ -60,7 +59,8 @@ def envelope(planes: list[Plane], lowest: bool = True) -> tuple[list[Line], Call
 
 def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
                    plane_at: Callable[[np.ndarray], Plane]) -> MeshData:
-    """The roof over ``part`` cut along ``cuts``, each piece on ``plane_at`` (its point on surface); heights scaled
+    """The roof over ``part`` cut along ``cuts`` (and a line through each courtyard, so no piece surrounds one),
+    each piece on ``plane_at`` (its point on surface); heights scaled
     so the highest point is at ``roof:height`` when given, never above ``spec.cap``; vertical walls where pieces
     meet at different heights and between the wall top and the roof along the outline."""
     if not part.is_valid or part.area <= 0:
@@ -71,21 +71,24 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
     tol = 1e-7 * size
     centre, reach = np.array([(x0 + x1) / 2, (y0 + y1) / 2]), 2.0 * math.hypot(x1 - x0, y1 - y0) + 1.0
     lines = [LineString(r.coords) for r in (part.exterior, *part.interiors)]
+    along = cuts[0][1] if cuts else np.array([1.0, 0.0])
+    cuts = cuts + [(np.asarray(Polygon(r).representative_point().coords[0]), along) for r in part.interiors]
     for point, d in cuts:
         d = d / math.hypot(*d)
         mid = point + ((centre - point) @ d) * d
         lines.append(LineString([mid - reach * d, mid + reach * d]))
     cells = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(lines))))
     faces = [orient(f, 1.0) for f in cells if part.contains(f.representative_point())]
+    if any(f.interiors for f in faces):
+        raise RoofError("a roof piece surrounds a courtyard")
     if not math.isclose(sum(f.area for f in faces), part.area, rel_tol=1e-9):
         raise RoofError("the roof's pieces do not cover the outline")
     grid = _Grid(tol)
-    rings = [[[grid.vertex(p) for p in np.asarray(r.coords)[:-1, :2]] for r in (f.exterior, *f.interiors)]
-             for f in faces]
+    rings = [[grid.vertex(p) for p in np.asarray(f.exterior.coords)[:-1, :2]] for f in faces]
     planes = [plane_at(np.asarray(f.representative_point().coords[0])) for f in faces]
     xy = np.array(grid.xy)
     heights = [xy @ p[:2] + p[2] for p in planes]  # per face, at every vertex
-    used = np.concatenate([h[sorted({v for r in rs for v in r})] for h, rs in zip(heights, rings)])
+    used = np.concatenate([h[ring] for h, ring in zip(heights, rings)])
     if used.min() < -1e-6 * size:
         raise RoofError("the roof would dip below the wall top")
     high = float(used.max())
@@ -93,9 +96,9 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
         raise RoofError("the roof has no height")
     scale = min((spec.height or high) / high, spec.cap / high)
     heights = [top + np.maximum(h, 0.0) * scale for h in heights]
-    owner = {(r[k], r[(k + 1) % len(r)]): f for f, rs in enumerate(rings) for r in rs for k in range(len(r))}
+    owner = {(r[k], r[(k + 1) % len(r)]): f for f, r in enumerate(rings) for k in range(len(r))}
     walls = _WallBuilder(grid, heights, owner, top)
-    roof = [[[grid.point(v, heights[f][v]) for v in r] for r in rs] for f, rs in enumerate(rings)]
+    roof = [[grid.point(v, heights[f][v]) for v in r] for f, r in enumerate(rings)]
     for (a, b), f in owner.items():
         if (b, a) in owner:
             walls.step(a, b, f, owner[b, a])
@@ -106,7 +109,7 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
     if walls.unused():
         raise RoofError("the roof's pieces leave outline edges unwalled")
     points = np.array(grid.points)
-    tris = [t for rs in roof for t in _face_triangles(points[:, :2], rs)]
+    tris = [t for ring in roof for t in _triangulate(points[:, :2], ring)]
     tris += [t for ring in walls.rings for t in _wall_triangles(points, ring)] + walls.bridges
     mesh = welded_mesh(points, tris)
     cracks = _cracks(mesh, top, part, sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors)))
@@ -228,15 +231,6 @@ class _WallBuilder:
 
 def _cosine(a: np.ndarray, b: np.ndarray) -> float:
     return float(a @ b) / max(math.hypot(*a) * math.hypot(*b), 1e-300)
-
-
-def _face_triangles(xy: np.ndarray, rings: list[list[int]]) -> list[tuple[int, int, int]]:
-    """Triangles of a roof piece (counter-clockwise): ear clipping, slivers flipped away when it has no hole."""
-    if len(rings) == 1:
-        return _triangulate(xy, rings[0])
-    flat = [n for r in rings for n in r]
-    cut = mapbox_earcut.triangulate_float64(xy[flat], np.cumsum([len(r) for r in rings]).astype(np.uint32))
-    return [(flat[a], flat[b], flat[c]) for a, b, c in cut.reshape(-1, 3)]
 
 
 def _wall_triangles(points: np.ndarray, ring: list[int]) -> list[tuple[int, int, int]]:
