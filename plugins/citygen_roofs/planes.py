@@ -77,11 +77,12 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
         d = d / math.hypot(*d)
         mid = point + ((centre - point) @ d) * d
         lines.append(LineString([mid - reach * d, mid + reach * d]))
-    cells = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(lines))))
+    grid_size = tol / 4  # snap rounding: a cut along an outline edge is that edge, not a sliver beside it
+    cells = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(lines, grid_size=grid_size))))
     faces = [orient(f, 1.0) for f in cells if part.contains(f.representative_point())]
     if any(f.interiors for f in faces):
         raise RoofError("a roof piece surrounds a courtyard")
-    if not math.isclose(sum(f.area for f in faces), part.area, rel_tol=1e-9):
+    if abs(sum(f.area for f in faces) - part.area) > grid_size * part.length:
         raise RoofError("the roof's pieces do not cover the outline")
     grid = _Grid(tol)
     rings = [[grid.vertex(p) for p in np.asarray(f.exterior.coords)[:-1, :2]] for f in faces]
@@ -138,7 +139,7 @@ class _Grid:
         return self.ids[key]
 
     def find(self, p: np.ndarray) -> int:
-        """The vertex at an outline corner (the cut keeps the outline's coordinates; else the nearest one)."""
+        """The vertex at an outline corner: the nearest, within ``tol`` (the cut rounds coordinates to a finer grid)."""
         key = (float(p[0]), float(p[1]))
         if key in self.ids:
             return self.ids[key]
