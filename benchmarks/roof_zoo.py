@@ -11,10 +11,11 @@ edges; the same rotated or moved ~1 km out like a city frame; near-degenerate on
 ``butterfly`` roof each outline twice, free and with a random proper subset of party walls, each with a random
 ``roof:orientation`` (none, along, across); ``saltbox``, ``side_hipped`` and ``crosspitched`` (rectangle-like parts
 only) roof the ``quad`` kind instead, rectangle-like quadrilaterals. Outcomes: ``ok`` (closed, party walls kept),
-``fallback`` (built other than asked, with a note: a party-wall roof built as free, a gabled roof instead), ``RoofError`` (the pipeline would build it flat),
-``cracked`` (the mesh's open boundary is not exactly the outline at the wall top) and ``exception`` (any other
-error). Prints a table per kind and one per builder, the failure messages grouped and the slowest roof (CPU time); failing cases
-(WKT, exact coordinates, party walls, builder, orientation) go to ``--save`` as JSON lines for ``--replay``."""
+``fallback`` (built other than asked, with a note: a party-wall roof built as free, a gabled roof instead),
+``RoofError`` (the pipeline would build it flat), ``cracked`` (the mesh's open boundary is not exactly the outline
+at the wall top) and ``exception`` (any other error). Prints a table per kind and one per builder, the failure
+messages grouped and the slowest roof (CPU time); failing cases (WKT, exact coordinates, party walls, builder,
+orientation) go to ``--save`` as JSON lines for ``--replay``."""
 from __future__ import annotations
 
 import argparse
@@ -261,7 +262,8 @@ def _closed(mesh, outline: Polygon) -> bool:
     n = np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]])
     ulp = 4 * float(np.spacing(np.abs(mesh.points).max()))  # float32 rounding of the points, a few units
     longest = np.max([np.linalg.norm(p[tris[:, k]] - p[tris[:, k - 1]], axis=1) for k in range(3)], axis=0)
-    if np.any((n[:, 2] < -ulp * longest) & ~_flat_to_rounding(mesh, n)) or abs(n[:, 2].sum() / 2 - outline.area) > ulp * outline.length:
+    down = (n[:, 2] < -ulp * longest) & ~_flat_to_rounding(mesh, n)
+    if np.any(down) or abs(n[:, 2].sum() / 2 - outline.area) > ulp * outline.length:
         return False
     try:
         edges, z = _open_edges(mesh)
@@ -326,7 +328,8 @@ def _generic(message: str) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--per-kind", type=int, default=40, help="outlines per kind (each roofed twice by every builder that applies)")
+    parser.add_argument("--per-kind", type=int, default=40,
+                        help="outlines per kind (each roofed twice by every builder that applies)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--save", type=Path, default=Path("out/roof_zoo_failures.jsonl"))
     parser.add_argument("--replay", type=Path, help="rebuild the cases of a saved failures file")

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from itertools import pairwise
 
 import numpy as np
 import shapely
@@ -105,7 +106,7 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
             walls.step(a, b, f, owner[b, a])
     for ring in (part.exterior, *part.interiors):
         xy_ring = np.asarray(ring.coords)[:, :2]
-        for u, v in zip(xy_ring[:-1], xy_ring[1:]):
+        for u, v in pairwise(xy_ring):
             walls.outline(grid.find(u), grid.find(v))
     if walls.unused():
         raise RoofError("the roof's pieces leave outline edges unwalled")
@@ -216,7 +217,7 @@ class _WallBuilder:
         foot_u, foot_v = p(u, self.top), p(v, self.top)
         pinches = [k for k in range(1, len(chain) - 1) if chain[k] == p(self.grid.of[chain[k]], self.top)]
         cuts = [0, *pinches, len(chain) - 1]
-        for s, e in zip(cuts[:-1], cuts[1:]):
+        for s, e in pairwise(cuts):
             start = foot_u if s == 0 else chain[s]
             end = foot_v if e == len(chain) - 1 else chain[e]
             ring = self.grid.upright([start, end, *chain[s:e + 1][::-1]])

@@ -16,8 +16,8 @@ from tests.roofs.shapes import outlines, polygons
 
 TOP = 12.0
 BUILDERS = [HippedRoof(), GabledRoof(), PyramidalRoof(), SkillionRoof(), FlatRoof(), MansardRoof(), GambrelRoof(),
-            DomeRoof(), RoundRoof(), HalfHippedRoof(), SaltboxRoof(), SideHippedRoof(), CrosspitchedRoof(), ButterflyRoof(),
-            SawtoothRoof()]
+            DomeRoof(), RoundRoof(), HalfHippedRoof(), SaltboxRoof(), SideHippedRoof(), CrosspitchedRoof(),
+            ButterflyRoof(), SawtoothRoof()]
 
 
 def _triangles(mesh):

@@ -50,7 +50,7 @@ def _slopes(n):
 def test_saltbox_long_slope_faces_north_by_default_at_the_pitch():
     """20 x 10 m at 30 degrees, untagged: the ridge along the length, SALTBOX_RIDGE x 10 m in from the north eave;
     the long (north) slope at 30 degrees, the short one twice as steep in rise; a vertical gable at each end."""
-    p, tris, n = _build(SaltboxRoof())
+    p, _tris, n = _build(SaltboxRoof())
     ridge = p[np.isclose(p[:, 2], p[:, 2].max())]
     run = SALTBOX_RIDGE * 10
     assert len(ridge) == 2 and np.allclose(ridge[:, 1], 10 - run) and np.ptp(ridge[:, 0]) == pytest.approx(20)
@@ -98,7 +98,7 @@ def test_rectangle_shapes_elsewhere_are_the_gabled_roof_with_a_note(builder):
 
 
 def test_side_hipped_has_one_gable_and_a_hip_at_the_end_facing_roof_direction():
-    p, tris, n = _build(SideHippedRoof(), direction=270.0)  # the hip faces west
+    p, _tris, n = _build(SideHippedRoof(), direction=270.0)  # the hip faces west
     walls = _walls(n)
     assert len(walls) == 1 and walls[0] @ [1, 0, 0] == pytest.approx(1.0)  # one gable triangle, on the east end
     ridge = p[np.isclose(p[:, 2], TOP + 5 * RISE)]
@@ -115,7 +115,7 @@ def test_side_hipped_gable_goes_to_a_party_wall_and_two_party_ends_are_gabled():
 
 
 def test_crosspitched_has_a_gable_on_every_side_and_one_ridge_height():
-    p, tris, n = _build(CrosspitchedRoof(), party=(0, 1, 2, 3))  # every wall a gable: party walls change nothing
+    p, _tris, n = _build(CrosspitchedRoof(), party=(0, 1, 2, 3))  # every wall a gable: party walls change nothing
     walls = _walls(n)
     assert len(walls) == 4 and sorted(map(tuple, np.round(walls[:, :2]).astype(int))) == [(-1, 0), (0, -1), (0, 1),
                                                                                              (1, 0)]
@@ -126,7 +126,7 @@ def test_crosspitched_has_a_gable_on_every_side_and_one_ridge_height():
 
 
 def test_butterfly_valley_is_lower_than_both_eaves():
-    p, tris, n = _build(ButterflyRoof())
+    p, _tris, n = _build(ButterflyRoof())
     valley = p[np.isclose(p[:, 1], 5.0)]
     assert np.allclose(valley[:, 2], TOP, atol=1e-5)  # the valley along the length, at the wall top
     for eave in (0.0, 10.0):
@@ -140,7 +140,7 @@ def test_butterfly_valley_is_lower_than_both_eaves():
 def test_sawtooth_teeth_count_heights_and_glazing():
     """30 x 12 m, slopes facing south: 12 m across the teeth, round(12 / 6) = 2 teeth 6 m wide, each 6 tan 30 high;
     the glazed walls (one between the teeth and the north wall of the first) face north."""
-    p, tris, n = _build(SawtoothRoof(), outline=SHED, direction=180.0)
+    p, _tris, n = _build(SawtoothRoof(), outline=SHED, direction=180.0)
     teeth = round(12 / SAWTOOTH_TOOTH)
     assert p[:, 2].max() == pytest.approx(TOP + 6 * RISE)
     assert sorted(np.unique(np.round(p[np.isclose(p[:, 2], TOP + 6 * RISE), 1], 6))) == [6.0, 12.0]
@@ -157,7 +157,7 @@ def test_sawtooth_teeth_count_heights_and_glazing():
 def test_sawtooth_keeps_its_gutters_off_party_walls():
     """Untagged, the slopes face out over the longest free wall; a tagged direction whose last gutter would lie
     along a party wall moves the teeth half a tooth (the wall meets a tooth half way up) and keeps its direction."""
-    p, _, n = _build(SawtoothRoof(), outline=SHED, party=(0,))
+    p, _, _n = _build(SawtoothRoof(), outline=SHED, party=(0,))
     south = p[np.isclose(p[:, 1], 0.0) & (p[:, 2] > TOP + 1e-6)]
     assert len(south) == 2 and np.allclose(south[:, 2], TOP + 6 * RISE)  # the south party wall: high glazing
     with roof_notes() as notes:
