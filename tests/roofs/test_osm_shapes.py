@@ -205,7 +205,7 @@ def test_no_slope_comes_down_onto_a_party_wall(outline, builder, data):
         p, tris, n = _build(builder, outline=outline, party=party)
     if notes:
         return
-    slope = n[:, 2] > 1e-6 * np.linalg.norm(n, axis=1)
+    slope = n[:, 2] > 0.01 * np.linalg.norm(n, axis=1)  # a roof plane, not a wall tilted by float32 rounding
     for k in party:
         a, b = edges[k, :2], edges[k, 2:]
         d = (b - a) / np.linalg.norm(b - a)
