@@ -69,7 +69,10 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
     part = orient(part, sign=1.0)
     x0, y0, x1, y1 = part.bounds
     size = max(1.0, x1 - x0, y1 - y0)
-    tol = 1e-7 * size
+    # snap rounding: a cut along an outline edge is that edge, not a sliver beside it, and vertices closer than the
+    # mesh's float32 points can tell apart (creases crossing near one point) are one vertex
+    grid_size = max(2.5e-8 * size, 8 * float(np.spacing(np.float32(max(map(abs, part.bounds))))))
+    tol = 4 * grid_size
     centre, reach = np.array([(x0 + x1) / 2, (y0 + y1) / 2]), 2.0 * math.hypot(x1 - x0, y1 - y0) + 1.0
     lines = [LineString(r.coords) for r in (part.exterior, *part.interiors)]
     along = cuts[0][1] if cuts else np.array([1.0, 0.0])
@@ -78,26 +81,25 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
         d = d / math.hypot(*d)
         mid = point + ((centre - point) @ d) * d
         lines.append(LineString([mid - reach * d, mid + reach * d]))
-    grid_size = tol / 4  # snap rounding: a cut along an outline edge is that edge, not a sliver beside it
     cells = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.unary_union(lines, grid_size=grid_size))))
     faces = [orient(f, 1.0) for f in cells if part.contains(f.representative_point())]
     if any(f.interiors for f in faces):
         raise RoofError("a roof piece surrounds a courtyard")
     if abs(sum(f.area for f in faces) - part.area) > grid_size * part.length:
         raise RoofError("the roof's pieces do not cover the outline")
-    grid = _Grid(tol)
+    grid = _Grid(tol, 0.75 * grid_size, part)
     rings = [[grid.vertex(p) for p in np.asarray(f.exterior.coords)[:-1, :2]] for f in faces]
     planes = [plane_at(np.asarray(f.representative_point().coords[0])) for f in faces]
     xy = np.array(grid.xy)
     heights = [xy @ p[:2] + p[2] for p in planes]  # per face, at every vertex
     used = np.concatenate([h[ring] for h, ring in zip(heights, rings)])
-    if used.min() < -1e-6 * size:
+    if used.min() < -tol * (1 + max(math.hypot(*p[:2]) for p in planes)):  # off the line by snapping, no more
         raise RoofError("the roof would dip below the wall top")
     high = float(used.max())
     if high <= 0:
         raise RoofError("the roof has no height")
     scale = min((spec.height or high) / high, spec.cap / high)
-    heights = [top + np.maximum(h, 0.0) * scale for h in heights]
+    heights = [top + np.where(h * scale > tol, h * scale, 0.0) for h in heights]  # within tol of the wall top: on it
     owner = {(r[k], r[(k + 1) % len(r)]): f for f, r in enumerate(rings) for k in range(len(r))}
     walls = _WallBuilder(grid, heights, owner, top)
     roof = [[grid.point(v, heights[f][v]) for v in r] for f, r in enumerate(rings)]
@@ -111,7 +113,8 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
     if walls.unused():
         raise RoofError("the roof's pieces leave outline edges unwalled")
     points = np.array(grid.points)
-    tris = [t for ring in roof for t in _triangulate(points[:, :2], ring)]
+    snapped = np.array(grid.snapped)[grid.of]  # pieces triangulated as cut (placing can make a ring touch itself)
+    tris = [t for ring in roof for t in _triangulate(snapped, ring)]
     tris += [t for ring in walls.rings for t in _wall_triangles(points, ring)] + walls.bridges
     mesh = welded_mesh(points, tris)
     cracks = _cracks(mesh, top, part, sum(len(r.coords) - 1 for r in (part.exterior, *part.interiors)))
@@ -121,29 +124,43 @@ def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
 
 
 class _Grid:
-    """Vertices of the cut outline (exact coordinates) and the mesh points over them, one per vertex and height
-    (heights within ``tol`` are one point)."""
+    """Vertices of the cut outline (snapped, put back on the outline) and the mesh points over them, one per vertex
+    and height (heights within ``tol`` are one point)."""
 
-    def __init__(self, tol: float) -> None:
-        self.tol = tol
+    def __init__(self, tol: float, snap: float, part: Polygon) -> None:
+        self.tol, self.snap = tol, snap
+        rings = [np.asarray(r.coords)[:, :2] for r in (part.exterior, *part.interiors)]
+        self.corners = np.concatenate([r[:-1] for r in rings])
+        self.starts, self.sides = self.corners, np.concatenate([np.diff(r, axis=0) for r in rings])
         self.xy: list[tuple[float, float]] = []
+        self.snapped: list[tuple[float, float]] = []
         self.ids: dict[tuple[float, float], int] = {}
         self.points: list[tuple[float, float, float]] = []
         self.over: dict[int, list[int]] = {}  # vertex -> its points
         self.of: list[int] = []  # point -> its vertex
 
     def vertex(self, p: np.ndarray) -> int:
+        """The vertex at the snapped point ``p``, put back where snapping moved it off the outline: on the outline
+        corner or onto the outline edge it lies within ``snap`` of (so the roof covers the outline exactly)."""
         key = (float(p[0]), float(p[1]))
         if key not in self.ids:
             self.ids[key] = len(self.xy)
-            self.xy.append(key)
+            self.snapped.append(key)
+            self.xy.append(self._placed(p))
         return self.ids[key]
 
+    def _placed(self, p: np.ndarray) -> tuple[float, float]:
+        gaps = np.hypot(*(self.corners - p).T)
+        if gaps.min() <= self.snap:
+            return tuple(map(float, self.corners[gaps.argmin()]))
+        s = np.clip(np.einsum("ij,ij->i", p - self.starts, self.sides) / np.einsum("ij,ij->i", self.sides, self.sides),
+                    0.0, 1.0)
+        foot = self.starts + s[:, None] * self.sides
+        gaps = np.hypot(*(foot - p).T)
+        return tuple(map(float, foot[gaps.argmin()] if gaps.min() <= self.snap else p))
+
     def find(self, p: np.ndarray) -> int:
-        """The vertex at an outline corner: the nearest, within ``tol`` (the cut rounds coordinates to a finer grid)."""
-        key = (float(p[0]), float(p[1]))
-        if key in self.ids:
-            return self.ids[key]
+        """The vertex at an outline corner."""
         gaps = np.hypot(*(np.array(self.xy) - p).T)
         if gaps.min() > self.tol:
             raise RoofError("an outline corner is lost where the roof is cut")

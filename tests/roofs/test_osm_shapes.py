@@ -214,3 +214,14 @@ def test_no_slope_comes_down_onto_a_party_wall(outline, builder, data):
         foot = on & np.isclose(p[:, 2], TOP, atol=1e-4)
         eave = foot[tris].sum(axis=1) == 2  # a side along the party wall's foot (three: a zero-area joining triangle)
         assert not np.any(eave & slope), f"{builder.id} slopes onto party wall {k}"
+
+
+def test_crosspitched_far_from_the_origin_stays_manifold_in_float32():
+    """Regression (Helsinki way/30779524, 380 m out): the crosspitched roof's creases cross within float32 rounding
+    of each other near the centre; welding the float32 points made an edge used twice the same way (11 of the
+    Helsinki rectangles). The cut is snap-rounded to a few float32 units, so such crossings are one vertex."""
+    outline = Polygon([(377.29766440608194, -23.177230177666136), (377.7925740199258, -31.5333189147348),
+                       (385.22547802942864, -31.098026190635395), (384.7305491943796, -22.719655415384803)])
+    mesh = CrosspitchedRoof().build(outline, TOP, RoofSpec("crosspitched", 30.0, cap=10.0))
+    edges, z = _open_edges(mesh)  # asserts no edge is used twice the same way
+    assert _same_edges(edges, _outline_edges(outline)) and np.allclose(z, TOP, atol=1e-4)
