@@ -61,9 +61,9 @@ def envelope(planes: list[Plane], lowest: bool = True) -> tuple[list[Line], Call
 def piecewise_roof(part: Polygon, top: float, spec: RoofSpec, cuts: list[Line],
                    plane_at: Callable[[np.ndarray], Plane]) -> MeshData:
     """The roof over ``part`` cut along ``cuts`` (and a line through each courtyard, so no piece surrounds one),
-    each piece on ``plane_at`` (its point on surface); heights scaled
-    so the highest point is at ``roof:height`` when given, never above ``spec.cap``; vertical walls where pieces
-    meet at different heights and between the wall top and the roof along the outline."""
+    each piece on ``plane_at`` (its point on surface); heights scaled so the highest point is at ``roof:height``
+    when given, never above ``spec.cap``; vertical walls where pieces meet at different heights and between the
+    wall top and the roof along the outline."""
     if not part.is_valid or part.area <= 0:
         raise RoofError("the outline is not a valid polygon")
     part = orient(part, sign=1.0)
