@@ -1,6 +1,8 @@
 """Roof builders: ``flat`` (a cap over the outline, courtyards left open) and the pitched roofs of
 :mod:`citygen_roofs.pitched` (``hipped``, ``gabled``, ``pyramidal``, ``skillion``,
-``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``, ``cone``) and ``onion`` (:mod:`citygen_roofs.onion`)."""
+``half-hipped``, ``mansard``, ``gambrel``, ``dome``, ``round``, ``cone``), ``onion`` (:mod:`citygen_roofs.onion`) and
+the roofs of planar pieces of :mod:`citygen_roofs.osm_shapes` (``saltbox``, ``side_hipped``, ``crosspitched``,
+``butterfly``, ``sawtooth``)."""
 from __future__ import annotations
 
 import mapbox_earcut
@@ -12,6 +14,7 @@ from citygen.hookspecs import hookimpl
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec
 from citygen_roofs.onion import OnionRoof
+from citygen_roofs.osm_shapes import ButterflyRoof, CrosspitchedRoof, SaltboxRoof, SawtoothRoof, SideHippedRoof
 from citygen_roofs.pitched import (ConeRoof, DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof, MansardRoof,
                                    PyramidalRoof, RoundRoof, SkillionRoof)
 
@@ -47,4 +50,5 @@ class FlatRoof(RoofBuilder):
 @hookimpl
 def citygen_roof_builders():
     return [FlatRoof(), HippedRoof(), GabledRoof(), HalfHippedRoof(), PyramidalRoof(), SkillionRoof(), MansardRoof(),
-            GambrelRoof(), DomeRoof(), RoundRoof(), OnionRoof(), ConeRoof()]
+            GambrelRoof(), DomeRoof(), RoundRoof(), OnionRoof(), ConeRoof(), SaltboxRoof(), SideHippedRoof(),
+            CrosspitchedRoof(), ButterflyRoof(), SawtoothRoof()]

@@ -12,7 +12,8 @@ from shapely import affinity
 from shapely.geometry import MultiPolygon, Polygon, mapping
 
 KINDS = ("yes", "apartments", "retail", "school", "church", "house", "office", "kiosk", "hotel", "residential")
-ROOFS = ("hipped", "gabled", "pyramidal", "skillion", "round", "half-hipped", "dome", "flat", "onion", None)
+ROOFS = ("hipped", "gabled", "pyramidal", "skillion", "round", "half-hipped", "dome", "flat", "onion", "saltbox",
+         "side_hipped", "crosspitched", "butterfly", "sawtooth", None)
 
 
 def _shape(rng: np.random.Generator, cx: float, cy: float) -> Polygon | MultiPolygon:

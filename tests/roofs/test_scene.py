@@ -40,22 +40,39 @@ def demo(tmp_path_factory):
 
 def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     report, out = demo
-    assert report.written == 13 and not report.skipped
-    assert report.warnings == ["way/13: flat roof instead of roof:shape='sawtooth', which no roof builder makes "
-                               "(known: cone, dome, flat, gabled, gambrel, half-hipped, hipped, mansard, onion, "
-                               "pyramidal, round, skillion)"]
+    assert report.written == 17 and not report.skipped and not report.warnings
     assert main(["validate", str(out)]) == 0
     roofs = _roofs(out)
     assert roofs["way/1"][1] == 2 and roofs["way/6"][1] == 2  # gabled rectangle and U: a gable at each ridge end
     assert roofs["way/2"][1] == 0 and roofs["way/5"][1] == 0  # hipped L and courtyard block
     assert roofs["way/5"][3] - roofs["way/5"][2] == pytest.approx(4.0, abs=1e-4)  # roof:height = "4 m"
     assert roofs["way/3"][0] == 4  # pyramid over a square
-    assert roofs["way/7"][2] == roofs["way/7"][3] and roofs["way/13"][2] == roofs["way/13"][3]  # flat, "sawtooth"
+    assert roofs["way/7"][2] == roofs["way/7"][3]  # flat
     assert roofs["way/8"][0] == 16 * 23  # onion over a 16-gon: 11 bands of quads and the tip
     assert roofs["way/8"][3] - roofs["way/8"][2] == pytest.approx(3 * 4.5 * math.cos(math.pi / 16), abs=0.1)  # 4.5 m
     assert roofs["way/9"][1] == 2  # untagged house: gabled by its [[assign]] rule
     assert roofs["way/12"][1] == 6  # gambrel: two five-sided gables
     assert roofs["way/10"][0] > 24 * 6 and roofs["way/11"][1] == 0  # a dome in bands over the 24-gon; mansard
+    assert roofs["way/13"][3] - roofs["way/13"][2] == pytest.approx(6 * math.tan(math.radians(25)), abs=0.01)  # 3 teeth
+    assert roofs["way/14"][1] == 2 and roofs["way/15"][1] == 1  # saltbox: two gables; side_hipped: one
+    assert roofs["way/16"][1] > 4 and roofs["way/17"][1] >= 4  # butterfly: walls up to its eaves; 4 cross gables
+
+
+def test_a_shape_no_builder_makes_gives_a_flat_roof_and_a_warning(tmp_path):
+    import json
+    (tmp_path / "z.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": [
+        _feature(1, [(0, 0), (10, 0), (10, 8), (0, 8)], **{"roof:shape": "zakomar"})]}))
+    (tmp_path / "z.toml").write_text(
+        f'[scene]\nseed = 1\n[footprints]\npath = "z.geojson"\n'
+        f'[[assign]]\nruleset = "{(REPO / "rulesets" / "house.grammar").as_posix()}"\n')
+    out = tmp_path / "z.usda"
+    report = generate_city(load_scene(tmp_path / "z.toml"), out=out)
+    assert report.written == 1
+    assert report.warnings == ["way/1: flat roof instead of roof:shape='zakomar', which no roof builder makes "
+                               "(known: butterfly, cone, crosspitched, dome, flat, gabled, gambrel, half-hipped, "
+                               "hipped, mansard, onion, pyramidal, round, saltbox, sawtooth, side_hipped, skillion)"]
+    roofs = _roofs(out)
+    assert roofs["way/1"][2] == roofs["way/1"][3]
 
 
 def test_untagged_buildings_keep_flat_roofs_by_default(tmp_path):
@@ -75,7 +92,7 @@ def test_a_failing_builder_gives_a_flat_roof_and_a_warning(tmp_path, monkeypatch
     monkeypatch.setattr(HippedRoof, "build", broken)
     out = tmp_path / "r.usda"
     report = generate_city(load_scene(SCENE), out=out)
-    assert report.written == 13
+    assert report.written == 17
     assert [w for w in report.warnings if "flat roof instead of hipped" in w] == [
         "way/2: flat roof instead of hipped: RoofError: no straight skeleton: test",
         "way/5: flat roof instead of hipped: RoofError: no straight skeleton: test"]
