@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from citygen.usd.normals import polygon_normals
+
 
 def planar_st(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """``(len(indices), 2) float32`` texture coordinates (faceVarying) of a polygon mesh."""
@@ -16,14 +18,8 @@ def planar_st(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np
     if not counts.size:
         return np.zeros((0, 2), np.float32)
     p = np.asarray(points, dtype=float)[indices]
-    start = np.cumsum(counts) - counts
     poly = np.repeat(np.arange(counts.size), counts)
-    nxt = start[poly] + (np.arange(len(indices)) - start[poly] + 1) % counts[poly]
-    q = p[nxt]
-    terms = np.column_stack([(p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2]), (p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0]),
-                             (p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])])
-    normal = np.add.reduceat(terms, start, axis=0)  # Newell's normal per polygon
-    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-12)[:, None]
+    normal = polygon_normals(points, counts, indices)
     horizontal = np.hypot(normal[:, 0], normal[:, 1])
     level = horizontal < 1e-9  # a flat face: u along x
     tangent = np.column_stack([np.where(level, 1.0, -normal[:, 1] / np.where(level, 1.0, horizontal)),

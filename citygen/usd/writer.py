@@ -34,6 +34,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.materials import look
+from citygen.usd.normals import indexed_face_normals
 from citygen.usd.uv import planar_st
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
@@ -78,7 +79,8 @@ def tile_name(tile: tuple[int, int]) -> str:
 
 
 class _Author:
-    """Thin Sdf authoring helpers on one layer; ``uvs``: meshes get ``primvars:st`` (:mod:`citygen.usd.uv`)."""
+    """Thin Sdf authoring helpers on one layer. Meshes get indexed face normals (``primvars:normals``, uniform,
+    :mod:`citygen.usd.normals`); ``uvs``: also ``primvars:st`` (:mod:`citygen.usd.uv`)."""
 
     def __init__(self, layer: Sdf.Layer, uvs: bool = False) -> None:
         self.layer = layer
@@ -118,6 +120,11 @@ class _Author:
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         self.attr(prim, "extent", T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
+        values, index = indexed_face_normals(pts, mesh.counts, mesh.indices)
+        normals = Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray, Sdf.VariabilityVarying)
+        normals.default = Vt.Vec3fArray.FromNumpy(values)
+        normals.SetInfo("interpolation", "uniform")
+        self.attr(prim, "primvars:normals:indices", T.IntArray, Vt.IntArray.FromNumpy(index))
         if self.uvs:
             st = Sdf.AttributeSpec(prim, "primvars:st", T.TexCoord2fArray, Sdf.VariabilityVarying)
             st.default = Vt.Vec2fArray.FromNumpy(planar_st(pts, mesh.counts, mesh.indices))

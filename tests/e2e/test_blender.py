@@ -25,7 +25,8 @@ buildings = [o for o in bpy.data.objects if o.parent in tiles]
 meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 print("BUILDINGS", len(buildings), "MESHES", len(meshes), "INSTANCERS",
       sum(1 for o in bpy.data.objects if o.type == "POINTCLOUD"),
-      "UVMAPPED", sum(1 for o in meshes if "st" in o.data.uv_layers))
+      "UVMAPPED", sum(1 for o in meshes if "st" in o.data.uv_layers),
+      "NORMALS", sum(1 for o in meshes if o.data.has_custom_normals))
 """
 
 
@@ -46,3 +47,4 @@ def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs, lod):
     assert int(fields[1]) == report.written == 160
     assert int(fields[3]) > 0 and int(fields[5]) > 0
     assert int(fields[7]) == (int(fields[3]) if uvs else 0)  # Blender reads primvars:st as the UV map "st"
+    assert int(fields[9]) == int(fields[3])  # and our face normals (without them it shades every crease smooth)
