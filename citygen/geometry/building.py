@@ -21,7 +21,7 @@ import numpy as np
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
-from citygen.geometry.quads import box_quads, merge_rects, to_world, weld
+from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld
 from citygen.layout import FacadeLayout, Region
 from citygen.mass import Face, Mass
 from citygen.usd.materials import COLOUR_PREFIX
@@ -172,19 +172,35 @@ def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) ->
     style_instanced = np.array([label in INSTANCED for label, _ in t.styles])
     style_behind = np.array([label in INSTANCED and label not in OPENINGS for label, _ in t.styles])
     instanced = style_instanced[t.codes]
-    depth_mm = np.rint(t.depth * 1000).astype(np.int64)
-    panel_key = (t.codes << 32) | (depth_mm & 0xFFFFFFFF)
-    for key in np.unique(panel_key[~instanced]):
-        sel = panel_key == key
-        flat = merge_rects(t.rects[sel])
-        d = t.depth[np.argmax(sel)]
-        sink.add_quads(t.styles[key >> 32], to_world(box_quads(flat, np.full(len(flat), d)), matrix))
-    behind = style_behind[t.codes]
+    _emit_panels(sink, t, ~instanced, style_behind[t.codes], matrix, wall_material)
+    if instanced.any():
+        _emit_elements(sink, t, instanced, matrix)
+
+
+def _emit_panels(sink: _Sink, t: _Terminals, panel: np.ndarray, behind: np.ndarray, matrix: np.ndarray,
+                 wall_material: str) -> None:
+    """Boxes of the ``panel`` terminals, merged per (style, depth in mm) at the group's first depth, then flat wall
+    quads behind the ``behind`` attachments: all groups of a face merged, boxed and transformed in one batch."""
+    depth_mm = np.rint(t.depth[panel] * 1000).astype(np.int64)
+    keys, first, groups = np.unique((t.codes[panel] << 32) | (depth_mm & 0xFFFFFFFF), return_index=True,
+                                    return_inverse=True)
+    styles = [t.styles[k >> 32] for k in keys.tolist()]
+    depths, rects, groups = t.depth[panel][first], t.rects[panel], groups.ravel()
     if behind.any():
-        flat = merge_rects(t.rects[behind])
-        sink.add_quads(("wall", wall_material), to_world(box_quads(flat, np.zeros(len(flat))), matrix))
-    if not instanced.any():
-        return
+        styles.append(("wall", wall_material))
+        depths = np.append(depths, 0.0)
+        rects = np.concatenate([rects, t.rects[behind]])
+        groups = np.concatenate([groups, np.full(int(behind.sum()), len(keys))])
+    flat, flat_groups = merge_rects_grouped(rects, groups)
+    quads, quad_groups = box_quads_grouped(flat, depths[flat_groups], flat_groups)
+    quads = to_world(quads, matrix)
+    bounds = np.searchsorted(quad_groups, np.arange(len(styles) + 1))
+    for style, lo, hi in zip(styles, bounds[:-1].tolist(), bounds[1:].tolist()):
+        sink.add_quads(style, quads[lo:hi])
+
+
+def _emit_elements(sink: _Sink, t: _Terminals, instanced: np.ndarray, matrix: np.ndarray) -> None:
+    """Instances of the ``instanced`` terminals: one prototype per (style, size in quanta, depth in cm)."""
     r, codes, depth = t.rects[instanced], t.codes[instanced], t.depth[instanced]
     size = np.column_stack([r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]])
     q = np.maximum(1, np.rint(size / QUANTUM)).astype(np.int64)
