@@ -17,8 +17,8 @@ from citygen.errors import RulesetError
 from citygen.layout import FacadeLayout, Region
 from citygen.request import FacadeRequest
 from citygen_split.ast import (
-    Body, Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
-    Terminal, successors,
+    Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
+    Terminal,
 )
 from citygen_split.expr import evaluate
 from citygen_split.sizes import aba_count, place, preferred_length, repeat_count, resolve
@@ -64,7 +64,7 @@ class _Derivation:
         self.count = 0
         self.trace: list[str] = []
         self.tracing = trace
-        self.reusable = set() if trace else _translation_invariant(grammar)
+        self.reusable = frozenset() if trace else grammar.translation_invariant
         self.cache: dict[tuple[str, float, float, int], Region] = {}
 
     def run(self) -> FacadeLayout:
@@ -245,33 +245,6 @@ class _Derivation:
             if right > 0:
                 out.append(self.region("Corner", x + w - right, lo, right, hi - lo, k, depth, ()))
         return out
-
-
-def _translation_invariant(grammar: Grammar) -> set[str]:
-    """Symbols whose derivation depends only on the region's size and floor (not on its position or on per-region
-    draws): no ``floors`` and no ``each`` rule is reachable from them. Their subtrees are derived once per size."""
-    graph = {rule.symbol: [s for s, _ in successors(rule.body)] for rule in grammar.rules}
-    variant = {rule.symbol for rule in grammar.rules if _position_dependent(rule.body)}
-    changed = True
-    while changed:
-        changed = False
-        for symbol, succ in graph.items():
-            if symbol not in variant and any(s in variant or s not in graph for s in succ):
-                variant.add(symbol)
-                changed = True
-    return set(graph) - variant
-
-
-def _position_dependent(body: Body) -> bool:
-    if isinstance(body, Floors):
-        return True
-    if isinstance(body, Choice):
-        return body.each or any(_position_dependent(b) for _, b in body.alternatives) or (
-            body.otherwise is not None and _position_dependent(body.otherwise))
-    if isinstance(body, Case):
-        return any(_position_dependent(b) for _, b in body.branches) or (
-            body.otherwise is not None and _position_dependent(body.otherwise))
-    return False
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:
