@@ -65,7 +65,7 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
-        self.cache: dict[tuple[str, float, float, int], Region] = {}
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
 
     def run(self) -> FacadeLayout:
         r = self.request
@@ -80,23 +80,22 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:
-                return self.translated(done, x - done.x, y - done.y)
-            done = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
-            done.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = done
-            return done
+                return self.translated(*done, x - done[0].x, y - done[0].y)
+            before = self.count
+            region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
+            region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
+            self.cache[key] = (region, self.count - before)
+            return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
-    def translated(self, region: Region, dx: float, dy: float) -> Region:
-        """A copy of a derived subtree moved by ``(dx, dy)`` (regions of equal symbol, size and floor derive alike)."""
-        self.count += 1
+    def translated(self, region: Region, size: int, dx: float, dy: float) -> Region:
+        """A copy of a derived subtree of ``size`` regions moved by ``(dx, dy)`` (regions of equal symbol, size
+        and floor derive alike)."""
+        self.count += size
         if self.count > MAX_REGIONS:
             raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {region.symbol}", plugin=PLUGIN_ID,
                                where=self.grammar.source, hint="the face is too large for this grammar's sizes")
-        copy = object.__new__(Region)
-        copy.__dict__.update(region.__dict__, x=region.x + dx, y=region.y + dy,
-                             children=tuple(self.translated(c, dx, dy) for c in region.children))
-        return copy
+        return _moved(region, dx, dy)
 
     def derive_region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
                       chain: tuple[str, ...]) -> Region:
@@ -245,6 +244,19 @@ class _Derivation:
             if right > 0:
                 out.append(self.region("Corner", x + w - right, lo, right, hi - lo, k, depth, ()))
         return out
+
+
+def _moved(region: Region, dx: float, dy: float) -> Region:
+    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (as :meth:`Region.fast`: no
+    per-field ``object.__setattr__``)."""
+    copy = object.__new__(Region)
+    fields_ = copy.__dict__
+    fields_.update(region.__dict__)
+    fields_["x"] = region.x + dx
+    fields_["y"] = region.y + dy
+    if region.children:
+        fields_["children"] = tuple([_moved(c, dx, dy) for c in region.children])
+    return copy
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:
