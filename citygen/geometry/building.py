@@ -131,22 +131,33 @@ class _Terminals:
 
 def _terminal_arrays(regions: Iterable[Region], wall_material: str, dx: float = 0.0, dy: float = 0.0,
                      sx: float = 1.0, sy: float = 1.0) -> _Terminals:
-    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass)."""
+    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass; the
+    style and depth of each distinct (label, material, depth) are worked out once)."""
     styles: dict[tuple[str, str], int] = {}
+    looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
     rows = []
     for r in regions:
         label = r.label
         if label is None or r.w <= 1e-6 or r.h <= 1e-6:
             continue
-        material = r.material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
-        if material == BUILDING_RENDER or (label == "wall" and wall_material.startswith(COLOUR_PREFIX)):
-            material = wall_material  # the building's colour; a colour from the data paints every wall
-        depth = r.depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
-        code = styles.setdefault((label, material), len(styles))
-        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, depth, code))
+        look = looks.get((label, r.material, r.depth))
+        if look is None:
+            look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
+        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, *look))
     table = np.array(rows, dtype=float).reshape(-1, 6)
     rects = (table[:, :4] - (dx, dy, dx, dy)) * (sx, sy, sx, sy)
     return _Terminals(rects, table[:, 4], table[:, 5].astype(np.int64), tuple(styles))
+
+
+def _look(label: str, material: str | None, depth: float, wall_material: str,
+          styles: dict[tuple[str, str], int]) -> tuple[float, int]:
+    """The depth and style code (registered in ``styles``) of a terminal: label defaults for depth and material,
+    and the building's wall material where the terminal asks for it."""
+    material = material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
+    if material == BUILDING_RENDER or (label == "wall" and wall_material.startswith(COLOUR_PREFIX)):
+        material = wall_material  # the building's colour; a colour from the data paints every wall
+    depth = depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
+    return depth, styles.setdefault((label, material), len(styles))
 
 
 def face_quaternion(matrix: np.ndarray) -> np.ndarray:
