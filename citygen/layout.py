@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import operator
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields, replace
@@ -289,11 +290,12 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
     if highest <= tol:
         return layout
     step = layout.width / cover.size
+    heights = cover.tolist()  # (Python floats: a bin lookup per region visited stays out of numpy)
 
     def hidden_to(x0: float, x1: float) -> float:
-        k0 = min(max(int(np.floor(x0 / step + tol)), 0), cover.size - 1)
-        k1 = min(max(int(np.ceil(x1 / step - tol)), k0 + 1), cover.size)
-        return float(cover[k0:k1].min())
+        k0 = min(max(math.floor(x0 / step + tol), 0), len(heights) - 1)
+        k1 = min(max(math.ceil(x1 / step - tol), k0 + 1), len(heights))
+        return min(heights[k0:k1])
 
     def cull(region: Region) -> Region:
         if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
