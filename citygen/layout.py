@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import operator
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields, replace
@@ -151,10 +152,17 @@ class FacadeLayout:
     def labels(self) -> list[str | None]:
         return [r.label for r in self.leaves]
 
+    @functools.cached_property
+    def leaf_rects(self) -> np.ndarray:
+        """Terminal rectangles in tree order as a read-only ``(n, 4)`` float array of ``x, y, w, h``, computed once
+        (the partition and request checks both read it)."""
+        rects = np.array([(r.x, r.y, r.w, r.h) for r in self.leaves], dtype=float).reshape(-1, 4)
+        rects.flags.writeable = False
+        return rects
+
     def terminal_array(self) -> np.ndarray:
-        """Terminal rectangles as an ``(n, 4)`` float array of ``x, y, w, h``."""
-        rects = [(r.x, r.y, r.w, r.h) for r in self.leaves]
-        return np.asarray(rects, dtype=float).reshape(-1, 4)
+        """Terminal rectangles as an ``(n, 4)`` float array of ``x, y, w, h`` (a copy of :attr:`leaf_rects`)."""
+        return self.leaf_rects.copy()
 
     def count(self, label: str) -> int:
         return sum(1 for r in self.leaves if r.label == label)
@@ -197,11 +205,15 @@ def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
     """
     problems: list[str] = []
     eps = tol * max(layout.width, layout.height, 1e-9)
-    by_layer: dict[str | None, list[Region]] = {}
-    for region in layout.leaves:
-        by_layer.setdefault(region.layer, []).append(region)
-    for layer, regions in by_layer.items():
-        rects = np.array([(r.x, r.y, r.w, r.h) for r in regions], dtype=float)
+    leaves, all_rects = layout.leaves, layout.leaf_rects
+    layers = [r.layer for r in leaves]
+    by_layer: dict[str | None, list[int]] = {layer: [] for layer in layers}
+    if len(by_layer) > 1:
+        for i, layer in enumerate(layers):
+            by_layer[layer].append(i)
+    for layer, members in by_layer.items():
+        regions = [leaves[i] for i in members] if len(by_layer) > 1 else leaves
+        rects = all_rects[members] if len(by_layer) > 1 else all_rects
         name = f"layer {layer!r}" if layer is not None else "layout"
         if not np.all(np.isfinite(rects)):
             problems.append(f"{name}: non-finite coordinates")
@@ -225,7 +237,7 @@ def _cluster(values: np.ndarray, bounds: tuple[float, float], eps: float) -> tup
     allv = np.concatenate([values.ravel(), bounds])
     order = np.argsort(allv, kind="stable")
     ordered = allv[order]
-    starts = np.r_[True, np.diff(ordered) > eps]
+    starts = np.concatenate([[True], np.diff(ordered) > eps])
     index = np.empty(allv.size, dtype=np.int64)
     index[order] = np.cumsum(starts) - 1
     return ordered[starts], index[: values.size].reshape(values.shape)
@@ -278,11 +290,12 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
     if highest <= tol:
         return layout
     step = layout.width / cover.size
+    heights = cover.tolist()  # (Python floats: a bin lookup per region visited stays out of numpy)
 
     def hidden_to(x0: float, x1: float) -> float:
-        k0 = min(max(int(np.floor(x0 / step + tol)), 0), cover.size - 1)
-        k1 = min(max(int(np.ceil(x1 / step - tol)), k0 + 1), cover.size)
-        return float(cover[k0:k1].min())
+        k0 = min(max(math.floor(x0 / step + tol), 0), len(heights) - 1)
+        k1 = min(max(math.ceil(x1 / step - tol), k0 + 1), len(heights))
+        return min(heights[k0:k1])
 
     def cull(region: Region) -> Region:
         if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:

@@ -95,20 +95,26 @@ def check_request(layout: FacadeLayout, request: FacadeRequest, tol: float = 1e-
     eps = tol * max(request.width, request.height, 1.0)
     if abs(layout.width - request.width) > eps or abs(layout.height - request.height) > eps:
         problems.append(f"layout is {layout.width} x {layout.height}, request {request.width} x {request.height}")
+    labels = [r.label for r in layout.leaves]
+    x, y, w, h = layout.leaf_rects.T
+    door = np.array([label == "door" for label in labels], dtype=bool)
+    bound = np.array([label in FLOOR_BOUND_LABELS for label in labels], dtype=bool)
     lines = np.asarray(request.floor_lines[1:-1], dtype=float)
-    doors = 0
+    high_door = door & (y > request.floor_lines[1] - eps) if request.floor_count > 1 else np.zeros_like(door)
+    straddles = (lines > (y + eps)[:, None]) & (lines < (y + h - eps)[:, None])
+    straddling = bound & straddles.any(axis=1)
     left, right = request.corner_widths
-    for r in layout.leaves:
-        if r.label == "door":
-            doors += 1
-            if r.y > request.floor_lines[1] - eps and request.floor_count > 1:
-                problems.append(f"door {r.symbol} at y={r.y:.3f} is not in the ground floor")
-        if r.label in FLOOR_BOUND_LABELS and lines.size:
-            cut = lines[(lines > r.y + eps) & (lines < r.y + r.h - eps)]
-            if cut.size:
-                problems.append(f"{r.label} {r.symbol} at y={r.y:.3f}..{r.y + r.h:.3f} straddles floor line {cut[0]:.3f}")
-        if r.label in FLOOR_BOUND_LABELS and (r.x < left - eps or r.x + r.w > request.width - right + eps):
+    cornered = bound & ((x < left - eps) | (x + w > request.width - right + eps))
+    for i in np.flatnonzero(high_door | straddling | cornered).tolist():
+        r = layout.leaves[i]
+        if high_door[i]:
+            problems.append(f"door {r.symbol} at y={r.y:.3f} is not in the ground floor")
+        if straddling[i]:
+            cut = lines[straddles[i]][0]
+            problems.append(f"{r.label} {r.symbol} at y={r.y:.3f}..{r.y + r.h:.3f} straddles floor line {cut:.3f}")
+        if cornered[i]:
             problems.append(f"{r.label} {r.symbol} at x={r.x:.3f}..{r.x + r.w:.3f} enters a corner strip")
+    doors = int(door.sum())
     expected = 1 if request.entrance else 0
     if doors != expected:
         problems.append(f"face has {doors} doors, the building coordinator asked for {expected}")

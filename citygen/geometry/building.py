@@ -21,7 +21,7 @@ import numpy as np
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
-from citygen.geometry.quads import box_quads, merge_rects, to_world, weld
+from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld
 from citygen.layout import FacadeLayout, Region
 from citygen.mass import Face, Mass
 from citygen.usd.materials import COLOUR_PREFIX
@@ -131,22 +131,33 @@ class _Terminals:
 
 def _terminal_arrays(regions: Iterable[Region], wall_material: str, dx: float = 0.0, dy: float = 0.0,
                      sx: float = 1.0, sy: float = 1.0) -> _Terminals:
-    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass)."""
+    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass; the
+    style and depth of each distinct (label, material, depth) are worked out once)."""
     styles: dict[tuple[str, str], int] = {}
+    looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
     rows = []
     for r in regions:
         label = r.label
         if label is None or r.w <= 1e-6 or r.h <= 1e-6:
             continue
-        material = r.material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
-        if material == BUILDING_RENDER or (label == "wall" and wall_material.startswith(COLOUR_PREFIX)):
-            material = wall_material  # the building's colour; a colour from the data paints every wall
-        depth = r.depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
-        code = styles.setdefault((label, material), len(styles))
-        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, depth, code))
+        look = looks.get((label, r.material, r.depth))
+        if look is None:
+            look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
+        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, *look))
     table = np.array(rows, dtype=float).reshape(-1, 6)
     rects = (table[:, :4] - (dx, dy, dx, dy)) * (sx, sy, sx, sy)
     return _Terminals(rects, table[:, 4], table[:, 5].astype(np.int64), tuple(styles))
+
+
+def _look(label: str, material: str | None, depth: float, wall_material: str,
+          styles: dict[tuple[str, str], int]) -> tuple[float, int]:
+    """The depth and style code (registered in ``styles``) of a terminal: label defaults for depth and material,
+    and the building's wall material where the terminal asks for it."""
+    material = material or (wall_material if label == "wall" else LABEL_MATERIAL.get(label, wall_material))
+    if material == BUILDING_RENDER or (label == "wall" and wall_material.startswith(COLOUR_PREFIX)):
+        material = wall_material  # the building's colour; a colour from the data paints every wall
+    depth = depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
+    return depth, styles.setdefault((label, material), len(styles))
 
 
 def face_quaternion(matrix: np.ndarray) -> np.ndarray:
@@ -172,19 +183,35 @@ def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) ->
     style_instanced = np.array([label in INSTANCED for label, _ in t.styles])
     style_behind = np.array([label in INSTANCED and label not in OPENINGS for label, _ in t.styles])
     instanced = style_instanced[t.codes]
-    depth_mm = np.rint(t.depth * 1000).astype(np.int64)
-    panel_key = (t.codes << 32) | (depth_mm & 0xFFFFFFFF)
-    for key in np.unique(panel_key[~instanced]):
-        sel = panel_key == key
-        flat = merge_rects(t.rects[sel])
-        d = t.depth[np.argmax(sel)]
-        sink.add_quads(t.styles[key >> 32], to_world(box_quads(flat, np.full(len(flat), d)), matrix))
-    behind = style_behind[t.codes]
+    _emit_panels(sink, t, ~instanced, style_behind[t.codes], matrix, wall_material)
+    if instanced.any():
+        _emit_elements(sink, t, instanced, matrix)
+
+
+def _emit_panels(sink: _Sink, t: _Terminals, panel: np.ndarray, behind: np.ndarray, matrix: np.ndarray,
+                 wall_material: str) -> None:
+    """Boxes of the ``panel`` terminals, merged per (style, depth in mm) at the group's first depth, then flat wall
+    quads behind the ``behind`` attachments: all groups of a face merged, boxed and transformed in one batch."""
+    depth_mm = np.rint(t.depth[panel] * 1000).astype(np.int64)
+    keys, first, groups = np.unique((t.codes[panel] << 32) | (depth_mm & 0xFFFFFFFF), return_index=True,
+                                    return_inverse=True)
+    styles = [t.styles[k >> 32] for k in keys.tolist()]
+    depths, rects, groups = t.depth[panel][first], t.rects[panel], groups.ravel()
     if behind.any():
-        flat = merge_rects(t.rects[behind])
-        sink.add_quads(("wall", wall_material), to_world(box_quads(flat, np.zeros(len(flat))), matrix))
-    if not instanced.any():
-        return
+        styles.append(("wall", wall_material))
+        depths = np.append(depths, 0.0)
+        rects = np.concatenate([rects, t.rects[behind]])
+        groups = np.concatenate([groups, np.full(int(behind.sum()), len(keys))])
+    flat, flat_groups = merge_rects_grouped(rects, groups)
+    quads, quad_groups = box_quads_grouped(flat, depths[flat_groups], flat_groups)
+    quads = to_world(quads, matrix)
+    bounds = np.searchsorted(quad_groups, np.arange(len(styles) + 1))
+    for style, lo, hi in zip(styles, bounds[:-1].tolist(), bounds[1:].tolist()):
+        sink.add_quads(style, quads[lo:hi])
+
+
+def _emit_elements(sink: _Sink, t: _Terminals, instanced: np.ndarray, matrix: np.ndarray) -> None:
+    """Instances of the ``instanced`` terminals: one prototype per (style, size in quanta, depth in cm)."""
     r, codes, depth = t.rects[instanced], t.codes[instanced], t.depth[instanced]
     size = np.column_stack([r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]])
     q = np.maximum(1, np.rint(size / QUANTUM)).astype(np.int64)

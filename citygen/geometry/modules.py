@@ -85,10 +85,14 @@ class Signatures:
         else:
             x, y, visit = r.x, r.y, self._visit
             start = len(self.log)
-            parts = [visit(c) for c in children]
-            info = (hash((2, round(r.w * CM), round(r.h * CM),
-                          *[(p[0], round((c.x - x) * CM), round((c.y - y) * CM)) for p, c in zip(parts, children)])),
-                    any([p[1] for p in parts]), sum([p[2] for p in parts]))
+            content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
+            detail, terminals = False, 0
+            for c in children:
+                sig, more, n = visit(c)
+                content.append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
+                detail = detail or more
+                terminals += n
+            info = (hash(tuple(content)), detail, terminals)
             self.log.append(info[0])
             if key is not None:
                 self.inner[key] = self.log[start:]

@@ -44,6 +44,21 @@ def box_quads(rects: np.ndarray, depth: np.ndarray, front: bool = True, sides: b
     return np.concatenate(parts) if len(parts) > 1 else (parts[0] if parts else np.zeros((0, 4, 3)))
 
 
+def box_quads_grouped(rects: np.ndarray, depth: np.ndarray, groups: np.ndarray,
+                      eps: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`box_quads` of many groups of boxes in one batch: ``(quads (m, 4, 3), group of every quad)``.
+
+    ``rects`` are sorted by ``groups`` (``(n,)`` ints); the quads come out grouped the same way, and a group's
+    quads are those ``box_quads`` gives for the group's boxes alone, in the same order (fronts, then sides).
+    """
+    front = _corners(rects, depth, _FRONT)
+    deep = np.abs(depth) > eps
+    sides = _corners(rects[deep], depth[deep], _SIDES)
+    rank = np.concatenate([2 * groups, np.repeat(2 * groups[deep] + 1, len(_SIDES))])
+    order = np.argsort(rank, kind="stable")
+    return np.concatenate([front, sides])[order], rank[order] >> 1
+
+
 def merge_rects(rects: np.ndarray, eps: float = 1e-6) -> np.ndarray:
     """Fewer rectangles covering the same area: runs touching along x merge, then runs touching along y.
 
@@ -51,20 +66,24 @@ def merge_rects(rects: np.ndarray, eps: float = 1e-6) -> np.ndarray:
     Wall pieces between the windows of a floor collapse into strips, which is most of a facade mesh's polygons.
     """
     rects = np.asarray(rects, dtype=float).reshape(-1, 4)
-    if len(rects) < 2:
-        return rects
+    return merge_rects_grouped(rects, np.zeros(len(rects), np.int64), eps)[0]
+
+
+def merge_rects_grouped(rects: np.ndarray, groups: np.ndarray, eps: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`merge_rects` of many groups in one batch (rectangles merge only within their group): the merged
+    ``(rects, groups)``, sorted by group; a group's rectangles are those ``merge_rects`` gives for it alone."""
     for lo, hi, a, b in ((0, 2, 1, 3), (1, 3, 0, 2)):  # merge along x within rows, then along y within columns
         if len(rects) < 2:
             break
-        order = np.lexsort((rects[:, lo], rects[:, b], rects[:, a]))
-        r = rects[order]
-        joined = ((np.abs(r[1:, a] - r[:-1, a]) < eps) & (np.abs(r[1:, b] - r[:-1, b]) < eps)
+        order = np.lexsort((rects[:, lo], rects[:, b], rects[:, a], groups))
+        r, g = rects[order], groups[order]
+        joined = ((g[1:] == g[:-1]) & (np.abs(r[1:, a] - r[:-1, a]) < eps) & (np.abs(r[1:, b] - r[:-1, b]) < eps)
                   & (np.abs(r[1:, lo] - r[:-1, hi]) < eps))
-        starts = np.flatnonzero(np.r_[True, ~joined])
-        merged = r[starts].copy()
-        merged[:, hi] = np.maximum.reduceat(r[:, hi], starts)
-        rects = merged
-    return rects
+        starts = np.flatnonzero(np.concatenate([[True], ~joined]))
+        rects = r[starts]
+        rects[:, hi] = np.maximum.reduceat(r[:, hi], starts)
+        groups = g[starts]
+    return rects, groups
 
 
 def to_world(quads: np.ndarray, matrix: np.ndarray) -> np.ndarray:

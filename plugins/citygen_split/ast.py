@@ -192,6 +192,22 @@ class Grammar:
     def rule(self, symbol: str) -> Rule:
         return self.table[symbol]
 
+    @cached_property
+    def translation_invariant(self) -> frozenset[str]:
+        """Symbols whose derivation depends only on the region's size and floor (not on its position or on
+        per-region draws): no ``floors`` and no ``each`` rule is reachable from them. The derivation derives their
+        subtrees once per size (computed once per grammar, not per face)."""
+        graph = {rule.symbol: [s for s, _ in successors(rule.body)] for rule in self.rules}
+        variant = {rule.symbol for rule in self.rules if _position_dependent(rule.body)}
+        changed = True
+        while changed:
+            changed = False
+            for symbol, succ in graph.items():
+                if symbol not in variant and any(s in variant or s not in graph for s in succ):
+                    variant.add(symbol)
+                    changed = True
+        return frozenset(graph) - variant
+
 
 def successors(body: Body) -> list[tuple[str, SourceLocation | None]]:
     """Symbols a body refers to, with where they are written."""
@@ -212,3 +228,15 @@ def successors(body: Body) -> list[tuple[str, SourceLocation | None]]:
         alts = [b for _, b in body.alternatives] + ([body.otherwise] if body.otherwise else [])
         return [s for b in alts for s in successors(b)]
     return []
+
+
+def _position_dependent(body: Body) -> bool:
+    if isinstance(body, Floors):
+        return True
+    if isinstance(body, Choice):
+        return body.each or any(_position_dependent(b) for _, b in body.alternatives) or (
+            body.otherwise is not None and _position_dependent(body.otherwise))
+    if isinstance(body, Case):
+        return any(_position_dependent(b) for _, b in body.branches) or (
+            body.otherwise is not None and _position_dependent(body.otherwise))
+    return False

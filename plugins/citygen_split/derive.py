@@ -17,8 +17,8 @@ from citygen.errors import RulesetError
 from citygen.layout import FacadeLayout, Region
 from citygen.request import FacadeRequest
 from citygen_split.ast import (
-    Body, Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
-    Terminal, successors,
+    Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
+    Terminal,
 )
 from citygen_split.expr import evaluate
 from citygen_split.sizes import aba_count, place, preferred_length, repeat_count, resolve
@@ -64,8 +64,8 @@ class _Derivation:
         self.count = 0
         self.trace: list[str] = []
         self.tracing = trace
-        self.reusable = set() if trace else _translation_invariant(grammar)
-        self.cache: dict[tuple[str, float, float, int], Region] = {}
+        self.reusable = frozenset() if trace else grammar.translation_invariant
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
 
     def run(self) -> FacadeLayout:
         r = self.request
@@ -80,23 +80,22 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:
-                return self.translated(done, x - done.x, y - done.y)
-            done = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
-            done.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = done
-            return done
+                return self.translated(*done, x - done[0].x, y - done[0].y)
+            before = self.count
+            region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
+            region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
+            self.cache[key] = (region, self.count - before)
+            return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
-    def translated(self, region: Region, dx: float, dy: float) -> Region:
-        """A copy of a derived subtree moved by ``(dx, dy)`` (regions of equal symbol, size and floor derive alike)."""
-        self.count += 1
+    def translated(self, region: Region, size: int, dx: float, dy: float) -> Region:
+        """A copy of a derived subtree of ``size`` regions moved by ``(dx, dy)`` (regions of equal symbol, size
+        and floor derive alike)."""
+        self.count += size
         if self.count > MAX_REGIONS:
             raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {region.symbol}", plugin=PLUGIN_ID,
                                where=self.grammar.source, hint="the face is too large for this grammar's sizes")
-        copy = object.__new__(Region)
-        copy.__dict__.update(region.__dict__, x=region.x + dx, y=region.y + dy,
-                             children=tuple(self.translated(c, dx, dy) for c in region.children))
-        return copy
+        return _moved(region, dx, dy)
 
     def derive_region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
                       chain: tuple[str, ...]) -> Region:
@@ -247,31 +246,17 @@ class _Derivation:
         return out
 
 
-def _translation_invariant(grammar: Grammar) -> set[str]:
-    """Symbols whose derivation depends only on the region's size and floor (not on its position or on per-region
-    draws): no ``floors`` and no ``each`` rule is reachable from them. Their subtrees are derived once per size."""
-    graph = {rule.symbol: [s for s, _ in successors(rule.body)] for rule in grammar.rules}
-    variant = {rule.symbol for rule in grammar.rules if _position_dependent(rule.body)}
-    changed = True
-    while changed:
-        changed = False
-        for symbol, succ in graph.items():
-            if symbol not in variant and any(s in variant or s not in graph for s in succ):
-                variant.add(symbol)
-                changed = True
-    return set(graph) - variant
-
-
-def _position_dependent(body: Body) -> bool:
-    if isinstance(body, Floors):
-        return True
-    if isinstance(body, Choice):
-        return body.each or any(_position_dependent(b) for _, b in body.alternatives) or (
-            body.otherwise is not None and _position_dependent(body.otherwise))
-    if isinstance(body, Case):
-        return any(_position_dependent(b) for _, b in body.branches) or (
-            body.otherwise is not None and _position_dependent(body.otherwise))
-    return False
+def _moved(region: Region, dx: float, dy: float) -> Region:
+    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (as :meth:`Region.fast`: no
+    per-field ``object.__setattr__``)."""
+    copy = object.__new__(Region)
+    fields_ = copy.__dict__
+    fields_.update(region.__dict__)
+    fields_["x"] = region.x + dx
+    fields_["y"] = region.y + dy
+    if region.children:
+        fields_["children"] = tuple([_moved(c, dx, dy) for c in region.children])
+    return copy
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:

@@ -112,3 +112,20 @@ def test_plain_walls_are_built_only_for_the_mass_level_of_detail():
     assert build_geometry(mass, faces, "plaster_ochre", None).walls is None
     walls = build_geometry(mass, faces, "plaster_ochre", None, walls=True).walls
     assert len(walls.counts) == 4 and np.isclose(walls.points[:, 2].max(), 3.0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 9), st.integers(0, 9), st.integers(0, 2)), min_size=1, max_size=60,
+                unique_by=lambda c: c[:2]))
+def test_grouped_merge_and_boxes_match_each_group_alone(cells):
+    from citygen.geometry.quads import box_quads_grouped, merge_rects_grouped
+    rects = np.array([(x, y, x + 1, y + 1) for x, y, _ in cells], float)
+    groups = np.array([g for _, _, g in cells])
+    merged, merged_groups = merge_rects_grouped(rects, groups)
+    assert np.all(np.diff(merged_groups) >= 0)
+    depth = np.array([0.0, -0.2, 0.3])
+    quads, quad_groups = box_quads_grouped(merged, depth[merged_groups], merged_groups)
+    for g in np.unique(groups):
+        alone = merge_rects(rects[groups == g])
+        assert np.array_equal(merged[merged_groups == g], alone)
+        assert np.array_equal(quads[quad_groups == g], box_quads(alone, np.full(len(alone), depth[g])))

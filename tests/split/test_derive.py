@@ -1,6 +1,7 @@
 """Derivation: operator layouts, floors and corners, conditions, stochastic rules, limits."""
 from __future__ import annotations
 
+import importlib
 from dataclasses import replace
 
 import pytest
@@ -240,6 +241,19 @@ def test_self_recursion_through_fallback_terminates():
     layout = derive(g, request(9, 3))
     assert [round(t.w, 9) for t in layout.terminals()] == [2, 2, 2, 2, 1]
     assert check_partition(layout) == []
+
+
+def test_region_limit_counts_every_region_of_copied_subtrees(monkeypatch):
+    """Copies of a subtree derived once count all their regions, as if each were derived: a face of 10 bays of
+    3 regions is 1 + 10 * 3 regions; one fewer allowed is an error, exactly that many is not."""
+    derivation = importlib.import_module("citygen_split.derive")
+    g = grammar("X --> repeat(x) { 1: Bay }\nBay --> split(y) { 1: A | '1: B }")
+    assert "Bay" in g.translation_invariant
+    monkeypatch.setattr(derivation, "MAX_REGIONS", 31)
+    assert len(derive(g, request(10, 3)).terminals()) == 20
+    monkeypatch.setattr(derivation, "MAX_REGIONS", 30)
+    with pytest.raises(RulesetError, match="beyond 30 regions"):
+        derive(g, request(10, 3))
 
 
 def test_non_positive_facade_is_an_error():
