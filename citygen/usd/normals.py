@@ -7,30 +7,37 @@ that is not subdivided.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+
+from citygen.geometry.building import MeshData
 
 #: Normals are told apart on a grid of this step (about 0.014 degrees): the faces of one plane share one normal.
 STEP = 2.0 ** -12
 _NEXT, _LAST = [1, 2, 0], [2, 0, 1]
+_CORNERS = np.arange(4)
 
 
 def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
-    """``(len(counts), 3)`` unit normals following the polygons' winding (Newell's method; for a mesh of quads
-    only, as the welded walls are, the cross product of the diagonals, its equal for a planar quad; ``(0, 0, 1)``
-    for a polygon of no area)."""
-    n = len(counts)
-    if not n:
+    """``(len(counts), 3)`` unit normals following the polygons' winding, ``(0, 0, 1)`` for a polygon of no area.
+    Triangles and quads (all the walls and nearly all roofs) take the cross product of the diagonals (a triangle as a
+    quad with its last corner twice), which equals Newell's normal for a planar quad; other polygons Newell's."""
+    counts = np.asarray(counts, dtype=np.int64)
+    if not counts.size:
         return np.zeros((0, 3))
     pts = np.asarray(points, dtype=float)
-    if len(indices) == 4 * n and counts[0] == 4 and counts[-1] == 4 and not np.any(np.asarray(counts) - 4):
-        p = pts[np.asarray(indices).reshape(n, 4)]
+    start = np.cumsum(counts) - counts
+    low, high = counts.min(), counts.max()
+    if low >= 3 and high <= 4:
+        corners = np.asarray(indices).reshape(-1, 4) if low == 4 else \
+            np.asarray(indices)[start[:, None] + np.minimum(_CORNERS, counts[:, None] - 1)]
+        p = pts[corners]
         a, b = p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]
         normal = a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]  # a x b (np.cross is slow on small arrays)
     else:
-        counts = np.asarray(counts, dtype=np.int64)
         p = pts[indices]
-        start = np.cumsum(counts) - counts
-        poly = np.repeat(np.arange(n), counts)
+        poly = np.repeat(np.arange(counts.size), counts)
         q = p[start[poly] + (np.arange(len(indices)) - start[poly] + 1) % counts[poly]]
         normal = np.add.reduceat(np.column_stack([(p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2]),
                                                   (p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0]),
@@ -42,13 +49,27 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
     return normal / length[:, None]
 
 
-def indexed_face_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct face normals ``(k, 3) float32`` (on the ``STEP`` grid, renormalised) and per polygon its index
-    ``(len(counts),) int32`` into them."""
+def face_normals(meshes: Sequence[MeshData]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per mesh, its distinct face normals ``(k, 3) float32`` (on the ``STEP`` grid, renormalised, in grid order)
+    and per polygon the index ``(len(counts),) int32`` into them. The meshes of one building or prototype are done
+    in one batch (a mesh has ~20 polygons, too few for numpy calls of its own)."""
+    meshes = list(meshes)
+    if not meshes:
+        return []
+    sizes = np.array([len(m.counts) for m in meshes])
+    offsets = np.cumsum([0] + [len(m.points) for m in meshes[:-1]])
+    points = np.concatenate([m.points for m in meshes])
+    counts = np.concatenate([m.counts for m in meshes])
+    indices = np.concatenate([np.asarray(m.indices, dtype=np.int64) + o for m, o in zip(meshes, offsets)])
     side = int(2 / STEP) + 1  # grid values -1/STEP .. 1/STEP, shifted to 0 .. side - 1
     grid = np.rint(polygon_normals(points, counts, indices) * (1 / STEP)).astype(np.int64) + side // 2
-    keys, index = np.unique((grid[:, 0] * side + grid[:, 1]) * side + grid[:, 2], return_inverse=True)
-    values = np.column_stack([keys // (side * side), keys // side % side, keys % side]) - side // 2.0
-    values /= np.sqrt(np.einsum("ij,ij->i", values, values))[:, None]
-    return values.astype(np.float32), index.astype(np.int32)
+    key = (grid[:, 0] * side + grid[:, 1]) * side + grid[:, 2]
+    # distinct (mesh, normal) pairs: sorted by mesh, so each mesh's normals are one run of them
+    pairs, pair = np.unique(np.repeat(np.arange(len(meshes)), sizes) * side ** 3 + key, return_inverse=True)
+    key = pairs % side ** 3
+    table = np.column_stack([key // (side * side), key // side % side, key % side]) - side // 2.0
+    table = (table / np.sqrt(np.einsum("ij,ij->i", table, table))[:, None]).astype(np.float32)
+    first = np.searchsorted(pairs, np.arange(len(meshes) + 1) * side ** 3).tolist()
+    local = (pair.reshape(-1) - np.repeat(first[:-1], sizes)).astype(np.int32)
+    ends = np.cumsum(sizes).tolist()
+    return [(table[first[k]:first[k + 1]], local[e - n:e]) for k, (n, e) in enumerate(zip(sizes.tolist(), ends))]

@@ -34,7 +34,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.materials import look
-from citygen.usd.normals import indexed_face_normals
+from citygen.usd.normals import face_normals
 from citygen.usd.uv import planar_st
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
@@ -108,8 +108,9 @@ class _Author:
         prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
 
     def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, material: Sdf.Path | None,
-             label: str | None) -> Sdf.PrimSpec | None:
-        """A Mesh prim (none for an empty mesh)."""
+             label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None) -> Sdf.PrimSpec | None:
+        """A Mesh prim (none for an empty mesh); ``normals``: its :func:`face_normals` when already computed in a
+        batch with other meshes."""
         if not len(mesh.counts):
             return None
         prim = self.prim(parent, name, "Mesh")
@@ -120,7 +121,7 @@ class _Author:
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         self.attr(prim, "extent", T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
-        values, index = indexed_face_normals(pts, mesh.counts, mesh.indices)
+        values, index = normals or face_normals([mesh])[0]
         normals = Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray, Sdf.VariabilityVarying)
         normals.default = Vt.Vec3fArray.FromNumpy(values)
         normals.SetInfo("interpolation", "uniform")
@@ -263,15 +264,14 @@ class StageWriter:
         if isinstance(key, ModuleKey):
             module = modules[key]
             names: set[str] = set()
-            for (label, mat), mesh in module.meshes.items():
-                author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, self.material(mat), label)
+            for ((label, mat), mesh), normals in zip(module.meshes.items(), face_normals(module.meshes.values())):
+                author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, self.material(mat), label, normals)
             if len(module.elements.proto_indices):
                 _instancer(author, proto, module.elements, lambda k: self.prototype(k, modules))
         else:
-            for part in build_prototype(key):
-                if len(part.quads):
-                    author.mesh(proto, part.name, MeshData.from_quads(part.quads), self.material(part.material),
-                                None)
+            parts = [(part, MeshData.from_quads(part.quads)) for part in build_prototype(key) if len(part.quads)]
+            for (part, mesh), normals in zip(parts, face_normals([mesh for _, mesh in parts])):
+                author.mesh(proto, part.name, mesh, self.material(part.material), None, normals)
         self.prototypes[key] = proto.path
         return proto.path
 
@@ -385,24 +385,27 @@ def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecor
         vtype, v = _value(value)
         author.attr(prim, f"citygen:{key}", vtype, v)
     body = prim
+    walls = geo.walls if lod else None
+    batch = [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
+    normals = face_normals(batch)  # one batch per building, in this order
     if lod:
         lods = Sdf.VariantSetSpec(prim, "lod")
         body, mass = Sdf.VariantSpec(lods, "full").primSpec, Sdf.VariantSpec(lods, "mass").primSpec
         prim.variantSetNameList.prependedItems.append("lod")
         prim.variantSelections["lod"] = "full"
         wall = next((mat for label, mat in geo.meshes if label == "wall"), "concrete")
-        if geo.walls is not None and author.mesh(mass, "Walls", geo.walls, material(wall), "wall") is not None:
+        if walls is not None and author.mesh(mass, "Walls", walls, material(wall), "wall", normals[-1]) is not None:
             counts["meshes"] += 1
-            counts["polygons"] += len(geo.walls.counts)
+            counts["polygons"] += len(walls.counts)
     if geo.meshes:
         facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
-        for (label, mat), mesh in geo.meshes.items():
+        for ((label, mat), mesh), mesh_normals in zip(geo.meshes.items(), normals):
             counts["meshes"] += author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, material(mat),
-                                            label) is not None
+                                            label, mesh_normals) is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        author.mesh(prim, "Roof", geo.roof, material(geo.roof_material), "roof")
+        author.mesh(prim, "Roof", geo.roof, material(geo.roof_material), "roof", normals[len(geo.meshes)])
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances

@@ -9,7 +9,8 @@ from pxr import Usd, UsdGeom
 
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
-from citygen.usd.normals import STEP, indexed_face_normals, polygon_normals
+from citygen.geometry.building import MeshData
+from citygen.usd.normals import STEP, face_normals, polygon_normals
 
 SQUARE = np.array([[0, 0, 0], [2, 0, 1], [2, 1, 1], [0, 1, 0]], dtype=float)  # a quad rising towards +x
 
@@ -51,7 +52,8 @@ def test_indexed_normals_are_unit_and_within_the_grid_step_of_each_face(directio
             corner = offset + shift * u
             quads.append([corner, corner + 2 * u, corner + 2 * u + v, corner + v])
     points = np.array(quads, dtype=np.float32).reshape(-1, 3)
-    values, index = indexed_face_normals(points, np.full(len(quads), 4), np.arange(len(points)))
+    mesh = MeshData(points, np.full(len(quads), 4, np.int32), np.arange(len(points), dtype=np.int32))
+    (values, index), = face_normals([mesh])
     assert values.dtype == np.float32 and index.dtype == np.int32 and len(index) == len(quads)
     assert np.allclose(np.linalg.norm(values, axis=1), 1.0, atol=1e-6)
     assert len(values) == len(np.unique(values, axis=0))
@@ -63,10 +65,24 @@ def test_the_faces_of_a_box_share_six_normals():
     box = np.array([[x, y, z] for x in (0, 4) for y in (0, 3) for z in (0, 2)], dtype=np.float32) + 500
     faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
     halves = [[f[0], f[1], f[2]] for f in faces] + [[f[0], f[2], f[3]] for f in faces]
-    values, index = indexed_face_normals(box, np.full(12, 3), np.array(halves).ravel())
+    mesh = MeshData(box, np.full(12, 3, np.int32), np.array(halves, dtype=np.int32).ravel())
+    (values, index), = face_normals([mesh])
     assert len(values) == 6 and np.array_equal(index[:6], index[6:])
     assert sorted(map(tuple, values.astype(int).tolist())) == sorted(
         [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)])
+
+
+def test_a_batch_gives_each_mesh_its_own_normals_as_alone():
+    """A building's meshes are done in one batch; each gets exactly what it would get alone."""
+    rng = np.random.default_rng(5)
+    meshes = [MeshData(rng.normal(size=(12, 3)).astype(np.float32), np.array(c, np.int32),
+                       rng.integers(0, 12, sum(c)).astype(np.int32)) for c in ([4, 4, 3], [5], [], [3, 3, 4, 6])]
+    for (values, index), mesh in zip(face_normals(meshes), meshes):
+        (alone, alone_index), = face_normals([mesh])
+        assert np.array_equal(values, alone) and np.array_equal(index, alone_index)
+        assert len(index) == len(mesh.counts) and len(values) == len(np.unique(index))
+        if len(mesh.counts):
+            assert np.allclose(values[index], polygon_normals(mesh.points, mesh.counts, mesh.indices), atol=STEP)
 
 
 def test_every_written_mesh_has_outward_face_normals(small_scene, test_registry, tmp_path):
