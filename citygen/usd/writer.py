@@ -122,9 +122,9 @@ class _Author:
         self.attr(prim, "extent", T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
         values, index = normals or face_normals([mesh])[0]
-        normals = Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray, Sdf.VariabilityVarying)
-        normals.default = Vt.Vec3fArray.FromNumpy(values)
-        normals.SetInfo("interpolation", "uniform")
+        spec = Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray, Sdf.VariabilityVarying)
+        spec.default = Vt.Vec3fArray.FromNumpy(values)
+        spec.SetInfo("interpolation", "uniform")
         self.attr(prim, "primvars:normals:indices", T.IntArray, Vt.IntArray.FromNumpy(index))
         if self.uvs:
             st = Sdf.AttributeSpec(prim, "primvars:st", T.TexCoord2fArray, Sdf.VariabilityVarying)
