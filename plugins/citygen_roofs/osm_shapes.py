@@ -77,10 +77,9 @@ def _ends(part: Polygon, party: frozenset[int], orientation: str | None) -> int 
     return short if orientation in (None, "along") else 1 - short
 
 
-def _gabled(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int], orientation: str | None,
-            why: str) -> MeshData:
+def _gabled(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int], why: str) -> MeshData:
     note(f"{why}: the gabled roof instead")
-    return skeleton_roof(part, top, spec, "gabled", True, party, orientation)
+    return skeleton_roof(part, top, spec, "gabled", True, party, spec.orientation)
 
 
 def _ring(part: Polygon) -> np.ndarray:
@@ -89,13 +88,13 @@ def _ring(part: Polygon) -> np.ndarray:
     return np.asarray(part.exterior.coords)[:-1, :2]
 
 
-def saltbox(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int], orientation: str | None) -> MeshData:
+def saltbox(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
     """An asymmetric gable over a rectangle-like part: the long slope (facing ``roof:direction``) at the pitch, the
     ridge ``SALTBOX_RIDGE`` of the depth in from its eave."""
     xy = _ring(part)
-    ends = _ends(part, party, orientation)
+    ends = _ends(part, party, spec.orientation)
     if ends is None:
-        return _gabled(part, top, spec, party, orientation, _why(part))
+        return _gabled(part, top, spec, party, _why(part))
     long = _facing(xy, ((ends + 1) % 4, (ends + 3) % 4), spec.direction)
     short = (long + 2) % 4
     depth = _depth(xy, long)
@@ -105,15 +104,14 @@ def saltbox(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int], or
     return piecewise_roof(part, top, spec, *envelope(planes))
 
 
-def side_hipped(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int],
-                orientation: str | None) -> MeshData:
+def side_hipped(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
     """A gabled roof over a rectangle-like part with a hip at the end facing ``roof:direction``: party walls at
     the ends are gables (two party walls: the gabled roof). The hip is at the pitch on a short side, steeper on a
     long one (weight ``(short/long)^2``, as for the hipped roof)."""
     xy = _ring(part)
-    ends = _ends(part, party, orientation)
+    ends = _ends(part, party, spec.orientation)
     if ends is None:
-        return _gabled(part, top, spec, party, orientation, _why(part))
+        return _gabled(part, top, spec, party, _why(part))
     length = np.hypot(*(np.roll(xy, -1, axis=0) - xy).T)
     pair = np.array([length[0] + length[2], length[1] + length[3]])
     short = int(np.argmin(pair))
@@ -126,13 +124,12 @@ def side_hipped(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]
     return piecewise_roof(part, top, spec, *envelope(planes))
 
 
-def crosspitched(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int],
-                 orientation: str | None) -> MeshData:
+def crosspitched(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
     """Two gabled roofs crossing over a rectangle-like part, ridges at one height: every wall is a gable, so
     party walls need nothing."""
     xy = _ring(part)
     if not rectangle_like(part):
-        return _gabled(part, top, spec, party, orientation, _why(part))
+        return _gabled(part, top, spec, party, _why(part))
     depth = [_depth(xy, k) for k in range(2)]
     ridge = spec.slope * min(depth) / 2
     planes = np.array([edge_plane(xy[k], xy[(k + 1) % 4], ridge / (depth[k % 2] / 2)) for k in range(4)])
@@ -145,14 +142,15 @@ def crosspitched(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int
     return piecewise_roof(part, top, spec, lines, plane_at)
 
 
-def butterfly(part: Polygon, top: float, spec: RoofSpec, orientation: str | None) -> MeshData:
+def butterfly(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] = frozenset()) -> MeshData:
     """An inverted gable: the valley at the wall top along the middle of the part's minimum rotated rectangle
-    (across it for ``roof:orientation=across``), both planes rising at the pitch to the eaves."""
+    (across it for ``roof:orientation=across``), both planes rising at the pitch to the eaves; ``party`` makes no
+    difference (no plane slopes down onto a wall)."""
     _ring(part)
     corners = np.asarray(part.minimum_rotated_rectangle.exterior.coords)[:4, :2]
     sides = [corners[1] - corners[0], corners[2] - corners[1]]
     long = int(math.hypot(*sides[1]) > math.hypot(*sides[0]))
-    axis = sides[1 - long] if orientation == "across" else sides[long]
+    axis = sides[1 - long] if spec.orientation == "across" else sides[long]
     axis = axis / math.hypot(*axis)
     centre = corners.mean(axis=0)
     n = np.array([-axis[1], axis[0]]) * spec.slope
@@ -226,52 +224,41 @@ def _why(part: Polygon) -> str:
 
 
 class _PlaneRoof(RoofBuilder):
-    """A roof of :mod:`citygen_roofs.osm_shapes` over every part of the outline."""
+    """A roof of :mod:`citygen_roofs.osm_shapes` over every part of the outline: ``shape(part, top, spec, party)``."""
 
-    oriented = False
+    shape = staticmethod(sawtooth)
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        return _merge([self.part(part, top, spec, party) for part, party in _parts(outline, spec.party)])
+        return _merge([self.shape(part, top, spec, party) for part, party in _parts(outline, spec.party)])
 
 
 class SaltboxRoof(_PlaneRoof):
     id = "saltbox"
     description = "saltbox roof: an asymmetric gable, its long slope facing roof:direction (default north)"
     oriented = True
-
-    def part(self, part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-        return saltbox(part, top, spec, party, spec.orientation)
+    shape = staticmethod(saltbox)
 
 
 class SideHippedRoof(_PlaneRoof):
     id = "side_hipped"
     description = "side-hipped roof: gabled, with a hip at the end facing roof:direction (default north)"
     oriented = True
-
-    def part(self, part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-        return side_hipped(part, top, spec, party, spec.orientation)
+    shape = staticmethod(side_hipped)
 
 
 class CrosspitchedRoof(_PlaneRoof):
     id = "crosspitched"
     description = "crosspitched roof: two gabled roofs crossing, a gable on every side"
-
-    def part(self, part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-        return crosspitched(part, top, spec, party, spec.orientation)
+    shape = staticmethod(crosspitched)
 
 
 class ButterflyRoof(_PlaneRoof):
     id = "butterfly"
     description = "butterfly roof: an inverted gable, a valley along the middle and high eaves"
-
-    def part(self, part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-        return butterfly(part, top, spec, spec.orientation)
+    shape = staticmethod(butterfly)
 
 
 class SawtoothRoof(_PlaneRoof):
     id = "sawtooth"
     description = "sawtooth roof: parallel teeth, slopes facing roof:direction, vertical glazed walls"
-
-    def part(self, part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
-        return sawtooth(part, top, spec, party)
