@@ -158,7 +158,12 @@ def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np
     m = len(bl) - 1
     line, lo, hi = _line_costs(inst, terms, axis, bl, n)
     masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi))).take(order), starts)
-    _, first = np.unique(masks, return_index=True)
+    by_mask = masks.argsort(kind="stable")  # each distinct mask's first group (np.unique's return_index, leaner)
+    ranked = masks.take(by_mask)
+    new = np.empty(ranked.size, dtype=bool)
+    new[0] = True
+    np.not_equal(ranked[1:], ranked[:-1], out=new[1:])
+    first = by_mask.compress(new)
     top = first.take(score.take(first).argsort(kind="stable")[:max_groupings])
     return line, masks.take(top).tolist()
 
