@@ -118,9 +118,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
                 instances = list(zip(sym.boxes.take(inside, 0).tolist(), terms.tolist(), group))
                 scores = dict(zip(group, (-sym.importance.take(inside)).tolist()))
             line, rows = _small_coverage(instances, scores, axis, bl, n, max_groupings)
-        groupings = {tuple(range(1, m))}  # a grouping = the atom boundaries kept
-        bits = [(k, 1 << (m - 1 - k)) for k in range(1, m)]
-        groupings.update(tuple(k for k, bit in bits if not row & bit) for row in rows)
+        every = tuple(range(1, m))
+        groupings = {every}  # a grouping = the atom boundaries kept
+        groupings.update(_kept(row, m, every) for row in rows)
         atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         piece = _Pieces(index, box, axis, bl, atom_sigs)
@@ -158,7 +158,12 @@ def _coverage(inst: np.ndarray, terms: np.ndarray, order: np.ndarray, starts: np
     m = len(bl) - 1
     line, lo, hi = _line_costs(inst, terms, axis, bl, n)
     masks = np.bitwise_or.reduceat(((1 << (m - lo)) - (1 << (m - hi))).take(order), starts)
-    _, first = np.unique(masks, return_index=True)
+    by_mask = masks.argsort(kind="stable")  # each distinct mask's first group (np.unique's return_index, leaner)
+    ranked = masks.take(by_mask)
+    new = np.empty(ranked.size, dtype=bool)
+    new[0] = True
+    np.not_equal(ranked[1:], ranked[:-1], out=new[1:])
+    first = by_mask.compress(new)
     top = first.take(score.take(first).argsort(kind="stable")[:max_groupings])
     return line, masks.take(top).tolist()
 
@@ -187,9 +192,7 @@ def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, 
     the kept rule is the one ``_add_all`` keeps."""
     low, lam = actions.bound
     groupings = list(groupings)
-    twice = [2 * v for v in bl]  # boundary k has equal-size neighbours p, q when 2 bl[k] == bl[p] + bl[q]
-    bounds = [low + lam * sum([line[k] for p, k, q in zip((0, *keep[:-1]), keep, (*keep[1:], m))
-                               if twice[k] != bl[p] + bl[q]]) for keep in groupings]
+    bounds = [low + lam * _kept_line_cost(keep, bl, m, line) for keep in groupings]
     seen: dict[tuple[int, ...], int] = {}
     base = axis << 20
     for g in sorted(range(len(bounds)), key=bounds.__getitem__):
@@ -208,6 +211,41 @@ def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, 
                 continue
             seen[key] = rank
             actions.add(axis, bl, e, sg, line, rank=rank)
+
+
+def _kept(row: int, m: int, every: tuple[int, ...]) -> tuple[int, ...]:
+    """The boundaries 1..m-1 (``every``) whose bit (boundary k at bit m - 1 - k) is clear in ``row``, taken run by
+    run of set bits (a row's set bits are the boundaries inside its instances: a few runs)."""
+    if not row:
+        return every
+    kept: list[int] = []
+    start = 0  # every[start] is the first boundary not yet decided
+    while row:
+        top = row.bit_length()  # the highest run of set bits: bits low..top-1, boundaries m-top..m-1-low
+        low = (~row & ((1 << top) - 1)).bit_length()
+        kept += every[start:m - top - 1]
+        start = m - low - 1
+        row &= (1 << low) - 1
+    kept += every[start:]
+    return tuple(kept)
+
+
+def _kept_line_cost(keep: tuple[int, ...], bl: list[int], m: int, line: list[float]) -> float:
+    """The line costs of the boundaries ``keep`` that no merge of equal-size neighbours can drop (boundary k
+    between kept neighbours p, q goes when bl[k] - bl[p] == bl[q] - bl[k]), summed left to right."""
+    s = 0
+    if not keep:
+        return s
+    p, k = bl[0], keep[0]
+    c = bl[k]
+    for q in keep[1:]:
+        d = bl[q]
+        if c + c != p + d:
+            s += line[k]
+        p, k, c = c, q, d
+    if c + c != p + bl[m]:
+        s += line[k]
+    return s
 
 
 def _line_costs(inst: np.ndarray, terms: np.ndarray, axis: int, bl: list[int], n: int

@@ -198,3 +198,22 @@ def test_memoised_exploitation_chooses_as_a_fresh_evaluation(layout_seed, seed):
         result = search.run("adp", 120, seed)
         return result.cost, {s: (a.op, a.axis, a.items) for s, a in result.rules.items()}, result.history
     assert run(True) == run(False)
+
+
+def test_kept_boundaries_and_their_line_cost_match_the_bitwise_definitions():
+    """``_kept`` (run by run of set bits) keeps exactly the boundaries whose bit is clear, and ``_kept_line_cost``
+    sums, left to right, the line costs of the kept boundaries whose neighbouring children differ in size."""
+    from citygen_inverse.actions import _kept, _kept_line_cost
+
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        m = int(rng.integers(2, 40))
+        every = tuple(range(1, m))
+        row = int(rng.integers(0, 1 << (m - 1))) if rng.random() < 0.8 else 0
+        expected = tuple(k for k in every if not row >> (m - 1 - k) & 1)
+        assert _kept(row, m, every) == expected
+        bl = np.cumsum(rng.integers(1, 3, m + 1)).tolist()
+        line = rng.random(m + 1).tolist()
+        ends = (0, *expected, m)
+        want = sum([line[k] for p, k, q in zip(ends, ends[1:], ends[2:]) if bl[k] - bl[p] != bl[q] - bl[k]])
+        assert _kept_line_cost(expected, bl, m, line) == want
