@@ -79,7 +79,7 @@ def main() -> int:
         g = extract_grammar(layout, "greedy")
         a2 = extract_grammar(layout, "adp", 2000, seed=0)
         a10 = extract_grammar(layout, "adp", args.big, seed=0) if args.big and i < args.big_limit else None
-        rows.append((f.stem, g.terminals, g, a2, a10, f.stem in args.extra))
+        rows.append((f.stem, g.terminals, g, a2, a10, f.stem in args.extra, layout.meta["annotation_agreement"]))
         print(f"{f.stem}: {g.terminals} T | greedy {g.cost:.1f}/{g.rules}/{g.seconds * 1e3:.0f} ms "
               f"(cpu {g.cpu_seconds * 1e3:.0f}) | ADP2K {a2.cost:.1f}/{a2.rules}/{a2.seconds:.2f} s "
               f"(cpu {a2.cpu_seconds:.2f}) {100 * (1 - a2.cost / g.cost):.1f}% below greedy"
@@ -90,7 +90,11 @@ def main() -> int:
     gain = lambda a, g: 1 - a.cost / g.cost  # noqa: E731
     big = [r for r in base if r[4]]
     lines = [
-        f"* {len(base)} facades, mean terminals {mean(r[1] for r in base):.0f} (max {max(r[1] for r in base)})",
+        f"* {len(base)} facades, mean terminals {mean(r[1] for r in base):.0f} (max {max(r[1] for r in base)}); "
+        f"the import keeps {mean(r[6]['pixels'] for r in base):.3f} of the annotation's pixels and "
+        f"{mean(r[6]['element_pixels'] for r in base):.3f} of its element pixels on average (at least "
+        f"{min(r[6]['pixels'] for r in base):.3f} / {min(r[6]['element_pixels'] for r in base):.3f}; "
+        "`meta.annotation_agreement`)",
         f"* greedy: mean cost {mean(r[2].cost for r in base):.1f}, {mean(r[2].rules for r in base):.0f} rules; "
         f"median {median(r[2].seconds for r in base) * 1e3:.0f} ms wall / "
         f"{median(r[2].cpu_seconds for r in base) * 1e3:.0f} ms cpu, max {max(r[2].seconds for r in base) * 1e3:.0f} ms",
@@ -117,7 +121,7 @@ def main() -> int:
                "| facade | #T | greedy cost | rules | s (wall / cpu) | ADP 2K cost | rules | s | % below greedy "
                f"| ADP {args.big // 1000}K cost | rules | s |",
                "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-        for name, n, g, a2, a10, extra in rows:
+        for name, n, g, a2, a10, extra, _ in rows:
             out.append(f"| {name}{' (extra)' if extra else ''} | {n} | {_fmt(g)} | {_fmt(a2)} | "
                        f"{100 * gain(a2, g):.1f} | {_fmt(a10)} |")
         out += ["", "## Summary (base rows)", "", *lines]

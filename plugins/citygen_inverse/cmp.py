@@ -10,6 +10,8 @@ z-order of ``label_names.txt``). The import (documented in ``docs/inverse.md``):
    mean (facade edges stay fixed); boxes that collapse to zero size are dropped and counted;
 3. regularisation (wu2014 §3.3): boxes of one label whose widths (heights) differ by less than ``regularize``
    of the facade size are made exactly equal by a QP that moves the snapped lines as little as possible;
+   every tolerance is at most its share (``element_share``) of the median window size on that axis, so a
+   facade of many small elements is regularised at the scale of its elements, not of the whole facade;
 4. boxes are painted on the grid of snapped lines in z-order; uncovered cells are wall;
 5. the painted grid is cut recursively at every line no object crosses (y first, then x); a block that no line
    separates (a pinwheel, wu2014 §6.3) is cut into maximal rectangles and is explained by the extractor's
@@ -44,6 +46,10 @@ DEFAULT_LABELS = {1: ("background", 1), 2: ("facade", 2), 3: ("window", 10), 4: 
 _ROW_LABELS = ("window", "door", "shop")
 #: Output grid of the imported lines (m).
 UNIT = 1e-4
+#: Upper bounds of the snap, align and equal-size tolerances as shares of the median window size on each axis
+#: (median of all boxes with fewer than two windows). CMP's annotation noise is 1-3 px (same-row windows: median
+#: height difference 1 px, 75th percentile 2 px), while 1 % of a facade of 38 window rows is half a window.
+ELEMENT_SHARE = (0.2, 0.4, 0.5)
 
 
 @dataclass(frozen=True)
@@ -178,10 +184,55 @@ def _png_agreement(png: Path, layout: FacadeLayout, box_px: tuple[float, float, 
     return float(np.mean(got == expected)) if got.size else 0.0
 
 
+def _tolerances(boxes: np.ndarray, names: list[str], extent: tuple[float, float],
+                shares: tuple[float, float, float], element_share: tuple[float, float, float] | None
+                ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(snap, align, size) in pixels for x and for y: ``shares`` of the facade extent, each at most its
+    ``element_share`` of the median window extent on that axis (of all boxes with fewer than two windows)."""
+    sizes = boxes[:, 2:] - boxes[:, :2]
+    solid = np.all(sizes > 0, axis=1)
+    windows = solid & np.array([n == "window" for n in names], dtype=bool)
+    ref = sizes[windows] if windows.sum() >= 2 else sizes[solid]
+    out = []
+    for axis in (0, 1):
+        tol = [share * extent[axis] for share in shares]
+        if element_share is not None and len(ref):
+            scale = float(np.median(ref[:, axis]))
+            tol = [min(t, e * scale) for t, e in zip(tol, element_share)]
+        out.append(tuple(tol))
+    return out[0], out[1]
+
+
+def _annotation_agreement(layout: FacadeLayout, annotated: list, fw: float, fh: float) -> dict[str, float]:
+    """How much of the annotation the layout keeps, on the facade's pixel grid: the share of all pixels, and of
+    the pixels that are an element in the annotation or the layout, whose label is the same (the annotation's
+    boxes painted in z-order, uncovered pixels wall)."""
+    w, h = max(int(round(fw)), 1), max(int(round(fh)), 1)
+    codes = {"wall": 0}
+    want = np.zeros((h, w), dtype=np.int16)
+    for part, (x0, y0, x1, y1) in annotated:
+        if x1 > x0 and y1 > y0:  # boxes outside the facade box are clipped to nothing
+            code = codes.setdefault(CMP_TO_LABEL[part.name], len(codes))
+            want[int(round(y0)):int(round(y1)), int(round(x0)):int(round(x1))] = code
+    got = np.zeros((h, w), dtype=np.int16)
+    sx, sy = w / layout.width, h / layout.height
+    for t in layout.terminals():
+        code = codes.setdefault(t.label, len(codes))
+        got[int(round(t.y * sy)):int(round((t.y + t.h) * sy)), int(round(t.x * sx)):int(round((t.x + t.w) * sx))] = code
+    same = want == got
+    element = (want > 0) | (got > 0)
+    return {"pixels": round(float(same.mean()), 4),
+            "element_pixels": round(float(same[element].mean()) if element.any() else 1.0, 4)}
+
+
 def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: float | None = None,
                floor_height: float = 3.0, snap: float = 0.01, align: float = 0.025, regularize: float = 0.03,
+               element_share: tuple[float, float, float] | None = ELEMENT_SHARE,
                labels_path: str | Path | None = None) -> FacadeLayout:
-    """Read a CMP annotation as a FacadeLayout in metres whose terminals partition the facade exactly."""
+    """Read a CMP annotation as a FacadeLayout in metres whose terminals partition the facade exactly.
+
+    ``snap``, ``align`` and ``regularize`` are shares of the facade's width (height), each capped by its share
+    in ``element_share`` of the median window width (height); ``None`` lifts the caps."""
     xml_path = Path(xml_path)
     labels = read_label_table(Path(labels_path)) if labels_path else _find_labels(xml_path)
     objects = parse_cmp_xml(xml_path.read_text(), str(xml_path), labels)
@@ -203,15 +254,17 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     parts = [b for b in boxes if b.name not in ("facade", "background")]
     clipped = np.array([(max(b.x0, fx0) - fx0, max(b.y0, fy0) - fy0, min(b.x1, fx1) - fx0, min(b.y1, fy1) - fy0)
                         for b in parts]).reshape(-1, 4)
-    keep = (clipped[:, 2] - clipped[:, 0] > snap * fw) & (clipped[:, 3] - clipped[:, 1] > snap * fh)
+    annotated = sorted(zip(parts, clipped.tolist()), key=lambda pc: (pc[0].z, pc[0].order))
+    tx, ty = _tolerances(clipped, [p.name for p in parts], (fw, fh), (snap, align, regularize), element_share)
+    keep = (clipped[:, 2] - clipped[:, 0] > tx[0]) & (clipped[:, 3] - clipped[:, 1] > ty[0])
     dropped = int((~keep).sum())
     parts = [p for p, k in zip(parts, keep) if k]
     clipped = clipped[keep]
     names = [p.name for p in parts]
-    xr = regularize_axis(clipped[:, 0], clipped[:, 2], clipped[:, [1, 3]], names, fw,
-                         snap=snap * fw, align=align * fw, size=regularize * fw)
-    yr = regularize_axis(clipped[:, 1], clipped[:, 3], clipped[:, [0, 2]], names, fh,
-                         snap=snap * fh, align=align * fh, size=regularize * fh)
+    xr = regularize_axis(clipped[:, 0], clipped[:, 2], clipped[:, [1, 3]], names, fw, snap=tx[0], align=tx[1],
+                         size=tx[2])
+    yr = regularize_axis(clipped[:, 1], clipped[:, 3], clipped[:, [0, 2]], names, fh, snap=ty[0], align=ty[1],
+                         size=ty[2])
     xp, yp = np.stack([xr.lo, xr.hi], axis=1), np.stack([yr.lo, yr.hi], axis=1)
     alive = (xp[:, 0] < xp[:, 1]) & (yp[:, 0] < yp[:, 1])
     dropped += int((~alive).sum())
@@ -237,6 +290,7 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     meta = {"source": xml_path.name, "importer": "cmp", "metres_per_pixel": scale,
             "scale_from": f"width {width} m" if width else f"{max(rows, 1)} rows x {floor_height} m",
             "image_size": [W, H] if size else None, "objects": len(objects), "dropped_boxes": dropped,
+            "tolerances_px": {"x": [round(t, 2) for t in tx], "y": [round(t, 2) for t in ty]},
             "regularization": {"x": x_status, "y": y_status}, "pinwheel_blocks": len(pinwheels),
             "citation": "R. Tylecek, R. Sara. Spatial Pattern Templates for Recognition of Objects with Regular "
                         "Structure. Proc. GCPR 2013."}
@@ -245,6 +299,7 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     problems = check_partition(layout)
     if problems:
         raise LayoutError("import did not give a partition: " + "; ".join(problems[:3]), where=str(xml_path))
+    meta["annotation_agreement"] = _annotation_agreement(layout, annotated, fw, fh)
     if size:
         meta["label_map_agreement"] = round(_png_agreement(png_path, layout, (fx0, fy0, fx1, fy1), labels), 4)
     return layout

@@ -202,3 +202,50 @@ def test_window_columns_get_one_floor_pitch(name, pitches):
     for ys in tall:
         steps = np.diff(ys)
         assert len({round(p, 4) for p in steps if p < 1.5 * steps.min()}) <= pitches  # (not a skipped floor)
+
+
+def test_regression_small_elements_keep_their_shape():
+    """Regression: tolerances of 1-3 % of the facade height (10-30 px) on cmp_b0045's 38 rows of 17 px windows
+    merged window rows and moved edges by half a window: 46 % of the annotated element pixels were lost. Capped
+    at shares of the median window size (``ELEMENT_SHARE``) the y tolerances are 3-9 px."""
+    capped = import_cmp(DATA / "cmp_b0045.xml")
+    uncapped = import_cmp(DATA / "cmp_b0045.xml", element_share=None)
+    assert uncapped.meta["annotation_agreement"]["element_pixels"] < 0.6  # the old behaviour, for the record
+    assert capped.meta["annotation_agreement"]["element_pixels"] > 0.78
+    assert capped.meta["label_map_agreement"] > 0.85
+    assert max(capped.meta["tolerances_px"]["y"]) < 10 < max(uncapped.meta["tolerances_px"]["y"])
+    assert capped.meta["dropped_boxes"] < uncapped.meta["dropped_boxes"]
+    assert check_partition(capped) == []
+
+
+def test_element_caps_leave_facades_of_large_elements_alone():
+    """cmp_b0005's windows are large against 1 % of its size: the caps do not bind and the import is unchanged."""
+    capped = import_cmp(DATA / "cmp_b0005.xml")
+    uncapped = import_cmp(DATA / "cmp_b0005.xml", element_share=None)
+    assert capped.meta["tolerances_px"] == uncapped.meta["tolerances_px"]
+    assert capped.dumps() == uncapped.dumps()
+
+
+def test_tolerances_are_capped_by_the_median_window():
+    from citygen_inverse.cmp import _tolerances
+    boxes = np.array([[0, 0, 20, 10], [30, 0, 50, 12], [60, 0, 80, 14], [0, 20, 900, 21]], dtype=float)
+    names = ["window", "window", "window", "cornice"]
+    tx, ty = _tolerances(boxes, names, (1000.0, 500.0), (0.01, 0.025, 0.03), (0.2, 0.4, 0.5))
+    assert tx == pytest.approx((4.0, 8.0, 10.0))  # median window width 20 px
+    assert ty == pytest.approx((2.4, 4.8, 6.0))  # median window height 12 px
+    tx, ty = _tolerances(boxes, names, (1000.0, 500.0), (0.01, 0.025, 0.03), None)
+    assert tx == pytest.approx((10.0, 25.0, 30.0)) and ty == pytest.approx((5.0, 12.5, 15.0))
+
+
+def test_regression_boxes_outside_the_facade_do_not_count_in_the_agreement(tmp_path):
+    """Regression: a box left of the facade box clipped to a negative width was painted as a slice ``[0:-k]``
+    over the whole facade, so the annotation agreement fell to 0.15 on some facades."""
+    def obj(x0, x1, y0, y1, label):  # CMP order: <x> runs down the photo, <y> across
+        return (f"<object><points><x>{y0}</x><x>{y1}</x><y>{x0}</y><y>{x1}</y></points><label>{label}</label>"
+                "</object>")
+    xml = tmp_path / "f.xml"
+    windows = [obj(0.2 + 0.3 * i, 0.35 + 0.3 * i, 0.2 + 0.3 * j, 0.4 + 0.3 * j, 3) for i in range(2) for j in range(2)]
+    xml.write_text(obj(0.1, 0.9, 0.1, 0.9, 2) + "".join(windows) + obj(0.0, 0.05, 0.3, 0.5, 11))
+    layout = import_cmp(xml, labels_path=DATA / "label_names.txt")
+    assert layout.count("window") == 4
+    assert layout.meta["annotation_agreement"] == {"pixels": 1.0, "element_pixels": 1.0}
