@@ -9,7 +9,8 @@ planar pieces (:func:`citygen_roofs.planes.piecewise_roof`):
 * ``crosspitched``: two gabled roofs crossing, both ridges at one height (the one across the short span at the
   pitch): a gable on every side, valleys to the corners.
 * ``butterfly``: an inverted gable: a valley at the wall top along the middle of the minimum rotated rectangle
-  (``roof:orientation=across``: across it), both planes rising at the pitch to high eaves, vertical walls below.
+  (``roof:orientation=across``: across it), both planes rising at the pitch to high eaves, vertical walls below;
+  turned when a party wall lies on the valley line.
 * ``sawtooth``: parallel teeth across the building, each a slope at the pitch facing ``roof:direction`` (default:
   out over the longest wall that is no party wall) from its gutter at the wall top up to a vertical glazed wall
   as high as the tooth; ``SAWTOOTH_TOOTH`` (6 m) nominal tooth width, as many teeth as fit.
@@ -144,18 +145,34 @@ def crosspitched(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int
 
 def butterfly(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] = frozenset()) -> MeshData:
     """An inverted gable: the valley at the wall top along the middle of the part's minimum rotated rectangle
-    (across it for ``roof:orientation=across``), both planes rising at the pitch to the eaves; ``party`` makes no
-    difference (no plane slopes down onto a wall)."""
+    (across it for ``roof:orientation=across``), both planes rising at the pitch to the eaves. A valley along a
+    party wall would drain onto the neighbour: the valley turns across, else the part gets the gabled roof."""
+    rings = [np.asarray(r.coords)[:-1, :2] for r in (part.exterior, *part.interiors)]
     _ring(part)
     corners = np.asarray(part.minimum_rotated_rectangle.exterior.coords)[:4, :2]
     sides = [corners[1] - corners[0], corners[2] - corners[1]]
     long = int(math.hypot(*sides[1]) > math.hypot(*sides[0]))
-    axis = sides[1 - long] if spec.orientation == "across" else sides[long]
-    axis = axis / math.hypot(*axis)
+    first = 1 - long if spec.orientation == "across" else long
     centre = corners.mean(axis=0)
-    n = np.array([-axis[1], axis[0]]) * spec.slope
-    plane = np.array([n[0], n[1], -float(n @ centre)])
-    return piecewise_roof(part, top, spec, *envelope([plane, -plane], lowest=False))
+    for turned, k in enumerate((first, 1 - first)):
+        axis = sides[k] / math.hypot(*sides[k])
+        n = np.array([-axis[1], axis[0]])
+        if _party_on_line(rings, party, centre, n):
+            continue
+        if turned:
+            note("the butterfly roof's valley would lie along a party wall: it runs across instead")
+        n = n * spec.slope
+        plane = np.array([n[0], n[1], -float(n @ centre)])
+        return piecewise_roof(part, top, spec, *envelope([plane, -plane], lowest=False))
+    return _gabled(part, top, spec, party, "the butterfly roof's valley lies along a party wall either way")
+
+
+def _party_on_line(rings: list[np.ndarray], party: frozenset[int], point: np.ndarray, normal: np.ndarray) -> bool:
+    """Whether a party wall (edge index over ``rings``) lies on the line through ``point`` across ``normal``."""
+    tol = 1e-6 * max(1.0, float(np.ptp(np.concatenate(rings), axis=0).max()))
+    edges = [(r[k], r[(k + 1) % len(r)]) for r in rings for k in range(len(r))]
+    return any(abs((a - point) @ normal) < tol and abs((b - point) @ normal) < tol
+               for index, (a, b) in enumerate(edges) if index in party)
 
 
 def sawtooth(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -> MeshData:
@@ -178,7 +195,7 @@ def sawtooth(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int]) -
                 note(f"roof:direction={spec.direction:g} brings a gutter down onto a party wall: the teeth face "
                      f"{math.degrees(math.atan2(down[0], down[1])) % 360:.0f} degrees instead")
             return piecewise_roof(part, top, spec, teeth.cuts(), teeth.plane_at(spec.slope))
-    return _gabled(part, top, spec, party, None, "every direction brings a gutter down onto a party wall")
+    return _gabled(part, top, spec, party, "every direction brings a gutter down onto a party wall")
 
 
 class _Teeth:

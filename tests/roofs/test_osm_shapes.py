@@ -137,6 +137,45 @@ def test_butterfly_valley_is_lower_than_both_eaves():
     assert p[:, 2].max() == pytest.approx(TOP + 10 * RISE)
 
 
+L_VALLEY = Polygon([(10, 4), (3, 4), (3, 8), (0, 8), (0, 0), (10, 0)])  # edge 0 on the 10 x 8 rectangle's middle
+
+
+def test_regression_butterfly_valley_turns_off_a_party_wall():
+    """Regression (hypothesis): the L outline's minimum rectangle is 10 x 8 m, so the valley ran along y = 4,
+    which is the outline's edge 0; as a party wall the slope beside it came down onto the neighbour. The valley
+    now turns across (x = 5), with a note; free, edge 0 keeps the valley."""
+    with roof_notes() as notes:
+        p, _, _ = _build(ButterflyRoof(), outline=L_VALLEY, party=(0,))
+    assert any("runs across" in w for w in notes)
+    assert np.allclose(p[np.isclose(p[:, 0], 5.0), 2], TOP, atol=1e-5)
+    assert p[np.isclose(p[:, 1], 4.0) & np.isclose(p[:, 0], 10.0), 2].max() == pytest.approx(TOP + 5 * RISE)
+    with roof_notes() as notes:
+        p, _, _ = _build(ButterflyRoof(), outline=L_VALLEY)
+    assert not notes and np.allclose(p[np.isclose(p[:, 1], 4.0), 2], TOP, atol=1e-5)
+
+
+def test_butterfly_valley_on_party_walls_both_ways_is_gabled():
+    """Edges of this L lie on both middle lines of its 10 x 8 m rectangle (y = 4 and x = 5): as party walls no
+    valley stays off them, and the part gets the gabled roof with a note."""
+    outline = Polygon([(0, 0), (10, 0), (10, 4), (5, 4), (5, 8), (0, 8)])
+    assert outline.minimum_rotated_rectangle.equals(Polygon([(0, 0), (10, 0), (10, 8), (0, 8)]))
+    with roof_notes() as notes:
+        _build(ButterflyRoof(), outline=outline, party=(2, 3))
+    assert any("either way" in w and "gabled" in w for w in notes)
+
+
+PLUS = Polygon([(3, 0), (9, 0), (9, 3), (12, 3), (12, 9), (9, 9), (9, 12), (3, 12), (3, 9), (0, 9), (0, 3), (3, 3)])
+
+
+def test_regression_sawtooth_with_a_gutter_on_a_party_wall_every_way_is_gabled():
+    """Regression: the sawtooth roof's gabled fallback was called with one argument too many (a TypeError, never
+    reached by the tests). The plus has walls 3 m (half a 6 m tooth) apart facing each way; with all but one of
+    them party walls, every direction puts a gutter on one, with the teeth moved half a tooth or not."""
+    with roof_notes() as notes:
+        _build(SawtoothRoof(), outline=PLUS, party=tuple(k for k in range(12) if k != 1))
+    assert any("every direction" in w and "gabled" in w for w in notes)
+
+
 def test_sawtooth_teeth_count_heights_and_glazing():
     """30 x 12 m, slopes facing south: 12 m across the teeth, round(12 / 6) = 2 teeth 6 m wide, each 6 tan 30 high;
     the glazed walls (one between the teeth and the north wall of the first) face north."""
