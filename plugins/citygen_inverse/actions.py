@@ -420,6 +420,21 @@ class Candidates:
         self.heuristic.append(action.heuristic)
         self._specs.append(None)
 
+    def cut_lines(self) -> tuple[list[int], list[int], list[int]]:
+        """Every split line of every candidate, without building the rules: candidate index, axis and position
+        (relative to the box) per line, candidates in order."""
+        ks, axes, cuts = [], [], []
+        for k, spec in enumerate(self._specs):
+            if spec is None:
+                axis, lines = self.built[k].axis, self.built[k].cuts
+            else:
+                axis, bl, edges = spec[:3]
+                lines = [bl[e] - bl[0] for e in edges[1:-1]]
+            ks += [k] * len(lines)
+            axes += [axis] * len(lines)
+            cuts += lines
+        return ks, axes, cuts
+
     def kids(self, k: int) -> tuple[int, ...]:
         """The distinct non-terminal successor signatures of candidate ``k`` (its rule's ``children``)."""
         spec = self._specs[k]

@@ -160,16 +160,21 @@ class GrammarSearch:
             p = self._imp_boxes - np.array([x, y, x, y])
             inside = np.flatnonzero((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 2] <= w) & (p[:, 3] <= h)
                                     & ~((p[:, 0] == 0) & (p[:, 1] == 0) & (p[:, 2] == w) & (p[:, 3] == h)))
-            masks, any_mask = [], 0
-            for a in self._actions[sig]:
-                m = 0
-                if a.cuts and inside.size:
-                    c = np.asarray(a.cuts)
-                    q = p[inside]
-                    hit = inside[np.any((q[:, a.axis, None] < c) & (q[:, a.axis + 2, None] > c), axis=1)]
-                    for i in hit.tolist():
-                        m |= 1 << i
-                masks.append(m)
+            acts = self._actions[sig]
+            masks = [0] * len(acts)
+            ks, axes, cuts = acts.cut_lines()
+            if inside.size and ks:
+                ks, axes, cuts = np.array(ks), np.array(axes), np.array(cuts)
+                q = p[inside]
+                lo, hi = q[:, axes], q[:, axes + 2]  # per instance, its extent along each line's axis
+                hit = (lo < cuts) & (hi > cuts)  # instance x line: the line cuts the instance
+                starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+                cut = np.zeros((len(acts), self._important.size), dtype=bool)
+                cut[np.ix_(ks[starts], inside)] = np.logical_or.reduceat(hit, starts, axis=1).T
+                packed = np.packbits(cut, axis=1, bitorder="little")
+                masks = [int.from_bytes(row.tobytes(), "little") for row in packed]
+            any_mask = 0
+            for m in masks:
                 any_mask |= m
             self._masks[key] = found = (masks, any_mask)
         return found

@@ -1,3 +1,5 @@
+import functools
+import operator
 from pathlib import Path
 
 import numpy as np
@@ -217,3 +219,31 @@ def test_kept_boundaries_and_their_line_cost_match_the_bitwise_definitions():
         ends = (0, *expected, m)
         want = sum([line[k] for p, k, q in zip(ends, ends[1:], ends[2:]) if bl[k] - bl[p] != bl[q] - bl[k]])
         assert _kept_line_cost(expected, bl, m, line) == want
+
+
+@pytest.mark.parametrize("name", ["cmp_b0012", "cmp_b0045"])
+def test_protection_masks_match_the_per_rule_definition(name):
+    """§4.7 protection: per candidate rule, the bit mask of important instances strictly inside the region that
+    one of its split lines crosses -- the vectorised masks equal the rule-by-rule definition for every region an
+    ADP run visits (with the candidates' rules built)."""
+    from citygen_inverse.regions import LayoutIndex
+    from citygen_inverse.search import GrammarSearch
+    search = GrammarSearch(LayoutIndex([import_cmp(DATA / f"{name}.xml")], True, periodic=True))
+    search.run("adp", 60, 0)
+    assert len(search._masks) > 10 and any(any(masks) for masks, _ in search._masks.values())
+    for (sig, x, y), (masks, any_mask) in search._masks.items():
+        box = search.index.sigs[sig].box
+        w, h = box[2] - box[0], box[3] - box[1]
+        expected = []
+        for action in search._actions[sig]:
+            m = 0
+            for i, (x0, y0, x1, y1) in enumerate(search._imp_boxes.tolist()):
+                x0, y0, x1, y1 = x0 - x, y0 - y, x1 - x, y1 - y
+                if x0 < 0 or y0 < 0 or x1 > w or y1 > h or (x0, y0, x1, y1) == (0, 0, w, h):
+                    continue
+                lo, hi = ((x0, x1), (y0, y1))[action.axis]
+                if any(lo < c < hi for c in action.cuts):
+                    m |= 1 << i
+            expected.append(m)
+        assert masks == expected
+        assert any_mask == functools.reduce(operator.or_, expected, 0)
