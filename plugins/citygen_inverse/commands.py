@@ -61,6 +61,14 @@ class LayoutCommand(Command):
                            help="metres per row of windows/doors/shops (default 3.0)")
         cmp.add_argument("--drop-degenerate", action="store_true",
                          help="drop zero-size boxes instead of refusing the annotation")
+        for flag, default, what in (("--snap", 0.01, "edges this close are one line"),
+                                    ("--align", 0.025, "same-side edges of one label this close are aligned"),
+                                    ("--equal-sizes", 0.03, "sizes of one label this close are made equal")):
+            cmp.add_argument(flag, type=float, default=default,
+                             help=f"regularisation (wu2014 §3.3): {what}; share of the facade size "
+                                  f"(default {default:g}), capped by the element scale")
+        cmp.add_argument("--no-element-caps", action="store_true",
+                         help="do not cap the tolerances at shares of the median window size")
         cmp.add_argument("-o", "--output", help="output JSON file (default stdout)")
         photo = sub.add_parser("from-photo", help="rectified facade photo -> layout JSON (mueller2007)")
         photo.add_argument("photo", help="facade photo (JPEG, PNG, ...), rectified")
@@ -75,17 +83,26 @@ class LayoutCommand(Command):
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
         if args.layout_command == "from-photo":
             return self._from_photo(args)
-        from citygen_inverse.cmp import import_cmp
+        from citygen_inverse.cmp import ELEMENT_SHARE, import_cmp
+        for name in ("snap", "align", "equal_sizes"):
+            value = getattr(args, name)
+            if not 0 <= value < 0.5:
+                return report(LayoutError(f"--{name.replace('_', '-')} must be a share of the facade size in "
+                                          f"[0, 0.5), got {value:g}", where=args.xml))
         try:
             if not args.drop_degenerate:
                 check_degenerate(args.xml)
-            layout = import_cmp(args.xml, png=args.png, width=args.width, floor_height=args.floor_height)
+            layout = import_cmp(args.xml, png=args.png, width=args.width, floor_height=args.floor_height,
+                                snap=args.snap, align=args.align, regularize=args.equal_sizes,
+                                element_share=None if args.no_element_caps else ELEMENT_SHARE)
         except (CitygenError, OSError) as exc:
             return report(exc)
         write_text(args.output, layout.dumps() + "\n")
         meta = layout.meta
         print(f"{args.xml}: {len(layout.terminals())} terminals, {layout.width:.2f} x {layout.height:.2f} m "
-              f"({meta['scale_from']}), {meta['pinwheel_blocks']} pinwheel blocks", file=sys.stderr)
+              f"({meta['scale_from']}), {meta['pinwheel_blocks']} pinwheel blocks, "
+              f"{100 * meta['annotation_agreement']['element_pixels']:.0f} % of the annotated element pixels kept",
+              file=sys.stderr)
         return 0
 
     def _from_photo(self, args: argparse.Namespace) -> int:

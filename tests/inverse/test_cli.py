@@ -107,6 +107,26 @@ def test_zero_size_box_is_refused_unless_dropped(tmp_path, capsys):
     assert FacadeLayout.loads(out.read_text()).meta["dropped_boxes"] == 1
 
 
+def test_import_cmp_regularisation_options(tmp_path, capsys):
+    """The tolerances are options: none gives the annotation back pixel for pixel, the summary says how much of
+    it the import kept, and a share outside [0, 0.5) is refused naming the option."""
+    xml = DATA / "cmp_b0045.xml"
+    raw, default = tmp_path / "raw.json", tmp_path / "default.json"
+    assert main(["layout", "import-cmp", str(xml), "--snap", "0", "--align", "0", "--equal-sizes", "0",
+                 "-o", str(raw)]) == 0
+    assert "100 % of the annotated element pixels kept" in capsys.readouterr().err
+    assert main(["layout", "import-cmp", str(xml), "-o", str(default)]) == 0
+    assert "% of the annotated element pixels kept" in capsys.readouterr().err
+    raw_layout, default_layout = (FacadeLayout.loads(p.read_text()) for p in (raw, default))
+    assert raw_layout.meta["annotation_agreement"]["element_pixels"] == 1.0
+    assert len(default_layout.terminals()) < len(raw_layout.terminals())
+    assert main(["layout", "import-cmp", str(xml), "--no-element-caps", "-o", str(tmp_path / "u.json")]) == 0
+    capsys.readouterr()
+    uncapped = FacadeLayout.loads((tmp_path / "u.json").read_text())
+    assert uncapped.meta["tolerances_px"]["y"][0] > default_layout.meta["tolerances_px"]["y"][0]
+    _fails(capsys, ["layout", "import-cmp", str(xml), "--align", "0.7"], "cmp_b0045.xml", "--align", "[0, 0.5)")
+
+
 @pytest.mark.parametrize("argv,name", [
     (["layout", "import-cmp", "{}/missing.xml"], "missing.xml"),
     (["grammar", "extract", "{}/missing.json"], "missing.json"),
