@@ -11,7 +11,6 @@ instead (no scaled ring could stay inside itself, or the bulb would lean over th
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.geometry.building import MeshData
@@ -30,6 +29,7 @@ ONION_HEIGHT = 3.0
 
 def onion_profile() -> tuple[np.ndarray, np.ndarray]:
     """Height shares and outline scales of the ``ONION_BANDS + 1`` rings, from the wall top to the tip."""
+    from scipy.interpolate import PchipInterpolator  # (scipy.interpolate takes ~0.3 s to import: only when used)
     z, s = np.array(ONION_PROFILE).T
     levels = np.linspace(0.0, 1.0, ONION_BANDS + 1)
     scales = PchipInterpolator(z, s)(levels)
