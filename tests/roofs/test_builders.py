@@ -39,13 +39,13 @@ def _outline_edges(outline):
     return np.array(edges)
 
 
-def _flat_to_rounding(mesh, n):
-    """Triangles no higher than float32 rounding of the points (a few units in the last place) over their longest
-    side: the zero-area triangles joining a pinched closing wall along its foot (citygen_roofs.planes) have no
-    orientation of their own."""
+def _plumb_to_rounding(mesh, n):
+    """Triangles whose plan is no wider than float32 rounding of the points (a few units in the last place) over
+    their longest side: walls, or the zero-area triangles joining a pinched closing wall along its foot
+    (citygen_roofs.planes), which have no up or down of their own (``test_thin_wall_rounded_to_float32_may_lean``)."""
     p, tris = _triangles(mesh)
     longest = np.max([np.linalg.norm(p[tris[:, k]] - p[tris[:, k - 1]], axis=1) for k in range(3)], axis=0)
-    return np.linalg.norm(n, axis=1) <= 4 * float(np.spacing(np.abs(mesh.points).max())) * longest
+    return np.abs(n[:, 2]) <= 4 * float(np.spacing(np.abs(mesh.points).max())) * longest
 
 
 def _open_edges(mesh):
@@ -152,6 +152,22 @@ def test_t_shape_with_a_thin_stem_is_roofed_and_closed(builder):
                        (21.323902945973018, 0)])
     test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, builder, 30.0, None)
 
+def test_thin_wall_rounded_to_float32_may_lean():
+    """Found by the cover property test at 25 x CI's examples: a round roof's end wall over a star outline has a
+    triangle 1.8 cm wide at its top and 0.9 m tall whose float32 corners lie 1e-6 m (one unit in the last place) off
+    the outline edge's vertical plane, so its normal leans 1.3e-4 downwards. A wall to rounding, not a face
+    pointing down; the property test now allows that lean, and only that."""
+    outline = Polygon([(10.657480659400388, 1.5550260430316452), (3.850891216616654, 3.1891435900229874),
+                       (8.052907766022964, 20.691802157181165), (5.135798004829934, 21.392138248748882), (0, 0),
+                       (9.723699203976764, -2.3344536385590606)])
+    mesh = RoundRoof().build(outline, TOP, RoofSpec("round", 10.0, cap=15.0))
+    p, tris = _triangles(mesh)
+    n = _normals(p, tris)
+    down = n[:, 2] < -1e-4 * np.linalg.norm(n, axis=1)
+    assert np.all(_plumb_to_rounding(mesh, n)[down])  # (1 such triangle when found)
+    test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, RoundRoof(), 10.0, None)
+
+
 def test_round_rectangle_is_a_half_cylinder_the_length_of_the_building():
     """A barrel vault: ridge the full length along the long side, as high as half the width (a semicircle in six
     planar bands a side), closed by two vertical end walls whose top follows the arc."""
@@ -193,7 +209,7 @@ def test_roofs_cover_the_outline_and_close_the_walls(outline, builder, pitch, di
         mesh = builder.build(outline, TOP, spec)
     p, tris = _triangles(mesh)
     n = _normals(p, tris)
-    assert np.all((n[:, 2] >= -1e-4 * np.linalg.norm(n, axis=1)) | _flat_to_rounding(mesh, n)), "a face points down"
+    assert np.all((n[:, 2] >= -1e-4 * np.linalg.norm(n, axis=1)) | _plumb_to_rounding(mesh, n)), "a face points down"
     assert n[:, 2].sum() / 2 == pytest.approx(outline.area, rel=1e-6)  # the projection covers the outline once
     assert np.all(p[:, 2] >= TOP - 1e-4) and np.all(p[:, 2] <= TOP + 15.0 + 1e-4)
     edges, z = _open_edges(mesh)

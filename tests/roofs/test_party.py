@@ -25,12 +25,17 @@ def _house(x0, width, depth):
 
 
 def _split(mesh):
-    """Roof (sloped) and wall (vertical) triangles as point arrays ``(m, 3, 3)``. A roof plane is at least 5 degrees
-    from vertical (``PITCH_RANGE`` tops out at 75), so a triangle whose normal is within 0.01 of horizontal is a
-    wall: float32 points tilt a thin wall triangle by up to ~1e-4 (``test_thin_gable_triangle_is_a_wall``)."""
+    """Roof (sloped) and wall (vertical) triangles as point arrays ``(m, 3, 3)``. A wall triangle's normal is within
+    0.01 of horizontal (float32 points tilt a thin wall by up to ~1e-4: ``test_thin_gable_triangle_is_a_wall``) and
+    its plan is thinner than 1 mm (its corners on one line). Either alone misjudges roofs: a dome's first band on a
+    steep hip is 89.5 degrees but 2 cm wide in plan (``test_dome_hip_band_by_a_deep_end_terrace_is_roof``); a
+    sloped sliver beside a tiny ridge is thin in plan but tilted."""
     p, tris = _triangles(mesh)
     n = _normals(p, tris)
-    vertical = np.abs(n[:, 2]) < 1e-2 * np.linalg.norm(n, axis=1)
+    xy = p[tris][:, :, :2]
+    longest = np.linalg.norm(xy - np.roll(xy, 1, axis=1), axis=2).max(axis=1)
+    thin = np.abs(n[:, 2]) < 1e-3 * longest  # twice the plan area / longest side < 1 mm
+    vertical = thin & (np.abs(n[:, 2]) < 1e-2 * np.linalg.norm(n, axis=1))
     return p[tris[~vertical]], p[tris[vertical]], n[~vertical]
 
 
@@ -214,6 +219,20 @@ def test_thin_gable_triangle_is_a_wall():
     assert np.all(n[:, 2] > 0) and (n[:, 2].sum() / 2) == pytest.approx(house.area, rel=1e-6)
     edges = _outline_edges(house)
     assert _eave_edges_cover(walls, edges[[3]])
+
+
+def test_dome_hip_band_by_a_deep_end_terrace_is_roof():
+    """Found by the terrace property test (one run in ~25 x CI's examples): a 4 x 15 m end-terrace house under a
+    dome has its free long side as a steep hip (weight (4/15)^2), so the dome's first band there rises 1.94 m over
+    1.8 cm (89.5 degrees). That is roof, not wall: the test's old angle threshold (normal within 0.01 of horizontal)
+    called it a wall and missed the free eave at x = 0."""
+    house = _house(0, 4.0, 15.0)
+    mesh = DomeRoof().build(house, TOP, RoofSpec("dome", 15.0, party=(1,)))
+    roof, walls, n = _split(mesh)
+    edges = _outline_edges(house)
+    assert _eave_edges_cover(roof, edges[[0, 2, 3]])
+    assert np.allclose(walls[:, :, 0], 4.0)  # the only wall is the gable on the party wall
+    assert np.all(n[:, 2] > 0) and (n[:, 2].sum() / 2) == pytest.approx(house.area, rel=1e-6)
 
 
 def test_all_party_walls_roof_as_free_without_a_warning():
