@@ -152,6 +152,7 @@ def test_t_shape_with_a_thin_stem_is_roofed_and_closed(builder):
                        (21.323902945973018, 0)])
     test_roofs_cover_the_outline_and_close_the_walls.hypothesis.inner_test(outline, builder, 30.0, None)
 
+
 def test_thin_wall_rounded_to_float32_may_lean():
     """Found by the cover property test at 25 x CI's examples: a round roof's end wall over a star outline has a
     triangle 1.8 cm wide at its top and 0.9 m tall whose float32 corners lie 1e-6 m (one unit in the last place) off
