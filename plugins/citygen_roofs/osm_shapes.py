@@ -160,7 +160,8 @@ def butterfly(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] =
         if _party_on_line(rings, party, centre, n):
             continue
         if turned:
-            note("the butterfly roof's valley would lie along a party wall: it runs across instead")
+            note("the butterfly roof's valley would lie along a party wall: "
+                 "it runs along the other middle line instead")
         n = n * spec.slope
         plane = np.array([n[0], n[1], -float(n @ centre)])
         return piecewise_roof(part, top, spec, *envelope([plane, -plane], lowest=False))
