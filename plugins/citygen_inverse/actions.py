@@ -461,12 +461,12 @@ def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[in
 def _grid(index: LayoutIndex, sig: int, model: CostModel) -> Action:
     """gridsplit (wu2014 §4.7) over the terminals of a region that no single line separates."""
     box = index.sigs[sig].box
-    idx = index.inside(box)
-    xs = tuple(int(v - box[0]) for v in np.unique(np.concatenate([index.X0[idx], index.X1[idx]])))
-    ys = tuple(int(v - box[1]) for v in np.unique(np.concatenate([index.Y0[idx], index.Y1[idx]])))
-    items = []
-    for k in idx[np.lexsort((index.X0[idx], index.Y0[idx]))]:
-        cell = (int(index.X0[k]), int(index.Y0[k]), int(index.X1[k]), int(index.Y1[k]))
-        items.append((index.sig(cell), _rel(box, cell)))
+    idx = index.inside(box).tolist()
+    x0, y0, x1, y1 = (v.take(idx).tolist() for v in (index.X0, index.Y0, index.X1, index.Y1))
+    xs = tuple(v - box[0] for v in sorted({*x0, *x1}))
+    ys = tuple(v - box[1] for v in sorted({*y0, *y1}))
+    term_sig = index.terminal_sigs()
+    items = [(term_sig[idx[k]], _rel(box, (x0[k], y0[k], x1[k], y1[k])))
+             for k in sorted(range(len(idx)), key=lambda k: (y0[k], x0[k]))]  # bottom to top, left to right
     cost = model.split + len(items)
     return Action("grid", 0, tuple(items), (), cost, model.lambda1 * cost, (), (xs, ys))

@@ -86,7 +86,7 @@ class GrammarSearch:
                 self._kidset[sig] = kidset = frozenset(c for ks in kids for c in ks)
                 for kid in kidset:
                     self._parents.setdefault(kid, []).append(sig)
-            self._greedy_k[sig] = int(np.argmin(heur))
+            self._greedy_k[sig] = min(range(len(heur)), key=heur.__getitem__)  # (the first least H)
         return acts
 
     def _softmax(self, sig: int) -> list[float]:
