@@ -93,7 +93,8 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         return _periodic(index, sig, model, sym.boxes.take(inside, 0), terms, best_only)
     actions = Candidates(index, box, model, best_only)
     instances = None
-    if inside.size > SMALL:
+    lone = terms.size == 0 or terms.max() == 1  # only single terminals inside: no valid line cuts an instance
+    if inside.size > SMALL and not lone:
         inst = sym.boxes.take(inside, 0)
         # the instances by repeated region (signature), and each region's f(a, o) (the same for all its instances)
         order = sym.group.take(inside).argsort(kind="stable")
@@ -110,7 +111,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         # instances (which a grouping keeping every instance whole drops) as a bit mask, boundary k at bit
         # m - 1 - k, so that masks order as the rows of boundaries do: the distinct masks, in lexicographic order
         # (the first region's score), by f(a, o)
-        if inside.size > SMALL and m <= 62:  # (a mask fits in int64)
+        if lone:  # (every mask is empty: the grouping it keeps is ``every``)
+            line, rows = [0.0] * (m + 1), ()
+        elif inside.size > SMALL and m <= 62:  # (a mask fits in int64)
             line, rows = _coverage(inst, terms, order, starts, score, axis, bl, n, max_groupings)
         else:
             if instances is None:
@@ -192,7 +195,8 @@ def _add_best(actions: Candidates, axis: int, bl: list[int], m: int, groupings, 
     the kept rule is the one ``_add_all`` keeps."""
     low, lam = actions.bound
     groupings = list(groupings)
-    bounds = [low + lam * _kept_line_cost(keep, bl, m, line) for keep in groupings]
+    bounds = [low + lam * _kept_line_cost(keep, bl, m, line) for keep in groupings] if any(line) \
+        else [low] * len(groupings)
     seen: dict[tuple[int, ...], int] = {}
     base = axis << 20
     for g in sorted(range(len(bounds)), key=bounds.__getitem__):
@@ -286,6 +290,8 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
     Substrings are grown one atom at a time as integer ids (the id of the one an atom shorter, then the atom), from
     the starts whose shorter substring occurs more than once (no other can repeat)."""
     m = len(atoms)
+    if m < 4:  # (no substring of two or more atoms occurs twice)
+        return []
     ids: dict[tuple[int, int], int] = {}
     code = [ids.setdefault(a, len(ids)) for a in atoms]  # per start, the id of its substring of length 1
     width = len(ids)
