@@ -160,15 +160,15 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
         tiles = split_lines(Hor, Q, 0, W, min_end=max(int(END_TILE * Q), TAU_SIZE))
     else:
         tiles = np.array([0, W])
-    ground = floors.size - 2
-    axis = mirror_axis(work[:floors[-2]] if floors[-2] >= 2 * TAU_SIZE else work)
-    door = None if repeats_floor_above(work, int(floors[-2])) else axis_door(work, int(floors[-2]), axis)
+    ground, top = floors.size - 2, int(floors[-2])
+    axis = mirror_axis(work[:top] if top >= 2 * TAU_SIZE else work)
+    door = axis_door(work, top, axis) if top >= 2 * TAU_SIZE and not repeats_floor_above(work, top) else None
     columns = [tiles] * (floors.size - 1)
     edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
     if door is not None:
         columns[ground], j = ground_columns(tiles, door.rect, max(2 * TAU_SIZE, int(DOOR_GAP * Q)))
-        rect = (int(floors[-2]), H, int(columns[ground][j]), int(columns[ground][j + 1]))
+        rect = (top, H, int(columns[ground][j]), int(columns[ground][j + 1]))
         trees[(ground, j)] = ("DoorTile", door_tile(edges, rect, door.rect), 0)
     groups = cluster_tiles(work, floors, columns, regular, skip=set(trees))
     rects = [[(int(floors[i]), int(floors[i + 1]), int(columns[i][j]), int(columns[i][j + 1])) for i, j in members]

@@ -41,11 +41,10 @@ Rect = tuple[int, int, int, int]  # r0, r1, c0, c1 (image rows down, half-open)
 
 @dataclass(frozen=True)
 class Door:
-    """A door found on the mirror axis: ``rect`` in working pixels (clipped to the ground floor), the unclipped
-    top row, and the mean gradient of its weakest side in mean gradients of the ground floor."""
+    """A door found on the mirror axis: ``rect`` in working pixels (clipped to the ground floor) and the mean
+    gradient of its weakest side in mean gradients of the ground floor."""
 
     rect: Rect
-    top: int
     strength: float
 
 
@@ -119,13 +118,14 @@ def axis_door(gray: np.ndarray, top: int, axis: float) -> Door | None:
     if best is None or best[0] < DOOR_EDGE * norm:
         return None
     s, r0, a, b = best
-    return Door((max(start + r0, top), H, a, b), start + r0, s / norm)
+    return Door((max(start + r0, top), H, a, b), s / norm)
 
 
 def ground_columns(tiles: np.ndarray, door: Rect, gap: int = 2 * TAU_SIZE) -> tuple[np.ndarray, int]:
-    """The ground floor's tile lines with the door's columns as a tile of their own: the shared lines outside the
-    door, at least ``gap`` from its sides, plus the door's sides; a narrower remainder beside the door (or the
-    facade's edge) joins the door's tile as wall. Returns the lines and the door tile's index."""
+    """The ground floor's tile lines with the door's columns as a tile of their own: the shared lines at least
+    ``gap`` outside the door's sides, and its sides (the tiles beside the door reach to it; where the facade's
+    edge is closer than ``gap``, the door's tile reaches to the edge, the strip beside the door is its wall).
+    Returns the lines and the door tile's index."""
     _, _, c0, c1 = door
     left = [int(t) for t in tiles if t <= c0 - gap]
     right = [int(t) for t in tiles if t >= c1 + gap]
