@@ -9,7 +9,9 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
    the same on the regular floors' band, transposed, gives the tile period;
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
-3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
+3. our extension (``photo_doors``): the entrance door, a box on the ground centred on the mirror axis of the
+   floors above; the ground floor gets the door's sides as tile lines of its own;
+   §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
    and the subdivision mapped onto its members; a contrast test tells elements from wall;
 4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
    library of rendered citygen prototypes by summed mutual information (Eq. 8): label, depth and material.
