@@ -10,7 +10,8 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
 3. our extension (``photo_doors``): the entrance door, a box on the ground centred on the mirror axis of the
-   floors above; the ground floor gets the door's sides as tile lines of its own;
+   floors above; the ground floor gets the door's sides as tile lines of its own (the floors above are
+   synchronised, §3.2, with the ground floor's tiles without them: the door changes nothing above the ground floor);
    §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
    and the subdivision mapped onto its members; a contrast test tells elements from wall;
 4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
@@ -173,10 +174,14 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
         rect = (top, H, int(columns[ground][j]), int(columns[ground][j + 1]))
         trees[(ground, j)] = ("DoorTile", door_tile(edges, rect, door.rect), 0)
     groups = cluster_tiles(work, floors, columns, regular, skip=set(trees))
-    rects = [[(int(floors[i]), int(floors[i + 1]), int(columns[i][j]), int(columns[i][j + 1])) for i, j in members]
-             for members in groups]
     grounds = [all(i == ground for i, _ in members) for members in groups]
-    for g, (members, node) in enumerate(zip(groups, subdivide_groups(edges, rects, grounds, doors=door is None))):
+    doorless = None  # with a door: the ground floor's groups without it, for the floors above (subdivide_groups)
+    if door is not None:
+        shared = [tiles] * (floors.size - 1)
+        doorless = _rects(floors, shared, [members for members in cluster_tiles(work, floors, shared, regular)
+                                           if all(i == ground for i, _ in members)])
+    nodes = subdivide_groups(edges, _rects(floors, columns, groups), grounds, door is None, doorless)
+    for g, (members, node) in enumerate(zip(groups, nodes)):
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P
@@ -287,6 +292,12 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, columns: list[np.ndarray
             heads.append(k)
             groups.append([cell])
     return groups
+
+
+def _rects(floors: np.ndarray, columns: list[np.ndarray], groups: list[list[tuple[int, int]]]) -> list[list[Rect]]:
+    """The member tiles of every group as rectangles (``columns[i]``: floor ``i``'s tile lines)."""
+    return [[(int(floors[i]), int(floors[i + 1]), int(columns[i][j]), int(columns[i][j + 1])) for i, j in members]
+            for members in groups]
 
 
 def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str, tuple[int, ...]]]:

@@ -1,15 +1,20 @@
 """The entrance door on the facade's mirror axis (``photo_doors``, our extension of mueller2007)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from PIL import Image
 
+import citygen_inverse.photo as photo
 from citygen.layout import check_partition
-from citygen_inverse.photo import analyse
+from citygen_inverse.photo import analyse, load_photo
 from citygen_inverse.photo_doors import ground_columns, mirror_axis, repeats_floor_above
-from citygen_inverse.photo_score import iou, matches
+from citygen_inverse.photo_score import cmp_boxes, facade_box, iou, matches
 from tests.photo.synthetic import facade
 
+CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 SHOP = 0.3 * np.array([1.0, 0.92, 0.85])
 
 
@@ -107,3 +112,57 @@ def test_door_box_is_clipped_to_the_ground_floor():
     assert got[1] >= result.floor_lines[-2] - 0.5
     assert iou(np.array([got]), np.array([(112, H - 80, 138, H)]))[0, 0] >= 0.8
     assert check_partition(result.layout) == []
+
+
+def _above_ground(result):
+    """Everything above the ground floor: the floor and tile lines, the floor regions above it (layout root
+    children, ground floor first) and the element boxes and labels whose centre lies above its top line."""
+    top = result.floor_lines[-2]
+    return (result.floor_lines, result.tile_lines, result.layout.root.children[1:],
+            [(box, label) for box, label in result.elements if (box[1] + box[3]) / 2 < top])
+
+
+def _without_door_step(monkeypatch, image):
+    monkeypatch.setattr(photo, "axis_door", lambda *args, **kwargs: None)
+    result = analyse(image)
+    monkeypatch.undo()
+    return result
+
+
+SYNTHETIC_DOORS = [dict(cols=5, door_x=112), dict(cols=6, door_x=137), dict(cols=5, door_x=112, shops=True),
+                   dict(cols=6, door_x=137, floors=4, floor_h=75, win=(40, 20), off=(20, 15), seed=2),
+                   dict(cols=7, door_x=141, tile_w=44, win=(34, 18), off=(12, 13), seed=3)]
+
+
+@pytest.mark.parametrize("case", SYNTHETIC_DOORS)
+def test_door_step_changes_nothing_above_the_ground_floor(monkeypatch, case):
+    """Regression (held-out windows 203 -> 195 with the door step): the ground floor's tile lines at the door's
+    sides changed its split distances, which §3.2 synchronises across the whole facade, and windows on upper
+    floors moved. With the door step on and off (``axis_door`` found nothing) the floors above the ground floor
+    -- lines, regions, element boxes and labels -- are identical; only the ground floor differs."""
+    case = dict(case)
+    shops = case.pop("shops", False)
+    image, truth, door = facade(ground_h=80, **case)
+    if shops:
+        for j in (0, 1, 3, 4):
+            image[-40:, j * 50 + 10:j * 50 + 40] = SHOP
+    with_door = analyse(image)
+    assert matches(with_door.boxes("door"), [door]) == 1
+    without = _without_door_step(monkeypatch, image)
+    assert without.boxes("door") != with_door.boxes("door")
+    assert _above_ground(with_door) == _above_ground(without)
+    assert matches(with_door.boxes("window"), truth) == len(truth)
+
+
+@pytest.mark.skipif(not (CMP / "cmp_b0015.jpg").is_file(), reason="CMP photos (shared data) not available")
+@pytest.mark.parametrize("name", ["cmp_b0002", "cmp_b0015"])
+def test_door_step_changes_nothing_above_the_ground_floor_of_cmp_photos(monkeypatch, name):
+    """The same on two development photos whose upper windows the door step moved (before the fix 7 of 20)."""
+    jpg = CMP / f"{name}.jpg"
+    with Image.open(jpg) as image:
+        size = image.size
+    crop = tuple(round(v) for v in facade_box(cmp_boxes(jpg.with_suffix(".xml"), size)))
+    image = load_photo(jpg, crop)
+    with_door = analyse(image)
+    assert with_door.boxes("door")
+    assert _above_ground(with_door) == _above_ground(_without_door_step(monkeypatch, image))
