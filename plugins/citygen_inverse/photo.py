@@ -9,7 +9,10 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
    the same on the regular floors' band, transposed, gives the tile period;
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
-3. §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
+3. our extension (``photo_doors``): the entrance door, a box on the ground centred on the mirror axis of the
+   floors above; the ground floor gets the door's sides as tile lines of its own (the floors above are
+   synchronised, §3.2, with the ground floor's tiles without them: the door changes nothing above the ground floor);
+   §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
    and the subdivision mapped onto its members; a contrast test tells elements from wall;
 4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
    library of rendered citygen prototypes by summed mutual information (Eq. 8): label, depth and material.
@@ -26,6 +29,7 @@ from scipy.ndimage import gaussian_filter
 
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
+from citygen_inverse.photo_doors import axis_door, door_tile, ground_columns, mirror_axis, repeats_floor_above
 from citygen_inverse.photo_elements import library
 from citygen_inverse.photo_refit import carry
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
@@ -45,6 +49,8 @@ END_TILE = 0.2
 SIGMA = 0.25
 #: Element pieces of one tile this close (working pixels) are one element.
 MERGE_GAP = 6
+#: A ground-floor tile left beside the door narrower than this fraction of the tile period joins the door's tile.
+DOOR_GAP = 0.5
 #: Window sides are refined at full resolution within this fraction of the box's width (height).
 REFINE = 0.3
 #: Depth of a tile in the layout tree (Facade -> floor -> tile): refined window sides move only inside it.
@@ -157,24 +163,37 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
         tiles = split_lines(Hor, Q, 0, W, min_end=max(int(END_TILE * Q), TAU_SIZE))
     else:
         tiles = np.array([0, W])
-    groups = cluster_tiles(work, floors, tiles, regular)
+    ground, top = floors.size - 2, int(floors[-2])
+    axis = mirror_axis(work[:top] if top >= 2 * TAU_SIZE else work)
+    door = axis_door(work, top, axis) if top >= 2 * TAU_SIZE and not repeats_floor_above(work, top) else None
+    columns = [tiles] * (floors.size - 1)
     edges = EdgeImage.of(work, colour)
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
-    rects = [[(int(floors[i]), int(floors[i + 1]), int(tiles[j]), int(tiles[j + 1])) for i, j in members]
-             for members in groups]
-    grounds = [all(i == floors.size - 2 for i, _ in members) for members in groups]
-    for g, (members, node) in enumerate(zip(groups, subdivide_groups(edges, rects, grounds))):
+    if door is not None:
+        columns[ground], j = ground_columns(tiles, door.rect, max(2 * TAU_SIZE, int(DOOR_GAP * Q)))
+        rect = (top, H, int(columns[ground][j]), int(columns[ground][j + 1]))
+        trees[(ground, j)] = ("DoorTile", door_tile(edges, rect, door.rect), 0)
+    groups = cluster_tiles(work, floors, columns, regular, skip=set(trees))
+    grounds = [all(i == ground for i, _ in members) for members in groups]
+    doorless = None  # with a door: the ground floor's groups without it, for the floors above (subdivide_groups)
+    if door is not None:
+        shared = [tiles] * (floors.size - 1)
+        doorless = _rects(floors, shared, [members for members in cluster_tiles(work, floors, shared, regular)
+                                           if all(i == ground for i, _ in members)])
+    nodes = subdivide_groups(edges, _rects(floors, columns, groups), grounds, door is None, doorless)
+    for g, (members, node) in enumerate(zip(groups, nodes)):
         for m, ij in enumerate(members):
             trees[ij] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P
-    layout, elements, paths = _layout(floors, tiles, regular, trees, H, scale)
+    layout, elements, paths = _layout(floors, columns, regular, trees, H, scale)
     root, boxes, sides = _refined(layout.root, luminance(image), elements, paths, f, scale, H)
     meta = dict(meta or {}, importer="photo (mueller2007)", metres_per_pixel=scale / f,
                 scale_from=f"width {width} m" if width else f"floor period x {floor_height} m",
                 floor_period_px=round(P * f, 2), tile_period_px=round(Q * f, 2),
                 floors=int(floors.size - 1), tiles_per_floor=int(tiles.size - 1),
                 mi_prominence={"floors": round(vsym.prominence, 4), "tiles": round(hsym.prominence, 4)},
-                refined_sides=sides)
+                refined_sides=sides, door_axis_px=round(axis * f, 2),
+                door_edge=round(door.strength, 3) if door else None)
     layout = FacadeLayout(layout.width, layout.height, root, meta)
     problems = check_partition(layout)
     if problems:
@@ -238,20 +257,21 @@ def refine_box(gray: np.ndarray, box: Box) -> Box:
     return (float(nx0), float(ny0), float(nx1), float(ny1))
 
 
-def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
-                  regular: np.ndarray) -> list[list[tuple[int, int]]]:
+def cluster_tiles(work: np.ndarray, floors: np.ndarray, columns: list[np.ndarray], regular: np.ndarray,
+                  skip: set[tuple[int, int]] = frozenset()) -> list[list[tuple[int, int]]]:
     """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
 
     Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together; the ground floor
     is never stacked with the floors above (§2.2: "the bottom and top floors often differ"). Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
     tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
-    within the gap tolerance, else it starts a group."""
+    within the gap tolerance, else it starts a group. ``columns[i]`` are floor ``i``'s tile lines (the ground
+    floor's differ where a door was found); the cells in ``skip`` (the door's tile) are not grouped."""
     from PIL import Image
-    cells = [(i, j) for i in range(floors.size - 1) for j in range(tiles.size - 1)]
+    cells = [(i, j) for i in range(floors.size - 1) for j in range(columns[i].size - 1) if (i, j) not in skip]
     ground = floors.size - 2
     thumbs, sizes = [], []
     for i, j in cells:
-        block = work[floors[i]:floors[i + 1], tiles[j]:tiles[j + 1]]
+        block = work[floors[i]:floors[i + 1], columns[i][j]:columns[i][j + 1]]
         t = np.asarray(Image.fromarray(block.astype(np.float32)).resize((THUMB, THUMB), Image.Resampling.BOX))
         t = t - t.mean()
         thumbs.append(t.ravel() / max(float(np.linalg.norm(t)), 1e-9))
@@ -272,6 +292,12 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, tiles: np.ndarray,
             heads.append(k)
             groups.append([cell])
     return groups
+
+
+def _rects(floors: np.ndarray, columns: list[np.ndarray], groups: list[list[tuple[int, int]]]) -> list[list[Rect]]:
+    """The member tiles of every group as rectangles (``columns[i]``: floor ``i``'s tile lines)."""
+    return [[(int(floors[i]), int(floors[i + 1]), int(columns[i][j]), int(columns[i][j + 1])) for i, j in members]
+            for members in groups]
 
 
 def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tuple[Rect, str, tuple[int, ...]]]:
@@ -306,7 +332,7 @@ def merge_elements(elements: list[tuple[Rect, str, tuple[int, int]]]) -> list[tu
     return [merged[k] for k in sorted(merged)]
 
 
-def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: dict, H: int,
+def _layout(floors: np.ndarray, columns: list[np.ndarray], regular: np.ndarray, trees: dict, H: int,
             s: float) -> tuple[FacadeLayout, list, list]:
     """Region tree in metres (y up), the element rectangles in working pixels and the paths of their terminals
     from the root (child indices; the tile is at depth ``TILE_DEPTH``)."""
@@ -336,11 +362,11 @@ def _layout(floors: np.ndarray, tiles: np.ndarray, regular: np.ndarray, trees: d
     for i in range(floors.size - 1):
         name = "Floor" if regular[i] else ("GroundFloor" if i == last else f"Floor{i}")
         row = []
-        for j in range(tiles.size - 1):
+        for j in range(columns[i].size - 1):
             symbol, node, m = trees[(i, j)]
             row.append(build(node, m, symbol, i, j, (floors.size - 2 - i, j)))
-        floor_regions.append(region((floors[i], floors[i + 1], tiles[0], tiles[-1]), name, children=row))
-    root = region((0, H, tiles[0], tiles[-1]), "Facade", children=reversed(floor_regions))
+        floor_regions.append(region((floors[i], floors[i + 1], columns[i][0], columns[i][-1]), name, children=row))
+    root = region((0, H, columns[0][0], columns[0][-1]), "Facade", children=reversed(floor_regions))
     return FacadeLayout(root.w, root.h, root), elements, paths
 
 

@@ -263,20 +263,29 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
     return EdgeImage.of(mean(edges.gray), colour)
 
 
-def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool]) -> list[Node]:
+def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool], doors: bool = True,
+                     doorless: list[list[Rect]] | None = None) -> list[Node]:
     """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
     edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
     whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members, and §4's element type per
-    cluster of corresponding regions (:func:`match_elements`)."""
+    cluster of corresponding regions (:func:`match_elements`).
+
+    ``doors`` False and ``doorless``: the facade's door was found on its mirror axis (``photo_doors``), no other
+    region is a door, and ``doorless`` are the ground floor's groups without the door's tile lines. The floors
+    above are synchronised with those instead of the ground floor's groups: the door step changes nothing above
+    the ground floor."""
     stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
     sizes = synchronised(stacks)
+    above = sizes if doorless is None else synchronised(
+        [tree for tree, ground in zip(stacks, grounds) if not ground]
+        + [stack_tree(edges, tiles, True) for tiles in doorless])
     out = []
     for tree, tiles, ground in zip(stacks, groups, grounds):
-        node = _members(_resync(tree, tree.rects[0], sizes), tree.rects[0], tiles)
+        node = _members(_resync(tree, tree.rects[0], sizes if ground else above), tree.rects[0], tiles)
         boxed = None if ground else box_split(edges, tiles)
         if boxed is not None and _area(node, "window") < COVER * _area(boxed, "window"):
             node = boxed
-        out.append(match_elements(edges, node))
+        out.append(match_elements(edges, node, doors))
     return out
 
 
@@ -299,7 +308,7 @@ def stack_tree(edges: EdgeImage, tiles: list[Rect], ground: bool) -> Node:
     return tree
 
 
-def match_elements(edges: EdgeImage, tree: Node) -> Node:
+def match_elements(edges: EdgeImage, tree: Node, doors: bool = True) -> Node:
     """§4: every element leaf -- a region the contrast test (:func:`_element_label`) or the profile windows took
     for an element -- is a cluster of similar regions, one per member tile; its label and element are Eq. 8's
     best library element among those :func:`_element_labels` allows. The contrast test stays the prior that
@@ -311,20 +320,20 @@ def match_elements(edges: EdgeImage, tree: Node) -> Node:
             return Node(node.rects, node.label, tuple(visit(c) for c in node.children), node.cuts)
         if node.label in (None, "wall"):
             return node
-        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles))
+        element, _ = cluster_type(edges.gray, node.rects, _element_labels(node, tiles, doors))
         return Node(node.rects, element.label, element=element.name)
     return visit(tree)
 
 
-def _element_labels(node: Node, tiles: tuple[Rect, ...]) -> tuple[str, ...]:
+def _element_labels(node: Node, tiles: tuple[Rect, ...], doors: bool = True) -> tuple[str, ...]:
     """Labels an element leaf may take: a region the contrast test took for a door (on the ground floor's bottom
-    edge, or a piece of one) is a door -- if plausible: at least ``DOOR_ASPECT`` times as high as wide, in a group
-    of at most ``MAX_DOORS`` tiles (a door repeated in every tile of a longer row is a row of shop fronts or an
-    arcade) -- or a shop front; any other a window."""
+    edge, or a piece of one) is a door -- if plausible: ``doors`` (no door found on the facade's mirror axis), at
+    least ``DOOR_ASPECT`` times as high as wide, in a group of at most ``MAX_DOORS`` tiles (a door repeated in
+    every tile of a longer row is a row of shop fronts or an arcade) -- or a shop front; any other a window."""
     if node.label != "door":
         return ("window",)
     r0, r1, c0, c1 = node.rects[0]
-    plausible = len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
+    plausible = doors and len(tiles) <= MAX_DOORS and r1 - r0 >= DOOR_ASPECT * (c1 - c0)
     return ("door", "shop") if plausible else ("shop",)
 
 

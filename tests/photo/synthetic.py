@@ -5,9 +5,11 @@ import numpy as np
 
 
 def facade(floors: int = 5, cols: int = 6, floor_h: int = 60, tile_w: int = 50, win: tuple[int, int] = (30, 22),
-           off: tuple[int, int] = (14, 14), noise: float = 0.04, seed: int = 0, ground_h: int = 0, accent: int = 0):
+           off: tuple[int, int] = (14, 14), noise: float = 0.04, seed: int = 0, ground_h: int = 0, accent: int = 0,
+           door_x: int | None = None):
     """RGB image in 0..1, window boxes ``(x0, y0, x1, y1)`` (pixels, y down) and the door box (None without a
-    ground floor). ``ground_h`` adds an irregular ground floor of that height with a door in its second tile;
+    ground floor). ``ground_h`` adds an irregular ground floor of that height with a 26 px wide door in its second
+    tile, or with its left side at column ``door_x``;
     ``accent`` = k gives every k-th floor (from the top) a dark cornice band and a balcony slab across the facade."""
     rng = np.random.default_rng(seed)
     H, W = floors * floor_h + ground_h, cols * tile_w
@@ -20,7 +22,7 @@ def facade(floors: int = 5, cols: int = 6, floor_h: int = 60, tile_w: int = 50, 
             boxes.append((c0, r0, c0 + win[1], r0 + win[0]))
     door = None
     if ground_h:
-        c0 = tile_w + (tile_w - 26) // 2
+        c0 = tile_w + (tile_w - 26) // 2 if door_x is None else door_x
         wall[H - ground_h + 20:, c0:c0 + 26] = 0.3 + 0.03 * rng.standard_normal((ground_h - 20, 26))
         door = (c0, H - ground_h + 20, c0 + 26, H)
     for i in range(0, floors, accent) if accent else ():
