@@ -31,6 +31,12 @@ class CostModel:
     lambda1: float = 1.0
     lambda2: float = 1.0
 
+    def __post_init__(self) -> None:
+        for name in ("split", "repeat", "lambda1", "lambda2"):
+            value = getattr(self, name)
+            if not value >= 0 or value == float("inf"):  # (NaN fails both tests)
+                raise ValueError(f"cost model: {name} must be a finite number >= 0, got {value!r}")
+
 
 @dataclass(frozen=True)
 class Action:

@@ -234,6 +234,10 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
     ``snap``, ``align`` and ``regularize`` are shares of the facade's width (height), each capped by its share
     in ``element_share`` of the median window width (height); ``None`` lifts the caps."""
     xml_path = Path(xml_path)
+    for name, value in (("width", width), ("floor_height", floor_height)):
+        if value is not None and not 0 < value < float("inf"):
+            raise LayoutError(f"{name} must be a positive number of metres, got {value!r}", where=str(xml_path),
+                              hint="pass the facade width (or the height of one row of windows) in metres")
     labels = read_label_table(Path(labels_path)) if labels_path else _find_labels(xml_path)
     objects = parse_cmp_xml(xml_path.read_text(), str(xml_path), labels)
     png_path = Path(png) if png else xml_path.with_suffix(".png")

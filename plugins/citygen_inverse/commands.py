@@ -126,6 +126,12 @@ class LayoutCommand(Command):
         return 0
 
 
+def _cost_options(parser: argparse.ArgumentParser) -> None:
+    """wu2014 Eq. 2's operator costs (each rule also costs its number of successors)."""
+    parser.add_argument("--split-cost", type=float, default=0.1, help="cost of a split rule, >= 0 (default 0.1)")
+    parser.add_argument("--repeat-cost", type=float, default=0.5, help="cost of a repeat rule, >= 0 (default 0.5)")
+
+
 def verified(text: str, layouts: list, paths: list[str]) -> str:
     """Check that an exact grammar regenerates its one layout; a mismatch is a bug, reported as an error."""
     if len(layouts) > 1:
@@ -146,21 +152,29 @@ class GrammarCommand(Command):
         sub = parser.add_subparsers(dest="grammar_command", required=True)
         ext = sub.add_parser("extract", help="layout JSON -> grammar in citygen's DSL")
         ext.add_argument("layouts", nargs="+", help="layout JSON file(s); several give one joint grammar")
-        ext.add_argument("--method", choices=("greedy", "is", "adp"), default="adp")
-        ext.add_argument("--iterations", type=int, default=2000)
-        ext.add_argument("--seed", type=int, default=0)
-        ext.add_argument("--split-cost", type=float, default=0.1)
-        ext.add_argument("--repeat-cost", type=float, default=0.5)
+        ext.add_argument("--method", choices=("greedy", "is", "adp"), default="adp",
+                         help="search (wu2014 §4): greedy by the splitting heuristic, importance sampling or "
+                              "approximate dynamic programming (default adp)")
+        ext.add_argument("--iterations", type=int, default=2000,
+                         help="grammars built by is / adp, at least 1 (default 2000; greedy builds one)")
+        ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp (default 0)")
+        _cost_options(ext)
         ext.add_argument("--size-independent", action="store_true",
                          help="a grammar for any face: floor slabs on the building's floor lines, a door on entrance "
                               "faces, alignment kept (wu2014 §5, Fig. 12); one layout only")
         ext.add_argument("-o", "--output", help="grammar file (default stdout)")
         cost = sub.add_parser("cost", help="wu2014 Eq. 1-2 cost of a grammar file")
-        cost.add_argument("grammar")
-        cost.add_argument("--split-cost", type=float, default=0.1)
-        cost.add_argument("--repeat-cost", type=float, default=0.5)
+        cost.add_argument("grammar", help="grammar file in citygen's DSL (extracted or hand-written)")
+        _cost_options(cost)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        where = args.grammar if args.grammar_command == "cost" else args.layouts[0]
+        bad = [f"--{name.replace('_', '-')} must be a finite number >= 0, got {getattr(args, name):g}"
+               for name in ("split_cost", "repeat_cost") if not 0 <= getattr(args, name) < float("inf")]
+        if args.grammar_command == "extract" and args.method != "greedy" and args.iterations < 1:
+            bad.append(f"--iterations must be at least 1, got {args.iterations}")
+        if bad:
+            return report(CitygenError("; ".join(bad), where=where))
         try:
             return self._extract(args) if args.grammar_command == "extract" else self._cost(args)
         except (CitygenError, OSError) as exc:

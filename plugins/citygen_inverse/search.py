@@ -254,6 +254,8 @@ class GrammarSearch:
             time_limit: float | None = None) -> SearchResult:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        if method != "greedy" and not iterations >= 1:
+            raise ValueError(f"{method} needs at least 1 iteration, got {iterations!r}")
         start = time.perf_counter()
         if self._best_only != (method == "greedy"):  # (a search run again with another method starts afresh)
             for table in (self._actions, self._cost, self._kids, self._greedy_k, self._cum, self._weights,

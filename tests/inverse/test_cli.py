@@ -185,3 +185,33 @@ def test_mismatches_names_what_is_not_derived(layout_json):
                                 children=(Region(0.0, 0.0, layout.width, layout.height, "Wall", "wall"),)))
     problems = mismatches(text, other)
     assert problems[0].endswith("derived") and "1 terminals in the layout" in problems[0]
+
+
+def test_out_of_range_options_are_refused_naming_the_option(layout_json, tmp_path, capsys):
+    """Regressions: ``--iterations 0`` ran one iteration silently, negative or NaN costs were used as given, and
+    ``--floor-height 0`` ended in a ZeroDivisionError traceback."""
+    _fails(capsys, ["grammar", "extract", str(layout_json), "--iterations", "0"], "b0009.json",
+           "--iterations must be at least 1")
+    _fails(capsys, ["grammar", "extract", str(layout_json), "--split-cost", "-1", "--repeat-cost", "nan"],
+           "--split-cost must be a finite number >= 0", "--repeat-cost")
+    grammar = tmp_path / "g.grammar"
+    assert main(["grammar", "extract", str(layout_json), "--method", "greedy", "--iterations", "0",
+                 "-o", str(grammar)]) == 0  # (greedy builds one grammar whatever --iterations says)
+    capsys.readouterr()
+    _fails(capsys, ["grammar", "cost", str(grammar), "--repeat-cost", "inf"], "g.grammar", "--repeat-cost")
+    for option in (["--floor-height", "0"], ["--width", "-3"]):
+        _fails(capsys, ["layout", "import-cmp", str(XML), *option], "cmp_b0009.xml", "must be a positive number")
+
+
+def test_the_api_refuses_what_the_cli_refuses(layout_json):
+    from citygen_inverse.actions import CostModel
+    from citygen_inverse.cmp import import_cmp
+    from citygen_inverse.extract import extract_grammar
+    layout = FacadeLayout.loads(layout_json.read_text())
+    with pytest.raises(ValueError, match="split must be a finite number >= 0"):
+        CostModel(split=-0.1)
+    with pytest.raises(ValueError, match="adp needs at least 1 iteration"):
+        extract_grammar(layout, "adp", 0)
+    assert extract_grammar(layout, "greedy", 0).iterations == 1
+    with pytest.raises(Exception, match="floor_height must be a positive number"):
+        import_cmp(XML, floor_height=0.0)
