@@ -12,6 +12,7 @@ from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import check_partition
 from citygen.pipeline import generate_city, terminal_progress
+from citygen.preview import add_size_arguments
 from citygen.registry import Registry, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.scene import load_scene
@@ -120,14 +121,12 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     p.set_defaults(run=_cmd_plugins)
     f = sub.add_parser("facade", help="preview one facade of a ruleset")
     f.add_argument("ruleset")
-    f.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+    add_size_arguments(f, floor_height=3.2, ground=True)
     f.add_argument("--kind", help="ruleset kind (default: from the file suffix)")
     f.add_argument("--json", action="store_true", help="print the FacadeLayout JSON")
     f.add_argument("--png", help="write a PNG drawing of the layout")
     f.add_argument("--explain", action="store_true", help="print how the layout was derived")
     f.add_argument("--seed", type=int, default=0)
-    f.add_argument("--floor-height", type=float, default=3.2)
-    f.add_argument("--ground-height", type=float, default=None)
     f.add_argument("--no-entrance", action="store_true", help="preview a face without the building's door")
     f.set_defaults(run=_cmd_facade)
     for name, command in sorted(registry.commands.items()):

@@ -13,6 +13,7 @@ per building; each face's generator receives them here and must honour them:
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -79,9 +80,10 @@ def split_floors(height: float, floor_height: float, ground_height: float | None
     The floor count is the nearest whole number; floors above the ground share the remaining height equally, so
     lines always end exactly at ``height``. A wall lower than one floor is one floor.
     """
-    if height <= 0:
-        raise ValueError(f"height must be positive, got {height}")
     ground = floor_height if ground_height is None else ground_height
+    for name, value in (("height", height), ("floor_height", floor_height), ("ground_height", ground)):
+        if not 0 < value < math.inf:  # (NaN fails too)
+            raise ValueError(f"{name} must be a positive finite number of metres, got {value}")
     if height < ground + 0.5 * floor_height:
         return (0.0, float(height))
     upper = max(1, round((height - ground) / floor_height))

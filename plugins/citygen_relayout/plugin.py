@@ -9,7 +9,7 @@ from pathlib import Path
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
-from citygen.preview import add_output_arguments, write_layouts
+from citygen.preview import add_output_arguments, add_size_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_relayout import building
@@ -52,7 +52,7 @@ class RelayoutCommand(Command):
 
     def configure(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("model", type=Path, help="a .relayout model file")
-        parser.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+        add_size_arguments(parser)
         parser.add_argument("--count", type=int, default=1)
         parser.add_argument("--seed", type=int, default=0)
         parser.add_argument("--budget", type=float, default=10.0, help="CPU-time safety limit per variation (s)")

@@ -8,7 +8,7 @@ from pathlib import Path
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
-from citygen.preview import add_output_arguments, write_layouts
+from citygen.preview import add_output_arguments, add_size_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_safe.generate import edit
@@ -44,10 +44,9 @@ class EditCommand(Command):
 
     def configure(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("ruleset", type=Path, help="a .safe ruleset file")
-        parser.add_argument("--size", nargs=2, type=float, metavar=("W", "H"), required=True)
+        add_size_arguments(parser, floor_height=3.0)
         parser.add_argument("--count", type=int, default=4, help="K, the number of variations")
         parser.add_argument("--seed", type=int, default=0)
-        parser.add_argument("--floor-height", type=float, default=3.0)
         parser.add_argument("--no-entrance", action="store_true", help="the face carries no door")
         add_output_arguments(parser)
 
