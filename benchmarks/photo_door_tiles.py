@@ -40,6 +40,15 @@ def ground_tiles(result) -> dict[tuple[float, float], Region]:
     return {(round(t.x, 6), round(t.w, 6)): t for t in ground.children}
 
 
+def elements(result, key: tuple[float, float]) -> list:
+    """The element boxes (crop pixels) and labels, a door counted as a shop front, whose centre lies in the ground
+    floor's tile ``key`` (metres)."""
+    mpp = result.layout.meta["metres_per_pixel"]
+    x0, x1, top = key[0] / mpp, (key[0] + key[1]) / mpp, result.floor_lines[-2]
+    return [(box, "shop" if label == "door" else label) for box, label in result.elements
+            if x0 <= (box[0] + box[2]) / 2 < x1 and (box[1] + box[3]) / 2 >= top]
+
+
 def untouched(on, off) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
     """The ground-floor tiles of ``off`` that are also tiles of ``on`` (by extent), and the rest of ``on``'s."""
     a, b = ground_tiles(on), ground_tiles(off)
@@ -52,8 +61,8 @@ def run(image, door: bool, record: list):
     appended to ``record``."""
     cluster = photo.cluster_tiles
 
-    def spy(work, floors, columns, regular, skip=frozenset()):
-        groups = cluster(work, floors, columns, regular, skip)
+    def spy(work, floors, columns, regular, *args, **kwargs):
+        groups = cluster(work, floors, columns, regular, *args, **kwargs)
         ground = floors.size - 2
         record.append([frozenset((int(columns[i][j]), int(columns[i][j + 1])) for i, j in g)
                        for g in groups if all(i == ground for i, _ in g)])
@@ -78,7 +87,7 @@ def compare(image) -> dict:
     a, b = ground_tiles(on), ground_tiles(off)
     reasons: dict[str, int] = {}
     for k in kept:
-        if normalised(a[k]) == normalised(b[k]):
+        if normalised(a[k]) == normalised(b[k]) and elements(on, k) == elements(off, k):
             continue
         if normalised(a[k], True) == normalised(b[k], True):
             reason = "labels"
