@@ -10,8 +10,9 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
 3. our extension (``photo_doors``): the entrance door, a box on the ground centred on the mirror axis of the
-   floors above; the ground floor gets the door's sides as tile lines of its own (the floors above are
-   synchronised, §3.2, with the ground floor's tiles without them: the door changes nothing above the ground floor);
+   floors above; the ground floor gets the door's sides as tile lines of its own, and only the tiles those lines
+   cut or merge are grouped and subdivided anew (every other tile keeps its door-free group, subdivision and §3.2
+   sizes: the door changes nothing but its own tiles);
    §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
    and the subdivision mapped onto its members; a contrast test tells elements from wall;
 4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
