@@ -273,8 +273,8 @@ def cluster_tiles(work: np.ndarray, floors: np.ndarray, columns: list[np.ndarray
     is never stacked with the floors above (§2.2: "the bottom and top floors often differ"). Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
     tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
     within the gap tolerance, else it starts a group. ``columns[i]`` are floor ``i``'s tile lines (the ground
-    floor's differ where a door was found); only the cells ``only`` are grouped when given (the ground-floor tiles rebuilt
-    around the door)."""
+    floor's differ where a door was found); only the cells ``only`` are grouped when given (the ground-floor
+    tiles rebuilt around the door)."""
     from PIL import Image
     cells = [(i, j) for i in range(floors.size - 1) for j in range(columns[i].size - 1)
              if only is None or (i, j) in only]
