@@ -10,8 +10,9 @@ resolution of at most ``WORK`` pixels (``MI_WORK`` for the mutual information) a
 2. §2.4 (``photo_structure``): floor lines are the minima of ``Ver(y)`` whose spacing fits the period (an
    irregular ground floor and attic are allowed), tile lines the minima of ``Hor(x)`` on the regular floors;
 3. our extension (``photo_doors``): the entrance door, a box on the ground centred on the mirror axis of the
-   floors above; the ground floor gets the door's sides as tile lines of its own (the floors above are
-   synchronised, §3.2, with the ground floor's tiles without them: the door changes nothing above the ground floor);
+   floors above; the ground floor gets the door's sides as tile lines of its own, and only the tiles those lines
+   cut or merge are grouped and subdivided anew (every other tile keeps its door-free group, subdivision and §3.2
+   sizes: the door changes nothing but its own tiles);
    §3 (``photo_tiles``): similar tiles are grouped (``cluster_tiles``), each group's mean tile is subdivided
    and the subdivision mapped onto its members; a contrast test tells elements from wall;
 4. §4 (``photo_elements``): each element's cluster of similar regions takes the best-matching element of a
@@ -29,7 +30,8 @@ from scipy.ndimage import gaussian_filter
 
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
-from citygen_inverse.photo_doors import axis_door, door_tile, ground_columns, mirror_axis, repeats_floor_above
+from citygen_inverse.photo_doors import (axis_door, door_tile, ground_columns, mirror_axis, repeats_floor_above,
+                                         untouched_tiles)
 from citygen_inverse.photo_elements import library
 from citygen_inverse.photo_refit import carry
 from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
@@ -168,22 +170,28 @@ def analyse(image: np.ndarray, source: str = "<photo>", *, width: float | None =
     door = axis_door(work, top, axis) if top >= 2 * TAU_SIZE and not repeats_floor_above(work, top) else None
     columns = [tiles] * (floors.size - 1)
     edges = EdgeImage.of(work, colour)
+    groups = cluster_tiles(work, floors, columns, regular)  # as without a door: the door changes only its tiles
     trees: dict[tuple[int, int], tuple[str, Node, int]] = {}
+    kept = {k: k for k in range(tiles.size - 1)}  # the ground floor's tiles the door leaves: shared -> own index
+    rebuilt: list[list[tuple[int, int]]] = []  # groups of the ground-floor tiles rebuilt around the door
     if door is not None:
         columns[ground], j = ground_columns(tiles, door.rect, max(2 * TAU_SIZE, int(DOOR_GAP * Q)))
         rect = (top, H, int(columns[ground][j]), int(columns[ground][j + 1]))
         trees[(ground, j)] = ("DoorTile", door_tile(edges, rect, door.rect), 0)
-    groups = cluster_tiles(work, floors, columns, regular, skip=set(trees))
-    grounds = [all(i == ground for i, _ in members) for members in groups]
-    doorless = None  # with a door: the ground floor's groups without it, for the floors above (subdivide_groups)
-    if door is not None:
-        shared = [tiles] * (floors.size - 1)
-        doorless = _rects(floors, shared, [members for members in cluster_tiles(work, floors, shared, regular)
-                                           if all(i == ground for i, _ in members)])
-    nodes = subdivide_groups(edges, _rects(floors, columns, groups), grounds, door is None, doorless)
-    for g, (members, node) in enumerate(zip(groups, nodes)):
-        for m, ij in enumerate(members):
-            trees[ij] = (f"Tile{g + 1}", node, m)
+        kept = untouched_tiles(tiles, columns[ground], j)
+        cut = set(range(columns[ground].size - 1)) - {j} - set(kept.values())
+        rebuilt = cluster_tiles(work, floors, columns, regular, {(ground, k) for k in cut}) if cut else []
+    everything = groups + rebuilt
+    grounds = [all(i == ground for i, _ in members) for members in everything]
+    rects = _rects(floors, [tiles] * (floors.size - 1), groups) + _rects(floors, columns, rebuilt)
+    nodes = subdivide_groups(edges, rects, grounds, door is None, [g >= len(groups) for g in range(len(rects))])
+    for g, (members, node) in enumerate(zip(everything, nodes)):
+        for m, (i, k) in enumerate(members):
+            if i == ground and g < len(groups):  # a door-free ground-floor group: its tiles the door left
+                if k not in kept:
+                    continue
+                k = kept[k]
+            trees[(i, k)] = (f"Tile{g + 1}", node, m)
     scale = (width / W) if width else floor_height / P
     layout, elements, paths = _layout(floors, columns, regular, trees, H, scale)
     root, boxes, sides = _refined(layout.root, luminance(image), elements, paths, f, scale, H)
@@ -258,16 +266,18 @@ def refine_box(gray: np.ndarray, box: Box) -> Box:
 
 
 def cluster_tiles(work: np.ndarray, floors: np.ndarray, columns: list[np.ndarray], regular: np.ndarray,
-                  skip: set[tuple[int, int]] = frozenset()) -> list[list[tuple[int, int]]]:
+                  only: set[tuple[int, int]] | None = None) -> list[list[tuple[int, int]]]:
     """Groups of similar tiles (§2: "similar tile appearances are detected and registered in groups").
 
     Only tiles of the stacked (regular) floors, or of one irregular floor, are grouped together; the ground floor
     is never stacked with the floors above (§2.2: "the bottom and top floors often differ"). Tiles are compared as ``THUMB x THUMB`` thumbnails (zero mean, unit variance) by normalised correlation; a
     tile joins the first group whose first member it matches by at least ``SIMILAR`` and whose size it has
     within the gap tolerance, else it starts a group. ``columns[i]`` are floor ``i``'s tile lines (the ground
-    floor's differ where a door was found); the cells in ``skip`` (the door's tile) are not grouped."""
+    floor's differ where a door was found); only the cells ``only`` are grouped when given (the ground-floor
+    tiles rebuilt around the door)."""
     from PIL import Image
-    cells = [(i, j) for i in range(floors.size - 1) for j in range(columns[i].size - 1) if (i, j) not in skip]
+    cells = [(i, j) for i in range(floors.size - 1) for j in range(columns[i].size - 1)
+             if only is None or (i, j) in only]
     ground = floors.size - 2
     thumbs, sizes = [], []
     for i, j in cells:

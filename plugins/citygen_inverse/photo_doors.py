@@ -133,6 +133,15 @@ def ground_columns(tiles: np.ndarray, door: Rect, gap: int = 2 * TAU_SIZE) -> tu
     return np.array(lines), len(left)
 
 
+def untouched_tiles(tiles: np.ndarray, lines: np.ndarray, door: int) -> dict[int, int]:
+    """The tiles of the shared tile lines ``tiles`` that the door's lines leave as they are: those that are also
+    tiles of the ground floor's ``lines`` (:func:`ground_columns`) other than the door's tile ``door``, by their
+    index in ``tiles`` -> in ``lines``. The rest of the ground floor's tiles are cut or merged by the door's sides."""
+    index = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(lines[:-1], lines[1:])) if k != door}
+    return {k: index[(int(a), int(b))] for k, (a, b) in enumerate(zip(tiles[:-1], tiles[1:]))
+            if (int(a), int(b)) in index}
+
+
 def door_tile(edges: EdgeImage, tile: Rect, door: Rect) -> Node:
     """The door's ground-floor tile: wall | (wall above the door / door) | wall, the door leaf typed by §4's Eq. 7
     among the library's doors (``photo_elements.cluster_type``)."""

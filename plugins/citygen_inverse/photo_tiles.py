@@ -264,24 +264,23 @@ def group_stack(edges: EdgeImage, tiles: list[Rect]) -> EdgeImage:
 
 
 def subdivide_groups(edges: EdgeImage, groups: list[list[Rect]], grounds: list[bool], doors: bool = True,
-                     doorless: list[list[Rect]] | None = None) -> list[Node]:
+                     rebuilt: list[bool] | None = None) -> list[Node]:
     """The shared subdivision of every group of similar tiles, as trees with one rectangle per member: §3.1's
     edge splits on each group's mean tile (:func:`stack_tree`), their split distances synchronised across the
     whole facade (§3.2, :func:`synchronised`), mapped proportionally onto the members, and §4's element type per
     cluster of corresponding regions (:func:`match_elements`).
 
-    ``doors`` False and ``doorless``: the facade's door was found on its mirror axis (``photo_doors``), no other
-    region is a door, and ``doorless`` are the ground floor's groups without the door's tile lines. The floors
-    above are synchronised with those instead of the ground floor's groups: the door step changes nothing above
-    the ground floor."""
+    ``doors`` False: the facade's door was found on its mirror axis (``photo_doors``), no other region is a door.
+    ``rebuilt`` flags the groups of the ground-floor tiles rebuilt around that door: they are synchronised with
+    every group, the others only among themselves (as without the door), so that the door step changes no tile
+    but those its tile lines touch."""
     stacks = [stack_tree(edges, tiles, ground) for tiles, ground in zip(groups, grounds)]
-    sizes = synchronised(stacks)
-    above = sizes if doorless is None else synchronised(
-        [tree for tree, ground in zip(stacks, grounds) if not ground]
-        + [stack_tree(edges, tiles, True) for tiles in doorless])
+    rebuilt = rebuilt or [False] * len(groups)
+    base = synchronised([tree for tree, late in zip(stacks, rebuilt) if not late])
+    sizes = synchronised(stacks) if any(rebuilt) else base
     out = []
-    for tree, tiles, ground in zip(stacks, groups, grounds):
-        node = _members(_resync(tree, tree.rects[0], sizes if ground else above), tree.rects[0], tiles)
+    for tree, tiles, ground, late in zip(stacks, groups, grounds, rebuilt):
+        node = _members(_resync(tree, tree.rects[0], sizes if late else base), tree.rects[0], tiles)
         boxed = None if ground else box_split(edges, tiles)
         if boxed is not None and _area(node, "window") < COVER * _area(boxed, "window"):
             node = boxed

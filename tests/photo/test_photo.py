@@ -290,6 +290,26 @@ def test_split_distances_are_synchronised_across_groups():
     assert synced == [[((16, 44, 14, 36), (76, 104, 14, 36))], [((16, 44, 64, 86), (76, 104, 64, 86))]]
 
 
+def test_rebuilt_groups_do_not_change_the_others_split_distances():
+    """Regression (docs/photo.md doors step 6): the ground-floor tiles rebuilt around the door were synchronised
+    together with every other group, so their split distances moved windows in tiles the door does not touch.
+    A group flagged ``rebuilt`` is synchronised with all groups, the others only among themselves: the first group
+    keeps the windows it has alone (not those synchronised with the second, above), the rebuilt one takes the
+    medians of both."""
+    from citygen_inverse.photo_tiles import EdgeImage, subdivide_groups
+    gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
+    for top in (0, 60):
+        gray[top + 14:top + 44, 14:36] = 0.25
+        gray[top + 16:top + 44, 63:86] = 0.25
+    edges = EdgeImage.of(gray)
+    groups = [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+    trees = subdivide_groups(edges, groups, [False, False], rebuilt=[False, True])
+    windows = [[n.rects for n in _leaves(t) if n.label == "window"] for t in trees]
+    assert windows == [[((15, 45, 14, 36), (75, 105, 14, 36))], [((16, 44, 64, 86), (76, 104, 64, 86))]]
+    assert trees[0] == subdivide_groups(edges, groups[:1], [False])[0]
+    assert trees[1] == subdivide_groups(edges, groups, [False, False])[1]
+
+
 def test_synchronised_split_that_no_longer_fits_is_mapped():
     """Regression: a split moved by synchronisation can leave a child region too small for the child's own split
     (distance 30 in a region now 20 high); ``_resync`` crashed on it (seen with ``SYNC`` = 0.2 on the CMP photos).
