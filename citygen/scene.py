@@ -5,6 +5,7 @@ unknown keys and wrong types are errors naming ``file:line`` and the valid choic
 """
 from __future__ import annotations
 
+import math
 import operator
 import re
 import tomllib
@@ -56,6 +57,9 @@ class Condition:
 _OPS = {">=": operator.ge, "<=": operator.le, ">": operator.gt, "<": operator.lt, "==": operator.eq,
         "!=": operator.ne}
 _COMPARISON = re.compile(r"^\s*(>=|<=|==|!=|>|<)\s*(-?\d+(?:\.\d*)?)\s*$")
+_OPERATOR = re.compile(r"^\s*(>=|<=|==|!=|>|<)")
+#: The least storey height (metres) a scene may set.
+MIN_STOREY = 2.0
 
 
 @dataclass(frozen=True)
@@ -129,10 +133,13 @@ class _Reader:
             self.fail(f"unknown key {unknown[0]!r} in [{name}]", unknown[0], hint=f"valid keys: {', '.join(sorted(allowed))}")
         return value
 
-    def number(self, table: Mapping[str, Any], key: str, default: float, positive: bool = True) -> float:
+    def number(self, table: Mapping[str, Any], key: str, default: float, least: float = 0.0) -> float:
+        """A finite number above 0 (at least ``least`` when that is more)."""
         value = table.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and value <= 0):
-            self.fail(f"{key} must be a {'positive ' if positive else ''}number, got {value!r}", key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                or value <= 0 or value < least:
+            what = f"a finite number of at least {least:g}" if least > 0 else "a finite positive number"
+            self.fail(f"{key} must be {what}, got {value!r}", key)
         return float(value)
 
     def roof_shape(self, value: Any, line: int | None) -> str:
@@ -183,7 +190,8 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
         r.fail("[footprints] with a path is required", hint='e.g. [footprints] path = "data/city.geojson"', line=1)
     fp_options = {k: v for k, v in fp.items() if k != "path"}
     d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
-    numbers = {k: r.number(d, k, getattr(Defaults, k)) for k in Defaults.__dataclass_fields__ if k != "roof_shape"}
+    numbers = {k: r.number(d, k, getattr(Defaults, k), least=MIN_STOREY if k.endswith("floor_height") else 0.0)
+               for k in Defaults.__dataclass_fields__ if k != "roof_shape"}
     at = max(text.find("[defaults]"), 0)
     shape = r.roof_shape(d["roof_shape"], _line_of(text, "roof_shape", at)) if "roof_shape" in d else "flat"
     defaults = Defaults(**numbers, roof_shape=shape)
@@ -241,7 +249,8 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         pitch_line = _line_of(r.text, "roof_pitch", header) if header >= 0 else line
         shape = r.roof_shape(item["roof_shape"], shape_line) if "roof_shape" in item else None
         pitch = r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None
-        result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), line),
+        when_line = _line_of(r.text, "when", header) if header >= 0 and "when" in item else line
+        result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), when_line),
                                  faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch,
                                  fallback=fallback))
     return tuple(result)
@@ -256,6 +265,9 @@ def _conditions(r: _Reader, when: Any, line: int | None) -> tuple[Condition, ...
             conditions.append(Condition(key, "in", tuple(value)))
         elif isinstance(value, str) and (m := _COMPARISON.match(value)):
             conditions.append(Condition(key, m[1], (float(m[2]),)))
+        elif isinstance(value, str) and _OPERATOR.match(value):
+            r.fail(f"when {key} = {value!r}: a comparison needs a number", line=line,
+                   hint=f'e.g. {key} = "< 7" or ">= 12.5"')
         elif isinstance(value, (str, int, float)) and not isinstance(value, bool):
             conditions.append(Condition(key, "in", (value,)))
         else:

@@ -46,7 +46,15 @@ def test_scene_parses_and_matches(tmp_path):
 
 @pytest.mark.parametrize("edit, message, line", [
     (("seed = 1", "seed = -4"), "seed must be", 3),
-    (("floor_height = 3.0", "floor_height = 0"), "floor_height must be a positive number", 10),
+    (("floor_height = 3.0", "floor_height = 0"), "floor_height must be a finite number of at least 2", 10),
+    # regressions: NaN passed every check (a NaN floor height was then blamed on [footprints], a NaN tile size
+    # ended in a traceback), storeys of a micrometre were built, and a comparison without a number matched nothing
+    (("floor_height = 3.0", "floor_height = nan"), "floor_height must be a finite number", 10),
+    (("floor_height = 3.0", "floor_height = 1e-6"), "floor_height must be a finite number of at least 2", 10),
+    (("floor_height = 3.0", "floor_height = 3.0\nground_floor_height = nan"), "ground_floor_height must be", 11),
+    (("floor_height = 3.0", "floor_height = 3.0\ncorner_width = inf"), "corner_width must be a finite positive", 11),
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\n[output]\ntile_size = nan\n'), "tile_size must be", 23),
+    (('levels = ">= 5"', 'levels = "< abc"'), "a comparison needs a number", 17),
     (("[defaults]", "[defaults]\nfloorheight = 3"), "unknown key 'floorheight'", 10),
     (('ruleset = "b.grammar"\n', 'ruleset = "missing.grammar"\n'), "missing.grammar does not exist", 20),
     (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nfallback = "gone.grammar"\n'), "gone.grammar does not exist",
