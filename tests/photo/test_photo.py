@@ -272,17 +272,23 @@ def test_window_half_hidden_by_a_railing_is_found_whole():
     assert _railing_group((28, 44), 0.55) == [((14, 44, 14, 36), (74, 104, 14, 36))]
 
 
-def test_split_distances_are_synchronised_across_groups():
-    """§3.2 global synchronisation: two groups whose windows differ by 1-2 px (imperfect symmetry: tops 14 / 16 px
-    below the tile top, left sides 14 / 13 px from the tile side) are split separately, then every split distance
-    takes its facade-wide cluster's median, so both groups' windows get the same offsets in their tiles."""
-    from citygen_inverse.photo_tiles import EdgeImage, stack_tree, subdivide_groups
+def _two_groups():
+    """Two groups of two tiles whose windows differ by 1-2 px (tops 14 / 16 px below the tile top, left sides 14 /
+    13 px from the tile side): the edge image and the groups' tiles."""
+    from citygen_inverse.photo_tiles import EdgeImage
     gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
     for top in (0, 60):
         gray[top + 14:top + 44, 14:36] = 0.25
         gray[top + 16:top + 44, 63:86] = 0.25
-    edges = EdgeImage.of(gray)
-    groups = [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+    return EdgeImage.of(gray), [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+
+
+def test_split_distances_are_synchronised_across_groups():
+    """§3.2 global synchronisation: two groups whose windows differ by 1-2 px (imperfect symmetry: tops 14 / 16 px
+    below the tile top, left sides 14 / 13 px from the tile side) are split separately, then every split distance
+    takes its facade-wide cluster's median, so both groups' windows get the same offsets in their tiles."""
+    from citygen_inverse.photo_tiles import stack_tree, subdivide_groups
+    edges, groups = _two_groups()
     alone = [[n.rects[0] for n in _leaves(stack_tree(edges, g, False)) if n.label == "window"] for g in groups]
     assert alone == [[(14, 44, 14, 36)], [(16, 44, 13, 36)]]
     trees = subdivide_groups(edges, groups, [False, False])
@@ -296,13 +302,8 @@ def test_rebuilt_groups_do_not_change_the_others_split_distances():
     A group flagged ``rebuilt`` is synchronised with all groups, the others only among themselves: the first group
     keeps the windows it has alone (not those synchronised with the second, above), the rebuilt one takes the
     medians of both."""
-    from citygen_inverse.photo_tiles import EdgeImage, subdivide_groups
-    gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
-    for top in (0, 60):
-        gray[top + 14:top + 44, 14:36] = 0.25
-        gray[top + 16:top + 44, 63:86] = 0.25
-    edges = EdgeImage.of(gray)
-    groups = [[(0, 60, 0, 50), (60, 120, 0, 50)], [(0, 60, 50, 100), (60, 120, 50, 100)]]
+    from citygen_inverse.photo_tiles import subdivide_groups
+    edges, groups = _two_groups()
     trees = subdivide_groups(edges, groups, [False, False], rebuilt=[False, True])
     windows = [[n.rects for n in _leaves(t) if n.label == "window"] for t in trees]
     assert windows == [[((15, 45, 14, 36), (75, 105, 14, 36))], [((16, 44, 64, 86), (76, 104, 64, 86))]]
