@@ -8,11 +8,11 @@ import sys
 from pathlib import Path
 
 from citygen import __version__
+from citygen.cliargs import add_size_arguments, whole
 from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import check_partition
 from citygen.pipeline import generate_city, terminal_progress
-from citygen.preview import add_size_arguments
 from citygen.registry import Registry, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.scene import load_scene
@@ -98,9 +98,9 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g = sub.add_parser("generate", help="generate a scene's city and write its USD stage")
     g.add_argument("scene", help="scene TOML file")
     g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
-    g.add_argument("--seed", type=int, help="override the scene seed")
+    g.add_argument("--seed", type=whole(0), help="override the scene seed (an integer >= 0)")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
-    g.add_argument("--jobs", type=int, default=0,
+    g.add_argument("--jobs", type=whole(0), default=0,
                    help="worker processes (default 0: one per CPU core); the output does not depend on it")
     g.add_argument("--executor", choices=EXECUTORS, default="local",
                    help="local (default): worker processes on this machine; dask: one task per tile on a Dask "

@@ -76,42 +76,6 @@ def contact_sheet(images: Sequence[Image.Image], columns: int = 4, gap: int = 8)
     return sheet
 
 
-#: Bounds of the preview commands' options (metres): the largest facade side, the least storey height.
-MAX_SIDE = 1000.0
-MIN_STOREY = 2.0
-
-
-def _metres(low: float, high: float, what: str):
-    """An argparse type: a finite number of metres, at least ``low`` (more than 0 when ``low`` is 0) and at most
-    ``high``."""
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number of metres") from None
-        if not (value >= low and value <= high and value > 0):  # (NaN fails every test)
-            least = f"at least {low:g}" if low > 0 else "more than 0"
-            raise argparse.ArgumentTypeError(f"{what} must be {least} and at most {high:g} m, got {text}")
-        return value
-    return parse
-
-
-def add_size_arguments(parser: argparse.ArgumentParser, floor_height: float | None = None,
-                       ground: bool = False) -> None:
-    """``--size W H`` of a one-facade preview command, with ``--floor-height`` (when it has a default) and
-    ``--ground-height`` (``ground``); a value that is not finite or out of bounds is refused by argparse (one
-    ``error:`` line naming the option)."""
-    parser.add_argument("--size", nargs=2, type=_metres(0.0, MAX_SIDE, "a facade side"), metavar=("W", "H"),
-                        required=True, help=f"facade width and height in metres (at most {MAX_SIDE:g} each)")
-    storey = _metres(MIN_STOREY, 100.0, "a storey")
-    if floor_height is not None:
-        parser.add_argument("--floor-height", type=storey, default=floor_height,
-                            help=f"storey height in metres (default {floor_height:g})")
-    if ground:
-        parser.add_argument("--ground-height", type=storey, default=None,
-                            help="ground floor height in metres (default: the storey height)")
-
-
 def add_output_arguments(parser: argparse.ArgumentParser) -> None:
     """``--json`` / ``--png FILE`` for a command that shows several layouts (see :func:`write_layouts`)."""
     out = parser.add_mutually_exclusive_group()

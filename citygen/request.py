@@ -23,6 +23,9 @@ import numpy as np
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
 from citygen.rng import derive_rng
 
+#: The least storey height (metres) a scene or a preview command may ask for.
+MIN_STOREY = 2.0
+
 
 @dataclass(frozen=True)
 class FaceContext:

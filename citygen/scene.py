@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from citygen.errors import SceneError, SourceLocation
+from citygen.request import MIN_STOREY
 
 UP_AXES = ("Z", "Y")
 INSTANCING = ("modules", "elements")
@@ -58,8 +59,6 @@ _OPS = {">=": operator.ge, "<=": operator.le, ">": operator.gt, "<": operator.lt
         "!=": operator.ne}
 _COMPARISON = re.compile(r"^\s*(>=|<=|==|!=|>|<)\s*(-?\d+(?:\.\d*)?)\s*$")
 _OPERATOR = re.compile(r"^\s*(>=|<=|==|!=|>|<)")
-#: The least storey height (metres) a scene may set.
-MIN_STOREY = 2.0
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,8 @@ def write_text(path: str | None, text: str) -> None:
         sys.stdout.write(text)
         return
     target = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=target.parent or ".", prefix=f".{target.name}.")
+    target.parent.mkdir(parents=True, exist_ok=True)  # (as ``citygen generate`` does for its stage)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
     with os.fdopen(fd, "w") as handle:
         handle.write(text)
     os.replace(tmp, target)
@@ -109,9 +110,9 @@ class LayoutCommand(Command):
         from citygen_inverse.photo import layout_from_photo
         for name in ("width", "floor_height"):
             value = getattr(args, name)
-            if value is not None and not value > 0:
-                return report(LayoutError(f"--{name.replace('_', '-')} must be positive, got {value:g}",
-                                          where=args.photo))
+            if value is not None and not 0 < value < float("inf"):
+                return report(LayoutError(f"--{name.replace('_', '-')} must be a finite positive number of metres, "
+                                          f"got {value:g}", where=args.photo))
         try:
             result = layout_from_photo(args.photo, width=args.width, floor_height=args.floor_height,
                                        crop=tuple(args.crop) if args.crop else None)

@@ -6,10 +6,11 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from citygen.cliargs import add_size_arguments, seconds, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
-from citygen.preview import add_output_arguments, add_size_arguments, write_layouts
+from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_relayout import building
@@ -53,9 +54,10 @@ class RelayoutCommand(Command):
     def configure(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("model", type=Path, help="a .relayout model file")
         add_size_arguments(parser)
-        parser.add_argument("--count", type=int, default=1)
+        parser.add_argument("--count", type=whole(1), default=1, help="variations (default 1)")
         parser.add_argument("--seed", type=int, default=0)
-        parser.add_argument("--budget", type=float, default=10.0, help="CPU-time safety limit per variation (s)")
+        parser.add_argument("--budget", type=seconds, default=10.0,
+                            help="CPU-time safety limit per variation (s, default 10)")
         add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
@@ -65,7 +67,7 @@ class RelayoutCommand(Command):
             print(f"error: {exc}", file=sys.stderr)
             return 2
         width, height = args.size
-        results = variations(model, width, height, max(1, args.count), seed=args.seed, budget_s=args.budget)
+        results = variations(model, width, height, args.count, seed=args.seed, budget_s=args.budget)
         layouts = [r.layout for r in results if r.success]
         for k, r in enumerate(results):
             if not r.success:

@@ -5,10 +5,11 @@ import argparse
 import sys
 from pathlib import Path
 
+from citygen.cliargs import add_size_arguments, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
-from citygen.preview import add_output_arguments, add_size_arguments, write_layouts
+from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_safe.generate import edit
@@ -45,7 +46,7 @@ class EditCommand(Command):
     def configure(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("ruleset", type=Path, help="a .safe ruleset file")
         add_size_arguments(parser, floor_height=3.0)
-        parser.add_argument("--count", type=int, default=4, help="K, the number of variations")
+        parser.add_argument("--count", type=whole(1), default=4, help="K, the number of variations (default 4)")
         parser.add_argument("--seed", type=int, default=0)
         parser.add_argument("--no-entrance", action="store_true", help="the face carries no door")
         add_output_arguments(parser)
@@ -60,7 +61,7 @@ class EditCommand(Command):
         width, height = args.size
         request = FacadeRequest.preview(width, height, args.floor_height, entrance=not args.no_entrance,
                                         seed=args.seed)
-        result = edit(ruleset, request, limit=max(1, args.count))
+        result = edit(ruleset, request, limit=args.count)
         layouts = [_finish(v.facade, request, ruleset, v, list(result.floor_jumps)) for v in result.variations]
         if not write_layouts(layouts, args.json, args.png):
             print(f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}")

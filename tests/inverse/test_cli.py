@@ -215,3 +215,13 @@ def test_the_api_refuses_what_the_cli_refuses(layout_json):
     assert extract_grammar(layout, "greedy", 0).iterations == 1
     with pytest.raises(Exception, match="floor_height must be a positive number"):
         import_cmp(XML, floor_height=0.0)
+
+
+def test_output_goes_into_a_new_directory(layout_json, tmp_path, capsys):
+    """Regression: ``-o new/dir/file`` ended in a FileNotFoundError traceback (``citygen generate`` creates the
+    stage's directory; the layout and grammar writers now do too)."""
+    out = tmp_path / "new" / "dir" / "b0045.json"
+    assert main(["layout", "import-cmp", str(DATA / "cmp_b0045.xml"), "-o", str(out)]) == 0
+    grammar = tmp_path / "other" / "g.grammar"
+    assert main(["grammar", "extract", str(out), "--method", "greedy", "-o", str(grammar)]) == 0
+    assert FacadeLayout.loads(out.read_text()).width > 0 and grammar.read_text().strip()

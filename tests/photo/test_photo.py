@@ -220,7 +220,9 @@ def test_cli_errors_name_the_file(tmp_path, capsys):
     assert main(["layout", "from-photo", str(path), "--crop", "0", "0", "900", "10"]) == 2
     assert "not inside the 300x300 image" in capsys.readouterr().err
     assert main(["layout", "from-photo", str(path), "--width", "-2"]) == 2
-    assert "--width must be positive" in capsys.readouterr().err
+    assert "--width must be a finite positive number of metres" in capsys.readouterr().err
+    assert main(["layout", "from-photo", str(path), "--width", "inf"]) == 2  # (was "did not give a partition")
+    assert "--width must be a finite positive number of metres, got inf" in capsys.readouterr().err
     noise = tmp_path / "noise.png"
     Image.fromarray((np.random.default_rng(0).random((200, 200)) * 255).astype(np.uint8)).save(noise)
     assert main(["layout", "from-photo", str(noise)]) == 2

@@ -1,5 +1,6 @@
-"""The one-facade preview commands (``facade``, ``edit``, ``relayout``) refuse sizes and storey heights that are
-not finite or out of bounds with one argparse error line naming the option.
+"""Numeric command-line options (``citygen.cliargs``) out of range are refused with one argparse error line naming
+the option: sizes and storey heights of the one-facade preview commands (``facade``, ``edit``, ``relayout``),
+variation counts, budgets, ``generate --jobs`` and ``--seed``.
 
 Regressions: ``--size 10 nan`` / ``inf`` and ``--floor-height 0`` / ``nan`` ended in tracebacks (ValueError,
 OverflowError, ZeroDivisionError, RecursionError), ``--size 1e9 10`` and ``--floor-height 1e-6`` ran for
@@ -54,3 +55,17 @@ def test_preview_requests_refuse_non_finite_sizes(kwargs):
         split_floors(**args)
     with pytest.raises(ValueError, match="must be a positive finite number of metres"):
         FacadeRequest.preview(12.0, **args)
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["edit", str(RULESETS / "cmp_b0035.safe"), "--size", "12", "9", "--count", "0"], "--count"),
+    (["relayout", str(RULESETS / "townhouse.relayout"), "--size", "12", "9", "--count", "-1"], "--count"),
+    (["relayout", str(RULESETS / "townhouse.relayout"), "--size", "12", "9", "--budget", "nan"], "--budget"),
+    (["relayout", str(RULESETS / "townhouse.relayout"), "--size", "12", "9", "--budget", "-1"], "--budget"),
+    (["generate", "scene.toml", "--jobs", "-1"], "--jobs"),
+    (["generate", "scene.toml", "--seed", "-5"], "--seed"),
+])
+def test_counts_budgets_jobs_and_seeds_out_of_range_are_refused(capsys, argv, option):
+    """Regressions: ``--count 0`` silently made one variation, ``--budget nan`` / ``-1`` and ``--jobs -1`` were
+    taken as given, and ``generate --seed -5`` overrode a scene seed that the scene file may not set below 0."""
+    _refused(capsys, argv, option)
