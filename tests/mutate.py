@@ -10,8 +10,12 @@ import json
 import math
 import random
 import re
+import shutil
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
+
+REPO = Path(__file__).resolve().parents[1]
 
 _NUMBER = re.compile(r"(?<![\w.])[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?(?![\w.])")
 _TOKEN = re.compile(r"[\w.+-]+|[^\w\s]")
@@ -175,3 +179,34 @@ def mutate(text: str, dialect: str, rng: random.Random) -> str:
                 pass
         text = rng.choice(text_mutations(dialect))(text, rng)
     return text
+
+
+def scratch_rulesets(directory: Path) -> Path:
+    """A copy of the shipped ``rulesets/`` in ``directory`` (so mutated rulesets find the files they name)."""
+    target = directory / "rulesets"
+    if not target.exists():
+        shutil.copytree(REPO / "rulesets", target)
+    return target
+
+
+def load_and_generate(path: Path) -> None:
+    """Load a ruleset through its kind in the default registry and generate a 12 x 9 m preview; a CitygenError
+    is a fine answer to bad input, anything else propagates (and so does a layout with a non-finite number)."""
+    from citygen.errors import CitygenError
+    from citygen.registry import default_registry
+    from citygen.request import FacadeRequest
+    kind = default_registry().kind_for_path(path)
+    try:
+        layout = kind.generate(kind.load(path), FacadeRequest.preview(12, 9))
+    except CitygenError:
+        return
+    for r in layout.root.terminals():
+        assert all(math.isfinite(v) for v in (r.x, r.y, r.w, r.h, r.depth)), r
+
+
+def fuzz_ruleset(scratch: Path, original: Path, seed: int) -> None:
+    """Mutate ``original`` (seeded), write it into ``scratch`` next to the shipped rulesets, load and generate."""
+    text = mutate(original.read_text(encoding="utf-8"), "dsl", random.Random(seed))
+    path = scratch / f"fuzz{original.suffix}"
+    path.write_text(text, encoding="utf-8")
+    load_and_generate(path)
