@@ -53,6 +53,13 @@ def _alarm(signum, frame):  # noqa: ARG001
     raise Timeout()
 
 
+def write(path: Path, content: str | bytes) -> None:
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content, encoding="utf-8")
+
+
 def small_cityjson(objects: int = 3) -> str:
     """The first ``objects`` buildings of the Delft CityJSON (with their parts), vertices renumbered."""
     doc = json.loads((REPO / "scenes/data/delft_buildings.city.json").read_text())
@@ -112,14 +119,14 @@ class Runner:
             if not math.isfinite(value):
                 raise ValueError(f"{what} has a non-finite number: {value!r}")
 
-    def _ruleset(self, reader: str, name: str, text: str) -> str:
+    def _ruleset(self, reader: str, name: str, text: str | bytes) -> str:
         rulesets = self.root / "rulesets"
         if name == SAFE_LAYOUT:  # the layout a .safe ruleset edits
-            (rulesets / SAFE_LAYOUT).write_text(text)
+            write(rulesets / SAFE_LAYOUT, text)
             target = rulesets / "cmp_b0035.safe"
         else:
             target = rulesets / f"fuzz{RULESET_SUFFIXES[reader]}"
-            target.write_text(text)
+            write(target, text)
         try:
             kind = REGISTRY.kind_for_path(target)
             ruleset = kind.load(target)
@@ -130,30 +137,30 @@ class Runner:
             if name == SAFE_LAYOUT:
                 shutil.copy(REPO / "rulesets" / SAFE_LAYOUT, rulesets / SAFE_LAYOUT)
 
-    def _footprints(self, name: str, text: str) -> str:
+    def _footprints(self, name: str, text: str | bytes) -> str:
         path = self.root / ("fuzz.city.json" if name.endswith(".city.json") else "fuzz.geojson")
-        path.write_text(text)
+        write(path, text)
         result = REGISTRY.importer_for(path).read(path, {})
         for fp in result.footprints:
             self._check_finite((fp.height, fp.base, fp.lift, *fp.polygon.bounds), f"footprint {fp.id}")
         return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
 
-    def run(self, reader: str, name: str, text: str) -> str:
+    def run(self, reader: str, name: str, text: str | bytes) -> str:
         if reader in RULESET_SUFFIXES:
             return self._ruleset(reader, name, text)
         if reader == "layout":
-            FacadeLayout.loads(text, name)
+            FacadeLayout.loads(text.decode("latin-1") if isinstance(text, bytes) else text, name)
             return "loaded"
         if reader == "scene":
             path = self.root / "scenes" / "fuzz.toml"
-            path.write_text(text)
+            write(path, text)
             load_scene(path)
             return "loaded"
         if reader == "footprints":
             return self._footprints(name, text)
         raise ValueError(reader)
 
-    def case(self, reader: str, name: str, text: str) -> tuple[str, str | None, float]:
+    def case(self, reader: str, name: str, text: str | bytes) -> tuple[str, str | None, float]:
         """(outcome, failure description or None, CPU seconds)."""
         signal.setitimer(signal.ITIMER_REAL, self.timeout)
         t0 = time.process_time()
@@ -175,11 +182,15 @@ class Runner:
 
 
 def cases(name: str, text: str, dialect: str, count: int, rng: random.Random, exhaustive_below: int
-          ) -> Iterator[tuple[str, str]]:
+          ) -> Iterator[tuple[str, str | bytes]]:
     """(description, mutated text): ``count`` random mutations, then for small files every truncation and every
     number replaced by every edge value."""
     for i in range(count):
         yield f"random #{i}", mutate(text, dialect, rng)
+    for _ in range(3):  # not UTF-8
+        data = text.encode()
+        at = rng.randrange(len(data) + 1)
+        yield f"byte 0xff at {at}", data[:at] + b"\xff" + data[at:]
     if len(text) <= exhaustive_below:
         for i in range(len(text)):
             yield f"truncated at {i}", text[:i]
@@ -227,7 +238,7 @@ def main() -> None:
         failure = shortest[3]
         suffix = Path(shortest[0]).suffix
         sample = args.out / f"{index:03d}-{reader}{suffix}"
-        sample.write_text(shortest[2])
+        write(sample, shortest[2])
         print(f"[{reader}] {failure}\n    {len(hits)} case(s); e.g. {shortest[0]} {shortest[1]} -> {sample}")
     print(f"{len(failures)} distinct failures")
 

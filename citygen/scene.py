@@ -169,6 +169,9 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise SceneError(f"cannot read scene: {exc.strerror}", where=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"scene is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=str(path), hint="save the file as UTF-8") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -150,11 +150,14 @@ def _geometries(obj: Any) -> list[Mapping[str, Any]]:
 
 def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str, Any]:
     """The object's attributes, its type and parent, and (for parts) the attributes of its parent."""
-    attributes = dict(obj.get("attributes") or {})
+    attributes, parents = obj.get("attributes") or {}, obj.get("parents") or []
+    if not isinstance(attributes, Mapping) or not isinstance(parents, list):
+        raise FeatureProblem("attributes must be a JSON object and parents a list of ids -- fix the CityObject")
+    attributes = dict(attributes)
     attributes["cityjson:type"] = obj["type"]
-    for parent_id in obj.get("parents") or []:
+    for parent_id in parents:
         attributes.setdefault("cityjson:parent", parent_id)
-        parent = objects.get(parent_id)
+        parent = objects.get(parent_id) if isinstance(parent_id, str) else None
         if isinstance(parent, Mapping):
             for key, value in (parent.get("attributes") or {}).items():
                 attributes.setdefault(key, value)
@@ -192,11 +195,11 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
             continue
         try:
             footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
+            attributes = _attributes(obj, objects)
         except FeatureProblem as problem:
             skipped.append((index, Skipped(oid, str(problem), where)))
             continue
         open_bottom += not had_ground
-        attributes = _attributes(obj, objects)
         label = f"{oid} ({where})"
         raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))

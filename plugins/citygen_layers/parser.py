@@ -422,4 +422,7 @@ def load(path: str | Path) -> Ruleset:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ParseError(f"cannot read ruleset: {exc.strerror}", where=SourceLocation(str(path))) from exc
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"ruleset is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=SourceLocation(str(path)), hint="save the file as UTF-8") from None
     return parse(text, str(path))

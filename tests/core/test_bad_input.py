@@ -55,6 +55,12 @@ def test_scene_ruleset_path_too_long_for_the_file_system_is_a_scene_error(tmp_pa
     assert len(str(info.value)) < 600
 
 
+def test_scene_that_is_not_utf8_is_a_scene_error(tmp_path):
+    (tmp_path / "s.toml").write_bytes(b'[scene]\nname = "caf\xe9"\n')  # was: UnicodeDecodeError
+    with pytest.raises(SceneError, match=r"s.toml: scene is not UTF-8 text \(byte 0xe9 at offset 19\)"):
+        load_scene(tmp_path / "s.toml")
+
+
 @settings(max_examples=60, deadline=None)
 @given(path=st.sampled_from(LAYOUTS), seed=st.integers(0, 2 ** 32 - 1))
 def test_mutated_layout_json_raises_only_layout_errors(path, seed):

@@ -88,3 +88,38 @@ def test_mutated_footprint_files_raise_only_footprint_errors(tmp_path_factory, p
         return
     for fp in result.footprints:
         assert all(abs(v) < float("inf") for v in (fp.height, fp.base, *fp.polygon.bounds)), fp.id
+
+
+@pytest.mark.parametrize("fid", [float("inf"), float("nan")])
+def test_osm_id_that_is_not_a_finite_number_is_kept_as_text(tmp_path, fid):
+    # was: OverflowError / ValueError from int(id) for the whole file
+    item = feature("x", SQUARE)
+    item["properties"]["osm_type"] = "way"
+    item["id"] = fid
+    result = read_footprints(write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [item]}), {})
+    assert [f.id for f in result.footprints] == [str(fid)]
+
+
+def test_levels_beyond_float_range_fall_back_to_the_next_height_source(tmp_path):
+    # was: OverflowError in math.isfinite for the whole file
+    item = feature("x", SQUARE)
+    del item["properties"]["height"]
+    item["properties"]["building:levels"] = 10 ** 400
+    result = read_footprints(write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [item]}), {})
+    (footprint,) = result.footprints
+    assert footprint.height_source == "default"
+    (warning,) = [w for w in result.warnings if "building:levels" in w]
+    assert "is too large" in warning and "trying the next height source" in warning and len(warning) < 300
+
+
+@pytest.mark.parametrize("key, value", [("attributes", 3.5), ("parents", 3.5), ("parents", [7])])
+def test_cityjson_object_with_malformed_attributes_or_parents_skips_one_building(tmp_path, key, value):
+    # was: TypeError ('float' object is not iterable) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["CityObjects"]["b"][key] = value
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    if value == [7]:  # an id that is not a string names no parent: ignored like a missing one
+        assert [f.id for f in result.footprints] == ["a", "b"]
+        return
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "attributes must be a JSON object" in result.skipped[0].reason

@@ -37,3 +37,10 @@ def scratch(tmp_path_factory):
 @given(path=st.sampled_from(RULESETS), seed=st.integers(0, 2 ** 32 - 1))
 def test_mutated_shipped_layer_stacks_raise_only_citygen_errors(scratch, path, seed):
     fuzz_ruleset(scratch, path, seed)
+
+
+def test_layer_stack_that_is_not_utf8_is_a_parse_error(tmp_path):
+    from citygen_layers.parser import load
+    (tmp_path / "s.layers").write_bytes(HEAD.encode() + b"# caf\xe9\n")  # was: UnicodeDecodeError
+    with pytest.raises(ParseError, match=r"s.layers: ruleset is not UTF-8 text \(byte 0xe9 at offset"):
+        load(tmp_path / "s.layers")

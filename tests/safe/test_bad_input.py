@@ -67,3 +67,16 @@ def test_mutated_layout_of_the_safe_ruleset_raises_only_citygen_errors(scratch, 
         load_and_generate(scratch / "cmp_b0035.safe")
     finally:
         shutil.copy(RULESETS / layout.name, layout)
+
+
+def test_layout_path_with_a_nul_byte_is_a_parse_error(tmp_path):
+    (tmp_path / "s.safe").write_text('safe s\nlayout "f\x00.layout.json"\n')  # was: ValueError embedded null byte
+    with pytest.raises(ParseError) as info:
+        load_ruleset(tmp_path / "s.safe")
+    assert str(info.value.where) == f"{tmp_path / 's.safe'}:2:8" and "cannot read layout" in str(info.value)
+
+
+def test_ruleset_that_is_not_utf8_is_a_parse_error(tmp_path):
+    (tmp_path / "s.safe").write_bytes(b"safe s\xff\n")  # was: UnicodeDecodeError
+    with pytest.raises(ParseError, match=r"not UTF-8 text \(byte 0xff at offset 6\).*save the file as UTF-8"):
+        load_ruleset(tmp_path / "s.safe")
