@@ -13,6 +13,7 @@ import functools
 import json
 import math
 import operator
+import reprlib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any
@@ -116,17 +117,46 @@ class Region:
         return data
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any], path: str = "root") -> Region:
-        try:
-            return cls(x=float(data["x"]), y=float(data["y"]), w=float(data["w"]), h=float(data["h"]),
-                       symbol=str(data.get("symbol", data.get("label") or "Region")),
-                       label=data.get("label"), depth=float(data.get("depth", 0.0)),
-                       material=data.get("material"), asset=data.get("asset"), layer=data.get("layer"),
-                       children=tuple(cls.from_json(c, f"{path}.children[{i}]")
-                                      for i, c in enumerate(data.get("children", ()))))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise LayoutError(f"region {path} is malformed ({exc!r})",
-                              hint="each region needs numeric x, y, w, h and a symbol") from exc
+    def from_json(cls, data: Mapping[str, Any], path: str = "root", source: str | None = None) -> Region:
+        """The region tree of a layout JSON object; ``path`` (``root.children[2]``) and ``source`` (the file)
+        name a malformed region in the :class:`LayoutError`."""
+        def fail(problem: str) -> LayoutError:
+            return LayoutError(f"region {path} {problem}", where=source,
+                               hint="each region needs finite numeric x, y, w, h (w, h >= 0), a symbol string, "
+                                    "and optional string label, material, asset, layer (docs/layout-json.md)")
+        if not isinstance(data, Mapping):
+            raise fail(f"is {type(data).__name__}, not a JSON object")
+        numbers = {}
+        for key in ("x", "y", "w", "h", "depth"):
+            value = data.get(key, 0.0 if key == "depth" else None)
+            if value is None and key != "depth":
+                raise fail(f"has no {key}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(_as_float(value)):
+                raise fail(f"has {key} = {reprlib.repr(value)}, not a finite number")
+            numbers[key] = float(value)
+        if numbers["w"] < 0 or numbers["h"] < 0:
+            raise fail(f"has a negative size {numbers['w']:g} x {numbers['h']:g}")
+        texts = {}
+        for key in ("symbol", "label", "material", "asset", "layer"):
+            value = data.get(key)
+            if value is not None and not isinstance(value, str):
+                raise fail(f"has {key} = {reprlib.repr(value)}, not a string")
+            texts[key] = value
+        children = data.get("children", [])
+        if not isinstance(children, list):
+            raise fail(f"has children = {reprlib.repr(children)}, not a list")
+        return cls(**numbers, symbol=texts["symbol"] or texts["label"] or "Region", label=texts["label"],
+                   material=texts["material"], asset=texts["asset"], layer=texts["layer"],
+                   children=tuple(cls.from_json(c, f"{path}.children[{i}]", source) for i, c in enumerate(children)))
+
+
+def _as_float(value: int | float) -> float:
+    """``float(value)``, or inf for an integer too large for a float."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
 
 
 _REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
@@ -176,15 +206,25 @@ class FacadeLayout:
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any], source: str = "<layout>") -> FacadeLayout:
+        if not isinstance(data, Mapping):
+            raise LayoutError(f"a layout is a JSON object, not {type(data).__name__}", where=source,
+                              hint="see docs/layout-json.md")
         version = data.get("schema_version")
         if version != SCHEMA_VERSION:
             raise LayoutError(f"unsupported schema_version {version!r}", where=source,
                               hint=f"this citygen reads layout JSON schema_version {SCHEMA_VERSION}")
-        try:
-            width, height = float(data["width"]), float(data["height"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise LayoutError("layout needs numeric width and height", where=source) from exc
-        return cls(width=width, height=height, root=Region.from_json(data["root"]), meta=dict(data.get("meta", {})))
+        size = (data.get("width"), data.get("height"))
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < _as_float(v) < math.inf
+                   for v in size):
+            raise LayoutError(f"layout needs a finite positive width and height, got {reprlib.repr(size[0])} x {reprlib.repr(size[1])}",
+                              where=source)
+        if "root" not in data:
+            raise LayoutError("layout has no root region", where=source, hint="see docs/layout-json.md")
+        meta = data.get("meta", {})
+        if not isinstance(meta, Mapping):
+            raise LayoutError(f"layout meta must be a JSON object, got {reprlib.repr(meta)}", where=source)
+        return cls(width=float(size[0]), height=float(size[1]), root=Region.from_json(data["root"], source=source),
+                   meta=dict(meta))
 
     @classmethod
     def loads(cls, text: str, source: str = "<layout>") -> FacadeLayout:

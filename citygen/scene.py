@@ -169,6 +169,9 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise SceneError(f"cannot read scene: {exc.strerror}", where=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"scene is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=str(path), hint="save the file as UTF-8") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -239,8 +242,9 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         paths = tuple((r.path.parent / n).resolve() for n in names)
         fallback = (r.path.parent / fallback).resolve() if fallback else None
         for p in paths + ((fallback,) if fallback else ()):
-            if not p.exists():
-                r.fail(f"ruleset {p.name} does not exist ({p})", line=line, hint="paths are relative to the scene file")
+            if not _is_file(p):
+                r.fail(f"ruleset {_short(p.name)} does not exist ({_short(str(p))})", line=line,
+                       hint="paths are relative to the scene file")
         faces = item.get("faces", "all")
         if faces not in FACE_SCOPES:
             r.fail(f"faces must be one of {', '.join(FACE_SCOPES)}, got {faces!r}", line=line)
@@ -253,6 +257,18 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
                                  faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch,
                                  fallback=fallback))
     return tuple(result)
+
+
+def _short(text: str, limit: int = 120) -> str:
+    return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 2:]}"
+
+
+def _is_file(path: Path) -> bool:
+    """``path.exists()``, False also for a name the file system refuses (too long)."""
+    try:
+        return path.exists()
+    except OSError:
+        return False
 
 
 def _conditions(r: _Reader, when: Any, line: int | None) -> tuple[Condition, ...]:

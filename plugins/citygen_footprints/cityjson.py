@@ -33,17 +33,33 @@ HORIZONTAL = 0.99
 
 
 def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
+    raw = doc.get("vertices", [])
     try:
-        vertices = np.asarray(doc.get("vertices", []), dtype=float)
-    except (TypeError, ValueError):
+        try:
+            vertices = np.asarray(raw, dtype=float)
+        except OverflowError:  # an integer beyond float range: inf, so only the buildings using it are skipped
+            vertices = np.asarray([[_finite_or_inf(v) for v in p] for p in raw], dtype=float)
+    except (TypeError, ValueError, OverflowError):
         raise FootprintError("CityJSON vertices are not all [x, y, z] numbers", where=str(path)) from None
     if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 3):
         raise FootprintError(f"CityJSON vertices have shape {vertices.shape}, expected (n, 3)", where=str(path))
     transform = doc.get("transform")
     if isinstance(transform, Mapping):
-        vertices = vertices * np.asarray(transform.get("scale", [1, 1, 1]), dtype=float) \
-            + np.asarray(transform.get("translate", [0, 0, 0]), dtype=float)
+        try:
+            scale = np.asarray(transform.get("scale", [1, 1, 1]), dtype=float)
+            translate = np.asarray(transform.get("translate", [0, 0, 0]), dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            scale = translate = np.zeros(0)
+        if scale.shape != (3,) or translate.shape != (3,) or not np.isfinite([*scale, *translate]).all():
+            raise FootprintError("CityJSON transform needs scale and translate of 3 finite numbers each",
+                                 where=str(path), hint='e.g. "transform": {"scale": [0.001, 0.001, 0.001], '
+                                                       '"translate": [0, 0, 0]}')
+        vertices = vertices * scale + translate
     return vertices.reshape(-1, 3)
+
+
+def _finite_or_inf(value: Any) -> Any:
+    return np.inf if isinstance(value, int) and abs(value) > 2 ** 1023 else value
 
 
 def _rank(geometry: Mapping[str, Any]) -> tuple[int, float]:
@@ -84,7 +100,7 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     try:
         surfaces = [[vertices[np.asarray(ring, dtype=np.intp)] for ring in surface if len(ring) >= 3]
                     for surface in _surfaces(geometry)]
-    except (IndexError, ValueError, TypeError):
+    except (IndexError, ValueError, TypeError, OverflowError):
         raise FeatureProblem("a surface refers to a vertex index that does not exist "
                              "-- the CityJSON file is corrupt; re-export it") from None
     surfaces = [s for s in surfaces if s]
@@ -134,11 +150,14 @@ def _geometries(obj: Any) -> list[Mapping[str, Any]]:
 
 def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str, Any]:
     """The object's attributes, its type and parent, and (for parts) the attributes of its parent."""
-    attributes = dict(obj.get("attributes") or {})
+    attributes, parents = obj.get("attributes") or {}, obj.get("parents") or []
+    if not isinstance(attributes, Mapping) or not isinstance(parents, list):
+        raise FeatureProblem("attributes must be a JSON object and parents a list of ids -- fix the CityObject")
+    attributes = dict(attributes)
     attributes["cityjson:type"] = obj["type"]
-    for parent_id in obj.get("parents") or []:
+    for parent_id in parents:
         attributes.setdefault("cityjson:parent", parent_id)
-        parent = objects.get(parent_id)
+        parent = objects.get(parent_id) if isinstance(parent_id, str) else None
         if isinstance(parent, Mapping):
             for key, value in (parent.get("attributes") or {}).items():
                 attributes.setdefault(key, value)
@@ -176,11 +195,11 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
             continue
         try:
             footprint, zmin, zmax, had_ground = footprint_of(geometries[0], vertices)
+            attributes = _attributes(obj, objects)
         except FeatureProblem as problem:
             skipped.append((index, Skipped(oid, str(problem), where)))
             continue
         open_bottom += not had_ground
-        attributes = _attributes(obj, objects)
         label = f"{oid} ({where})"
         raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))

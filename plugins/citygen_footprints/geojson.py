@@ -1,6 +1,7 @@
 """GeoJSON footprints (RFC 7946 lon/lat, or projected with a ``crs`` member / the ``crs`` option)."""
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -63,7 +64,8 @@ def feature_id(feature: Mapping[str, Any], properties: Mapping[str, Any], index:
     if value is None:
         return f"feature/{index}"
     osm_type = properties.get("osm_type", properties.get("@type"))
-    if isinstance(value, int | float) and not isinstance(value, bool) and osm_type in OSM_TYPES:
+    if isinstance(value, int | float) and not isinstance(value, bool) and osm_type in OSM_TYPES \
+            and math.isfinite(value):
         return f"{osm_type}/{int(value)}"
     return str(value)
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import re
+import reprlib
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -41,6 +43,8 @@ def _members(text: str) -> list[str]:
 def _plain(value: object, what: str) -> float | str:
     if isinstance(value, bool) or value is None:
         raise ValueError(f"expected a {what}, got {value!r}")
+    if isinstance(value, int) and abs(value) > sys.float_info.max:
+        raise ValueError(f"{what} {str(value)[:12]}... is too large")
     if isinstance(value, int | float):
         if not math.isfinite(value) or value < 0:
             raise ValueError(f"{what} {value!r} is {'negative' if value < 0 else 'not finite'}")
@@ -171,7 +175,8 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
 
     def reject(tag: str, why: str) -> None:
         rejected.append(tag)
-        warnings.append(f"{feature_id}: cannot use {tag}={tags[tag]!r} ({why}); trying the next height source")
+        warnings.append(f"{feature_id}: cannot use {tag}={reprlib.repr(tags[tag])} ({why}); "
+                        "trying the next height source")
 
     def read(tag: str, parse) -> float | None:
         if not _present(tags, tag):

@@ -41,7 +41,7 @@ def _ring_array(ring: object, label: str) -> np.ndarray:
         if any(isinstance(v, bool) for p in ring for v in p[:2]):
             raise TypeError
         points = np.array([p[:2] for p in ring], dtype=float)
-    except (TypeError, ValueError, IndexError):
+    except (TypeError, ValueError, IndexError, OverflowError):
         raise FeatureProblem(f"{label} has a malformed position (each must be [x, y] numbers) "
                              "-- fix the coordinates in the source data") from None
     if points.ndim != 2 or points.shape[1] != 2:

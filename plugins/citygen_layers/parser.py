@@ -1,6 +1,7 @@
 """Parser of ``.layers`` files (format: ``docs/layers.md``); every error names ``file:line:column``."""
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -109,9 +110,13 @@ def _strip_comment(line: str) -> str:
 
 def _number(text: str, loc: SourceLocation, what: str) -> float:
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise ParseError(f"expected a number for {what}, found {text!r}", where=loc) from None
+    if not math.isfinite(value):
+        raise ParseError(f"expected a finite number for {what}, found {text!r}", where=loc,
+                         hint="nan and inf are not allowed: write metres (or a count)")
+    return value
 
 
 def _words(line: str) -> list[tuple[str, int]]:
@@ -417,4 +422,7 @@ def load(path: str | Path) -> Ruleset:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ParseError(f"cannot read ruleset: {exc.strerror}", where=SourceLocation(str(path))) from exc
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"ruleset is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=SourceLocation(str(path)), hint="save the file as UTF-8") from None
     return parse(text, str(path))

@@ -27,6 +27,9 @@ def load_model(path: Path | str) -> Model:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ParseError(f"cannot read model: {exc.strerror}", where=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"model is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=str(path), hint="save the file as UTF-8") from None
     return parse_model(text, str(path), base=path.parent)
 
 
@@ -85,12 +88,17 @@ class _Builder:
         tolerance = 1e-3
         if cur.accept("tolerance"):
             tolerance = cur.number("a relative size tolerance")[0]
+        where = SourceLocation(self.source, tok.line, tok.column)
         try:
-            layout = FacadeLayout.loads(path.read_text(encoding="utf-8"), str(path))
-            self.symbols, self.root = symbols_from_layout(layout, tolerance)
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
-            raise ParseError(f"cannot read layout {path.name}: {exc.strerror}",
-                             where=SourceLocation(self.source, tok.line, tok.column)) from exc
+            raise ParseError(f"cannot read layout {path.name}: {exc.strerror}", where=where) from exc
+        except ValueError as exc:  # a NUL in the path, or not UTF-8
+            raise ParseError(f"cannot read layout {path.name!r}: {exc}", where=where,
+                             hint="name a UTF-8 FacadeLayout JSON file") from exc
+        try:
+            layout = FacadeLayout.loads(text, str(path))
+            self.symbols, self.root = symbols_from_layout(layout, tolerance)
         except LayoutError as exc:
             raise ParseError(f"layout {path.name}: {exc.message}",
                              where=SourceLocation(self.source, tok.line, tok.column), hint=exc.hint) from exc

@@ -48,6 +48,9 @@ def load_ruleset(path: Path | str) -> SafeRuleset:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ParseError(f"cannot read ruleset: {exc.strerror}", where=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"ruleset is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                         where=str(path), hint="save the file as UTF-8") from None
     return parse_ruleset(text, str(path), base=path.parent)
 
 
@@ -122,6 +125,9 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
         lay = FacadeLayout.loads((base / layout[0]).read_text(encoding="utf-8"), str(base / layout[0]))
     except OSError as exc:
         raise ParseError(f"cannot read layout {layout[0]!r}: {exc.strerror}", where=layout[1]) from exc
+    except ValueError as exc:  # a NUL in the path, or not UTF-8
+        raise ParseError(f"cannot read layout {layout[0]!r}: {exc}", where=layout[1],
+                         hint="name a UTF-8 FacadeLayout JSON file") from exc
     except CitygenError as exc:
         raise ParseError(f"layout {layout[0]!r} is invalid: {exc}", where=layout[1]) from exc
     facade = facade_from_layout(lay)

@@ -122,7 +122,7 @@ class _Derivation:
                                    hint="one of these rules must split or end in a terminal")
             child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
             return Region.fast(x, y, w, h, symbol, children=(child,))
-        children = self.children(body, x, y, w, h, floor, depth + 1)
+        children = self.children(body, x, y, w, h, floor, depth + 1, rule)
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
 
     def note(self, depth: int, symbol: str, x: float, y: float, w: float, h: float, how: str) -> None:
@@ -177,7 +177,7 @@ class _Derivation:
 
     # ---- operations -----------------------------------------------------------------------------------------
     def children(self, body: SimpleBody, x: float, y: float, w: float, h: float, floor: int,
-                 depth: int) -> list[Region]:
+                 depth: int, rule: Rule) -> list[Region]:
         if isinstance(body, Grid):
             return self.grid(body, x, y, w, h, floor, depth)
         if isinstance(body, Floors):
@@ -187,10 +187,12 @@ class _Derivation:
         start = x if axis == "x" else y
         if isinstance(body, Repeat):
             sizes = [i.size for i in body.items]
+            self.check_tiles(rule, preferred_length(sizes), length)
             n = repeat_count(preferred_length(sizes), length)
             extents = resolve(sizes, length / n) * n
             items: Sequence[Item] = body.items * n
         elif isinstance(body, RepeatABA):
+            self.check_tiles(rule, preferred_length([body.a.size, body.b.size]), length)
             n = aba_count(preferred_length([body.a.size]), preferred_length([body.b.size]), length)
             items = [body.a, body.b] * n + [body.a]
             extents = resolve([i.size for i in items], length)
@@ -209,6 +211,13 @@ class _Derivation:
                 else:
                     out.append(self.region(item.symbol, x, pos, w, extent, floor, depth, ()))
         return out
+
+    def check_tiles(self, rule: Rule, tile: float, length: float) -> None:
+        """Refuse a repeat whose tiles are so small that their count alone passes :data:`MAX_REGIONS`."""
+        if not length / tile <= MAX_REGIONS:
+            raise RulesetError(f"repeat of rule {rule.symbol}: tiles of {tile:g} m would fill {length:g} m more than "
+                               f"{MAX_REGIONS} times", where=rule.loc, plugin=PLUGIN_ID,
+                               hint="make the repeated sizes larger")
 
     def grid(self, body: Grid, x: float, y: float, w: float, h: float, floor: int, depth: int) -> list[Region]:
         xs = [pos for pos, _ in place(resolve(body.cols, w), x, w)] + [x + w]

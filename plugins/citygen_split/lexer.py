@@ -1,6 +1,7 @@
 """Tokens of the split grammar language, each with its 1-based line and column."""
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -48,6 +49,9 @@ def tokenize(text: str, source: str) -> list[Token]:
         if kind != "ws":
             if kind == "STR":
                 value = re.sub(r"\\(.)", r"\1", value[1:-1])
+            elif kind == "NUM" and not math.isfinite(float(value)):
+                raise ParseError(f"number {value} is too large", where=SourceLocation(source, line, column),
+                                 hint="sizes, depths and percentages are metres or percent: write a usual number")
             tokens.append(Token(kind, value, line, column))
         newlines = value.count("\n") if kind == "ws" else 0
         if newlines:

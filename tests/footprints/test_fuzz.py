@@ -1,0 +1,125 @@
+"""Footprint files found bad by fuzzing (benchmarks/fuzz_readers.py): a bad number skips its building, a bad
+file-level value is a FootprintError; never a traceback."""
+from __future__ import annotations
+
+import json
+import random
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from citygen.errors import FootprintError
+from citygen_footprints.plugin import read_footprints
+
+from ..mutate import mutate
+from .conftest import BAD, ROOT, write_json
+
+SQUARE = [[24.94, 60.17], [24.9402, 60.17], [24.9402, 60.1701], [24.94, 60.1701], [24.94, 60.17]]
+
+
+def feature(fid: str, ring: list) -> dict:
+    return {"type": "Feature", "id": fid, "properties": {"building": "yes", "height": 9},
+            "geometry": {"type": "Polygon", "coordinates": [ring]}}
+
+
+def cityjson(vertices: list, boundaries: list, transform: dict | None = None) -> dict:
+    def building(first: int) -> dict:
+        return {"type": "Building", "geometry": [{"type": "MultiSurface", "lod": "1", "boundaries": [
+            [[first + i for i in b[0]]] for b in boundaries]}]}
+    doc = {"type": "CityJSON", "version": "2.0", "metadata": {"referenceSystem": "EPSG:7415"},
+           "CityObjects": {"a": building(0), "b": building(len(vertices))},
+           "vertices": [list(v) for v in vertices + vertices]}
+    if transform is not None:
+        doc["transform"] = transform
+    return doc
+
+
+BOX = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [0, 0, 9], [10, 0, 9], [10, 10, 9], [0, 10, 9]]
+FACES = [[[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]], [[1, 2, 6, 5]], [[2, 3, 7, 6]], [[3, 0, 4, 7]]]
+
+
+def test_geojson_coordinate_beyond_float_range_skips_one_building(tmp_path):
+    # was: OverflowError (int too large to convert to float) for the whole file
+    path = write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [
+        feature("ok", SQUARE), feature("huge", [[24.94, 60.17], [10 ** 400, 60.17], [24.9402, 60.1701], [24.94, 60.17]])]})
+    result = read_footprints(path, {})
+    assert [f.id for f in result.footprints] == ["ok"]
+    assert [s.id for s in result.skipped] == ["huge"] and "malformed position" in result.skipped[0].reason
+
+
+def test_cityjson_vertex_beyond_float_range_skips_only_the_buildings_using_it(tmp_path):
+    # was: OverflowError in np.asarray(vertices) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["vertices"][len(BOX) + 6][0] = 10 ** 400
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "NaN or infinite" in result.skipped[0].reason
+
+
+def test_cityjson_boundary_index_infinite_skips_one_building(tmp_path):
+    # was: OverflowError (cannot convert float infinity to integer) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["CityObjects"]["b"]["geometry"][0]["boundaries"][0][0][1] = float("inf")
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a"] and [s.id for s in result.skipped] == ["b"]
+
+
+@pytest.mark.parametrize("transform", [{"scale": ["x", 1, 1], "translate": [0, 0, 0]},
+                                       {"scale": [1, 1], "translate": [0, 0, 0]},
+                                       {"scale": [1, 1, 1], "translate": [0, float("nan"), 0]}])
+def test_cityjson_bad_transform_is_a_footprint_error(tmp_path, transform):
+    # was: ValueError from numpy (could not convert string / operands could not be broadcast)
+    with pytest.raises(FootprintError, match="transform needs scale and translate of 3 finite numbers"):
+        read_footprints(write_json(tmp_path / "c.city.json", cityjson(BOX, FACES, transform)), {})
+
+
+SOURCES = [BAD, ROOT / "scenes" / "data" / "roofs_demo.geojson"]
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(path=st.sampled_from(SOURCES), seed=st.integers(0, 2 ** 32 - 1))
+def test_mutated_footprint_files_raise_only_footprint_errors(tmp_path_factory, path, seed):
+    target = tmp_path_factory.getbasetemp() / "fuzz.geojson"
+    target.write_text(mutate(path.read_text(), "json", random.Random(seed)))
+    try:
+        result = read_footprints(target, {})
+    except FootprintError:
+        return
+    for fp in result.footprints:
+        assert all(abs(v) < float("inf") for v in (fp.height, fp.base, *fp.polygon.bounds)), fp.id
+
+
+@pytest.mark.parametrize("fid", [float("inf"), float("nan")])
+def test_osm_id_that_is_not_a_finite_number_is_kept_as_text(tmp_path, fid):
+    # was: OverflowError / ValueError from int(id) for the whole file
+    item = feature("x", SQUARE)
+    item["properties"]["osm_type"] = "way"
+    item["id"] = fid
+    result = read_footprints(write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [item]}), {})
+    assert [f.id for f in result.footprints] == [str(fid)]
+
+
+def test_levels_beyond_float_range_fall_back_to_the_next_height_source(tmp_path):
+    # was: OverflowError in math.isfinite for the whole file
+    item = feature("x", SQUARE)
+    del item["properties"]["height"]
+    item["properties"]["building:levels"] = 10 ** 400
+    result = read_footprints(write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [item]}), {})
+    (footprint,) = result.footprints
+    assert footprint.height_source == "default"
+    (warning,) = [w for w in result.warnings if "building:levels" in w]
+    assert "is too large" in warning and "trying the next height source" in warning and len(warning) < 300
+
+
+@pytest.mark.parametrize("key, value", [("attributes", 3.5), ("parents", 3.5), ("parents", [7])])
+def test_cityjson_object_with_malformed_attributes_or_parents_skips_one_building(tmp_path, key, value):
+    # was: TypeError ('float' object is not iterable) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["CityObjects"]["b"][key] = value
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    if value == [7]:  # an id that is not a string names no parent: ignored like a missing one
+        assert [f.id for f in result.footprints] == ["a", "b"]
+        return
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "attributes must be a JSON object" in result.skipped[0].reason
