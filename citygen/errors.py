@@ -7,6 +7,7 @@ stay readable.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 
 @dataclass(frozen=True)
@@ -78,3 +79,15 @@ class SolverError(CitygenError):
 
 class ExportError(CitygenError):
     """A stage could not be written or fails validation."""
+
+
+def read_user_text(path: Path, error: type[CitygenError], what: str, encoding: str = "utf-8") -> str:
+    """The text of a file a user wrote; a file that cannot be read or is not UTF-8 raises ``error`` naming the
+    path (``what``: "scene", "ruleset", ... in the message)."""
+    try:
+        return path.read_text(encoding=encoding)
+    except OSError as exc:
+        raise error(f"cannot read {what}: {exc.strerror or exc}", where=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
+                    where=str(path), hint="save the file as UTF-8") from None

@@ -216,8 +216,8 @@ class FacadeLayout:
         size = (data.get("width"), data.get("height"))
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < _as_float(v) < math.inf
                    for v in size):
-            raise LayoutError(f"layout needs a finite positive width and height, got {reprlib.repr(size[0])} x {reprlib.repr(size[1])}",
-                              where=source)
+            raise LayoutError("layout needs a finite positive width and height, got "
+                              f"{reprlib.repr(size[0])} x {reprlib.repr(size[1])}", where=source)
         if "root" not in data:
             raise LayoutError("layout has no root region", where=source, hint="see docs/layout-json.md")
         meta = data.get("meta", {})

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from citygen.errors import SceneError, SourceLocation
+from citygen.errors import SceneError, SourceLocation, read_user_text
 from citygen.request import MIN_STOREY
 
 UP_AXES = ("Z", "Y")
@@ -165,13 +165,7 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
 
     Roof shapes are checked against ``roof_shapes`` (default: the roof builders of the installed plugins)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SceneError(f"cannot read scene: {exc.strerror}", where=str(path)) from exc
-    except UnicodeDecodeError as exc:
-        raise SceneError(f"scene is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
-                         where=str(path), hint="save the file as UTF-8") from None
+    text = read_user_text(path, SceneError, "scene")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

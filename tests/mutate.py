@@ -29,8 +29,8 @@ NUMBERS = {
              '""', "null", "[]", "{}", "true", '"x"'),
 }
 #: Tokens that break structure or types.
-ODD = ("", "[", "]", "{", "}", "(", ")", "'", '"', "|", ":", "=", ",", "..", "*", "%", "^", "é", "\u200b", "\U0001f3e0",
-       "\x00", "true", "null", "x" * 300, "-", "#", ";", "\t", "\\")
+ODD = ("", "[", "]", "{", "}", "(", ")", "'", '"', "|", ":", "=", ",", "..", "*", "%", "^", "é", "\u200b",
+       "\U0001f3e0", "\x00", "true", "null", "x" * 300, "-", "#", ";", "\t", "\\")
 
 #: Values a JSON tree mutation puts in place of a node.
 JSON_VALUES: tuple[Any, ...] = (0, -1, math.nan, math.inf, -math.inf, 1e308, 1e-308, 10 ** 30, 10 ** 400, "", "x",

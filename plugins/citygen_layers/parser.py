@@ -5,7 +5,7 @@ import math
 import re
 from pathlib import Path
 
-from citygen.errors import ParseError, SourceLocation
+from citygen.errors import ParseError, SourceLocation, read_user_text
 from citygen_layers.model import (
     Alt, Counter, Layer, Node, Pattern, Rep, Ruleset, Seq, ShapeSpec, SolveOptions, Sym, Symbol,
 )
@@ -418,11 +418,4 @@ def parse(text: str, path: str = "<string>") -> Ruleset:
 def load(path: str | Path) -> Ruleset:
     """Read and parse a ``.layers`` file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ParseError(f"cannot read ruleset: {exc.strerror}", where=SourceLocation(str(path))) from exc
-    except UnicodeDecodeError as exc:
-        raise ParseError(f"ruleset is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
-                         where=SourceLocation(str(path)), hint="save the file as UTF-8") from None
-    return parse(text, str(path))
+    return parse(read_user_text(path, ParseError, "ruleset"), str(path))

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from citygen.errors import LayoutError, ParseError, SourceLocation
+from citygen.errors import LayoutError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout
 from citygen_relayout import generators as gen
 from citygen_relayout.hierarchy import symbols_from_layout
@@ -23,14 +23,7 @@ _CONSTRAINTS = {"size", "freq", "seq", "repeat", "shuffle", "replicate", "instan
 
 def load_model(path: Path | str) -> Model:
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ParseError(f"cannot read model: {exc.strerror}", where=str(path)) from exc
-    except UnicodeDecodeError as exc:
-        raise ParseError(f"model is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
-                         where=str(path), hint="save the file as UTF-8") from None
-    return parse_model(text, str(path), base=path.parent)
+    return parse_model(read_user_text(path, ParseError, "model"), str(path), base=path.parent)
 
 
 def parse_model(text: str, source: str = "<model>", base: Path | None = None) -> Model:

@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from citygen.errors import CitygenError, ParseError, SourceLocation
+from citygen.errors import CitygenError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout
 from citygen_safe.edit import BUDGET_S
 from citygen_safe.grids import GridSpec, auto_specs
@@ -44,14 +44,7 @@ class SafeRuleset:
 
 def load_ruleset(path: Path | str) -> SafeRuleset:
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ParseError(f"cannot read ruleset: {exc.strerror}", where=str(path)) from exc
-    except UnicodeDecodeError as exc:
-        raise ParseError(f"ruleset is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})",
-                         where=str(path), hint="save the file as UTF-8") from None
-    return parse_ruleset(text, str(path), base=path.parent)
+    return parse_ruleset(read_user_text(path, ParseError, "ruleset"), str(path), base=path.parent)
 
 
 def _tokens(line: str, source: str, lineno: int) -> list[tuple[str, int]]:

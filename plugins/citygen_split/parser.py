@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from citygen.errors import ParseError, SourceLocation
+from citygen.errors import ParseError, SourceLocation, read_user_text
 from citygen_split.ast import (
     Attr, Binary, Body, Case, Choice, Const, Expr, Floors, FloorItem, Grammar, Grid, Item, Rename, Repeat,
     RepeatABA, Rule, SimpleBody, Size, Split, SymSplit, Terminal, Unary, Var, successors,
@@ -29,11 +29,7 @@ def parse(text: str, source: str = "<string>") -> Grammar:
 def load(path: str | Path) -> Grammar:
     """Parse the grammar file at ``path``."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParseError(f"cannot read grammar: {exc}", where=str(path)) from exc
-    return parse(text, str(path))
+    return parse(read_user_text(path, ParseError, "grammar"), str(path))
 
 
 class _Parser:

@@ -2,7 +2,6 @@
 file-level value is a FootprintError; never a traceback."""
 from __future__ import annotations
 
-import json
 import random
 
 import pytest
@@ -42,7 +41,8 @@ FACES = [[[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]], [[1, 2, 6, 5]], [[2, 3,
 def test_geojson_coordinate_beyond_float_range_skips_one_building(tmp_path):
     # was: OverflowError (int too large to convert to float) for the whole file
     path = write_json(tmp_path / "c.geojson", {"type": "FeatureCollection", "features": [
-        feature("ok", SQUARE), feature("huge", [[24.94, 60.17], [10 ** 400, 60.17], [24.9402, 60.1701], [24.94, 60.17]])]})
+        feature("ok", SQUARE),
+        feature("huge", [[24.94, 60.17], [10 ** 400, 60.17], [24.9402, 60.1701], [24.94, 60.17]])]})
     result = read_footprints(path, {})
     assert [f.id for f in result.footprints] == ["ok"]
     assert [s.id for s in result.skipped] == ["huge"] and "malformed position" in result.skipped[0].reason

@@ -1,18 +1,11 @@
 """Bad layer stacks found by fuzzing (benchmarks/fuzz_readers.py) give a ParseError, not a traceback."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from citygen.errors import ParseError
 from citygen_layers.parser import parse
 
-from ..mutate import fuzz_ruleset, scratch_rulesets
-
-RULESETS = sorted((Path(__file__).resolve().parents[2] / "rulesets").glob("*.layers"))
 HEAD = "symbol A size=1 opaque\nsymbol B size=1\ncounter k\n"
 
 
@@ -26,17 +19,6 @@ def test_nan_and_inf_are_not_numbers_of_a_layer_stack(line, where):
     with pytest.raises(ParseError) as info:
         parse(HEAD + line, "stack.layers")
     assert f"stack.layers{where}" in str(info.value) and "expected a finite number" in str(info.value)
-
-
-@pytest.fixture(scope="module")
-def scratch(tmp_path_factory):
-    return scratch_rulesets(tmp_path_factory.mktemp("fuzz"))
-
-
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(path=st.sampled_from(RULESETS), seed=st.integers(0, 2 ** 32 - 1))
-def test_mutated_shipped_layer_stacks_raise_only_citygen_errors(scratch, path, seed):
-    fuzz_ruleset(scratch, path, seed)
 
 
 def test_layer_stack_that_is_not_utf8_is_a_parse_error(tmp_path):

@@ -1,18 +1,11 @@
 """Bad relayout models found by fuzzing (benchmarks/fuzz_readers.py) give a ParseError, never a traceback."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from citygen.errors import ParseError
 from citygen_relayout import load_model
 
-from ..mutate import fuzz_ruleset, scratch_rulesets
-
-RULESETS = sorted((Path(__file__).resolve().parents[2] / "rulesets").glob("*.relayout"))
 
 
 def test_model_that_is_not_utf8_is_a_parse_error(tmp_path):
@@ -26,14 +19,3 @@ def test_layout_path_with_a_nul_byte_is_a_parse_error(tmp_path):
     with pytest.raises(ParseError) as info:
         load_model(tmp_path / "m.relayout")
     assert str(info.value.where) == f"{tmp_path / 'm.relayout'}:2:8" and "cannot read layout" in str(info.value)
-
-
-@pytest.fixture(scope="module")
-def scratch(tmp_path_factory):
-    return scratch_rulesets(tmp_path_factory.mktemp("fuzz"))
-
-
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(path=st.sampled_from(RULESETS), seed=st.integers(0, 2 ** 32 - 1))
-def test_mutated_shipped_relayout_models_raise_only_citygen_errors(scratch, path, seed):
-    fuzz_ruleset(scratch, path, seed)
