@@ -15,7 +15,7 @@ import numpy as np
 from citygen.footprints import Footprint, ImportResult, Skipped
 from pyproj import CRS
 
-from citygen_footprints.frame import make_frame
+from citygen_footprints.frame import is_geographic, make_frame, outside_lonlat
 from citygen_footprints.heights import Height, infer_height, resolve_height
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem, Part, build_polygon
@@ -66,6 +66,25 @@ def _project(features: Sequence[RawFeature], frame) -> list[tuple[Part, ...]]:
     return [tuple([next(pieces) for _ in part] for part in f.parts) for f in features]
 
 
+def _stray_lonlat(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
+    """Features of a lon/lat file with coordinates outside the lon/lat range are skipped when they are fewer than
+    half of the features (bad coordinates in a few buildings); when as many or more, all are kept and
+    ``make_frame`` refuses the file (most likely projected metres without a declared CRS)."""
+    bad = [f for f in features if any(outside_lonlat(np.asarray(r, dtype=float).reshape(-1, 2)).any()
+                                      for p in f.parts for r in p)]
+    if not bad or 2 * len(bad) >= len(features):
+        return list(features), []
+    skipped = []
+    for f in bad:
+        points = np.concatenate([np.asarray(r, dtype=float).reshape(-1, 2) for p in f.parts for r in p])
+        x, y = points[np.argmax(outside_lonlat(points))]
+        skipped.append((f.index, Skipped(f.id, f"coordinates such as ({x:.6g}, {y:.6g}) are outside the lon/lat "
+                                               "range of the rest of the file -- fix them in the source data",
+                                         f.where)))
+    gone = {id(f) for f in bad}
+    return [f for f in features if id(f) not in gone], skipped
+
+
 def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skipped]], warnings: Sequence[str],
              crs: CRS | None, options: ImportOptions, path: Path) -> ImportResult:
     """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort.
@@ -75,9 +94,12 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
     """
     features, id_warnings = unique_ids(features)
     out_warnings = list(warnings) + id_warnings
+    out_skipped = list(skipped)
+    if crs is not None and options.crs_check and is_geographic(crs):
+        features, stray = _stray_lonlat(features)
+        out_skipped += stray
     points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
     frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
-    out_skipped = list(skipped)
     footprints = []
     for feature, parts in zip(features, _project(features, frame), strict=True):
         label = f"{feature.id} ({feature.where})"

@@ -80,8 +80,18 @@ def _tmerc_proj(crs: CRS, lon: float, lat: float) -> str:
         return local.to_proj4()
 
 
+def is_geographic(crs: CRS) -> bool:
+    """The CRS's horizontal part is lon/lat."""
+    return _horizontal(crs).is_geographic
+
+
+def outside_lonlat(points: np.ndarray) -> np.ndarray:
+    """Per point ``(n, 2)``: outside the lon/lat range (|lon| > 180 or |lat| > 90)."""
+    return (np.abs(points[:, 0]) > 180) | (np.abs(points[:, 1]) > 90)
+
+
 def _check_geographic(points: np.ndarray, name: str, where: str) -> None:
-    bad = (np.abs(points[:, 0]) > 180) | (np.abs(points[:, 1]) > 90)
+    bad = outside_lonlat(points)
     if bad.any():
         x, y = points[np.argmax(bad)]
         raise FootprintError(

@@ -152,6 +152,26 @@ def test_metres_without_a_crs_are_a_clear_error(tmp_path):
     assert "metres.geojson" in text and "outside the lon/lat range" in text and "crs = " in text
 
 
+def _features(rings_list):
+    return {"type": "FeatureCollection",
+            "features": [{"type": "Feature", "properties": {"@id": f"way/{k}"},
+                          "geometry": {"type": "Polygon", "coordinates": rings}} for k, rings in enumerate(rings_list)]}
+
+
+def test_a_few_stray_coordinates_skip_their_buildings_not_the_file(tmp_path):
+    """Regression: one feature with a coordinate outside the lon/lat range refused the whole lon/lat file (the
+    test for projected metres without a CRS). Fewer than half of the features out of range: those are skipped
+    with the reason; as many or more: the file is still refused with the CRS hint."""
+    good = [_square(24.94 + 0.001 * k, 60.17, 0.0002) for k in range(3)]
+    stray = [[[24.95, 60.17], [1e9, 60.17], [24.9502, 60.1702], [24.95, 60.17]]]
+    result = read_footprints(write_json(tmp_path / "one.geojson", _features([*good, stray])), {})
+    assert [f.id for f in result.footprints] == ["way/0", "way/1", "way/2"]
+    (skipped,) = result.skipped
+    assert skipped.id == "way/3" and "outside the lon/lat range of the rest of the file" in skipped.reason
+    with pytest.raises(FootprintError, match="outside the lon/lat range, but the file is read as"):
+        read_footprints(write_json(tmp_path / "half.geojson", _features([good[0], stray])), {})
+
+
 def test_lonlat_declared_projected_is_a_clear_error(tmp_path):
     lonlat = _square(24.94, 60.17, 0.0002)
     path = write_json(tmp_path / "wrong.geojson", _collection(lonlat))
