@@ -20,7 +20,7 @@ from citygen.usd.validate import validate_stage
 
 
 def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
-    scene = load_scene(args.scene, registry.roof_builders)
+    scene = load_scene(args.scene, registry.roof_builders, registry.ruleset_kinds)
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
     if args.scheduler and args.executor != "dask":
         raise CitygenError("--scheduler needs --executor dask", hint="add --executor dask")

@@ -115,8 +115,9 @@ def _line_of(text: str, key: str, start: int = 0) -> int | None:
 class _Reader:
     """Checks one table of the scene, reporting problems with file:line."""
 
-    def __init__(self, path: Path, text: str, roof_shapes: Collection[str] | None = None) -> None:
-        self.path, self.text, self.roof_shapes = path, text, roof_shapes
+    def __init__(self, path: Path, text: str, roof_shapes: Collection[str] | None = None,
+                 kinds: Mapping[str, Any] | None = None) -> None:
+        self.path, self.text, self.roof_shapes, self.kinds = path, text, roof_shapes, kinds
 
     def fail(self, message: str, key: str | None = None, hint: str | None = None, line: int | None = None) -> None:
         if line is None and key is not None:
@@ -149,6 +150,23 @@ class _Reader:
             self.fail(f"unknown roof shape {value!r}", line=line, hint=f"valid shapes: {', '.join(shapes)}")
         return value
 
+    def ruleset_kind(self, value: Any, paths: Collection[Path], line: int | None) -> str | None:
+        """The ``kind`` of an assignment, checked (with the rulesets' suffixes when it is not given) against the
+        ruleset kinds the reader was given; without them, the builder checks when it loads the ruleset."""
+        if self.kinds is None:
+            return value
+        if value is not None:
+            if not isinstance(value, str) or value not in self.kinds:
+                self.fail(f"unknown ruleset kind {value!r}", line=line,
+                          hint=f"loaded kinds: {', '.join(sorted(self.kinds))}")
+            return value
+        suffixes = sorted({s for kind in self.kinds.values() for s in kind.suffixes})
+        for p in paths:
+            if not p.name.lower().endswith(tuple(suffixes)):
+                self.fail(f"no ruleset kind reads {p.suffix or 'files without suffix'} ({p.name})", line=line,
+                          hint=f"known ruleset suffixes: {', '.join(suffixes)}; or give kind explicitly")
+        return None
+
     def pitch(self, value: Any, line: int | None) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 90:
             self.fail(f"roof_pitch must be a number of degrees between 0 and 90, got {value!r}", line=line)
@@ -160,10 +178,12 @@ class _Reader:
         return (self.path.parent / value).resolve()
 
 
-def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> Scene:
+def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
+               kinds: Mapping[str, Any] | None = None) -> Scene:
     """Parse and check a scene file; raise :class:`SceneError` with file:line on any problem.
 
-    Roof shapes are checked against ``roof_shapes`` (default: the roof builders of the installed plugins)."""
+    Roof shapes are checked against ``roof_shapes`` (default: the roof builders of the installed plugins), and
+    when ``kinds`` (id -> ruleset kind) is given, each assignment's ``kind`` or else its rulesets' suffixes."""
     path = Path(path)
     text = read_user_text(path, SceneError, "scene")
     try:
@@ -172,7 +192,7 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None) -> 
         match = re.search(r"line (\d+), column (\d+)", str(exc))
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
-    r = _Reader(path, text, roof_shapes)
+    r = _Reader(path, text, roof_shapes, kinds)
     unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
     if unknown:
         r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",
@@ -239,6 +259,9 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
             if not _is_file(p):
                 r.fail(f"ruleset {_short(p.name)} does not exist ({_short(str(p))})", line=line,
                        hint="paths are relative to the scene file")
+        kind = r.ruleset_kind(item.get("kind"), paths, line)
+        if fallback is not None:
+            r.ruleset_kind(None, (fallback,), line)  # (a fallback is read by the kind its suffix names)
         faces = item.get("faces", "all")
         if faces not in FACE_SCOPES:
             r.fail(f"faces must be one of {', '.join(FACE_SCOPES)}, got {faces!r}", line=line)
@@ -248,7 +271,7 @@ def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
         pitch = r.pitch(item["roof_pitch"], pitch_line) if "roof_pitch" in item else None
         when_line = _line_of(r.text, "when", header) if header >= 0 and "when" in item else line
         result.append(Assignment(rulesets=paths, conditions=_conditions(r, item.get("when", {}), when_line),
-                                 faces=faces, kind=item.get("kind"), line=line, roof_shape=shape, roof_pitch=pitch,
+                                 faces=faces, kind=kind, line=line, roof_shape=shape, roof_pitch=pitch,
                                  fallback=fallback))
     return tuple(result)
 

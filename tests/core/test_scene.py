@@ -1,6 +1,7 @@
 import pytest
 
 from citygen.errors import SceneError
+from citygen.registry import default_registry
 from citygen.scene import load_scene
 
 BASE = '''[scene]
@@ -55,6 +56,11 @@ def test_scene_parses_and_matches(tmp_path):
     (("floor_height = 3.0", "floor_height = 3.0\ncorner_width = inf"), "corner_width must be a finite positive", 11),
     (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\n[output]\ntile_size = nan\n'), "tile_size must be", 23),
     (('levels = ">= 5"', 'levels = "< abc"'), "a comparison needs a number", 17),
+    # regressions: an unknown kind, or a ruleset no kind reads, skipped every building at generation
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nkind = "nonsense"\n'), "unknown ruleset kind 'nonsense'",
+     20),
+    (('ruleset = "b.grammar"\n', 'ruleset = "s.toml"\n'), r"no ruleset kind reads \.toml \(s\.toml\)", 20),
+    (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nfallback = "s.toml"\n'), "no ruleset kind reads", 20),
     (("[defaults]", "[defaults]\nfloorheight = 3"), "unknown key 'floorheight'", 10),
     (('ruleset = "b.grammar"\n', 'ruleset = "missing.grammar"\n'), "missing.grammar does not exist", 20),
     (('ruleset = "b.grammar"\n', 'ruleset = "b.grammar"\nfallback = "gone.grammar"\n'), "gone.grammar does not exist",
@@ -67,7 +73,7 @@ def test_scene_parses_and_matches(tmp_path):
 def test_scene_errors_name_file_and_line(tmp_path, edit, message, line):
     path = write(tmp_path, BASE.replace(*edit))
     with pytest.raises(SceneError, match=message) as info:
-        load_scene(path)
+        load_scene(path, kinds=default_registry().ruleset_kinds)
     assert f"s.toml:{line}" in str(info.value)
 
 
