@@ -130,7 +130,7 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         every = tuple(range(1, m))
         groupings = {every}  # a grouping = the atom boundaries kept
         groupings.update(_kept(row, m, every) for row in rows)
-        atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1])) for k in range(m)]
+        atom_sigs = [index.sig(_piece(box, axis, bl[k], bl[k + 1]), True) for k in range(m)]
         groupings.update(_repeated_runs([(s, bl[k + 1] - bl[k]) for k, s in enumerate(atom_sigs)]))
         piece = _Pieces(index, box, axis, bl, atom_sigs)
         if actions.bound is None:
@@ -283,7 +283,7 @@ def _periodic(index: LayoutIndex, sig: int, model: CostModel, inst: np.ndarray, 
     tiles = [k for k, v in enumerate(bl) if (v - box[axis]) % p == 0]
     out = Candidates(index, box, model, best_only)
     for edges in (tiles, list(range(len(bl)))):
-        sigs = [index.sig(_piece(box, axis, bl[a], bl[b])) for a, b in zip(edges, edges[1:])]
+        sigs = [index.sig(_piece(box, axis, bl[a], bl[b]), True) for a, b in zip(edges, edges[1:])]
         out.add(axis, bl, edges, sigs, line, only="repeat")  # (always: for >= 2 tiles repeat is the cheapest)
         if len(tiles) == len(bl):
             break
@@ -338,6 +338,8 @@ def _repeated_runs(atoms: list[tuple[int, int]], limit: int = 16) -> list[tuple[
 
 
 def _piece(box: Box, axis: int, a: int, b: int) -> Box:
+    """The slab of ``box`` from ``a`` to ``b`` along ``axis``: exactly tiled when ``box`` is and ``a``, ``b`` are
+    its sides or valid cuts (so its signature is looked up with ``tiled``)."""
     return (int(a), box[1], int(b), box[3]) if axis == 0 else (box[0], int(a), box[2], int(b))
 
 
@@ -349,7 +351,7 @@ class _Pieces(dict):
         self.index, self.box, self.axis, self.bl = index, box, axis, bl
 
     def __missing__(self, ab: tuple[int, int]) -> int:
-        s = self[ab] = self.index.sig(_piece(self.box, self.axis, self.bl[ab[0]], self.bl[ab[1]]))
+        s = self[ab] = self.index.sig(_piece(self.box, self.axis, self.bl[ab[0]], self.bl[ab[1]]), True)
         return s
 
 
@@ -432,20 +434,23 @@ class Candidates:
         self.heuristic.append(action.heuristic)
         self._specs.append(None)
 
-    def cut_lines(self) -> tuple[list[int], list[int], list[int]]:
-        """Every split line of every candidate, without building the rules: candidate index, axis and position
-        (relative to the box) per line, candidates in order."""
-        ks, axes, cuts = [], [], []
+    def cut_lines(self) -> tuple[list[int], list[int], list[int], list[int]]:
+        """Every split line of every candidate, without building the rules: the candidates that have lines (in
+        order) and the offset of each one's first line, then per line its axis and position (absolute)."""
+        owners, starts, axes, cuts = [], [], [], []
         for k, spec in enumerate(self._specs):
             if spec is None:
-                axis, lines = self.built[k].axis, self.built[k].cuts
+                action = self.built[k]
+                axis, lines = action.axis, [c + self.box[action.axis] for c in action.cuts]
             else:
-                axis, bl, edges = spec[:3]
-                lines = [bl[e] - bl[0] for e in edges[1:-1]]
-            ks += [k] * len(lines)
-            axes += [axis] * len(lines)
-            cuts += lines
-        return ks, axes, cuts
+                axis, bl, edges = spec[0], spec[1], spec[2]
+                lines = [bl[e] for e in edges[1:-1]]
+            if lines:
+                owners.append(k)
+                starts.append(len(cuts))
+                axes += [axis] * len(lines)
+                cuts += lines
+        return owners, starts, axes, cuts
 
     def kids(self, k: int) -> tuple[int, ...]:
         """The distinct non-terminal successor signatures of candidate ``k`` (its rule's ``children``)."""

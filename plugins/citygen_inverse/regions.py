@@ -147,13 +147,14 @@ class LayoutIndex:
         """``sig`` of every terminal's box, in terminal order (the same lookups, in the same order, the first time;
         later calls return the same list)."""
         if self._terminal_sigs is None:
-            boxes = zip(self.X0.tolist(), self.Y0.tolist(), self.X1.tolist(), self.Y1.tolist())
+            boxes = list(zip(self.X0.tolist(), self.Y0.tolist(), self.X1.tolist(), self.Y1.tolist()))
             if not self.free_extents:
                 self._terminal_sigs = [self.sig(box) for box in boxes]
             else:
                 first: dict[int, int] = {}  # with free extents a lone terminal's signature is its material's
                 self._terminal_sigs = [first[mat] if mat in first else first.setdefault(mat, self.sig(box))
                                        for mat, box in zip(self.material.tolist(), boxes)]
+                self._boxes.update(zip(boxes, self._terminal_sigs))  # (what a lookup of each box would find)
         return self._terminal_sigs
 
     @property
@@ -227,11 +228,13 @@ class _Grid:
         (_, inv_x), (_, inv_y) = self.powers
         self.inv = [(inv_x[k][:, None] * inv_y[k][None, :]).tolist() for k in range(lanes)]  # per lane, corner
         place = self.powers[0][0][:, a0] * self.powers[1][0][:, b0]  # (lanes, terminals)
-        self.hash: list[list] = []  # per variant (free_w + 2 free_h), per lane: prefix sums
-        for variant in range(4):
+        self.hash: list[list] = []  # per variant (free_w + 2 free_h) but the last, per lane: prefix sums
+        for variant in range(3):
             val = np.zeros((lanes, nx, ny), dtype=np.uint64)
             val[:, a0, b0] = r[variant].T * place
             self.hash.append([_prefix2(v) for v in val])
+        # free width and height: no interior edge either way, so a single terminal, whose content is its R(t)
+        self.single = list(map(tuple, r[3].tolist()))
 
     def region(self, box: Box, tiled: bool = False) -> tuple[tuple[int, int, int, int], int, int, int] | None:
         """For an exactly tiled ``box`` (None otherwise): its grid indices, its terminal count and the terminal edge
@@ -272,6 +275,8 @@ class _Grid:
     def content(self, cell: tuple[int, int, int, int], variant: int) -> tuple[int, int]:
         """The two content hashes of the tiled box on grid cells ``cell``, translated to its corner (``variant``:
         free width + 2 free height)."""
+        if variant == 3:
+            return self.single[self.owner[cell[0]][cell[1]]]
         t, u = self.hash[variant]
         a, b = self.inv
         i0, j0, i1, j1 = cell
@@ -294,9 +299,9 @@ class _Grid:
         along = self.along[axis]
         span = hi - lo
         for count in counts:
-            if count > i1 - i0:
-                continue
             p = length // count
+            if count > i1 - i0 or start + p not in index:  # (most boxes fail here: no line a tile away)
+                continue
             tiles = [i0]
             for k in range(1, count):
                 t = index.get(start + k * p)

@@ -162,15 +162,15 @@ class GrammarSearch:
                                     & ~((p[:, 0] == 0) & (p[:, 1] == 0) & (p[:, 2] == w) & (p[:, 3] == h)))
             acts = self._actions[sig]
             masks = [0] * len(acts)
-            ks, axes, cuts = acts.cut_lines()
-            if inside.size and ks:
-                ks, axes, cuts = np.array(ks), np.array(axes), np.array(cuts)
-                q = p[inside]
+            owners, starts, axes, cuts = acts.cut_lines()
+            if inside.size and owners:
+                axes = np.array(axes)
+                cuts = np.array(cuts) - np.take(box, axes)  # (relative to the box, as the instances are)
+                q = p.take(inside, 0)
                 lo, hi = q[:, axes], q[:, axes + 2]  # per instance, its extent along each line's axis
                 hit = (lo < cuts) & (hi > cuts)  # instance x line: the line cuts the instance
-                starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
                 cut = np.zeros((len(acts), self._important.size), dtype=bool)
-                cut[np.ix_(ks[starts], inside)] = np.logical_or.reduceat(hit, starts, axis=1).T
+                cut[np.ix_(owners, inside)] = np.logical_or.reduceat(hit, starts, axis=1).T
                 packed = np.packbits(cut, axis=1, bitorder="little")
                 masks = [int.from_bytes(row.tobytes(), "little") for row in packed]
             any_mask = 0

@@ -59,6 +59,28 @@ def test_grid_signatures_match_brute_force_content(seed):
     assert len(set(by_key.values())) == len(by_key)  # different content, different signatures
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_slabs_between_valid_cuts_are_tiled(seed):
+    """Candidate rules look up the slabs of a region between its cuts with ``tiled`` (no tiling test): every slab
+    between any two of a tiled box's sides and cuts is exactly tiled, with the signature a checked lookup finds."""
+    layout = random_layout(np.random.default_rng(seed), 10.0, 8.0, depth=5)
+    checked, fast = LayoutIndex([layout], periodic=True), LayoutIndex([layout], periodic=True)
+    for index in (fast, checked):
+        index.terminal_sigs(), index.sig(index.roots[0])
+    slabs, k = 0, 1
+    while k < len(checked.sigs) and slabs < 5000:  # (every signature, including those the slabs add)
+        box, k = checked.sigs[k].box, k + 1
+        for axis in (0, 1):
+            bl = [box[axis], *checked.cuts(box, axis), box[axis + 2]]
+            for a in range(len(bl)):
+                for b in range(a + 1, len(bl)):
+                    slab = (bl[a], box[1], bl[b], box[3]) if axis == 0 else (box[0], bl[a], box[2], bl[b])
+                    assert checked._grid.region(slab) is not None, slab
+                    assert fast.sig(slab, True) == checked.sig(slab), slab
+                    slabs += 1
+    assert slabs > 100
+
+
 def _tiles(box, axis: int, p: int):
     n = (box[2 + axis] - box[axis]) // p
     return [(box[0] + k * p, box[1], box[0] + (k + 1) * p, box[3]) if axis == 0 else
