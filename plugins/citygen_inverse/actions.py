@@ -62,15 +62,17 @@ def _ops(seq: list[tuple[int, int]], model: CostModel) -> tuple[str, float, int]
     """Cheapest operator for a child sequence of (signature, size along the axis): (op, cost, items written)."""
     k = len(seq)
     best = ("split", model.split + k, k)
+    first = seq[0]
     for p in _divisors_below(k):
-        if seq[p] == seq[0] and seq == seq[:p] * (k // p):
+        if seq[p] == first and seq == seq[:p] * (k // p):
             if model.repeat + p < best[1]:
                 best = ("repeat", model.repeat + p, p)
             break
-    if k >= 3 and k % 2 == 1 and len(set(seq[0::2])) == 1 and len(set(seq[1::2])) == 1 and seq[0] != seq[1]:
-        if model.repeat + 2 < best[1]:
-            best = ("repeatABA", model.repeat + 2, 2)
-    if k >= 3 and k % 2 == 1 and seq == seq[::-1] and model.split + (k + 1) // 2 < best[1]:
+    if k < 3 or k % 2 == 0 or seq[-1] != first:  # (A B A ... A and odd palindromes end as they start)
+        return best
+    if len(set(seq[0::2])) == 1 and len(set(seq[1::2])) == 1 and first != seq[1] and model.repeat + 2 < best[1]:
+        best = ("repeatABA", model.repeat + 2, 2)
+    if seq == seq[::-1] and model.split + (k + 1) // 2 < best[1]:
         best = ("symsplit", model.split + (k + 1) // 2, (k + 1) // 2)
     return best
 

@@ -247,3 +247,24 @@ def test_protection_masks_match_the_per_rule_definition(name):
             expected.append(m)
         assert masks == expected
         assert any_mask == functools.reduce(operator.or_, expected, 0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 2), st.integers(1, 2)), min_size=2, max_size=9),
+       st.sampled_from([CostModel(), CostModel(split=0.1, repeat=0.05), CostModel(split=2.0, repeat=0.5)]))
+def test_ops_picks_the_cheapest_operator_that_fits(seq, model):
+    """An operator for a child sequence, by definition: split always fits; repeat with the smallest period that
+    tiles the sequence; repeatABA for A B A ... A (odd, A != B); symsplit for an odd palindrome. The cheapest wins,
+    the earlier of these on a tie."""
+    from citygen_inverse.actions import _ops
+    k = len(seq)
+    fits = [("split", model.split + k, k)]
+    period = next((p for p in range(1, k) if k % p == 0 and seq == seq[:p] * (k // p)), None)
+    if period is not None:
+        fits.append(("repeat", model.repeat + period, period))
+    odd = k >= 3 and k % 2 == 1
+    if odd and all(s == seq[0] for s in seq[0::2]) and all(s == seq[1] for s in seq[1::2]) and seq[0] != seq[1]:
+        fits.append(("repeatABA", model.repeat + 2, 2))
+    if odd and seq == seq[::-1]:
+        fits.append(("symsplit", model.split + (k + 1) // 2, (k + 1) // 2))
+    assert _ops(seq, model) == min(fits, key=lambda op: op[1])
