@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from citygen.errors import LayoutError, ParseError, SourceLocation
+from citygen.errors import LayoutError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout, Region, check_partition
 from citygen_inverse.regularize import integer_lines, regularize_axis
 
@@ -68,7 +68,7 @@ class CmpBox:
 def read_label_table(path: Path) -> dict[int, tuple[str, int]]:
     """``label_names.txt``: lines ``id name z_order`` -> {id: (name, z)}."""
     table = {}
-    for lineno, line in enumerate(path.read_text().splitlines(), 1):
+    for lineno, line in enumerate(read_user_text(path, ParseError, "label table").splitlines(), 1):
         if not line.strip():
             continue
         parts = line.split()
@@ -154,20 +154,28 @@ def _decompose(grid: np.ndarray, r0: int, r1: int, c0: int, c1: int, out: list, 
             out.append((r0 + r, r0 + r_end, c0 + c, c0 + c_end, int(ident)))
 
 
-def _image_size(png: Path | None) -> tuple[int, int] | None:
-    if png is None or not png.is_file():
-        return None
+def read_label_map(png: Path, labels: dict[int, tuple[str, int]]) -> np.ndarray:
+    """The label map of a CMP photo: one label id per pixel (rows from the top), ids from the label table."""
     from PIL import Image
-    with Image.open(png) as image:
-        return image.size
+    try:
+        with Image.open(png) as image:
+            mode, ids = image.mode, np.asarray(image)
+    except OSError as exc:  # (Pillow's "cannot identify image file" included)
+        raise LayoutError(f"cannot read the label map: {exc}", where=str(png),
+                          hint="give the CMP label map (a PNG of label ids) with --png, or remove the file") from None
+    if mode not in ("P", "L", "I", "I;16") or ids.ndim != 2:
+        raise LayoutError(f"not a label map: a {mode} image, expected one label id per pixel (a palette or grey "
+                          "PNG, as CMP's)", where=str(png), hint="give the CMP label map with --png")
+    unknown = sorted(set(np.unique(ids).tolist()) - set(labels))
+    if unknown:
+        raise LayoutError(f"label ids {unknown[:8]} of the label map are not in the label table", where=str(png),
+                          hint="give the label map of this annotation, or the label table it uses")
+    return ids
 
 
-def _png_agreement(png: Path, layout: FacadeLayout, box_px: tuple[float, float, float, float],
+def _png_agreement(ids: np.ndarray, layout: FacadeLayout, box_px: tuple[float, float, float, float],
                    labels: dict[int, tuple[str, int]]) -> float:
     """Fraction of label-map pixels inside the facade box whose label equals the layout's label there."""
-    from PIL import Image
-    with Image.open(png) as image:
-        ids = np.asarray(image)
     fx0, fy0, fx1, fy1 = box_px
     H = ids.shape[0]
     rows = slice(int(round(H - fy1)), int(round(H - fy0)))
@@ -239,11 +247,12 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
             raise LayoutError(f"{name} must be a positive number of metres, got {value!r}", where=str(xml_path),
                               hint="pass the facade width (or the height of one row of windows) in metres")
     labels = read_label_table(Path(labels_path)) if labels_path else _find_labels(xml_path)
-    objects = parse_cmp_xml(xml_path.read_text(), str(xml_path), labels)
+    objects = parse_cmp_xml(read_user_text(xml_path, LayoutError, "CMP annotation"), str(xml_path), labels)
     png_path = Path(png) if png else xml_path.with_suffix(".png")
-    size = _image_size(png_path)
-    if png and size is None:
+    if png and not png_path.is_file():
         raise LayoutError("label map not found", where=str(png))
+    label_map = read_label_map(png_path, labels) if png_path.is_file() else None
+    size = label_map.shape[::-1] if label_map is not None else None
     W, H = size if size else (1000, 1000)
     # the <x> values run down the photo and the <y> values across it (checked against every label map)
     boxes = [CmpBox(v0 * W, (1 - u1) * H, v1 * W, (1 - u0) * H, labels[lab][0], labels[lab][1], order)
@@ -305,7 +314,7 @@ def import_cmp(xml_path: str | Path, *, png: str | Path | None = None, width: fl
         raise LayoutError("import did not give a partition: " + "; ".join(problems[:3]), where=str(xml_path))
     meta["annotation_agreement"] = _annotation_agreement(layout, annotated, fw, fh)
     if size:
-        meta["label_map_agreement"] = round(_png_agreement(png_path, layout, (fx0, fy0, fx1, fy1), labels), 4)
+        meta["label_map_agreement"] = round(_png_agreement(label_map, layout, (fx0, fy0, fx1, fy1), labels), 4)
     return layout
 
 

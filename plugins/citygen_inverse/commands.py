@@ -7,7 +7,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from citygen.errors import CitygenError, LayoutError
+from citygen.errors import CitygenError, LayoutError, read_user_text
 from citygen.registry import Command, Registry
 
 
@@ -40,7 +40,8 @@ def check_degenerate(xml: str) -> None:
     from citygen_inverse.cmp import _find_labels, parse_cmp_xml
     path = Path(xml)
     labels = _find_labels(path)
-    for x0, x1, y0, y1, label, order in parse_cmp_xml(path.read_text(), xml, labels):
+    for x0, x1, y0, y1, label, order in parse_cmp_xml(read_user_text(path, LayoutError, "CMP annotation"), xml,
+                                                      labels):
         if x0 == x1 or y0 == y1:
             raise LayoutError(f"object {order} ({labels[label][0]}) is a zero-size box "
                               f"(x {x0:g}..{x1:g}, y {y0:g}..{y1:g})", where=xml,
@@ -186,7 +187,7 @@ class GrammarCommand(Command):
         from citygen_inverse.actions import CostModel
         from citygen_inverse.extract import extract_grammar
         from citygen_inverse.independent import extract_size_independent
-        layouts = [FacadeLayout.loads(Path(p).read_text(), p) for p in args.layouts]
+        layouts = [FacadeLayout.loads(read_user_text(Path(p), LayoutError, "layout"), p) for p in args.layouts]
         for path, layout in zip(args.layouts, layouts):
             problems = check_partition(layout)
             if problems:

@@ -150,6 +150,17 @@ def test_bad_layout_and_grammar_files(tmp_path, capsys):
     _fails(capsys, ["grammar", "cost", str(g)], "bad.grammar:2:1")
 
 
+def test_regression_files_that_are_not_utf8_are_refused(tmp_path, capsys):
+    """A layout or annotation with a byte that is not UTF-8 ended in a UnicodeDecodeError traceback."""
+    bad = tmp_path / "latin1.json"
+    bad.write_bytes(b'{"width": 3, "name": "fa\xe7ade"}')
+    _fails(capsys, ["grammar", "extract", str(bad)], "latin1.json", "not UTF-8")
+    xml = tmp_path / "latin1.xml"
+    xml.write_bytes((DATA / "cmp_b0012.xml").read_bytes().replace(b"window", b"w\xefndow", 1))
+    _fails(capsys, ["layout", "import-cmp", str(xml)], "latin1.xml", "not UTF-8")
+    _fails(capsys, ["layout", "import-cmp", str(xml), "--drop-degenerate"], "latin1.xml", "not UTF-8")
+
+
 def test_size_independent_takes_one_layout(layout_json, capsys):
     _fails(capsys, ["grammar", "extract", str(layout_json), str(layout_json), "--size-independent"],
            "one layout")

@@ -249,3 +249,35 @@ def test_regression_boxes_outside_the_facade_do_not_count_in_the_agreement(tmp_p
     layout = import_cmp(xml, labels_path=DATA / "label_names.txt")
     assert layout.count("window") == 4
     assert layout.meta["annotation_agreement"] == {"pixels": 1.0, "element_pixels": 1.0}
+
+
+@pytest.mark.parametrize("image,message", [
+    (None, "cannot read the label map"),
+    (np.zeros((40, 30, 3), np.uint8), "not a label map: a RGB image"),
+    (np.full((40, 30), 250, np.uint8), r"label ids \[250\]"),
+])
+def test_regression_a_bad_label_map_is_refused(tmp_path, image, message):
+    """A label map that is not one (not an image, colours, ids the label table lacks) was read as one: it set the
+    photo's aspect ratio, so the layout came out with the wrong width, and scored a meaningless agreement."""
+    from PIL import Image
+    png = tmp_path / "map.png"
+    if image is None:
+        png.write_bytes(b"not a png")
+    else:
+        Image.fromarray(image).save(png)
+    with pytest.raises(LayoutError, match=message) as info:
+        import_cmp(DATA / "cmp_b0012.xml", png=png)
+    assert "map.png" in str(info.value)
+    beside = tmp_path / "cmp_b0012.xml"  # the .png found beside the annotation is checked too
+    beside.write_bytes((DATA / "cmp_b0012.xml").read_bytes())
+    png.rename(beside.with_suffix(".png"))
+    (tmp_path / "label_names.txt").write_bytes((DATA / "label_names.txt").read_bytes())
+    with pytest.raises(LayoutError, match=message):
+        import_cmp(beside)
+
+
+def test_regression_a_label_table_that_is_not_utf8_is_refused(tmp_path):
+    table = tmp_path / "label_names.txt"
+    table.write_bytes(b"1 background 1\n2 fa\xe7ade 2\n")
+    with pytest.raises(ParseError, match="label_names.txt: label table is not UTF-8"):
+        import_cmp(DATA / "cmp_b0012.xml", labels_path=table)
