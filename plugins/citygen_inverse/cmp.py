@@ -111,6 +111,10 @@ def parse_cmp_xml(text: str, source: str, labels: dict[int, tuple[str, int]]) ->
         if label not in labels:
             raise LayoutError(f"object {order} has label {label}, unknown to the label table", where=source,
                               hint=f"known label ids: {sorted(labels)}")
+        if not all(-0.01 <= v <= 1.01 for v in (*xs, *ys)):  # (NaN fails too)
+            raise ParseError(f"object {order} has points {xs + ys}: CMP points are fractions 0..1 of the photo size",
+                             where=SourceLocation(source), hint="give the points as fractions of the photo size")
+        xs, ys = [min(max(v, 0.0), 1.0) for v in xs], [min(max(v, 0.0), 1.0) for v in ys]  # (rounding beyond)
         objects.append((min(xs), max(xs), min(ys), max(ys), label, order))
     if not objects:
         raise LayoutError("the annotation has no objects", where=source)

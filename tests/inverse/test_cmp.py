@@ -281,3 +281,13 @@ def test_regression_a_label_table_that_is_not_utf8_is_refused(tmp_path):
     table.write_bytes(b"1 background 1\n2 fa\xe7ade 2\n")
     with pytest.raises(ParseError, match="label_names.txt: label table is not UTF-8"):
         import_cmp(DATA / "cmp_b0012.xml", labels_path=table)
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "1e308", "-3", "512"])
+def test_regression_points_outside_the_photo_are_refused(tmp_path, value):
+    """A point of inf reached the regularisation QP (a ValueError traceback); NaN and values far outside 0..1
+    (pixels instead of fractions) are refused the same way, naming the object."""
+    xml = tmp_path / "points.xml"
+    xml.write_text((DATA / "cmp_b0012.xml").read_text().replace("\n0.99512\n", f"\n{value}\n", 1))
+    with pytest.raises(ParseError, match="points.xml: object 0 has points .* fractions 0..1"):
+        import_cmp(xml, labels_path=DATA / "label_names.txt")
