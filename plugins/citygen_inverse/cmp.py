@@ -164,7 +164,7 @@ def read_label_map(png: Path, labels: dict[int, tuple[str, int]]) -> np.ndarray:
     try:
         with Image.open(png) as image:
             mode, ids = image.mode, np.asarray(image)
-    except OSError as exc:  # (Pillow's "cannot identify image file" included)
+    except (OSError, Image.DecompressionBombError) as exc:  # (Pillow's "cannot identify image file" included)
         raise LayoutError(f"cannot read the label map: {exc}", where=str(png),
                           hint="give the CMP label map (a PNG of label ids) with --png, or remove the file") from None
     if mode not in ("P", "L", "I", "I;16") or ids.ndim != 2:

@@ -89,6 +89,9 @@ def load_photo(path: str | Path, crop: tuple[float, float, float, float] | None 
         with Image.open(path) as image:
             image.load()
             rgb = _as_rgb(image)
+    except Image.DecompressionBombError as exc:
+        raise LayoutError(f"the image is too large to open safely ({exc.args[0].split(',')[0]})", where=str(path),
+                          hint="downscale the photo (the analysis works on at most ~1000 pixels a side)") from None
     except (UnidentifiedImageError, OSError, ValueError) as exc:
         if isinstance(exc, (FileNotFoundError, IsADirectoryError)):
             raise

@@ -211,6 +211,21 @@ def test_cli_refuses_a_non_image(tmp_path, capsys, content):
     assert "Traceback" not in err
 
 
+def test_regression_an_image_over_pillows_pixel_limit_is_refused(tmp_path, capsys, monkeypatch):
+    """Pillow refuses images over its decompression-bomb limit (~179 megapixels) with an exception that is not an
+    OSError: it ended in a traceback, for a photo and for a CMP label map."""
+    path = tmp_path / "facade.png"
+    Image.fromarray(np.zeros((60, 50, 3), np.uint8)).save(path)
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1000)
+    assert main(["layout", "from-photo", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "too large to open safely" in err and "downscale" in err
+    xml = Path(__file__).resolve().parents[1] / "data" / "inverse" / "cmp_b0012.xml"
+    assert main(["layout", "import-cmp", str(xml), "--png", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "cannot read the label map" in err and "Traceback" not in err
+
+
 def test_cli_errors_name_the_file(tmp_path, capsys):
     assert main(["layout", "from-photo", str(tmp_path / "missing.png")]) == 2
     assert "missing.png: no such file" in capsys.readouterr().err
