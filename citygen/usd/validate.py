@@ -1,6 +1,7 @@
 """Stage validation: every registered ``pxr.UsdValidation`` validator plus mesh topology checks."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +27,7 @@ def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
         try:
             stage = Usd.Stage.Open(str(stage_or_path))
         except Tf.ErrorException as exc:
-            return [Finding("error", str(stage_or_path), f"cannot open stage: {str(exc).strip().splitlines()[0]}")]
+            return [Finding("error", str(stage_or_path), f"cannot open stage: {_usd_reason(exc)}")]
     findings = []
     context = UsdValidation.ValidationContext(UsdValidation.ValidationRegistry().GetOrLoadAllValidators())
     for error in context.Validate(stage):
@@ -45,3 +46,11 @@ def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
             if not ok:
                 findings.append(Finding("error", str(prim.GetPath()), f"mesh topology: {reason}"))
     return findings
+
+
+def _usd_reason(exc: Exception) -> str:
+    """The reason of a USD error without its source location ("Error in 'pxrInternal_...::Open' at line N in
+    file stage.cpp : 'reason'" -> "reason")."""
+    first = str(exc).strip().splitlines()[0]
+    match = re.match(r"Error in '[^']*' at line \d+ in file \S+ : '(.*?)'?$", first)
+    return match.group(1) if match else first

@@ -115,7 +115,10 @@ def test_validate_cli_exit_codes(small_scene, test_registry, tmp_path, capsys):
     assert "topology" in capsys.readouterr().out
     (tmp_path / "garbage.usda").write_text("#usda 1.0\ndef {")
     assert main(["validate", str(tmp_path / "garbage.usda")]) == 1
-    assert "cannot open stage" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "cannot open stage" in out and "Error in '" not in out  # (USD's source location is dropped)
+    assert main(["validate", str(tmp_path / "missing.usda")]) == 1
+    assert "cannot open stage: Failed to open layer" in capsys.readouterr().out
 
 
 def test_element_instancing_places_the_same_elements(small_scene, test_registry, tmp_path):
