@@ -1,13 +1,20 @@
 import argparse
+import random
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from citygen.errors import LayoutError, ParseError
+from citygen.errors import CitygenError, LayoutError, ParseError
 from citygen.layout import FacadeLayout, check_partition
 from citygen_inverse.cmp import import_cmp
 from citygen_inverse.commands import GrammarCommand, LayoutCommand
+from citygen_inverse.extract import extract_grammar
+
+from ..mutate import mutate
+from .helpers import assert_reproduces
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "inverse"
 
@@ -291,3 +298,18 @@ def test_regression_points_outside_the_photo_are_refused(tmp_path, value):
     xml.write_text((DATA / "cmp_b0012.xml").read_text().replace("\n0.99512\n", f"\n{value}\n", 1))
     with pytest.raises(ParseError, match="points.xml: object 0 has points .* fractions 0..1"):
         import_cmp(xml, labels_path=DATA / "label_names.txt")
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(name=st.sampled_from(["cmp_b0005", "cmp_b0012"]), seed=st.integers(0, 2 ** 32 - 1))
+def test_mutated_annotations_import_as_partitions_or_raise_citygen_errors(tmp_path_factory, name, seed):
+    """Fuzzed CMP annotations (tests/mutate.py): an import either refuses with a CitygenError or gives an exact
+    partition whose greedy grammar re-derives it."""
+    xml = tmp_path_factory.getbasetemp() / f"{name}.xml"
+    xml.write_text(mutate((DATA / f"{name}.xml").read_text(), "json", random.Random(seed)))
+    try:
+        layout = import_cmp(xml, png=DATA / f"{name}.png", labels_path=DATA / "label_names.txt")
+    except CitygenError:
+        return
+    assert check_partition(layout) == []
+    assert_reproduces(extract_grammar(layout, "greedy").text, layout)
