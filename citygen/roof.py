@@ -2,9 +2,10 @@
 
 Tags read (https://wiki.openstreetmap.org/wiki/Key:roof:shape): ``roof:shape``, ``roof:height`` (metres above the
 wall top), ``roof:angle`` (pitch in degrees), ``roof:direction`` (compass degrees or N/NE/..., the direction the
-slope faces, i.e. downhill), ``roof:orientation`` (``along``: ridge parallel to the longest side, ``across``:
-perpendicular to it; rectangle-like outlines only, see :func:`rectangle_like`). A tag that does not parse is
-ignored, so the scene's default applies.
+main slope faces, i.e. downhill; where the orientation is untagged the ridge runs parallel to the side facing it),
+``roof:orientation`` (``along``: ridge parallel to the longest side, ``across``: perpendicular to it;
+rectangle-like outlines only, see :func:`rectangle_like`). A tag that does not parse is ignored, so the scene's
+default applies.
 
 *Party walls* -- outline edges a neighbour stands against up to the eave (``citygen.coordinator.party_walls``) --
 are passed to the builder in :attr:`RoofSpec.party`: a pitched roof must not slope down onto the neighbour.

@@ -53,6 +53,21 @@ def _parts(outline: Polygon | MultiPolygon, party: tuple[int, ...] = ()) -> list
     return out
 
 
+def ridge_orientation(part: Polygon, spec: RoofSpec) -> str | None:
+    """``roof:orientation``, else the one ``roof:direction`` gives a rectangle-like (counter-clockwise) part: the
+    main face slopes down towards that compass direction, so the ridge runs parallel to the side facing it --
+    ``along`` when that is a long side, ``across`` when a short one (OSM's alternative tags; a square building can
+    only be told by the direction)."""
+    if spec.orientation is not None or spec.direction is None or not rectangle_like(part):
+        return spec.orientation
+    d = np.diff(np.asarray(part.exterior.coords)[:, :2], axis=0)
+    angle = math.radians(spec.direction)
+    facing = int(np.argmax((d[:, 1] * math.sin(angle) - d[:, 0] * math.cos(angle)) / np.hypot(*d.T)))
+    length = np.hypot(*d.T)
+    short = 0 if length[0] + length[2] <= length[1] + length[3] else 1
+    return "across" if facing % 2 == short else "along"
+
+
 def edge_weights(part: Polygon, party: frozenset[int], orientation: str | None, gables: bool) -> np.ndarray:
     """Per outline edge its speed in the weighted straight skeleton; 0 makes it a vertical gable wall.
 
@@ -472,15 +487,20 @@ def skillion(part: Polygon, top: float, spec: RoofSpec, party: frozenset[int] = 
 
 class _SkeletonRoof(RoofBuilder):
     """A roof over the straight skeleton with the profile of its ``id``; ``gables``: hip ends become gables;
-    ``oriented``: reads ``roof:orientation``. Party walls are gable walls."""
+    ``oriented``: reads ``roof:orientation`` (or ``roof:direction``). Party walls are gable walls."""
 
     gables = False
 
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
-        orientation = spec.orientation if self.oriented else None
-        return _merge([skeleton_roof(part, top, spec, self.id, self.gables, party, orientation)
-                       for part, party in _parts(outline, spec.party)])
+        parts = _parts(outline, spec.party)
+        if self.oriented and spec.orientation is None and spec.direction is not None \
+                and not all(rectangle_like(part) for part, _ in parts):
+            note(f"roof:direction={spec.direction:g} sets the ridge of rectangle-like parts only; elsewhere the "
+                 "ridge follows the straight skeleton")
+        return _merge([skeleton_roof(part, top, spec, self.id, self.gables, party,
+                                     ridge_orientation(part, spec) if self.oriented else None)
+                       for part, party in parts])
 
 
 class HippedRoof(_SkeletonRoof):

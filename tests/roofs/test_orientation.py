@@ -6,7 +6,7 @@ import pytest
 from shapely import affinity
 from shapely.geometry import Polygon, box
 
-from citygen.roof import RoofSpec, rectangle_like, roof_spec
+from citygen.roof import RoofSpec, rectangle_like, roof_notes, roof_spec
 from citygen_roofs.pitched import GabledRoof, GambrelRoof, HippedRoof, MansardRoof
 from tests.roofs.test_builders import TOP, _normals, _open_edges, _outline_edges, _same_edges, _triangles
 
@@ -95,3 +95,42 @@ def test_roof_spec_reads_orientation():
     assert roof_spec({"roof:orientation": "along"}, 9.0).orientation == "along"
     assert roof_spec({"roof:orientation": "diagonal"}, 9.0).orientation is None  # unknown: the default
     assert roof_spec({}, 9.0, party=(1, 3)).party == (1, 3)
+
+
+@pytest.mark.parametrize("direction,orientation", [(0.0, "along"), (180.0, "along"), (90.0, "across"),
+                                                   (275.0, "across"), (20.0, "along")])
+def test_roof_direction_sets_the_ridge_when_orientation_is_untagged(direction, orientation):
+    """roof:direction (the main face's downslope compass direction, OSM's alternative to roof:orientation): the
+    ridge runs parallel to the side facing it -- on a 20 x 8 m house facing north or south, along the long sides."""
+    outline = box(0, 0, LENGTH, WIDTH)
+    by_direction = GabledRoof().build(outline, TOP, RoofSpec("gabled", 30.0, direction=direction))
+    tagged = GabledRoof().build(outline, TOP, RoofSpec("gabled", 30.0, orientation=orientation))
+    assert np.allclose(np.sort(by_direction.points, axis=0), np.sort(tagged.points, axis=0))
+
+
+def test_roof_direction_turns_the_ridge_of_a_square_house():
+    """A square house has no long side for roof:orientation: only roof:direction tells where the ridge runs."""
+    for direction, ridge_axis in ((90.0, 0), (0.0, 1), (270.0, 0)):  # slopes facing east-west: ridge north-south
+        mesh = GabledRoof().build(box(0, 0, 10, 10), TOP, RoofSpec("gabled", 30.0, direction=direction))
+        ridge = _ridge(mesh, TOP + 5 * SLOPE)
+        assert len(ridge) == 2 and np.allclose(ridge[:, ridge_axis], 5.0), direction
+        assert np.ptp(ridge[:, 1 - ridge_axis]) == pytest.approx(10.0)
+
+
+def test_roof_orientation_wins_over_roof_direction_and_direction_over_party_walls():
+    rotated = affinity.rotate(box(0, 0, LENGTH, WIDTH), 90, origin=(0, 0))  # long sides facing east and west
+    both = GabledRoof().build(rotated, TOP, RoofSpec("gabled", 30.0, orientation="along", direction=0.0))
+    along = GabledRoof().build(rotated, TOP, RoofSpec("gabled", 30.0, orientation="along"))
+    assert np.allclose(np.sort(both.points, axis=0), np.sort(along.points, axis=0))
+    house = Polygon([(0, 0), (6, 0), (6, 15), (0, 15)])  # party walls on the long sides, main face to the east
+    untagged = GabledRoof().build(house, TOP, RoofSpec("gabled", 30.0, party=(1, 3)))
+    assert np.allclose(_walls(untagged)[:, 1], 0)  # a terrace house: gables on the party walls
+    mesh = GabledRoof().build(house, TOP, RoofSpec("gabled", 30.0, direction=90.0, party=(1, 3)))
+    assert np.allclose(_walls(mesh)[:, 0], 0)  # gables face -y and +y: the slopes come down to the party walls
+    l_shape = Polygon([(0, 0), (20, 0), (20, 8), (8, 8), (8, 20), (0, 20)])  # not rectangle-like: no effect
+    plain = HippedRoof().build(l_shape, TOP, RoofSpec("hipped", 30.0))
+    with roof_notes() as notes:
+        turned = HippedRoof().build(l_shape, TOP, RoofSpec("hipped", 30.0, direction=90.0))
+    assert np.array_equal(plain.points, turned.points)
+    assert notes == ["roof:direction=90 sets the ridge of rectangle-like parts only; elsewhere the ridge follows "
+                     "the straight skeleton"]
