@@ -43,6 +43,7 @@ def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
         raise FootprintError("CityJSON vertices are not all [x, y, z] numbers", where=str(path)) from None
     if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 3):
         raise FootprintError(f"CityJSON vertices have shape {vertices.shape}, expected (n, 3)", where=str(path))
+    vertices = vertices.reshape(-1, 3)  # also no vertices at all: (0, 3)
     transform = doc.get("transform")
     if isinstance(transform, Mapping):
         try:
@@ -55,7 +56,7 @@ def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
                                  where=str(path), hint='e.g. "transform": {"scale": [0.001, 0.001, 0.001], '
                                                        '"translate": [0, 0, 0]}')
         vertices = vertices * scale + translate
-    return vertices.reshape(-1, 3)
+    return vertices
 
 
 def _finite_or_inf(value: Any) -> Any:
