@@ -287,6 +287,9 @@ class Runner:
             if prim.IsA(UsdGeom.PointBased):
                 self._check_finite((v for p in UsdGeom.PointBased(prim).GetPointsAttr().Get() or () for v in p),
                                    f"{prim.GetPath()} points")
+        internal = [s for s in report.skipped if s.reason.startswith("internal error")]
+        if internal:
+            raise ValueError(f"skipped with an internal error: {internal[0].id}: {internal[0].reason}")
         if report.written < 3:
             raise ValueError(f"a good building was lost: written {report.written}, skipped "
                              f"{[(s.id, s.reason) for s in report.skipped]}")

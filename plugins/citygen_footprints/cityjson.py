@@ -7,6 +7,7 @@ from the attributes (``measuredHeight``, ``storeysAboveGround``) with ``cityjson
 """
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -166,7 +167,13 @@ def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str,
 
 
 def _crs(doc: Mapping[str, Any], path: Path, options: ImportOptions, notes: list[str]) -> CRS | None:
-    declared = (doc.get("metadata") or {}).get("referenceSystem")
+    metadata = doc.get("metadata") or {}
+    declared = metadata.get("referenceSystem") if isinstance(metadata, Mapping) else None
+    if not isinstance(metadata, Mapping) or not isinstance(declared, str | None):
+        raise FootprintError(f"CityJSON metadata must be an object whose referenceSystem is a CRS name, got "
+                             f"{reprlib.repr(metadata)}", where=str(path),
+                             hint='e.g. "metadata": {"referenceSystem": "https://www.opengis.net/def/crs/EPSG/0/7415"}'
+                                  ", or set crs in the scene's [footprints] table")
     crs_text = options.crs or declared
     if not crs_text:
         notes.append(f"{path}: no referenceSystem in metadata; coordinates kept as unknown metric units "
@@ -200,9 +207,15 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
         except FeatureProblem as problem:
             skipped.append((index, Skipped(oid, str(problem), where)))
             continue
+        parts = _parts(footprint)
+        if not parts:  # the ground surfaces cancel out or collapse (e.g. coordinates too large to resolve them)
+            skipped.append((index, Skipped(oid, "its footprint has no area (degenerate ground surfaces, or coordinates "
+                                                "too large to tell its corners apart) -- check its boundaries and "
+                                                "the file's transform", where)))
+            continue
         open_bottom += not had_ground
         label = f"{oid} ({where})"
-        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
+        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, parts,
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))
     return raws, skipped, open_bottom
 

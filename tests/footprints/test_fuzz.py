@@ -123,3 +123,51 @@ def test_cityjson_object_with_malformed_attributes_or_parents_skips_one_building
         return
     assert [f.id for f in result.footprints] == ["a"]
     assert [s.id for s in result.skipped] == ["b"] and "attributes must be a JSON object" in result.skipped[0].reason
+
+
+@pytest.mark.parametrize("metadata", [float("inf"), {"referenceSystem": [7415, 0]}])
+def test_cityjson_metadata_that_is_not_an_object_is_a_footprint_error(tmp_path, metadata):
+    # was: AttributeError ('float' object has no attribute 'get') / TypeError (unhashable list) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["metadata"] = metadata
+    with pytest.raises(FootprintError, match="metadata must be an object whose referenceSystem is a CRS name"):
+        read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+
+
+def test_cityjson_buildings_whose_footprint_collapses_are_skipped(tmp_path):
+    # was: ValueError (need at least one array to concatenate) when no building had a footprint left
+    # y = 1e30 swallows the 10 m: rounding leaves the triangle a Newell area but no polygon
+    doc = cityjson([[1.1, 0, 0], [7.7, 0, 0], [3.3, 10, 0]], [[[0, 1, 2]]],
+                   {"scale": [1, 1, 1], "translate": [0, 1e30, 0]})
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert result.footprints == () and [s.id for s in result.skipped] == ["a", "b"]
+    assert "footprint has no area" in result.skipped[0].reason and "transform" in result.skipped[0].reason
+
+
+def _projected(tmp_path, far_x: float):
+    features = [feature(f"b{k}", [[385_000 + x, 6_672_000], [385_010 + x, 6_672_000], [385_010 + x, 6_672_010],
+                                  [385_000 + x, 6_672_010], [385_000 + x, 6_672_000]])
+                for k, x in enumerate((0, 20, 40, far_x))]
+    doc = {"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:3067"}},
+           "features": features}
+    return read_footprints(write_json(tmp_path / "p.geojson", doc), {})
+
+
+def test_a_building_far_from_the_others_is_skipped_and_the_frame_stays_on_the_rest(tmp_path):
+    # was: the whole file refused (its bbox centre outside EPSG:3067's area of use) or, without a CRS, every
+    # building 5e14 m from the origin
+    result = _projected(tmp_path, 1e15)
+    assert [f.id for f in result.footprints] == ["b0", "b1", "b2"]
+    (skip,) = result.skipped
+    assert skip.id == "b3" and "lie 1e+15 units from the other buildings" in skip.reason
+    assert result.georef.origin == (385_025.0, 6_672_005.0)
+
+
+def test_a_building_whose_base_is_beyond_reach_is_skipped(tmp_path):
+    # was: written at z = 1e300, which the stage's float32 points turn into inf
+    doc = cityjson(BOX, FACES)
+    for vertex in doc["vertices"][len(BOX):]:
+        vertex[2] += 1e300
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "base z = 1e+300 m" in result.skipped[0].reason
