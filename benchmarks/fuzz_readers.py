@@ -10,6 +10,17 @@ JSON also mutated as a tree) through the public entry points: the ruleset kinds'
 ``load_scene`` and the footprint importers. Each mutation is also applied once per number (every number of the
 file replaced by every edge value) for files of at most ``--exhaustive-below`` characters.
 
+Three more readers: ``osm`` -- the building ways and multipolygons near the first ``building:part`` of
+``helsinki.osm.pbf`` written as .osm XML, .opl and .osm.pbf, mutated as objects (edge tag values of ``height``,
+``building:levels``, ``min_height``, ``roof:*``, ``building:part``; ways cut to 0/1/2 nodes, unclosed, with missing
+or swapped nodes; duplicate ids; multipolygon members missing; nodes at edge coordinates), then as text, or the PBF
+as bytes (truncated, flipped bits, zeroed or repeated blocks); ``cityjsonseq`` -- three Delft buildings as
+CityJSONSeq, lines dropped, duplicated, swapped, cut, mutated as JSON trees, the header's transform given edge
+values; ``extreme`` -- a fixed list of huge-but-finite footprints (coordinates, z, heights, widths, tags; EXTREME)
+among three good ones through ``generate_city`` and ``citygen validate``: a run must write a stage with zero
+validation errors and finite points, keep the good buildings and skip the bad one with a reason (not an
+internal error).
+
 Prints per reader the cases run, how many loaded / were refused with a CitygenError, and every other exception
 (type, message, the last frame) and every case over the timeout, with the input written to ``--out`` to
 reproduce. A generated layout or footprint with a non-finite number counts as a failure too.

@@ -56,7 +56,8 @@ def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
             raise FootprintError("CityJSON transform needs scale and translate of 3 finite numbers each",
                                  where=str(path), hint='e.g. "transform": {"scale": [0.001, 0.001, 0.001], '
                                                        '"translate": [0, 0, 0]}')
-        vertices = vertices * scale + translate
+        with np.errstate(over="ignore"):  # a vertex beyond float range becomes inf: its buildings are skipped
+            vertices = vertices * scale + translate
     return vertices
 
 
@@ -109,8 +110,10 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     if not surfaces:
         raise FeatureProblem("the geometry has no surfaces -- check its boundaries")
     if not all(np.isfinite(r).all() for s in surfaces for r in s):
-        raise FeatureProblem("a vertex is NaN or infinite -- fix the vertices in the source data")
-    normals = _newell([s[0] for s in surfaces])
+        raise FeatureProblem("a vertex is NaN or infinite (or beyond float range after the transform) "
+                             "-- fix the vertices or the transform in the source data")
+    with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: no finite normal, so no flat surface
+        normals = _newell([s[0] for s in surfaces])
     length = np.linalg.norm(normals, axis=1)
     nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
     flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²

@@ -171,3 +171,11 @@ def test_a_building_whose_base_is_beyond_reach_is_skipped(tmp_path):
     result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
     assert [f.id for f in result.footprints] == ["a"]
     assert [s.id for s in result.skipped] == ["b"] and "base z = 1e+300 m" in result.skipped[0].reason
+
+
+def test_cityjson_transform_overflow_skips_the_buildings_quietly(tmp_path, recwarn):
+    # was: numpy RuntimeWarnings (overflow in multiply, invalid value in reduceat) printed among the reasons
+    doc = cityjson(BOX, FACES, {"scale": [1e308, 1, 1], "translate": [0, 0, 0]})
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [s.id for s in result.skipped] == ["a", "b"] and "after the transform" in result.skipped[0].reason
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
