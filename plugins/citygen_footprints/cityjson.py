@@ -147,9 +147,9 @@ def _height(attributes: Mapping[str, Any], label: str, zmin: float, zmax: float,
 
 def _geometries(obj: Any) -> list[Mapping[str, Any]]:
     """The object's usable geometries, best first (see :func:`_rank`)."""
-    if not isinstance(obj, Mapping):
+    if not isinstance(obj, Mapping) or not isinstance(obj.get("geometry"), list):
         return []
-    return sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
+    return sorted((g for g in obj["geometry"] if isinstance(g, Mapping)
                    and g.get("type") in SOLIDS + SURFACES), key=_rank)
 
 
@@ -197,7 +197,8 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
         if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
             continue
         index, where = start + offset, f"{at} CityObjects[{oid!r}]"
-        if any(_geometries(objects.get(child)) for child in obj.get("children") or []):
+        children = obj.get("children") if isinstance(obj.get("children"), list) else []
+        if any(_geometries(objects.get(child)) for child in children if isinstance(child, str)):
             continue  # represented by its parts, which inherit its attributes
         geometries = _geometries(obj)
         if not geometries:

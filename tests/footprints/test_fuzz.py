@@ -179,3 +179,16 @@ def test_cityjson_transform_overflow_skips_the_buildings_quietly(tmp_path, recwa
     result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
     assert [s.id for s in result.skipped] == ["a", "b"] and "after the transform" in result.skipped[0].reason
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.parametrize("key, value", [("geometry", 3.5), ("children", 3.5), ("children", [[1]])])
+def test_cityjson_object_with_malformed_geometry_or_children_skips_one_building(tmp_path, key, value):
+    # was: TypeError ('float' object is not iterable / unhashable type: 'list') for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["CityObjects"]["b"][key] = value
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    if key == "children":  # no usable children: the building is drawn by its own geometry
+        assert [f.id for f in result.footprints] == ["a", "b"]
+        return
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "no Solid or MultiSurface geometry" in result.skipped[0].reason
