@@ -165,8 +165,8 @@ def small_osm(buildings: int = 40) -> dict:
     ``tests.mutate.osm_model``."""
     import osmium
     pbf = REPO / "scenes/data/helsinki.osm.pbf"
-    lon, lat = next((o.nodes[0].lon, o.nodes[0].lat) for o in osmium.FileProcessor(pbf, osmium.osm.NODE | osmium.osm.WAY)
-                    .with_locations() if o.is_way() and "building:part" in o.tags)
+    located = osmium.FileProcessor(pbf, osmium.osm.NODE | osmium.osm.WAY).with_locations()
+    lon, lat = next((o.nodes[0].lon, o.nodes[0].lat) for o in located if o.is_way() and "building:part" in o.tags)
     ways, relations, members = [], [], set()
     for o in osmium.FileProcessor(pbf, osmium.osm.ALL).with_locations():
         if o.is_relation() and o.tags.get("type") == "multipolygon" and "building" in o.tags and len(relations) < 2:

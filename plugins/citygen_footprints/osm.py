@@ -72,7 +72,8 @@ def _read_error(exc: Exception, path: Path) -> FootprintError:
     if "out of order" in message or "twice in input" in message:
         hint = ("each object must appear once, sorted by type and id, as in extracts of the planet file: run "
                 "`osmium sort` on it, and combine extracts with `osmium merge`, not by concatenating them")
-    elif any(word in message for word in ("XML", "OPL", "PBF", "uncompress", "illegal", "coordinate", "EOF")):
+    elif any(word in message.lower() for word in ("xml", "opl", "pbf", "uncompress", "illegal", "coordinate", "eof",
+                                                  "element")):
         hint = "the file is corrupt or truncated: re-download or re-export it (`osmium fileinfo -e FILE` checks it)"
     else:
         hint = "give an .osm (XML), .osm.pbf or .opl file"
