@@ -102,14 +102,16 @@ def _far_apart(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[t
     bad = [k for k, d in enumerate(reach) if not d <= MAX_DISTANCE]
     if not bad or 2 * len(bad) >= len(features):
         return list(features), []
-    skipped = [(features[k].index, Skipped(features[k].id, f"its coordinates lie {reach[k]:.3g} units from the other "
-                                                          f"buildings (more than {MAX_DISTANCE:g} m) -- fix them in "
-                                                          "the source data", features[k].where)) for k in bad]
-    return [f for k, f in enumerate(features) if k not in set(bad)], skipped
+    skipped = [(features[k].index, Skipped(features[k].id, f"its coordinates lie {reach[k]:.3g} units of the file's "
+                                                          f"CRS from the other buildings (more than {MAX_DISTANCE:g}) "
+                                                          "-- fix them in the source data", features[k].where))
+               for k in bad]
+    gone = set(bad)
+    return [f for k, f in enumerate(features) if k not in gone], skipped
 
 
 def _out_of_reach(parts: Sequence[Part], base: float, top: float) -> str | None:
-    """Why a projected footprint cannot be written (too far from the origin or z = 0), or None."""
+    """Why a footprint in the local frame cannot be written (too far from the origin or z = 0), or None."""
     reach = max(float(np.abs(r).max()) for p in parts for r in p)
     if not reach <= MAX_DISTANCE:
         return (f"it lies {reach:.3g} m from the scene origin, more than {MAX_DISTANCE:g} m -- fix its coordinates "

@@ -159,7 +159,7 @@ def test_a_building_far_from_the_others_is_skipped_and_the_frame_stays_on_the_re
     result = _projected(tmp_path, 1e15)
     assert [f.id for f in result.footprints] == ["b0", "b1", "b2"]
     (skip,) = result.skipped
-    assert skip.id == "b3" and "lie 1e+15 units from the other buildings" in skip.reason
+    assert skip.id == "b3" and "lie 1e+15 units of the file's CRS from the other buildings" in skip.reason
     assert result.georef.origin == (385_025.0, 6_672_005.0)
 
 
