@@ -114,7 +114,7 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
                              "-- fix the vertices or the transform in the source data")
     with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: no finite normal, so no flat surface
         normals = _newell([s[0] for s in surfaces])
-    length = np.linalg.norm(normals, axis=1)
+        length = np.linalg.norm(normals, axis=1)
     nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
     flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²
     if not flat.any():

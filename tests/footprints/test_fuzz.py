@@ -192,3 +192,13 @@ def test_cityjson_object_with_malformed_geometry_or_children_skips_one_building(
         return
     assert [f.id for f in result.footprints] == ["a"]
     assert [s.id for s in result.skipped] == ["b"] and "no Solid or MultiSurface geometry" in result.skipped[0].reason
+
+
+def test_cityjson_wall_of_huge_height_falls_back_quietly(tmp_path, recwarn):
+    # was: a numpy RuntimeWarning (overflow in np.linalg.norm of the wall normals)
+    doc = cityjson(BOX, FACES)
+    for vertex in doc["vertices"][len(BOX) + 4:]:
+        vertex[2] = 1e300
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a", "b"] and result.footprints[1].height_source == "default"
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
