@@ -115,7 +115,7 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: no finite normal, so no flat surface
         normals = _newell([s[0] for s in surfaces])
         length = np.linalg.norm(normals, axis=1)
-    nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
+        nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
     flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²
     if not flat.any():
         raise FeatureProblem("the geometry has no surface with a footprint area -- check its boundaries")
@@ -127,7 +127,9 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     ground = flat & is_down
     z = np.concatenate([r[:, 2] for s in surfaces for r in s])
     chosen = polygons[ground] if ground.any() else polygons[flat]
-    return shapely.union_all(chosen), float(z.min()), float(z.max()), bool(ground.any())
+    with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: GEOS overflows, the area check skips it
+        footprint = shapely.union_all(chosen)
+    return footprint, float(z.min()), float(z.max()), bool(ground.any())
 
 
 def _parts(geometry: shapely.Geometry) -> tuple[list[np.ndarray], ...]:

@@ -202,3 +202,13 @@ def test_cityjson_wall_of_huge_height_falls_back_quietly(tmp_path, recwarn):
     result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
     assert [f.id for f in result.footprints] == ["a", "b"] and result.footprints[1].height_source == "default"
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_cityjson_buildings_too_large_to_measure_are_skipped_quietly(tmp_path, recwarn):
+    # was: "area inf m² is below min_area = 1 m² (a sliver)" and numpy / shapely RuntimeWarnings (divide, unary_union)
+    doc = cityjson([[x * 1e200, y * 1e200, z] for x, y, z in BOX], FACES)
+    del doc["metadata"]  # no CRS: the coordinates are not refused as outside a CRS's area of use
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert result.footprints == () and [s.id for s in result.skipped] == ["a", "b"]
+    assert "its area is inf m² (coordinates too large to measure it)" in result.skipped[0].reason
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
