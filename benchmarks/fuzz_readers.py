@@ -10,9 +10,21 @@ JSON also mutated as a tree) through the public entry points: the ruleset kinds'
 ``load_scene`` and the footprint importers. Each mutation is also applied once per number (every number of the
 file replaced by every edge value) for files of at most ``--exhaustive-below`` characters.
 
+Three more readers: ``osm`` -- the building ways and multipolygons near the first ``building:part`` of
+``helsinki.osm.pbf`` written as .osm XML, .opl and .osm.pbf, mutated as objects (edge tag values of ``height``,
+``building:levels``, ``min_height``, ``roof:*``, ``building:part``; ways cut to 0/1/2 nodes, unclosed, with missing
+or swapped nodes; duplicate ids; multipolygon members missing; nodes at edge coordinates), then as text, or the PBF
+as bytes (truncated, flipped bits, zeroed or repeated blocks); ``cityjsonseq`` -- three Delft buildings as
+CityJSONSeq, lines dropped, duplicated, swapped, cut, mutated as JSON trees, the header's transform given edge
+values; ``extreme`` -- a fixed list of huge-but-finite footprints (coordinates, z, heights, widths, tags; EXTREME)
+among three good ones through ``generate_city`` and ``citygen validate``: a run must write a stage with zero
+validation errors and finite points, keep the good buildings and skip the bad one with a reason (not an
+internal error).
+
 Prints per reader the cases run, how many loaded / were refused with a CitygenError, and every other exception
 (type, message, the last frame) and every case over the timeout, with the input written to ``--out`` to
-reproduce. A generated layout or footprint with a non-finite number counts as a failure too.
+reproduce. A generated layout or footprint with a non-finite number counts as a failure too, and so does a
+RuntimeWarning (numpy or shapely overflow printed among the messages) from a footprint reader.
 """
 from __future__ import annotations
 
@@ -26,6 +38,7 @@ import sys
 import tempfile
 import time
 import traceback
+import warnings
 from collections import Counter, defaultdict
 from collections.abc import Iterator
 from pathlib import Path
@@ -38,11 +51,73 @@ from citygen.layout import FacadeLayout  # noqa: E402
 from citygen.registry import default_registry  # noqa: E402
 from citygen.request import FacadeRequest  # noqa: E402
 from citygen.scene import load_scene  # noqa: E402
-from tests.mutate import NUMBERS, mutate, number_spans  # noqa: E402
+from tests.mutate import (NUMBERS, mutate, mutate_bytes, mutate_jsonl, mutate_osm, number_spans,  # noqa: E402
+                          osm_model, write_osm)
 
 REGISTRY = default_registry()
 RULESET_SUFFIXES = {"split": ".grammar", "layers": ".layers", "relayout": ".relayout", "safe": ".safe"}
 SAFE_LAYOUT = "cmp_b0035.layout.json"
+#: readers whose runs must not print numpy / shapely RuntimeWarnings either
+FOOTPRINT_READERS = ("footprints", "osm", "cityjsonseq", "extreme")
+
+
+#: huge-but-finite values end to end: (case, spec); each spec is one bad building among three good ones (x, y:
+#: metres from the first corner; w: width; z: base; h: wall height), ``tags`` its tags, ``options`` the scene's
+#: [footprints] keys; ``cityjson`` writes a CityJSON file without CRS (coordinates taken as metres), else GeoJSON
+#: in EPSG:3067
+EXTREME: list[tuple[str, dict]] = [
+    *[(f"x = {x:g}", {"x": x}) for x in (1e7, 1e15, 1e300, -1e300)],
+    *[(f"cityjson x = {x:g}", {"x": x, "cityjson": True}) for x in (1e7, 1e15, 1e300, -1e300)],
+    *[(f"cityjson z = {z:g}", {"z": z, "cityjson": True}) for z in (1e7, 1e15, 1e300, -1e300)],
+    *[(f"cityjson h = {h:g}", {"h": h, "cityjson": True}) for h in (1e4, 1e15, 1e300)],
+    ("width 1e-12", {"w": 1e-12, "cityjson": True}),
+    ("width 1e-12, min_area 1e-30", {"w": 1e-12, "cityjson": True, "options": {"min_area": 1e-30}}),
+    ("width 1e-6, min_area 1e-30", {"w": 1e-6, "cityjson": True, "options": {"min_area": 1e-30}}),
+    ("width 1e7", {"w": 1e7, "cityjson": True}),
+    *[(f"height={v}", {"tags": {"height": v}}) for v in ("1e15", "1e300", "-1e300", "10000")],
+    ("height=10000, max_height 20000", {"tags": {"height": "10000"}, "options": {"max_height": 20000}}),
+    ("building:levels=1e15", {"tags": {"building:levels": "1e15"}}),
+    ("min_height=1e300", {"tags": {"height": "12", "min_height": "1e300"}}),
+    ("min_height=999", {"tags": {"height": "1000", "min_height": "999.99"}}),
+    *[(f"{k}={v}", {"tags": {"height": "12", "roof:shape": "gabled", k: v}})
+      for k, v in (("roof:height", "1e300"), ("roof:height", "10000"), ("roof:levels", "1e15"),
+                   ("roof:angle", "89.9999999"), ("roof:angle", "1e300"), ("roof:height", "1e-300"))],
+]
+EXTREME_RULESET = "house.grammar"
+
+
+def extreme_files(directory: Path, spec: dict) -> Path:
+    """The footprint file and scene of one EXTREME case in ``directory``; returns the scene path."""
+    boxes = [(0.0, 0.0, 10.0, 0.0, 9.0, {}), (20.0, 0.0, 10.0, 0.0, 9.0, {}), (0.0, 20.0, 10.0, 0.0, 9.0, {}),
+             (spec.get("x", 40.0), spec.get("y", 0.0), spec.get("w", 10.0), spec.get("z", 0.0), spec.get("h", 9.0),
+              spec.get("tags", {}))]
+    if spec.get("cityjson"):
+        objects, vertices = {}, []
+        for k, (x, y, w, z, h, tags) in enumerate(boxes):
+            first = len(vertices)
+            vertices += [[x + dx, y + dy, zz] for zz in (z, z + h) for dx, dy in ((0, 0), (w, 0), (w, 10), (0, 10))]
+            faces = [[[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]], [[1, 2, 6, 5]], [[2, 3, 7, 6]], [[3, 0, 4, 7]]]
+            objects[f"b{k}"] = {"type": "Building", "attributes": tags, "geometry": [{
+                "type": "Solid", "lod": "1", "boundaries": [[[[first + i for i in f[0]]] for f in faces]]}]}
+        doc = {"type": "CityJSON", "version": "2.0", "CityObjects": objects, "vertices": vertices}
+        footprints = directory / "extreme.city.json"
+    else:
+        features = []
+        for k, (x, y, w, _, _, tags) in enumerate(boxes):
+            x0, y0 = 385_000.0 + x, 6_672_000.0 + y
+            ring = [[x0, y0], [x0 + w, y0], [x0 + w, y0 + 10], [x0, y0 + 10], [x0, y0]]
+            features.append({"type": "Feature", "id": f"b{k}", "properties": {"building": "yes", **tags},
+                              "geometry": {"type": "Polygon", "coordinates": [ring]}})
+        doc = {"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:3067"}},
+               "features": features}
+        footprints = directory / "extreme.geojson"
+    footprints.write_text(json.dumps(doc))
+    options = "".join(f"{k} = {v!r}\n" for k, v in spec.get("options", {}).items())
+    scene = directory / "extreme.toml"
+    scene.write_text(f'[scene]\nseed = 1\n[footprints]\npath = "{footprints.name}"\n{options}'
+                     f'[[assign]]\nruleset = "{(REPO / "rulesets" / EXTREME_RULESET).as_posix()}"\n'
+                     '[output]\npath = "extreme.usda"\n')
+    return scene
 
 
 class Timeout(Exception):
@@ -88,6 +163,58 @@ def small_cityjson(objects: int = 3) -> str:
     return json.dumps(doc, indent=1)
 
 
+def small_osm(buildings: int = 40) -> dict:
+    """The building ways and multipolygon relations of ``helsinki.osm.pbf`` (outlines and ``building:part``s)
+    within about 110 m of its first ``building:part``, at most ``buildings`` of them, with their nodes, as a
+    ``tests.mutate.osm_model``."""
+    import osmium
+    pbf = REPO / "scenes/data/helsinki.osm.pbf"
+    located = osmium.FileProcessor(pbf, osmium.osm.NODE | osmium.osm.WAY).with_locations()
+    lon, lat = next((o.nodes[0].lon, o.nodes[0].lat) for o in located if o.is_way() and "building:part" in o.tags)
+    ways, relations, members = [], [], set()
+    for o in osmium.FileProcessor(pbf, osmium.osm.ALL).with_locations():
+        if o.is_relation() and o.tags.get("type") == "multipolygon" and "building" in o.tags and len(relations) < 2:
+            refs = [(m.type, m.ref, m.role) for m in o.members]
+            if len(refs) <= 6:
+                relations.append((o.id, refs, dict(o.tags)))
+                members |= {ref for kind, ref, _ in refs if kind == "w"}
+        elif o.is_way() and ("building" in o.tags or "building:part" in o.tags) and len(ways) < buildings and \
+                o.nodes[0].location.valid() and abs(o.nodes[0].lon - lon) < 2e-3 and abs(o.nodes[0].lat - lat) < 1e-3:
+            ways.append((o.id, [n.ref for n in o.nodes], dict(o.tags)))
+    taken = {w[0] for w in ways}
+    for o in osmium.FileProcessor(pbf, osmium.osm.WAY):
+        if o.id in members and o.id not in taken:
+            ways.append((o.id, [n.ref for n in o.nodes], dict(o.tags)))
+    wanted = {ref for _, refs, _ in ways for ref in refs}
+    nodes = {o.id: (o.lon, o.lat) for o in osmium.FileProcessor(pbf, osmium.osm.NODE) if o.id in wanted}
+    return osm_model(nodes, ways, relations)
+
+
+def small_cityjsonseq(objects: int = 3) -> str:
+    """``small_cityjson`` as CityJSON Text Sequences: a header line, then one CityJSONFeature per building."""
+    doc = json.loads(small_cityjson(objects))
+    header = {k: v for k, v in doc.items() if k not in ("CityObjects", "vertices")}
+    header.update(CityObjects={}, vertices=[])
+    lines = [json.dumps(header)]
+    for oid, obj in doc["CityObjects"].items():
+        if obj["type"] != "Building":
+            continue
+        objects_ = {oid: obj, **{c: doc["CityObjects"][c] for c in obj.get("children", [])}}
+        index: dict[int, int] = {}
+
+        def remap(b):
+            if isinstance(b, list):
+                return [remap(x) for x in b]
+            return index.setdefault(b, len(index))
+        for o in objects_.values():
+            for geometry in o.get("geometry", []):
+                geometry["boundaries"] = remap(geometry["boundaries"])
+        vertices = [doc["vertices"][i] for i in sorted(index, key=index.get)]
+        lines.append(json.dumps({"type": "CityJSONFeature", "id": oid, "CityObjects": objects_,
+                                 "vertices": vertices}))
+    return "\n".join(lines) + "\n"
+
+
 def seeds() -> dict[str, list[tuple[str, str, str]]]:
     """reader -> [(name, text, dialect)] of the shipped inputs."""
     out: dict[str, list[tuple[str, str, str]]] = defaultdict(list)
@@ -102,6 +229,10 @@ def seeds() -> dict[str, list[tuple[str, str, str]]]:
     for path in (REPO / "scenes/data/roofs_demo.geojson", REPO / "tests/data/footprints/bad_footprints.geojson"):
         out["footprints"].append((path.name, path.read_text(), "json"))
     out["footprints"].append(("delft3.city.json", small_cityjson(), "json"))
+    model = small_osm()
+    out["osm"] += [("helsinki.osm", model, "osm"), ("helsinki.opl", model, "osm"), ("helsinki.osm.pbf", model, "pbf")]
+    out["cityjsonseq"].append(("delft3.city.jsonl", small_cityjsonseq(), "jsonl"))
+    out["extreme"] += [(what, spec, "extreme") for what, spec in EXTREME]
     return out
 
 
@@ -145,6 +276,40 @@ class Runner:
             self._check_finite((fp.height, fp.base, fp.lift, *fp.polygon.bounds), f"footprint {fp.id}")
         return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
 
+    def _osm(self, name: str, data: str | bytes) -> str:
+        path = self.root / f"fuzz{''.join(Path(name).suffixes)}"
+        write(path, data)
+        result = REGISTRY.importer_for(path).read(path, {})
+        for fp in result.footprints:
+            self._check_finite((fp.height, fp.base, fp.lift, *fp.polygon.bounds), f"footprint {fp.id}")
+        return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
+
+    def _extreme(self, spec: dict) -> str:
+        from pxr import Usd, UsdGeom
+
+        from citygen.pipeline import generate_city
+        from citygen.usd.validate import validate_stage
+        directory = self.root / "extreme"
+        shutil.rmtree(directory, ignore_errors=True)
+        directory.mkdir()
+        scene = extreme_files(directory, spec)
+        report = generate_city(load_scene(scene), out=directory / "extreme.usda", jobs=1, registry=REGISTRY)
+        errors = [f for f in validate_stage(directory / "extreme.usda") if f.severity == "error"]
+        if errors:
+            raise ValueError(f"citygen validate: {len(errors)} errors, e.g. {errors[0].where}: {errors[0].message}")
+        stage = Usd.Stage.Open(str(directory / "extreme.usda"))
+        for prim in stage.Traverse(Usd.PrimAllPrimsPredicate):
+            if prim.IsA(UsdGeom.PointBased):
+                self._check_finite((v for p in UsdGeom.PointBased(prim).GetPointsAttr().Get() or () for v in p),
+                                   f"{prim.GetPath()} points")
+        internal = [s for s in report.skipped if s.reason.startswith("internal error")]
+        if internal:
+            raise ValueError(f"skipped with an internal error: {internal[0].id}: {internal[0].reason}")
+        if report.written < 3:
+            raise ValueError(f"a good building was lost: written {report.written}, skipped "
+                             f"{[(s.id, s.reason) for s in report.skipped]}")
+        return f"generated ({report.written} written, {len(report.skipped)} skipped)"
+
     def run(self, reader: str, name: str, text: str | bytes) -> str:
         if reader in RULESET_SUFFIXES:
             return self._ruleset(reader, name, text)
@@ -158,6 +323,10 @@ class Runner:
             return "loaded"
         if reader == "footprints":
             return self._footprints(name, text)
+        if reader in ("osm", "cityjsonseq"):
+            return self._osm(name, text)
+        if reader == "extreme":
+            return self._extreme(text)
         raise ValueError(reader)
 
     def case(self, reader: str, name: str, text: str | bytes) -> tuple[str, str | None, float]:
@@ -165,7 +334,13 @@ class Runner:
         signal.setitimer(signal.ITIMER_REAL, self.timeout)
         t0 = time.process_time()
         try:
-            outcome, failure = self.run(reader, name, text), None
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", RuntimeWarning)
+                outcome, failure = self.run(reader, name, text), None
+            noisy = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+            if noisy and reader in FOOTPRINT_READERS:  # numpy / shapely noise on stderr among the skip reasons
+                where = f"{Path(noisy[0].filename).name}:{noisy[0].lineno}"
+                outcome, failure = "crash", f"RuntimeWarning @ {where}: {str(noisy[0].message)[:160]}"
         except CitygenError:
             outcome, failure = "refused", None
         except Timeout:
@@ -199,11 +374,39 @@ def cases(name: str, text: str, dialect: str, count: int, rng: random.Random, ex
                 yield f"number {text[a:b]!r} at {a} -> {value!r}", text[:a] + value + text[b:]
 
 
+def osm_cases(name: str, model: dict, dialect: str, count: int, rng: random.Random, scratch: Path
+              ) -> Iterator[tuple[str, str | bytes]]:
+    """``count`` OSM files: the model mutated (``mutate_osm``, one to three times) and written in ``name``'s format;
+    text formats also get a text mutation a third of the time, PBF a byte mutation (truncation, flipped bytes,
+    zeroed or repeated blocks) half of the time."""
+    path = scratch / f"render{''.join(Path(name).suffixes)}"
+    write_osm(model, path)
+    seed = path.read_bytes()
+    for i in range(count):
+        if dialect == "pbf" and rng.random() < 0.5:
+            yield f"random bytes #{i}", mutate_bytes(seed, rng)
+            continue
+        mutated = model
+        for _ in range(rng.choice((1, 1, 2, 3))):
+            mutated = mutate_osm(mutated, rng)
+        try:
+            write_osm(mutated, path)
+        except Exception:  # noqa: BLE001 -- pyosmium cannot write it: not a case
+            continue
+        data = path.read_bytes()
+        if dialect == "pbf":
+            yield f"random model #{i}", mutate_bytes(data, rng) if rng.random() < 0.25 else data
+        elif rng.random() < 1 / 3:
+            yield f"random model+text #{i}", mutate(data.decode(), "dsl", rng)
+        else:
+            yield f"random model #{i}", data.decode()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=300, help="random mutations per shipped file")
     parser.add_argument("--readers", nargs="*", help="subset of: " + ", ".join(
-        [*RULESET_SUFFIXES, "layout", "scene", "footprints"]))
+        [*RULESET_SUFFIXES, "layout", "scene", "footprints", "osm", "cityjsonseq", "extreme"]))
     parser.add_argument("--timeout", type=float, default=10.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--exhaustive-below", type=int, default=1600, help="file size for exhaustive mutations")
@@ -221,7 +424,15 @@ def main() -> None:
             t_reader = time.process_time()
             for name, text, dialect in files:
                 rng = random.Random(f"{args.seed}:{reader}:{name}")
-                for what, mutated in cases(name, text, dialect, args.cases, rng, args.exhaustive_below):
+                if dialect in ("osm", "pbf"):
+                    generated = osm_cases(name, text, dialect, args.cases, rng, Path(tmp))
+                elif dialect == "jsonl":
+                    generated = ((f"random #{i}", mutate_jsonl(text, rng)) for i in range(args.cases))
+                elif dialect == "extreme":
+                    generated = iter([(name, text)])
+                else:
+                    generated = cases(name, text, dialect, args.cases, rng, args.exhaustive_below)
+                for what, mutated in generated:
                     outcome, failure, seconds = runner.case(reader, name, mutated)
                     counts[outcome.split(" (")[0]] += 1
                     slowest = max(slowest, (seconds, f"{name} {what}"))
@@ -237,8 +448,8 @@ def main() -> None:
         shortest = min(hits, key=lambda h: len(h[2]))
         failure = shortest[3]
         suffix = Path(shortest[0]).suffix
-        sample = args.out / f"{index:03d}-{reader}{suffix}"
-        write(sample, shortest[2])
+        sample = args.out / f"{index:03d}-{reader}{'.json' if reader == 'extreme' else suffix}"
+        write(sample, json.dumps(shortest[2]) if isinstance(shortest[2], dict) else shortest[2])
         print(f"[{reader}] {failure}\n    {len(hits)} case(s); e.g. {shortest[0]} {shortest[1]} -> {sample}")
     print(f"{len(failures)} distinct failures")
 

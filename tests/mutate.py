@@ -210,3 +210,134 @@ def fuzz_ruleset(scratch: Path, original: Path, seed: int) -> None:
     path = scratch / f"fuzz{original.suffix}"
     path.write_text(text, encoding="utf-8")
     load_and_generate(path)
+
+
+# --- OpenStreetMap: a small model (nodes, ways, relations) mutated as objects, written with pyosmium ----------------
+
+#: tags that carry a building's shape and height, and values they should never break the reader with
+OSM_KEYS = ("height", "building:levels", "min_height", "building:min_level", "roof:shape", "roof:height",
+            "roof:levels", "building:part", "building", "type")
+OSM_VALUES = ("", "nan", "NaN", "inf", "-inf", "-5", "0", "1e308", "1e-308", "12 m", "3;4", "3-", ";", "-", "IV",
+              "\u00e9t\u00e9", "\U0001f3e0", "\u200b", "9" * 40, "1" + "0" * 400, "12,5", "40 ft", "5'", "no",
+              "yes", "multipolygon", "x" * 300)
+MISSING_ID = 987_654_321_987
+
+
+def osm_model(nodes: dict, ways: list, relations: list) -> dict:
+    """{"nodes": {id: (lon, lat)}, "ways": [(id, [node ids], {tags})], "relations": [(id, [(t, ref, role)],
+    {tags})]} -- plain data, so a mutation is a deep copy and an edit."""
+    return {"nodes": dict(nodes), "ways": [(i, list(r), dict(t)) for i, r, t in ways],
+            "relations": [(i, list(m), dict(t)) for i, m, t in relations]}
+
+
+def mutate_osm(model: dict, rng: random.Random) -> dict:
+    """One structural or tag mutation: an edge tag value, a way cut to 0/1/2 nodes, unclosed, with a missing or
+    repeated node, a self-crossing (two nodes swapped), a duplicate id, a relation member missing or its role
+    changed, a node moved to an edge coordinate."""
+    model = osm_model(model["nodes"], model["ways"], model["relations"])
+    ways, relations, nodes = model["ways"], model["relations"], model["nodes"]
+    wi = rng.randrange(len(ways))
+    wid, refs, tags = ways[wi]
+    action = rng.randrange(11)
+    if action in (0, 1, 2):  # tags: the most frequent mutation
+        target = rng.choice([t for _, _, t in ways + relations] if action else [tags])
+        target[rng.choice(OSM_KEYS)] = rng.choice(OSM_VALUES)
+    elif action == 3:
+        del refs[rng.choice((0, 1, 2)):]
+    elif action == 4 and refs:
+        refs.pop()
+    elif action == 5 and refs:
+        refs[rng.randrange(len(refs))] = rng.choice((MISSING_ID, -1, 0, refs[0]))
+    elif action == 6 and len(refs) > 3:
+        i, j = rng.sample(range(len(refs) - 1), 2)
+        refs[i], refs[j] = refs[j], refs[i]
+    elif action == 7:
+        other = rng.choice(ways)
+        if rng.random() < 0.5:  # two ways share an id
+            ways[wi] = (other[0], refs, tags)
+        else:  # a way repeated
+            ways.append((other[0], list(other[1]), dict(other[2])))
+    elif action == 8 and relations:
+        rid, members, rtags = rng.choice(relations)
+        if members:
+            k = rng.randrange(len(members))
+            kind, ref, role = members[k]
+            choice = rng.randrange(3)
+            if choice == 0:
+                del members[k]
+            elif choice == 1:
+                members[k] = (kind, MISSING_ID, role)
+            else:
+                members[k] = (kind, ref, rng.choice(("", "inner", "outer", "x")))
+    elif action == 9:
+        nid = rng.choice(list(nodes))
+        lon, lat = nodes[nid]
+        edge = rng.choice((180.0, -180.0, 90.0, -90.0, 0.0, 179.9999999, 1e-7, lon + 1e-9))
+        nodes[nid] = (edge, lat) if rng.random() < 0.5 else (lon, max(-90.0, min(90.0, edge)))
+    else:
+        del nodes[rng.choice(list(nodes))]
+    return model
+
+
+def write_osm(model: dict, path: Path) -> None:
+    """Write the model as ``path``'s format (.osm XML, .opl, .osm.pbf) with pyosmium, sorted by type and id."""
+    import osmium
+    from osmium.osm.mutable import Node, Relation, Way
+    path.unlink(missing_ok=True)
+    writer = osmium.SimpleWriter(str(path))
+    try:
+        for nid, (lon, lat) in sorted(model["nodes"].items()):
+            writer.add_node(Node(id=nid, location=(lon, lat), version=1))
+        for wid, refs, tags in sorted(model["ways"], key=lambda w: w[0]):  # libosmium wants files sorted by id
+            writer.add_way(Way(id=wid, nodes=refs, tags=tags, version=1))
+        for rid, members, tags in sorted(model["relations"], key=lambda r: r[0]):
+            writer.add_relation(Relation(id=rid, members=members, tags=tags, version=1))
+    finally:
+        writer.close()
+
+
+def mutate_bytes(data: bytes, rng: random.Random) -> bytes:
+    """A binary file truncated, with bytes flipped or a block zeroed or repeated."""
+    action = rng.randrange(4)
+    if action == 0:
+        return data[:rng.randrange(len(data) + 1)]
+    out = bytearray(data)
+    if action == 1:
+        for _ in range(rng.choice((1, 1, 2, 8))):
+            out[rng.randrange(len(out))] ^= 1 << rng.randrange(8)
+        return bytes(out)
+    at, size = rng.randrange(len(out)), rng.choice((4, 16, 256, 4096))
+    if action == 2:
+        out[at:at + size] = bytes(len(out[at:at + size]))
+        return bytes(out)
+    return bytes(out[:at + size] + out[at:])
+
+
+# --- CityJSONSeq: one JSON value per line ---------------------------------------------------------------------------
+
+TRANSFORM_VALUES: tuple[Any, ...] = (0, -1, math.nan, math.inf, -math.inf, 1e308, 1e-308, 10 ** 30, 10 ** 400, "1",
+                                     None, [], 1e-300)
+
+
+def mutate_jsonl(text: str, rng: random.Random) -> str:
+    """A line dropped, duplicated, swapped or cut (``text_mutations``), one line mutated as a JSON tree, or the
+    header's transform scale/translate given an edge value."""
+    lines = text.splitlines()
+    action = rng.randrange(4)
+    if action == 0 or not lines:
+        return rng.choice(text_mutations("json"))(text, rng)
+    if action == 1:
+        try:
+            header = json.loads(lines[0])
+            member = rng.choice(("scale", "translate"))
+            header["transform"][member][rng.randrange(3)] = rng.choice(TRANSFORM_VALUES)
+            lines[0] = json.dumps(header)
+            return "\n".join(lines) + "\n"
+        except (ValueError, KeyError, TypeError, IndexError):
+            return text
+    i = rng.randrange(len(lines))
+    try:
+        lines[i] = json.dumps(mutate_tree(json.loads(lines[i]), rng))
+    except ValueError:
+        lines[i] = rng.choice(text_mutations("json"))(lines[i], rng)
+    return "\n".join(lines) + "\n"

@@ -96,7 +96,8 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
 
     Vertices within ``10**-decimals`` metres merge, so adjacent wall pieces share their corners. Coordinates are
     snapped to that grid relative to the quads' minimum corner and packed into one int64 key per vertex (21 bits
-    per axis: extents up to 2 km at 1 mm), which keeps the unique step a 1-D sort.
+    per axis: extents up to 2 km at 1 mm), which keeps the unique step a 1-D sort; larger extents (a 10 km tower)
+    take the row-wise unique, which orders the vertices the same way (x, then y, then z).
     """
     flat = quads.reshape(-1, 3)
     if not len(flat):
@@ -104,9 +105,10 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
     step = 10.0 ** -decimals
     origin = flat.min(axis=0)
     grid = np.rint((flat - origin) / step).astype(np.int64)
-    if grid.max() >= 1 << 21:
-        raise ValueError(f"weld: extent {grid.max() * step:.0f} m exceeds the 21-bit key range")
-    key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
-    uniq, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    if grid.max() < 1 << 21:
+        key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
+        _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, inverse = np.unique(grid, axis=0, return_index=True, return_inverse=True)
     points = origin + grid[first] * step
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)

@@ -21,6 +21,11 @@ from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem, Part, build_polygon
 
 
+#: no building may lie further than this from the scene origin, nor its base or top further from z = 0 (metres):
+#: 10,000 km is beyond any city, and the stage's float32 points still resolve a metre there
+MAX_DISTANCE = 1e7
+
+
 @dataclass(frozen=True)
 class RawFeature:
     """One feature as read from the file (``index`` = its position there), before projection and repair."""
@@ -85,6 +90,38 @@ def _stray_lonlat(features: Sequence[RawFeature]) -> tuple[list[RawFeature], lis
     return [f for f in features if id(f) not in gone], skipped
 
 
+def _far_apart(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
+    """Features of a metric file (projected or unknown CRS) with a coordinate more than ``MAX_DISTANCE`` from the
+    median of the features' first corners are skipped when fewer than half of the features (bad coordinates in a
+    few buildings would otherwise drag the frame's centre away from the rest); else all are kept."""
+    if not features:
+        return [], []
+    rings = [[np.asarray(r, dtype=float).reshape(-1, 2) for p in f.parts for r in p] for f in features]
+    centre = np.median([r[0][0] for r in rings], axis=0)
+    reach = [max(float(np.abs(r - centre).max()) for r in f) for f in rings]
+    bad = [k for k, d in enumerate(reach) if not d <= MAX_DISTANCE]
+    if not bad or 2 * len(bad) >= len(features):
+        return list(features), []
+    skipped = [(features[k].index, Skipped(features[k].id, f"its coordinates lie {reach[k]:.3g} units of the file's "
+                                                          f"CRS from the other buildings (more than {MAX_DISTANCE:g}) "
+                                                          "-- fix them in the source data", features[k].where))
+               for k in bad]
+    gone = set(bad)
+    return [f for k, f in enumerate(features) if k not in gone], skipped
+
+
+def _out_of_reach(parts: Sequence[Part], base: float, top: float) -> str | None:
+    """Why a footprint in the local frame cannot be written (too far from the origin or z = 0), or None."""
+    reach = max(float(np.abs(r).max()) for p in parts for r in p)
+    if not reach <= MAX_DISTANCE:
+        return (f"it lies {reach:.3g} m from the scene origin, more than {MAX_DISTANCE:g} m -- fix its coordinates "
+                "or the file's CRS")
+    if not (abs(base) <= MAX_DISTANCE and abs(top) <= MAX_DISTANCE):
+        return (f"its base z = {base:.3g} m / top {top:.3g} m lie beyond ±{MAX_DISTANCE:g} m -- fix the z "
+                "coordinates (or min_height) in the source data")
+    return None
+
+
 def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skipped]], warnings: Sequence[str],
              crs: CRS | None, options: ImportOptions, path: Path) -> ImportResult:
     """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort.
@@ -98,6 +135,9 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
     if crs is not None and options.crs_check and is_geographic(crs):
         features, stray = _stray_lonlat(features)
         out_skipped += stray
+    elif crs is None or not is_geographic(crs):
+        features, far = _far_apart(features)
+        out_skipped += far
     points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
     frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
     footprints = []
@@ -113,6 +153,10 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
         height = feature.height or infer_height(resolve_height(feature.attributes, label, options.heights),
                                                 feature.attributes, _least_width(polygon), options.heights)
         out_warnings.extend(height.warnings)
+        base = feature.base + height.base_offset
+        if problem := _out_of_reach(parts, base, base + height.height):
+            out_skipped.append((feature.index, Skipped(feature.id, problem, feature.where)))
+            continue
         if height.rejected and options.bad_height == "skip":
             reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
                       "bad_height = \"fallback\" to use the next height source")
@@ -120,7 +164,7 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
             continue
         footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
                                     height_source=height.source, levels=height.levels,
-                                    base=feature.base + height.base_offset, attributes=dict(feature.attributes),
+                                    base=base, attributes=dict(feature.attributes),
                                     source=feature.source, lift=height.base_offset))
     ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
     return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)

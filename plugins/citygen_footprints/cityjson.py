@@ -7,6 +7,7 @@ from the attributes (``measuredHeight``, ``storeysAboveGround``) with ``cityjson
 """
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -43,6 +44,7 @@ def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
         raise FootprintError("CityJSON vertices are not all [x, y, z] numbers", where=str(path)) from None
     if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 3):
         raise FootprintError(f"CityJSON vertices have shape {vertices.shape}, expected (n, 3)", where=str(path))
+    vertices = vertices.reshape(-1, 3)  # also no vertices at all: (0, 3)
     transform = doc.get("transform")
     if isinstance(transform, Mapping):
         try:
@@ -54,8 +56,9 @@ def _vertices(doc: Mapping[str, Any], path: Path) -> np.ndarray:
             raise FootprintError("CityJSON transform needs scale and translate of 3 finite numbers each",
                                  where=str(path), hint='e.g. "transform": {"scale": [0.001, 0.001, 0.001], '
                                                        '"translate": [0, 0, 0]}')
-        vertices = vertices * scale + translate
-    return vertices.reshape(-1, 3)
+        with np.errstate(over="ignore"):  # a vertex beyond float range becomes inf: its buildings are skipped
+            vertices = vertices * scale + translate
+    return vertices
 
 
 def _finite_or_inf(value: Any) -> Any:
@@ -107,10 +110,12 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     if not surfaces:
         raise FeatureProblem("the geometry has no surfaces -- check its boundaries")
     if not all(np.isfinite(r).all() for s in surfaces for r in s):
-        raise FeatureProblem("a vertex is NaN or infinite -- fix the vertices in the source data")
-    normals = _newell([s[0] for s in surfaces])
-    length = np.linalg.norm(normals, axis=1)
-    nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
+        raise FeatureProblem("a vertex is NaN or infinite (or beyond float range after the transform) "
+                             "-- fix the vertices or the transform in the source data")
+    with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: no finite normal, so no flat surface
+        normals = _newell([s[0] for s in surfaces])
+        length = np.linalg.norm(normals, axis=1)
+        nz = np.divide(normals[:, 2], length, out=np.zeros(len(length)), where=length > 0)
     flat = np.abs(normals[:, 2]) > 2e-9  # projected area above 1e-9 m²
     if not flat.any():
         raise FeatureProblem("the geometry has no surface with a footprint area -- check its boundaries")
@@ -122,7 +127,9 @@ def footprint_of(geometry: Mapping[str, Any], vertices: np.ndarray) -> tuple[sha
     ground = flat & is_down
     z = np.concatenate([r[:, 2] for s in surfaces for r in s])
     chosen = polygons[ground] if ground.any() else polygons[flat]
-    return shapely.union_all(chosen), float(z.min()), float(z.max()), bool(ground.any())
+    with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: GEOS overflows, the area check skips it
+        footprint = shapely.union_all(chosen)
+    return footprint, float(z.min()), float(z.max()), bool(ground.any())
 
 
 def _parts(geometry: shapely.Geometry) -> tuple[list[np.ndarray], ...]:
@@ -142,9 +149,9 @@ def _height(attributes: Mapping[str, Any], label: str, zmin: float, zmax: float,
 
 def _geometries(obj: Any) -> list[Mapping[str, Any]]:
     """The object's usable geometries, best first (see :func:`_rank`)."""
-    if not isinstance(obj, Mapping):
+    if not isinstance(obj, Mapping) or not isinstance(obj.get("geometry"), list):
         return []
-    return sorted((g for g in obj.get("geometry") or [] if isinstance(g, Mapping)
+    return sorted((g for g in obj["geometry"] if isinstance(g, Mapping)
                    and g.get("type") in SOLIDS + SURFACES), key=_rank)
 
 
@@ -165,7 +172,13 @@ def _attributes(obj: Mapping[str, Any], objects: Mapping[str, Any]) -> dict[str,
 
 
 def _crs(doc: Mapping[str, Any], path: Path, options: ImportOptions, notes: list[str]) -> CRS | None:
-    declared = (doc.get("metadata") or {}).get("referenceSystem")
+    metadata = doc.get("metadata") or {}
+    declared = metadata.get("referenceSystem") if isinstance(metadata, Mapping) else None
+    if not isinstance(metadata, Mapping) or not isinstance(declared, str | None):
+        raise FootprintError(f"CityJSON metadata must be an object whose referenceSystem is a CRS name, got "
+                             f"{reprlib.repr(metadata)}", where=str(path),
+                             hint='e.g. "metadata": {"referenceSystem": "https://www.opengis.net/def/crs/EPSG/0/7415"}'
+                                  ", or set crs in the scene's [footprints] table")
     crs_text = options.crs or declared
     if not crs_text:
         notes.append(f"{path}: no referenceSystem in metadata; coordinates kept as unknown metric units "
@@ -186,7 +199,8 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
         if not isinstance(obj, Mapping) or obj.get("type") not in BUILDING_TYPES:
             continue
         index, where = start + offset, f"{at} CityObjects[{oid!r}]"
-        if any(_geometries(objects.get(child)) for child in obj.get("children") or []):
+        children = obj.get("children") if isinstance(obj.get("children"), list) else []
+        if any(_geometries(objects.get(child)) for child in children if isinstance(child, str)):
             continue  # represented by its parts, which inherit its attributes
         geometries = _geometries(obj)
         if not geometries:
@@ -199,9 +213,15 @@ def collect_buildings(objects: Mapping[str, Any], vertices: np.ndarray, path: Pa
         except FeatureProblem as problem:
             skipped.append((index, Skipped(oid, str(problem), where)))
             continue
+        parts = _parts(footprint)
+        if not parts:  # the ground surfaces cancel out or collapse (e.g. coordinates too large to resolve them)
+            skipped.append((index, Skipped(oid, "its footprint has no area (degenerate ground surfaces, or coordinates "
+                                                "too large to tell its corners apart) -- check its boundaries and "
+                                                "the file's transform", where)))
+            continue
         open_bottom += not had_ground
         label = f"{oid} ({where})"
-        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, _parts(footprint),
+        raws.append(RawFeature(index, oid, where, f"{path.name}#{index}", attributes, parts,
                                height=_height(attributes, label, zmin, zmax, options), base=zmin))
     return raws, skipped, open_bottom
 

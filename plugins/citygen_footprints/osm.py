@@ -66,6 +66,31 @@ def _rings(area) -> list[list[list[tuple[float, float]]]]:
             for outer in area.outer_rings()]
 
 
+def _read_error(exc: Exception, path: Path) -> FootprintError:
+    """libosmium's reason the file cannot be read, with what to do about it."""
+    message = str(exc)
+    if "out of order" in message or "twice in input" in message:
+        hint = ("each object must appear once, sorted by type and id, as in extracts of the planet file: run "
+                "`osmium sort` on it, and combine extracts with `osmium merge`, not by concatenating them")
+    elif any(word in message.lower() for word in ("xml", "opl", "pbf", "uncompress", "illegal", "coordinate", "eof",
+                                                  "element")):
+        hint = "the file is corrupt or truncated: re-download or re-export it (`osmium fileinfo -e FILE` checks it)"
+    else:
+        hint = "give an .osm (XML), .osm.pbf or .opl file"
+    return FootprintError(f"cannot read the OpenStreetMap file: {message}", where=str(path), hint=hint)
+
+
+def _objects(osmium, path: Path):
+    """The file's objects, nodes located, building areas assembled; FootprintError when libosmium cannot read it
+    (it raises RuntimeError for unreadable, truncated or unsorted files, ValueError or InvalidLocationError for
+    malformed ids, versions and coordinates)."""
+    areas_of = osmium.filter.KeyFilter("building", "building:part")  # only building relations are assembled
+    try:
+        yield from osmium.FileProcessor(str(path)).with_locations().with_areas(areas_of)
+    except (RuntimeError, ValueError, OverflowError, osmium.InvalidLocationError) as exc:
+        raise _read_error(exc, path) from exc
+
+
 def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
     """Building areas in file order, and the buildings that could not be assembled (with why)."""
     osmium = _osmium()
@@ -74,31 +99,26 @@ def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
     skipped: dict[str, Skipped] = {}
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, in file order
     made: set[str] = set()
-    try:
-        areas_of = osmium.filter.KeyFilter("building", "building:part")  # only building relations are assembled
-        for obj in osmium.FileProcessor(str(path)).with_locations().with_areas(areas_of):
-            if not _is_building(obj.tags):
-                continue
-            if obj.is_area():
-                oid = f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}"
-                made.add(oid)
-                areas.append(_Area(order.setdefault(oid, len(order)), oid, dict(obj.tags), _rings(obj)))
-            elif obj.is_way():
-                oid = f"way/{obj.id}"
-                order.setdefault(oid, len(order))
-                missing = sum(not n.location.valid() for n in obj.nodes)
-                if missing:
-                    skipped[oid] = Skipped(oid, f"{missing} of its {len(obj.nodes)} nodes are missing from the file "
-                                                "(the extract cut the building) -- use an extract that keeps whole "
-                                                "ways (osmium extract --strategy complete_ways)", f"{where}, {oid}")
-                elif not obj.is_closed():
-                    skipped[oid] = Skipped(oid, "the building way is not closed -- close its outline or map it as a "
-                                                "multipolygon relation", f"{where}, {oid}")
-            elif obj.is_relation() and obj.tags.get("type") == "multipolygon":
-                order.setdefault(f"relation/{obj.id}", len(order))
-    except RuntimeError as exc:  # libosmium's errors: unreadable, not OSM, truncated
-        raise FootprintError(f"cannot read the OpenStreetMap file: {exc}", where=str(path),
-                             hint="give an .osm (XML), .osm.pbf or .opl file") from exc
+    for obj in _objects(osmium, path):
+        if not _is_building(obj.tags):
+            continue
+        if obj.is_area():
+            oid = f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}"
+            made.add(oid)
+            areas.append(_Area(order.setdefault(oid, len(order)), oid, dict(obj.tags), _rings(obj)))
+        elif obj.is_way():
+            oid = f"way/{obj.id}"
+            order.setdefault(oid, len(order))
+            missing = sum(not n.location.valid() for n in obj.nodes)
+            if missing:
+                skipped[oid] = Skipped(oid, f"{missing} of its {len(obj.nodes)} nodes are missing from the file "
+                                            "(the extract cut the building) -- use an extract that keeps whole "
+                                            "ways (osmium extract --strategy complete_ways)", f"{where}, {oid}")
+            elif not obj.is_closed():
+                skipped[oid] = Skipped(oid, "the building way is not closed -- close its outline or map it as a "
+                                            "multipolygon relation", f"{where}, {oid}")
+        elif obj.is_relation() and obj.tags.get("type") == "multipolygon":
+            order.setdefault(f"relation/{obj.id}", len(order))
     for oid in order.keys() - made - skipped.keys():
         what = "member ways or nodes missing from the extract, or rings that do not close" \
             if oid.startswith("relation/") else "fewer than three distinct nodes, or a self-crossing libosmium rejects"

@@ -147,7 +147,10 @@ def build_polygon(parts: Sequence[Part], min_area: float, min_part_area: float,
             warnings.append(note)
     merged = _polygonal(shapely.union_all(polygons)) if len(polygons) > 1 else polygons
     area = sum(p.area for p in merged)
-    if not math.isfinite(area) or area < min_area or area == 0:
+    if not math.isfinite(area):
+        raise FeatureProblem(f"its area is {area} m² (coordinates too large to measure it) "
+                             "-- fix the coordinates in the source data")
+    if area < min_area or area == 0:
         raise FeatureProblem(f"area {area:.3g} m² is below min_area = {min_area:g} m² (a sliver) "
                              "-- lower min_area in the scene to keep it")
     kept = [p for p in merged if p.area >= min_part_area] or [max(merged, key=lambda p: p.area)]

@@ -42,6 +42,16 @@ def test_weld_shares_corners_of_adjacent_quads():
     assert np.allclose(points[indices].reshape(2, 4, 3), quads)
 
 
+def test_weld_of_quads_beyond_the_packed_key_range_orders_points_the_same():
+    # was: ValueError "weld: extent 10000 m exceeds the 21-bit key range" (a 10 km tower skipped as internal error)
+    quads = box_quads(np.array([[0, 0, 1, 1], [1, 0, 2, 1]]), np.zeros(2))
+    tall = quads * np.array([1.0, 2500.0, 1.0])  # 2 x 2500 m: y beyond 2**21 mm
+    small_points, small_indices = weld(quads)
+    points, indices = weld(tall)
+    assert np.array_equal(indices, small_indices)
+    assert np.allclose(points[indices].reshape(2, 4, 3), tall)
+
+
 def _bay(x, y, key=None):
     from citygen.layout import Region
     kids = (Region(x, y, 1, 3, "W", "wall"), Region(x + 1, y, 1.2, 1, "W", "wall"),

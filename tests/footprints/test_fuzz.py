@@ -123,3 +123,92 @@ def test_cityjson_object_with_malformed_attributes_or_parents_skips_one_building
         return
     assert [f.id for f in result.footprints] == ["a"]
     assert [s.id for s in result.skipped] == ["b"] and "attributes must be a JSON object" in result.skipped[0].reason
+
+
+@pytest.mark.parametrize("metadata", [float("inf"), {"referenceSystem": [7415, 0]}])
+def test_cityjson_metadata_that_is_not_an_object_is_a_footprint_error(tmp_path, metadata):
+    # was: AttributeError ('float' object has no attribute 'get') / TypeError (unhashable list) for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["metadata"] = metadata
+    with pytest.raises(FootprintError, match="metadata must be an object whose referenceSystem is a CRS name"):
+        read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+
+
+def test_cityjson_buildings_whose_footprint_collapses_are_skipped(tmp_path):
+    # was: ValueError (need at least one array to concatenate) when no building had a footprint left
+    # y = 1e30 swallows the 10 m: rounding leaves the triangle a Newell area but no polygon
+    doc = cityjson([[1.1, 0, 0], [7.7, 0, 0], [3.3, 10, 0]], [[[0, 1, 2]]],
+                   {"scale": [1, 1, 1], "translate": [0, 1e30, 0]})
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert result.footprints == () and [s.id for s in result.skipped] == ["a", "b"]
+    assert "footprint has no area" in result.skipped[0].reason and "transform" in result.skipped[0].reason
+
+
+def _projected(tmp_path, far_x: float):
+    features = [feature(f"b{k}", [[385_000 + x, 6_672_000], [385_010 + x, 6_672_000], [385_010 + x, 6_672_010],
+                                  [385_000 + x, 6_672_010], [385_000 + x, 6_672_000]])
+                for k, x in enumerate((0, 20, 40, far_x))]
+    doc = {"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:3067"}},
+           "features": features}
+    return read_footprints(write_json(tmp_path / "p.geojson", doc), {})
+
+
+def test_a_building_far_from_the_others_is_skipped_and_the_frame_stays_on_the_rest(tmp_path):
+    # was: the whole file refused (its bbox centre outside EPSG:3067's area of use) or, without a CRS, every
+    # building 5e14 m from the origin
+    result = _projected(tmp_path, 1e15)
+    assert [f.id for f in result.footprints] == ["b0", "b1", "b2"]
+    (skip,) = result.skipped
+    assert skip.id == "b3" and "lie 1e+15 units of the file's CRS from the other buildings" in skip.reason
+    assert result.georef.origin == (385_025.0, 6_672_005.0)
+
+
+def test_a_building_whose_base_is_beyond_reach_is_skipped(tmp_path):
+    # was: written at z = 1e300, which the stage's float32 points turn into inf
+    doc = cityjson(BOX, FACES)
+    for vertex in doc["vertices"][len(BOX):]:
+        vertex[2] += 1e300
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "base z = 1e+300 m" in result.skipped[0].reason
+
+
+def test_cityjson_transform_overflow_skips_the_buildings_quietly(tmp_path, recwarn):
+    # was: numpy RuntimeWarnings (overflow in multiply, invalid value in reduceat) printed among the reasons
+    doc = cityjson(BOX, FACES, {"scale": [1e308, 1, 1], "translate": [0, 0, 0]})
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [s.id for s in result.skipped] == ["a", "b"] and "after the transform" in result.skipped[0].reason
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.parametrize("key, value", [("geometry", 3.5), ("children", 3.5), ("children", [[1]])])
+def test_cityjson_object_with_malformed_geometry_or_children_skips_one_building(tmp_path, key, value):
+    # was: TypeError ('float' object is not iterable / unhashable type: 'list') for the whole file
+    doc = cityjson(BOX, FACES)
+    doc["CityObjects"]["b"][key] = value
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    if key == "children":  # no usable children: the building is drawn by its own geometry
+        assert [f.id for f in result.footprints] == ["a", "b"]
+        return
+    assert [f.id for f in result.footprints] == ["a"]
+    assert [s.id for s in result.skipped] == ["b"] and "no Solid or MultiSurface geometry" in result.skipped[0].reason
+
+
+def test_cityjson_wall_of_huge_height_falls_back_quietly(tmp_path, recwarn):
+    # was: a numpy RuntimeWarning (overflow in np.linalg.norm of the wall normals)
+    doc = cityjson(BOX, FACES)
+    for vertex in doc["vertices"][len(BOX) + 4:]:
+        vertex[2] = 1e300
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert [f.id for f in result.footprints] == ["a", "b"] and result.footprints[1].height_source == "default"
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_cityjson_buildings_too_large_to_measure_are_skipped_quietly(tmp_path, recwarn):
+    # was: "area inf m² is below min_area = 1 m² (a sliver)" and numpy / shapely RuntimeWarnings (divide, unary_union)
+    doc = cityjson([[x * 1e200, y * 1e200, z] for x, y, z in BOX], FACES)
+    del doc["metadata"]  # no CRS: the coordinates are not refused as outside a CRS's area of use
+    result = read_footprints(write_json(tmp_path / "c.city.json", doc), {})
+    assert result.footprints == () and [s.id for s in result.skipped] == ["a", "b"]
+    assert "its area is inf m² (coordinates too large to measure it)" in result.skipped[0].reason
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]

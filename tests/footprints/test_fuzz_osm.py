@@ -1,0 +1,102 @@
+"""OpenStreetMap and CityJSONSeq files found bad by fuzzing (benchmarks/fuzz_readers.py --readers osm cityjsonseq):
+a malformed file is a FootprintError naming it and what to do, a bad building is skipped; never a traceback."""
+from __future__ import annotations
+
+import json
+import random
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from citygen.errors import FootprintError
+from citygen_footprints.plugin import read_footprints
+
+from ..mutate import mutate_bytes, mutate_jsonl, mutate_osm, osm_model, write_osm
+from .test_osm import _osm, _read, _ring, _square
+
+pytest.importorskip("osmium")
+
+
+def _one_way(tmp_path, name="a.osm"):
+    nodes = _square(1, 0, 0, 20, 10)
+    return _osm(tmp_path / name, nodes, [(100, _ring(nodes), {"building": "yes", "height": "7"})])
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ('version="1"', 'version="1e308"', "illegal version"),  # was: ValueError from pyosmium
+    ('lat="60.17', 'lat="-inf', "wrong format for coordinate"),  # was: osmium.InvalidLocationError
+])
+def test_osm_xml_with_a_malformed_attribute_is_a_footprint_error(tmp_path, old, new, words):
+    path = _one_way(tmp_path)
+    path.write_text(path.read_text().replace(old, new, 1))
+    with pytest.raises(FootprintError, match=words) as err:
+        _read(path)
+    assert str(path) in str(err.value) and "corrupt" in str(err.value)
+
+
+def test_osm_file_with_an_id_twice_says_how_to_sort_it(tmp_path):
+    path = _one_way(tmp_path)
+    way = next(line for line in path.read_text().splitlines() if line.startswith("<way"))
+    path.write_text(path.read_text().replace(way, way + "\n" + way))
+    with pytest.raises(FootprintError, match="twice in input") as err:
+        _read(path)
+    assert "osmium sort" in str(err.value)
+
+
+HEADER = {"type": "CityJSON", "version": "2.0", "transform": {"scale": [0.5, 0.5, 1], "translate": [10, 20, 0]},
+          "metadata": {"referenceSystem": "EPSG:7415"}, "CityObjects": {}, "vertices": []}
+BOX = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [0, 0, 9], [10, 0, 9], [10, 10, 9], [0, 10, 9]]
+FACES = [[[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]], [[1, 2, 6, 5]], [[2, 3, 7, 6]], [[3, 0, 4, 7]]]
+
+
+def _feature(oid: str, dx: float) -> dict:
+    return {"type": "CityJSONFeature", "id": oid, "vertices": [[x + dx, y, z] for x, y, z in BOX], "CityObjects": {
+        oid: {"type": "Building", "geometry": [{"type": "Solid", "lod": "1", "boundaries": [FACES]}]}}}
+
+
+def test_cityjsonseq_line_without_vertices_reads_the_other_lines(tmp_path):
+    # was: ValueError (operands could not be broadcast together with shapes (0,) (3,)) for the whole file
+    path = tmp_path / "a.city.jsonl"
+    path.write_text("\n".join(json.dumps(line) for line in (HEADER, HEADER, _feature("a", 0))) + "\n")
+    result = read_footprints(path, {})
+    assert [f.id for f in result.footprints] == ["a"] and result.footprints[0].height == 9
+
+
+SEQ = "\n".join(json.dumps(line) for line in (HEADER, _feature("a", 0), _feature("b", 40))) + "\n"
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_mutated_cityjsonseq_files_raise_only_footprint_errors(tmp_path_factory, seed):
+    path = tmp_path_factory.getbasetemp() / "fuzz.city.jsonl"
+    path.write_text(mutate_jsonl(SEQ, random.Random(seed)))
+    try:
+        result = read_footprints(path, {})
+    except FootprintError:
+        return
+    for fp in result.footprints:
+        assert all(abs(v) < float("inf") for v in (fp.height, fp.base, *fp.polygon.bounds)), fp.id
+
+
+SEED = osm_model({n: (lon, lat) for n, lon, lat in _square(1, 0, 0, 20, 10) + _square(11, 30, 0, 10, 10)},
+                 [(100, [1, 2, 3, 4, 1], {"building": "yes", "height": "7"}),
+                  (101, [11, 12, 13, 14, 11], {"building:part": "yes"}),
+                  (102, [11, 12, 13], {}), (103, [13, 14, 11], {})],
+                 [(500, [("w", 102, "outer"), ("w", 103, "outer")], {"type": "multipolygon", "building": "yes"})])
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(suffix=st.sampled_from([".osm", ".opl", ".osm.pbf"]), seed=st.integers(0, 2 ** 32 - 1))
+def test_mutated_osm_files_raise_only_footprint_errors(tmp_path_factory, suffix, seed):
+    rng = random.Random(seed)
+    path = tmp_path_factory.getbasetemp() / f"fuzz{suffix}"
+    write_osm(mutate_osm(mutate_osm(SEED, rng), rng), path)
+    if suffix == ".osm.pbf" and rng.random() < 0.5:
+        path.write_bytes(mutate_bytes(path.read_bytes(), rng))
+    try:
+        result = _read(path)
+    except FootprintError:
+        return
+    for fp in result.footprints:
+        assert all(abs(v) < float("inf") for v in (fp.height, fp.base, *fp.polygon.bounds)), fp.id
