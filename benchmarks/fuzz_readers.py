@@ -19,7 +19,8 @@ CityJSONSeq, lines dropped, duplicated, swapped, cut, mutated as JSON trees, the
 values; ``extreme`` -- a fixed list of huge-but-finite footprints (coordinates, z, heights, widths, tags; EXTREME)
 among three good ones through ``generate_city`` and ``citygen validate``: a run must write a stage with zero
 validation errors and finite points, keep the good buildings and skip the bad one with a reason (not an
-internal error).
+internal error). ``cmp``: the CMP annotations of ``tests/data/inverse`` (label maps and label table beside them)
+through ``import_cmp``, then greedy extraction: an import must give an exact partition whose grammar re-derives it.
 
 Prints per reader the cases run, how many loaded / were refused with a CitygenError, and every other exception
 (type, message, the last frame) and every case over the timeout, with the input written to ``--out`` to
@@ -57,6 +58,7 @@ from tests.mutate import (NUMBERS, mutate, mutate_bytes, mutate_jsonl, mutate_os
 REGISTRY = default_registry()
 RULESET_SUFFIXES = {"split": ".grammar", "layers": ".layers", "relayout": ".relayout", "safe": ".safe"}
 SAFE_LAYOUT = "cmp_b0035.layout.json"
+CMP = REPO / "tests/data/inverse"  # CMP annotations (with their label maps and label table)
 #: readers whose runs must not print numpy / shapely RuntimeWarnings either
 FOOTPRINT_READERS = ("footprints", "osm", "cityjsonseq", "extreme")
 
@@ -233,6 +235,8 @@ def seeds() -> dict[str, list[tuple[str, str, str]]]:
     out["osm"] += [("helsinki.osm", model, "osm"), ("helsinki.opl", model, "osm"), ("helsinki.osm.pbf", model, "pbf")]
     out["cityjsonseq"].append(("delft3.city.jsonl", small_cityjsonseq(), "jsonl"))
     out["extreme"] += [(what, spec, "extreme") for what, spec in EXTREME]
+    for path in sorted(CMP.glob("*.xml")):
+        out["cmp"].append((path.name, path.read_text(), "dsl"))
     return out
 
 
@@ -310,6 +314,21 @@ class Runner:
                              f"{[(s.id, s.reason) for s in report.skipped]}")
         return f"generated ({report.written} written, {len(report.skipped)} skipped)"
 
+    def _cmp(self, name: str, text: str | bytes) -> str:
+        from citygen.layout import check_partition
+        from citygen_inverse.cmp import import_cmp
+        from citygen_inverse.extract import extract_grammar
+        from citygen_inverse.verify import mismatches
+        directory = self.root / "cmp"
+        if not directory.exists():  # the label table and label maps beside the annotations, as in the CMP set
+            shutil.copytree(CMP, directory, ignore=shutil.ignore_patterns("*.xml"))
+        write(directory / name, text)
+        layout = import_cmp(directory / name)
+        problems = check_partition(layout) or mismatches(extract_grammar(layout, "greedy").text, layout)
+        if problems:
+            raise ValueError(f"imported layout: {problems[0]}")
+        return "imported"
+
     def run(self, reader: str, name: str, text: str | bytes) -> str:
         if reader in RULESET_SUFFIXES:
             return self._ruleset(reader, name, text)
@@ -327,6 +346,8 @@ class Runner:
             return self._osm(name, text)
         if reader == "extreme":
             return self._extreme(text)
+        if reader == "cmp":
+            return self._cmp(name, text)
         raise ValueError(reader)
 
     def case(self, reader: str, name: str, text: str | bytes) -> tuple[str, str | None, float]:
@@ -406,7 +427,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=300, help="random mutations per shipped file")
     parser.add_argument("--readers", nargs="*", help="subset of: " + ", ".join(
-        [*RULESET_SUFFIXES, "layout", "scene", "footprints", "osm", "cityjsonseq", "extreme"]))
+        [*RULESET_SUFFIXES, "layout", "scene", "footprints", "osm", "cityjsonseq", "extreme", "cmp"]))
     parser.add_argument("--timeout", type=float, default=10.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--exhaustive-below", type=int, default=1600, help="file size for exhaustive mutations")
