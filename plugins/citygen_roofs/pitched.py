@@ -61,9 +61,8 @@ def ridge_orientation(part: Polygon, spec: RoofSpec) -> str | None:
     if spec.orientation is not None or spec.direction is None or not rectangle_like(part):
         return spec.orientation
     d = np.diff(np.asarray(part.exterior.coords)[:, :2], axis=0)
-    angle = math.radians(spec.direction)
-    facing = int(np.argmax((d[:, 1] * math.sin(angle) - d[:, 0] * math.cos(angle)) / np.hypot(*d.T)))
-    length = np.hypot(*d.T)
+    length, angle = np.hypot(*d.T), math.radians(spec.direction)
+    facing = int(np.argmax((d[:, 1] * math.sin(angle) - d[:, 0] * math.cos(angle)) / length))  # outward . compass
     short = 0 if length[0] + length[2] <= length[1] + length[3] else 1
     return "across" if facing % 2 == short else "along"
 
