@@ -135,15 +135,15 @@ def _cost_options(parser: argparse.ArgumentParser) -> None:
 
 
 def verified(text: str, layouts: list, paths: list[str]) -> str:
-    """Check that an exact grammar regenerates its one layout; a mismatch is a bug, reported as an error."""
-    if len(layouts) > 1:
-        return "(joint grammar: not re-derived)"
-    from citygen_inverse.verify import mismatches
-    problems = mismatches(text, layouts[0])
-    if problems:
-        raise CitygenError("the extracted grammar does not regenerate the layout: " + "; ".join(problems),
-                           where=paths[0], hint="this is a bug in citygen: please report it with the layout file")
-    return "exact: re-derived"
+    """Check that an exact grammar regenerates its layout (a joint grammar: each layout from its own facade
+    symbol); a mismatch is a bug, reported as an error."""
+    from citygen_inverse.verify import joint_mismatches, mismatches
+    found = [mismatches(text, layouts[0])] if len(layouts) == 1 else joint_mismatches(text, layouts)
+    for problems, path in zip(found, paths):
+        if problems:
+            raise CitygenError("the extracted grammar does not regenerate the layout: " + "; ".join(problems),
+                               where=path, hint="this is a bug in citygen: please report it with the layout file")
+    return "exact: re-derived" if len(layouts) == 1 else f"exact: all {len(layouts)} facades re-derived"
 
 
 class GrammarCommand(Command):

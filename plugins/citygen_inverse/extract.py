@@ -42,14 +42,15 @@ def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "a
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     writer = GrammarWriter(index, result.rules)
     terminals = int(index.X0.size)
+    cost, rules = result.cost, len(result.rules)
+    if len(layouts) > 1:  # the written axiom picks a facade: a choice of k renames, priced as `grammar cost` does
+        cost, rules = cost + model.split * (len(layouts) - 1) + len(layouts), rules + 1
     header = [f"extracted by citygen grammar extract (wu2014), method {method}, {result.iterations} iterations, "
               f"seed {seed}",
-              f"{terminals} terminals; cost {result.cost:.1f} (split {model.split}, repeat {model.repeat}); "
-              f"{len(result.rules)} rules"]
+              f"{terminals} terminals; cost {cost:.1f} (split {model.split}, repeat {model.repeat}); {rules} rules"]
     if len(layouts) > 1:
         header.append(f"joint grammar of {len(layouts)} facades: the axiom picks one")
     exact = writer.text(header)
     independent = writer.text([*header, "size-independent version (wu2014 §5)"], independent=True,
                               floors=len(layouts) == 1)
-    return Extraction(exact, independent, result.cost, len(result.rules), wall, result.iterations,
-                      terminals, method, cpu)
+    return Extraction(exact, independent, cost, rules, wall, result.iterations, terminals, method, cpu)

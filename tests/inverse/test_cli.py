@@ -1,5 +1,6 @@
 """The inverse commands through ``citygen.cli.main``: import, extract (each method), cost, and bad input."""
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -183,6 +184,34 @@ def test_extract_refuses_a_grammar_that_does_not_regenerate_its_layout(layout_js
     err = capsys.readouterr().err
     assert "does not regenerate the layout" in err and str(layout_json) in err and "is not derived" in err
     assert not out.exists()
+
+
+def test_joint_grammars_are_re_derived_facade_by_facade(layout_json, tmp_path, capsys, monkeypatch):
+    """A joint grammar (wu2014 §6.1) was written without a check; each layout is now derived from its own facade
+    symbol, and the cost and rule count printed are those of the written file (with the axiom's choice rule)."""
+    import dataclasses
+
+    import citygen_inverse.extract as extract_module
+    other = tmp_path / "b0005.json"
+    assert main(["layout", "import-cmp", str(DATA / "cmp_b0005.xml"), "-o", str(other)]) == 0
+    out = tmp_path / "joint.grammar"
+    assert main(["grammar", "extract", str(layout_json), str(other), "--method", "greedy", "-o", str(out)]) == 0
+    assert "exact: all 2 facades re-derived" in capsys.readouterr().err
+    extracted = out.read_text().splitlines()[1]
+    assert main(["grammar", "cost", str(out)]) == 0
+    cost, _, rules = capsys.readouterr().out.split()[1:4]
+    assert f"cost {cost[:-1]}" in extracted and f"{rules} rules" in extracted
+    real = extract_module.extract_grammar
+
+    def broken(*args, **kwargs):  # every part of the second facade's first split comes out as a wall
+        result = real(*args, **kwargs)
+        lines = [re.sub(r": \w+", ": Wall", line) if line.startswith("Facade2 -->") else line
+                 for line in result.text.splitlines()]
+        return dataclasses.replace(result, text="\n".join(lines))
+    monkeypatch.setattr(extract_module, "extract_grammar", broken)
+    assert main(["grammar", "extract", str(layout_json), str(other), "--method", "greedy", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "does not regenerate the layout" in err and str(other) in err and str(layout_json) not in err
 
 
 def test_mismatches_names_what_is_not_derived(layout_json):

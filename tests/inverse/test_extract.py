@@ -74,7 +74,8 @@ def test_joint_extraction_shares_rules():
     a, b = regular_facade(5, 6), regular_facade(3, 4)
     joint = extract_grammar([a, b], "adp", 200, seed=0)
     single = extract_grammar(a, "adp", 200, seed=0).cost + extract_grammar(b, "adp", 200, seed=0).cost
-    assert joint.cost < single
+    axiom = CostModel().split + 2  # the written axiom's choice of facade (two grammars would need one as well)
+    assert joint.cost - axiom < single
     grammar = citygen_split.parse(joint.text, "t")
     assert {r.symbol for r in grammar.rules} >= {"Facade", "Facade1", "Facade2"}
 
