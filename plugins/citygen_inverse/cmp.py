@@ -170,7 +170,8 @@ def read_label_map(png: Path, labels: dict[int, tuple[str, int]]) -> np.ndarray:
     if mode not in ("P", "L", "I", "I;16") or ids.ndim != 2:
         raise LayoutError(f"not a label map: a {mode} image, expected one label id per pixel (a palette or grey "
                           "PNG, as CMP's)", where=str(png), hint="give the CMP label map with --png")
-    unknown = sorted(set(np.unique(ids).tolist()) - set(labels))
+    present = np.flatnonzero(np.bincount(ids.ravel())) if ids.dtype.kind == "u" else np.unique(ids)
+    unknown = sorted(set(present.tolist()) - set(labels))
     if unknown:
         raise LayoutError(f"label ids {unknown[:8]} of the label map are not in the label table", where=str(png),
                           hint="give the label map of this annotation, or the label table it uses")
