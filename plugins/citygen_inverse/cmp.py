@@ -186,14 +186,16 @@ def _png_agreement(ids: np.ndarray, layout: FacadeLayout, box_px: tuple[float, f
     rows = slice(int(round(H - fy1)), int(round(H - fy0)))
     cols = slice(int(round(fx0)), int(round(fx1)))
     crop = ids[rows, cols]
-    lut = np.array([CMP_TO_LABEL.get(labels.get(i, ("?", 0))[0], "?") for i in range(int(ids.max()) + 1)])
+    code: dict[str, int] = {}  # labels as small integers: comparing strings per pixel is slow
+    lut = np.array([code.setdefault(CMP_TO_LABEL.get(labels.get(i, ("?", 0))[0], "?"), len(code))
+                    for i in range(int(ids.max()) + 1)])
     expected = lut[crop]
-    got = np.full(crop.shape, "wall", dtype=expected.dtype)
+    got = np.full(crop.shape, code.get("wall", -1))
     sx, sy = crop.shape[1] / layout.width, crop.shape[0] / layout.height
     for t in layout.terminals():
         c0, c1 = int(round(t.x * sx)), int(round((t.x + t.w) * sx))
         r1, r0 = crop.shape[0] - int(round(t.y * sy)), crop.shape[0] - int(round((t.y + t.h) * sy))
-        got[r0:r1, c0:c1] = t.label
+        got[r0:r1, c0:c1] = code.get(t.label, -1)
     return float(np.mean(got == expected)) if got.size else 0.0
 
 
