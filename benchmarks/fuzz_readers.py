@@ -273,16 +273,8 @@ class Runner:
             if name == SAFE_LAYOUT:
                 shutil.copy(REPO / "rulesets" / SAFE_LAYOUT, rulesets / SAFE_LAYOUT)
 
-    def _footprints(self, name: str, text: str | bytes) -> str:
-        path = self.root / ("fuzz.city.json" if name.endswith(".city.json") else "fuzz.geojson")
-        write(path, text)
-        result = REGISTRY.importer_for(path).read(path, {})
-        for fp in result.footprints:
-            self._check_finite((fp.height, fp.base, fp.lift, *fp.polygon.bounds), f"footprint {fp.id}")
-        return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
-
-    def _osm(self, name: str, data: str | bytes) -> str:
-        path = self.root / f"fuzz{''.join(Path(name).suffixes)}"
+    def _footprints(self, name: str, data: str | bytes) -> str:
+        path = self.root / f"fuzz{''.join(Path(name).suffixes)}"  # (the suffixes choose the importer)
         write(path, data)
         result = REGISTRY.importer_for(path).read(path, {})
         for fp in result.footprints:
@@ -341,10 +333,8 @@ class Runner:
             write(path, text)
             load_scene(path)
             return "loaded"
-        if reader == "footprints":
+        if reader in ("footprints", "osm", "cityjsonseq"):
             return self._footprints(name, text)
-        if reader in ("osm", "cityjsonseq"):
-            return self._osm(name, text)
         if reader == "extreme":
             return self._extreme(text)
         if reader == "cmp":
