@@ -7,9 +7,17 @@ with its own height tags (``min_height``, ``building:min_level`` lift its base) 
 (``building``, address, ...) unless it has its own; ``osm_parts = "ignore"`` keeps the outlines and drops the parts.
 What cannot become a building is reported by id: an open way, a relation whose members are missing from the
 extract (clipped at its edge), a way with nodes missing.
+
+Files saved by an editor (JOSM's format) are read as the editor shows them: objects marked ``action="delete"``
+are left out, and new objects' negative ids, which libosmium's node location index cannot hold, are moved above
+the file's largest id in a temporary copy (buildings keep their negative ids in ids and messages).
 """
 from __future__ import annotations
 
+import bz2
+import gzip
+import re
+import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -80,35 +88,62 @@ def _read_error(exc: Exception, path: Path) -> FootprintError:
     return FootprintError(f"cannot read the OpenStreetMap file: {message}", where=str(path), hint=hint)
 
 
-def _objects(osmium, path: Path):
-    """The file's objects, nodes located, building areas assembled; FootprintError when libosmium cannot read it
-    (it raises RuntimeError for unreadable, truncated or unsorted files, ValueError or InvalidLocationError for
-    malformed ids, versions and coordinates)."""
-    areas_of = osmium.filter.KeyFilter("building", "building:part")  # only building relations are assembled
+def _objects(osmium, path: Path, areas: bool = True, source: Path | None = None):
+    """The file's objects, nodes located and building areas assembled (``areas``, else only the OSM objects);
+    FootprintError naming ``source`` (default: the file) when libosmium cannot read it (it raises RuntimeError
+    for unreadable, truncated or unsorted files, ValueError or InvalidLocationError for malformed ids, versions
+    and coordinates)."""
     try:
-        yield from osmium.FileProcessor(str(path)).with_locations().with_areas(areas_of)
+        if areas:
+            areas_of = osmium.filter.KeyFilter("building", "building:part")  # only building relations are assembled
+            yield from osmium.FileProcessor(str(path)).with_locations().with_areas(areas_of)
+        else:
+            yield from osmium.FileProcessor(str(path), osmium.osm.NODE | osmium.osm.WAY | osmium.osm.RELATION)
     except (RuntimeError, ValueError, OverflowError, osmium.InvalidLocationError) as exc:
-        raise _read_error(exc, path) from exc
+        raise _read_error(exc, source or path) from exc
 
 
 def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
     """Building areas in file order, and the buildings that could not be assembled (with why)."""
     osmium = _osmium()
-    where = path.name
+    deleted = _deleted(path)
+    if not deleted:
+        areas, skipped, negative = _scan(osmium, path, path)
+        if not negative:
+            return areas, skipped
+    with tempfile.TemporaryDirectory(prefix="citygen-osm-") as tmp:
+        copy, names = _editor_copy(osmium, path, Path(tmp) / "renumbered.osm.pbf", deleted)
+        areas, skipped, _ = _scan(osmium, copy, path, names)
+    return areas, skipped
+
+
+def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]] | None = None
+          ) -> tuple[list[_Area], list[tuple[int, Skipped]], bool]:
+    """``read_areas`` of the file ``source`` read from ``path``, and whether it has negative ids. ``names``: for
+    an editor's file read from its copy, each way's and relation's name and place in ``source``, by its name in
+    the copy."""
+    where = source.name
     areas: list[_Area] = []
     skipped: dict[str, Skipped] = {}
-    order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, in file order
+    order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, by place in the file
     made: set[str] = set()
-    for obj in _objects(osmium, path):
+    negative = False
+
+    def named(oid: str) -> str:
+        oid, place = names[oid] if names else (oid, len(order))
+        order.setdefault(oid, place)
+        return oid
+    for obj in _objects(osmium, path, source=source):
+        if obj.id < 0:
+            negative = True
         if not _is_building(obj.tags):
             continue
         if obj.is_area():
-            oid = f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}"
+            oid = named(f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}")
             made.add(oid)
-            areas.append(_Area(order.setdefault(oid, len(order)), oid, dict(obj.tags), _rings(obj)))
+            areas.append(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
         elif obj.is_way():
-            oid = f"way/{obj.id}"
-            order.setdefault(oid, len(order))
+            oid = named(f"way/{obj.id}")
             missing = sum(not n.location.valid() for n in obj.nodes)
             if missing:
                 skipped[oid] = Skipped(oid, f"{missing} of its {len(obj.nodes)} nodes are missing from the file "
@@ -118,14 +153,96 @@ def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
                 skipped[oid] = Skipped(oid, "the building way is not closed -- close its outline or map it as a "
                                             "multipolygon relation", f"{where}, {oid}")
         elif obj.is_relation() and obj.tags.get("type") == "multipolygon":
-            order.setdefault(f"relation/{obj.id}", len(order))
+            named(f"relation/{obj.id}")
     for oid in order.keys() - made - skipped.keys():
         what = "member ways or nodes missing from the extract, or rings that do not close" \
             if oid.startswith("relation/") else "fewer than three distinct nodes, or a self-crossing libosmium rejects"
         skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
                                     "extract or fix the outline in OSM", f"{where}, {oid}")
     areas.sort(key=lambda a: a.index)
-    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0])
+    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), negative
+
+
+_XML = ((".osm", open), (".osm.gz", gzip.open), (".osm.bz2", bz2.open))  # (what an editor saves)
+_DELETE = re.compile(rb"""action\s*=\s*["']delete["']""")
+_ELEMENT = re.compile(rb"""<\s*(node|way|relation)\b[^>]*?\bid\s*=\s*["'](-?\d+)["']""")
+
+
+def _deleted(path: Path, chunk: int = 1 << 24) -> set[tuple[str, int]]:
+    """(type letter, id) of the objects an editor marked ``action="delete"`` in an XML file (libosmium reads them
+    as any other); the file is streamed, only the elements holding the mark are parsed."""
+    opener = next((o for suffix, o in _XML if path.name.lower().endswith(suffix)), None)
+    if opener is None:
+        return set()
+    found: set[tuple[str, int]] = set()
+    tail = b""
+    try:
+        with opener(path, "rb") as f:
+            while block := f.read(chunk):
+                data = tail + block
+                for mark in _DELETE.finditer(data):
+                    start = data.rfind(b"<", 0, mark.start())
+                    element = _ELEMENT.match(data, start) if start >= 0 else None
+                    if element and data.find(b">", start, mark.start()) < 0:
+                        found.add((element.group(1)[:1].decode(), int(element.group(2))))
+                tail = data[-4096:]  # (an element cut at the block's end is seen again whole)
+    except (OSError, EOFError, ValueError):
+        return set()  # (libosmium then reports what is wrong with the file)
+    return found
+
+
+def _editor_copy(osmium, path: Path, out: Path, deleted: set[tuple[str, int]]) -> tuple[Path, dict[str, str]]:
+    """A copy of ``path`` without the ``deleted`` objects and with every negative id (an editor's new object)
+    moved above the largest id of its type, each type still sorted by id (the new objects after the others, in
+    the order of their ids, as libosmium needs); and per way and relation of the copy, its name and place in
+    ``path`` (``_scan``'s ``names``)."""
+    top = {"n": 0, "w": 0, "r": 0}
+    for obj in _objects(osmium, path, areas=False):
+        kind = obj.type_str()
+        top[kind] = max(top[kind], obj.id)
+
+    def new(kind: str, i: int) -> int:
+        return top[kind] - i if i < 0 else i
+
+    mutable = osmium.osm.mutable
+    names: dict[str, tuple[str, int]] = {}
+    held: list = []  # the new objects of the type being read (copies: a read object dies with its buffer)
+    writer = osmium.SimpleWriter(str(out))
+    add = {"n": writer.add_node, "w": writer.add_way, "r": writer.add_relation}
+    try:
+        kind = "n"
+        for obj in _objects(osmium, path, areas=False):
+            if obj.type_str() != kind:
+                held = _flush(held, add[kind])
+                kind = obj.type_str()
+            if (kind, obj.id) in deleted:
+                continue
+            i, tags = new(kind, obj.id), dict(obj.tags)
+            if kind == "n":
+                copy = mutable.Node(id=i, tags=tags, location=obj.location)
+            elif kind == "w":
+                copy = mutable.Way(id=i, tags=tags, nodes=[new("n", n.ref) for n in obj.nodes])
+            else:
+                copy = mutable.Relation(id=i, tags=tags, members=[(m.type, new(m.type, m.ref), m.role)
+                                                                  for m in obj.members])
+            if kind != "n":
+                name = "way" if kind == "w" else "relation"
+                names[f"{name}/{i}"] = (f"{name}/{obj.id}", len(names))
+            if obj.id >= 0:
+                add[kind](copy)
+            else:
+                held.append(copy)
+        _flush(held, add[kind])
+    finally:
+        writer.close()
+    return out, names
+
+
+def _flush(held: list, add) -> list:
+    """Write the ``held`` objects in the order of their ids; an empty list for the next type."""
+    for copy in sorted(held, key=lambda o: o.id):
+        add(copy)
+    return []
 
 
 def _with_parts(areas: list[_Area]) -> tuple[list[_Area], list[str]]:

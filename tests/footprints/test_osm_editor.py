@@ -1,0 +1,104 @@
+"""OpenStreetMap files saved by an editor (JOSM's format): new objects with negative ids, objects marked deleted."""
+from __future__ import annotations
+
+import bz2
+import gzip
+
+import pytest
+from citygen.errors import FootprintError
+
+from .test_osm import _read, _ring, _square
+
+pytest.importorskip("osmium")
+from citygen_footprints.osm import _deleted  # noqa: E402
+
+
+def _josm(path, nodes, ways, relations=(), actions=None):
+    """An editor's OSM XML: JOSM's quoting and attributes, ``actions`` {(type letter, id): action}."""
+    actions = actions or {}
+
+    def attrs(kind, i):
+        action = actions.get((kind, i))
+        return f"id='{i}'" + (f" action='{action}'" if action else "") + ("" if i < 0 else " version='3'")
+
+    def tags(t):
+        return "".join(f"<tag k='{k}' v='{v}' />" for k, v in t.items())
+    lines = ["<?xml version='1.0' encoding='UTF-8'?>", "<osm version='0.6' upload='never' generator='JOSM'>"]
+    lines += [f"  <node {attrs('n', i)} lat='{lat:.9f}' lon='{lon:.9f}' />" for i, lon, lat in nodes]
+    lines += [f"  <way {attrs('w', i)}>" + "".join(f"<nd ref='{n}' />" for n in refs) + tags(t) + "</way>"
+              for i, refs, t in ways]
+    lines += [f"  <relation {attrs('r', i)}>" + "".join(f"<member type='{k}' ref='{r}' role='{role}' />"
+                                                        for k, r, role in members) + tags(t) + "</relation>"
+              for i, members, t in relations]
+    text = "\n".join([*lines, "</osm>"]) + "\n"
+    if path.name.endswith(".gz"):
+        path.write_bytes(gzip.compress(text.encode()))
+    elif path.name.endswith(".bz2"):
+        path.write_bytes(bz2.compress(text.encode()))
+    else:
+        path.write_text(text)
+    return path
+
+
+def _new(first, x, w=20):
+    """Four nodes of a new (negative id) square, ids first, first - 1, ..."""
+    return [(first - k, lon, lat) for k, (_, lon, lat) in enumerate(_square(0, x, 0, w, 10))]
+
+
+def test_new_objects_with_negative_ids_are_buildings(tmp_path):
+    # was: every building skipped with "5 of its 5 nodes are missing from the file" (libosmium's location index
+    # holds no negative id)
+    a, b = _new(-1, 0), _new(-5, 40)
+    outer, inner = _new(-11, 80, 40), [(n - 20, lon, lat) for n, lon, lat in _square(0, 90, 3, 5, 4)]
+    inner = [(-31 - k, lon, lat) for k, (_, lon, lat) in enumerate(inner)]
+    old = _square(7, 160, 0, 10, 10)  # downloaded, positive ids, with a new way of the same number as a node
+    path = _josm(tmp_path / "edit.osm", a + b + outer + inner + old, [
+        (-100, _ring(a), {"building": "house", "height": "7"}),
+        (-101, _ring(b), {"building": "yes"}),
+        (-102, _ring(outer), {}), (-103, _ring(inner), {}),
+        (-104, [n for n, *_ in old[:3]], {"building": "yes"}),  # open: skipped, named by its own id
+        (7, [*_ring(old)], {"building": "shed"}),
+    ], [(-200, [("w", -102, "outer"), ("w", -103, "inner")], {"type": "multipolygon", "building": "yes"})])
+    result = _read(path)
+    ids = [f.id for f in result.footprints]
+    assert ids == ["way/-100", "way/-101", "way/7", "relation/-200"]
+    fp = result.footprints[0]
+    assert fp.height == 7.0 and fp.attributes["osm_id"] == -100 and fp.attributes["building"] == "house"
+    assert result.footprints[3].polygon.area == pytest.approx(40 * 10 - 5 * 4, rel=0.01)
+    (skip,) = result.skipped
+    assert skip.id == "way/-104" and "not closed" in skip.reason and "way/-104" in skip.where
+
+
+@pytest.mark.parametrize("name", ["edit.osm", "edit.osm.gz", "edit.osm.bz2"])
+def test_objects_marked_deleted_by_the_editor_are_left_out(tmp_path, name):
+    a, b, c = _square(1, 0, 0, 20, 10), _square(11, 40, 0, 20, 10), _new(-1, 80)
+    deleted = {("w", 101): "delete", **{("n", n): "delete" for n, *_ in b}, ("w", -100): "delete",
+               ("w", 100): "modify"}
+    path = _josm(tmp_path / name, a + b + c, [(100, _ring(a), {"building": "yes"}),
+                                              (101, _ring(b), {"building": "yes"}),
+                                              (-100, _ring(c), {"building": "yes"})], actions=deleted)
+    result = _read(path)
+    assert [f.id for f in result.footprints] == ["way/100"] and result.skipped == ()
+
+
+def test_deleted_marks_are_found_across_read_blocks(tmp_path):
+    nodes = _square(1, 0, 0, 20, 10)
+    marks = {("n", 3): "delete", ("w", 100): "delete", ("n", 1): "modify"}
+    path = _josm(tmp_path / "a.osm", nodes, [(100, _ring(nodes), {"building": "yes"})], actions=marks)
+    for chunk in (5, 17, 64, 1 << 20):
+        assert _deleted(path, chunk) == {("n", 3), ("w", 100)}
+
+
+def test_pbf_and_unreadable_files_are_not_scanned_for_marks(tmp_path):
+    (tmp_path / "a.osm.pbf").write_bytes(b"action='delete'")
+    (tmp_path / "b.osm.gz").write_bytes(b"not gzip")
+    assert _deleted(tmp_path / "a.osm.pbf") == set() and _deleted(tmp_path / "b.osm.gz") == set()
+
+
+def test_an_editor_file_that_cannot_be_read_is_named_not_its_copy(tmp_path):
+    nodes = _new(-1, 0)
+    way = (-100, _ring(nodes), {"building": "yes"})
+    path = _josm(tmp_path / "edit.osm", nodes, [way, way])
+    with pytest.raises(FootprintError, match="twice in input") as err:
+        _read(path)
+    assert str(err.value).startswith(str(path)) and "citygen-osm-" not in str(err.value)
