@@ -8,15 +8,11 @@ with its own height tags (``min_height``, ``building:min_level`` lift its base) 
 What cannot become a building is reported by id: an open way, a relation whose members are missing from the
 extract (clipped at its edge), a way with nodes missing.
 
-Files saved by an editor (JOSM's format) are read as the editor shows them: objects marked ``action="delete"``
-are left out, and new objects' negative ids, which libosmium's node location index cannot hold, are moved above
-the file's largest id in a temporary copy (buildings keep their negative ids in ids and messages).
+A file not in the order libosmium needs (nodes, ways, relations, each sorted by id, once, no negative id: an
+Overpass export, a file saved by an editor, concatenated extracts) is read from a sorted copy (``osm_sorted``).
 """
 from __future__ import annotations
 
-import bz2
-import gzip
-import re
 import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -31,6 +27,7 @@ from shapely.geometry import Polygon
 from citygen_footprints.assemble import RawFeature, assemble
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.options import ImportOptions
+from citygen_footprints.osm_sorted import deleted_marks, sorted_copy
 from citygen_footprints.repair import FeatureProblem, clean_rings
 
 INSTALL_HINT = "pip install 'citygen[osm]'"
@@ -39,6 +36,7 @@ SUFFIXES = (".osm", ".osm.pbf", ".pbf", ".osm.bz2", ".osm.gz", ".osc", ".opl")
 OWN_KEYS = ("height", "min_height", "building:levels", "building:min_level", "building:part", "roof:", "type")
 #: a part belongs to the outline holding at least this share of its area
 PART_SHARE = 0.5
+_RANK = {"n": 0, "w": 1, "r": 2}  # the order of types libosmium needs
 
 
 @dataclass(frozen=True)
@@ -77,11 +75,8 @@ def _rings(area) -> list[list[list[tuple[float, float]]]]:
 def _read_error(exc: Exception, path: Path) -> FootprintError:
     """libosmium's reason the file cannot be read, with what to do about it."""
     message = str(exc)
-    if "out of order" in message or "twice in input" in message:
-        hint = ("each object must appear once, sorted by type and id, as in extracts of the planet file: run "
-                "`osmium sort` on it, and combine extracts with `osmium merge`, not by concatenating them")
-    elif any(word in message.lower() for word in ("xml", "opl", "pbf", "uncompress", "illegal", "coordinate", "eof",
-                                                  "element")):
+    words = ("xml", "opl", "pbf", "uncompress", "illegal", "coordinate", "eof", "element")
+    if any(word in message.lower() for word in words):
         hint = "the file is corrupt or truncated: re-download or re-export it (`osmium fileinfo -e FILE` checks it)"
     else:
         hint = "give an .osm (XML), .osm.pbf or .opl file"
@@ -103,46 +98,68 @@ def _objects(osmium, path: Path, areas: bool = True, source: Path | None = None)
         raise _read_error(exc, source or path) from exc
 
 
-def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
-    """Building areas in file order, and the buildings that could not be assembled (with why)."""
+def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]], list[str]]:
+    """Building areas in file order, the buildings that could not be assembled (with why), and a note when the
+    file was read from a sorted copy."""
     osmium = _osmium()
-    deleted = _deleted(path)
-    if not deleted:
-        areas, skipped, negative = _scan(osmium, path, path)
-        if not negative:
-            return areas, skipped
+    deleted = deleted_marks(path)
+    if deleted:
+        why = f"{len(deleted)} objects marked deleted by an editor (left out)"
+    else:
+        try:
+            areas, skipped, why = _scan(osmium, path, path)
+            if why is None:
+                return areas, skipped, []
+        except FootprintError as err:
+            if not _order_error(err):
+                raise
+            why = "objects out of order or repeated (the last of each kept)"
     with tempfile.TemporaryDirectory(prefix="citygen-osm-") as tmp:
-        copy, names = _editor_copy(osmium, path, Path(tmp) / "renumbered.osm.pbf", deleted)
+        copy = Path(tmp) / "sorted.osm.pbf"
+        names = sorted_copy(osmium, _objects(osmium, path, areas=False), copy, deleted)
         areas, skipped, _ = _scan(osmium, copy, path, names)
-    return areas, skipped
+    return areas, skipped, [f"{path.name}: {why} -- read from a copy sorted as libosmium needs (nodes, ways, "
+                            "relations, each by id; `osmium sort` makes one ahead)"]
+
+
+def _order_error(err: FootprintError) -> bool:
+    """Whether libosmium stopped at an object out of order or repeated (which a sorted copy mends)."""
+    return isinstance(err.__cause__, RuntimeError) and any(
+        words in str(err.__cause__) for words in ("out of order", "twice in input"))
 
 
 def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]] | None = None
-          ) -> tuple[list[_Area], list[tuple[int, Skipped]], bool]:
-    """``read_areas`` of the file ``source`` read from ``path``, and whether it has negative ids. ``names``: for
-    an editor's file read from its copy, each way's and relation's name and place in ``source``, by its name in
-    the copy."""
+          ) -> tuple[list[_Area], list[tuple[int, Skipped]], str | None]:
+    """``read_areas`` of the file ``source`` read from ``path``, and why its objects are not in the order
+    libosmium needs (None when they are: nodes before ways before relations, no negative id; libosmium itself
+    stops at ids out of order). ``names``: for a file read from its sorted copy, each way's and relation's name
+    and place in ``source``, by its name in the copy."""
     where = source.name
     areas: list[_Area] = []
     skipped: dict[str, Skipped] = {}
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, by place in the file
     made: set[str] = set()
-    negative = False
+    why, last = None, 0
 
     def named(oid: str) -> str:
         oid, place = names[oid] if names else (oid, len(order))
         order.setdefault(oid, place)
         return oid
     for obj in _objects(osmium, path, source=source):
-        if obj.id < 0:
-            negative = True
+        if obj.is_area():
+            if _is_building(obj.tags):
+                oid = named(f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}")
+                made.add(oid)
+                areas.append(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
+            continue
+        rank = _RANK[obj.type_str()]
+        if why is None and (rank < last or obj.id < 0):
+            why = "negative ids (an editor's new objects)" if obj.id < 0 else \
+                "nodes or ways after the ways or relations that use them (as in Overpass exports)"
+        last = rank
         if not _is_building(obj.tags):
             continue
-        if obj.is_area():
-            oid = named(f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}")
-            made.add(oid)
-            areas.append(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
-        elif obj.is_way():
+        if obj.is_way():
             oid = named(f"way/{obj.id}")
             missing = sum(not n.location.valid() for n in obj.nodes)
             if missing:
@@ -160,89 +177,7 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
         skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
                                     "extract or fix the outline in OSM", f"{where}, {oid}")
     areas.sort(key=lambda a: a.index)
-    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), negative
-
-
-_XML = ((".osm", open), (".osm.gz", gzip.open), (".osm.bz2", bz2.open))  # (what an editor saves)
-_DELETE = re.compile(rb"""action\s*=\s*["']delete["']""")
-_ELEMENT = re.compile(rb"""<\s*(node|way|relation)\b[^>]*?\bid\s*=\s*["'](-?\d+)["']""")
-
-
-def _deleted(path: Path, chunk: int = 1 << 24) -> set[tuple[str, int]]:
-    """(type letter, id) of the objects an editor marked ``action="delete"`` in an XML file (libosmium reads them
-    as any other); the file is streamed, only the elements holding the mark are parsed."""
-    opener = next((o for suffix, o in _XML if path.name.lower().endswith(suffix)), None)
-    if opener is None:
-        return set()
-    found: set[tuple[str, int]] = set()
-    tail = b""
-    try:
-        with opener(path, "rb") as f:
-            while block := f.read(chunk):
-                data = tail + block
-                for mark in _DELETE.finditer(data):
-                    start = data.rfind(b"<", 0, mark.start())
-                    element = _ELEMENT.match(data, start) if start >= 0 else None
-                    if element and data.find(b">", start, mark.start()) < 0:
-                        found.add((element.group(1)[:1].decode(), int(element.group(2))))
-                tail = data[-4096:]  # (an element cut at the block's end is seen again whole)
-    except (OSError, EOFError, ValueError):
-        return set()  # (libosmium then reports what is wrong with the file)
-    return found
-
-
-def _editor_copy(osmium, path: Path, out: Path, deleted: set[tuple[str, int]]) -> tuple[Path, dict[str, str]]:
-    """A copy of ``path`` without the ``deleted`` objects and with every negative id (an editor's new object)
-    moved above the largest id of its type, each type still sorted by id (the new objects after the others, in
-    the order of their ids, as libosmium needs); and per way and relation of the copy, its name and place in
-    ``path`` (``_scan``'s ``names``)."""
-    top = {"n": 0, "w": 0, "r": 0}
-    for obj in _objects(osmium, path, areas=False):
-        kind = obj.type_str()
-        top[kind] = max(top[kind], obj.id)
-
-    def new(kind: str, i: int) -> int:
-        return top[kind] - i if i < 0 else i
-
-    mutable = osmium.osm.mutable
-    names: dict[str, tuple[str, int]] = {}
-    held: list = []  # the new objects of the type being read (copies: a read object dies with its buffer)
-    writer = osmium.SimpleWriter(str(out))
-    add = {"n": writer.add_node, "w": writer.add_way, "r": writer.add_relation}
-    try:
-        kind = "n"
-        for obj in _objects(osmium, path, areas=False):
-            if obj.type_str() != kind:
-                held = _flush(held, add[kind])
-                kind = obj.type_str()
-            if (kind, obj.id) in deleted:
-                continue
-            i, tags = new(kind, obj.id), dict(obj.tags)
-            if kind == "n":
-                copy = mutable.Node(id=i, tags=tags, location=obj.location)
-            elif kind == "w":
-                copy = mutable.Way(id=i, tags=tags, nodes=[new("n", n.ref) for n in obj.nodes])
-            else:
-                copy = mutable.Relation(id=i, tags=tags, members=[(m.type, new(m.type, m.ref), m.role)
-                                                                  for m in obj.members])
-            if kind != "n":
-                name = "way" if kind == "w" else "relation"
-                names[f"{name}/{i}"] = (f"{name}/{obj.id}", len(names))
-            if obj.id >= 0:
-                add[kind](copy)
-            else:
-                held.append(copy)
-        _flush(held, add[kind])
-    finally:
-        writer.close()
-    return out, names
-
-
-def _flush(held: list, add) -> list:
-    """Write the ``held`` objects in the order of their ids; an empty list for the next type."""
-    for copy in sorted(held, key=lambda o: o.id):
-        add(copy)
-    return []
+    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), why
 
 
 def _with_parts(areas: list[_Area]) -> tuple[list[_Area], list[str]]:
@@ -285,10 +220,10 @@ def _shape(area: _Area) -> shapely.Geometry:
 
 def import_osm(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
     """Footprints from an OpenStreetMap file (always lon/lat, EPSG:4326)."""
-    areas, skipped = read_areas(path)
-    notes: list[str] = []
+    areas, skipped, notes = read_areas(path)
     if options.osm_parts == "replace":
-        areas, notes = _with_parts(areas)
+        areas, parts = _with_parts(areas)
+        notes += parts
     else:
         areas = [a for a in areas if not a.is_part]
     crs_warnings = [] if options.crs is None else [
