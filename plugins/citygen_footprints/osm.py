@@ -27,7 +27,8 @@ from shapely.geometry import Polygon
 from citygen_footprints.assemble import RawFeature, assemble
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.options import ImportOptions
-from citygen_footprints.osm_sorted import deleted_marks, sorted_copy
+from citygen_footprints.osm_json import osm_json_elements
+from citygen_footprints.osm_sorted import deleted_marks, plain, sorted_copy
 from citygen_footprints.repair import FeatureProblem, clean_rings
 
 INSTALL_HINT = "pip install 'citygen[osm]'"
@@ -114,12 +115,22 @@ def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]], list
             if not _order_error(err):
                 raise
             why = "objects out of order or repeated (the last of each kept)"
-    with tempfile.TemporaryDirectory(prefix="citygen-osm-") as tmp:
-        copy = Path(tmp) / "sorted.osm.pbf"
-        names = sorted_copy(osmium, _objects(osmium, path, areas=False), copy, deleted)
-        areas, skipped, _ = _scan(osmium, copy, path, names)
+    areas, skipped = _via_copy(osmium, plain(_objects(osmium, path, areas=False), deleted), path)
     return areas, skipped, [f"{path.name}: {why} -- read from a copy sorted as libosmium needs (nodes, ways, "
                             "relations, each by id; `osmium sort` makes one ahead)"]
+
+
+def _via_copy(osmium, elements, source: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
+    """``read_areas`` of ``source`` from a sorted copy of its ``elements`` (see ``osm_sorted.sorted_copy``)."""
+    with tempfile.TemporaryDirectory(prefix="citygen-osm-") as tmp:
+        copy = Path(tmp) / "sorted.osm.pbf"
+        try:
+            names = sorted_copy(osmium, elements, copy)
+        except OverflowError as exc:
+            raise FootprintError(f"cannot read the OpenStreetMap file: {exc}", where=str(source),
+                                 hint="renumber the file's objects (`osmium renumber`)") from exc
+        areas, skipped, _ = _scan(osmium, copy, source, names)
+    return areas, skipped
 
 
 def _order_error(err: FootprintError) -> bool:
@@ -221,9 +232,24 @@ def _shape(area: _Area) -> shapely.Geometry:
 def import_osm(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
     """Footprints from an OpenStreetMap file (always lon/lat, EPSG:4326)."""
     areas, skipped, notes = read_areas(path)
+    return _footprints(areas, skipped, notes, path, options, warnings)
+
+
+def import_osm_json(doc: Mapping[str, Any], path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()
+                    ) -> ImportResult:
+    """Footprints from an OSM JSON document (``osm_json``), read from a sorted copy as an OpenStreetMap file."""
+    osmium = _osmium()
+    elements, problems = osm_json_elements(doc, path.name)
+    areas, skipped = _via_copy(osmium, elements, path)
+    return _footprints(areas, skipped, problems, path, options, warnings)
+
+
+def _footprints(areas: list[_Area], skipped: list[tuple[int, Skipped]], notes: list[str], path: Path,
+                options: ImportOptions, warnings: tuple[str, ...]) -> ImportResult:
+    """The footprints of building ``areas`` read from ``path`` (Simple 3D Buildings parts applied)."""
     if options.osm_parts == "replace":
         areas, parts = _with_parts(areas)
-        notes += parts
+        notes = [*notes, *parts]
     else:
         areas = [a for a in areas if not a.is_part]
     crs_warnings = [] if options.crs is None else [

@@ -52,31 +52,44 @@ def deleted_marks(path: Path, chunk: int = 1 << 24) -> set[tuple[str, int]]:
     return found
 
 
-def sorted_copy(osmium, objects, out: Path, deleted: set[tuple[str, int]]) -> dict[str, tuple[str, int]]:
-    """Write ``objects`` (a file's nodes, ways and relations as pyosmium reads them) to ``out`` as libosmium
-    needs them (module docstring). Returns per way and relation of the copy its name and place in the file read
-    (``"way/-5"``, first appearance among ways and relations)."""
-    ids, lons, lats = array("q"), array("d"), array("d")
-    ways: dict[int, tuple] = {}
-    relations: dict[int, tuple] = {}
-    first: dict[tuple[str, int], int] = {}
+def plain(objects, deleted: set[tuple[str, int]] = frozenset()):
+    """pyosmium's nodes, ways and relations as ``sorted_copy`` takes them, without the ``deleted`` ones."""
     for obj in objects:
         kind = obj.type_str()
         if (kind, obj.id) in deleted:
             continue
         if kind == "n":
-            valid = obj.location.valid()
-            ids.append(obj.id)
-            lons.append(obj.location.lon if valid else np.nan)
-            lats.append(obj.location.lat if valid else np.nan)
-            continue
-        first.setdefault((kind, obj.id), len(first))
-        if kind == "w":
-            ways[obj.id] = (tuple(n.ref for n in obj.nodes), dict(obj.tags))
+            where = obj.location
+            yield ("n", obj.id, where.lon, where.lat) if where.valid() else ("n", obj.id, None, None)
+        elif kind == "w":
+            yield "w", obj.id, [n.ref for n in obj.nodes], dict(obj.tags)
         else:
-            relations[obj.id] = (tuple((m.type, m.ref, m.role) for m in obj.members), dict(obj.tags))
+            yield "r", obj.id, [(m.type, m.ref, m.role) for m in obj.members], dict(obj.tags)
+
+
+def sorted_copy(osmium, elements, out: Path) -> dict[str, tuple[str, int]]:
+    """Write ``elements`` -- ("n", id, lon, lat) (lon, lat None: no location), ("w", id, node ids, tags),
+    ("r", id, [(type letter, ref, role)], tags) -- to ``out`` as libosmium needs them (module docstring).
+    Returns per way and relation of the copy its name and place among the ways and relations read
+    (``"way/-5"``, first appearance)."""
+    ids, lons, lats = array("q"), array("d"), array("d")
+    ways: dict[int, tuple] = {}
+    relations: dict[int, tuple] = {}
+    first: dict[tuple[str, int], int] = {}
+    for kind, i, a, b in elements:
+        if kind == "n":
+            ids.append(i)
+            lons.append(np.nan if a is None else a)
+            lats.append(np.nan if b is None else b)
+            continue
+        first.setdefault((kind, i), len(first))
+        (ways if kind == "w" else relations)[i] = (a, b)
     node_ids = np.frombuffer(ids, dtype=np.int64)
     top = {"n": int(node_ids.max(initial=0)), "w": max([0, *ways]), "r": max([0, *relations])}
+    for kind, low in (("n", int(node_ids.min(initial=0))), ("w", min([0, *ways])), ("r", min([0, *relations]))):
+        if top[kind] - low >= 1 << 63:
+            raise OverflowError(f"{_NAME.get(kind, 'node')} ids {low} and {top[kind]} are too far apart to renumber "
+                                "the negative ones")
 
     def new(kind: str, i: int) -> int:
         return top[kind] - i if i < 0 else i
@@ -86,7 +99,9 @@ def sorted_copy(osmium, objects, out: Path, deleted: set[tuple[str, int]]) -> di
     try:
         renumbered = np.where(node_ids < 0, top["n"] - node_ids, node_ids)
         order = np.argsort(renumbered, kind="stable")
-        keep = order[np.append(renumbered[order][1:] != renumbered[order][:-1], True)]  # the last of equal ids
+        last = np.ones(order.size, dtype=bool)  # the last of equal ids
+        last[:-1] = renumbered[order[1:]] != renumbered[order[:-1]]
+        keep = order[last]
         lon, lat = np.frombuffer(lons), np.frombuffer(lats)
         for i, x, y in zip(renumbered[keep].tolist(), lon[keep].tolist(), lat[keep].tolist()):
             writer.add_node(mutable.Node(id=i, location=location() if x != x else location(x, y)))

@@ -15,11 +15,13 @@ from citygen_footprints.geojson import import_geojson
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
 from citygen_footprints.osm import SUFFIXES as OSM_SUFFIXES
-from citygen_footprints.osm import import_osm
+from citygen_footprints.osm import import_osm, import_osm_json
+from citygen_footprints.osm_json import is_osm_json
 
 
 def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
-    """Read a GeoJSON, CityJSON or CityJSONSeq (``.jsonl``) file; JSON files dispatch on their top-level ``type``."""
+    """Read a GeoJSON, CityJSON, CityJSONSeq (``.jsonl``) or OSM JSON file; JSON files dispatch on their
+    top-level ``type`` (OSM JSON has none, but a list of ``elements``)."""
     path = Path(path)
     parsed, warnings = parse_options(options)
     if path.name.lower().endswith(".jsonl"):
@@ -29,15 +31,18 @@ def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
         return import_cityjson(doc, path, parsed, warnings)
     if isinstance(doc, Mapping) and doc.get("type") in ("FeatureCollection", "Feature", "Polygon", "MultiPolygon"):
         return import_geojson(doc, path, parsed, lines, warnings)
+    if is_osm_json(doc):
+        return import_osm_json(doc, path, parsed, warnings)
     kind = doc.get("type") if isinstance(doc, Mapping) else type(doc).__name__
     raise FootprintError(f"neither GeoJSON nor CityJSON (top-level type is {kind!r})", where=str(path),
-                         hint="give a GeoJSON FeatureCollection of (Multi)Polygons or a CityJSON file")
+                         hint="give a GeoJSON FeatureCollection of (Multi)Polygons, a CityJSON file or OSM JSON "
+                              "(an Overpass [out:json] result)")
 
 
 class GeoJSONImporter(FootprintImporter):
     id = "geojson"
     suffixes = (".geojson", ".json")
-    description = "GeoJSON Polygon/MultiPolygon buildings (lon/lat or projected), OSM height tags"
+    description = "GeoJSON Polygon/MultiPolygon buildings (lon/lat or projected), OSM height tags; OSM JSON"
 
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
         return read_footprints(path, options)

@@ -8,7 +8,7 @@ import gzip
 import pytest
 from citygen.errors import FootprintError
 
-from .test_osm import _read, _ring, _square
+from .test_osm import LAT, LON, _read, _ring, _square
 
 pytest.importorskip("osmium")
 from citygen_footprints.osm_sorted import deleted_marks  # noqa: E402
@@ -138,12 +138,21 @@ def test_a_marked_file_that_cannot_be_read_names_the_file_not_its_copy(tmp_path)
 def test_the_sorted_copy_of_a_sorted_file_reads_the_same(tmp_path):
     import osmium
     from citygen_footprints.osm import _objects, _scan
-    from citygen_footprints.osm_sorted import sorted_copy
+    from citygen_footprints.osm_sorted import plain, sorted_copy
 
     from .test_osm import HELSINKI_PBF
     copy = tmp_path / "copy.osm.pbf"
-    names = sorted_copy(osmium, _objects(osmium, HELSINKI_PBF, areas=False), copy, set())
+    names = sorted_copy(osmium, plain(_objects(osmium, HELSINKI_PBF, areas=False)), copy)
     direct, via_copy = _scan(osmium, HELSINKI_PBF, HELSINKI_PBF), _scan(osmium, copy, HELSINKI_PBF, names)
     assert direct[2] is None and via_copy[2] is None and len(direct[0]) == 572
     assert [(a.id, a.tags, a.polygons) for a in direct[0]] == [(a.id, a.tags, a.polygons) for a in via_copy[0]]
     assert [s for _, s in direct[1]] == [s for _, s in via_copy[1]]  # (the same order; places count other ways)
+
+
+def test_negative_ids_too_far_from_the_others_to_renumber_are_an_error_naming_the_file(tmp_path):
+    nodes = [(-(1 << 62) - k, lon, lat) for k, (_, lon, lat) in enumerate(_square(0, 0, 0, 20, 10))]
+    nodes.append((1 << 62, LON, LAT))
+    path = _josm(tmp_path / "far.osm", nodes, [(100, _ring(nodes[:4]), {"building": "yes"})])
+    with pytest.raises(FootprintError, match="too far apart") as err:
+        _read(path)
+    assert str(err.value).startswith(str(path)) and "osmium renumber" in str(err.value)
