@@ -176,7 +176,9 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
             if missing:
                 skipped[oid] = Skipped(oid, f"{missing} of its {len(obj.nodes)} nodes are missing from the file "
                                             "(the extract cut the building) -- use an extract that keeps whole "
-                                            "ways (osmium extract --strategy complete_ways)", f"{where}, {oid}")
+                                            "ways (osmium extract --strategy complete_ways; an Overpass query: "
+                                            "`>;` then `out skel qt;`, or `out geom;` without a box)",
+                                       f"{where}, {oid}")
             elif not obj.is_closed():
                 skipped[oid] = Skipped(oid, "the building way is not closed -- close its outline or map it as a "
                                             "multipolygon relation", f"{where}, {oid}")
