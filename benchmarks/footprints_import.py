@@ -1,22 +1,72 @@
-"""Footprint import benchmark: median time to read the shipped Helsinki (GeoJSON) and Delft (CityJSON) data.
+"""Footprint import benchmark: median time to read the shipped Helsinki (GeoJSON, OpenStreetMap) and Delft
+(CityJSON) data.
 
     python benchmarks/footprints_import.py [--repeat N] [FILE ...]
 
-Prints per file: footprints, skipped, warnings, median / min ms over N runs, footprints per second.
+Prints per file: footprints, skipped, warnings, median / min ms over N runs, footprints per second. With pyosmium
+and no FILE also the Helsinki extract as Overpass writes it -- ways and relations before their nodes, as XML and
+as OSM JSON -- which is read from a sorted copy, and whether its footprints equal the extract's.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
-from citygen_footprints.plugin import read_footprints
+from citygen_footprints.plugin import OSMImporter, read_footprints
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_FILES = [REPO / "scenes" / "data" / "helsinki_buildings.geojson",
                  REPO / "scenes" / "data" / "delft_buildings.city.json"]
 FULL_DELFT = REPO / ".." / "shared" / "data" / "cityjson_delft" / "delft.json"
+HELSINKI_PBF = REPO / "scenes" / "data" / "helsinki.osm.pbf"
+
+
+def read(path: Path):
+    return OSMImporter().read(path, {}) if path.suffix in (".osm", ".pbf") else read_footprints(path, {})
+
+
+def overpass_copies(directory: Path) -> list[Path]:
+    """The Helsinki extract in Overpass's order (``out body; >; out skel qt;``): as OSM XML and as OSM JSON."""
+    import osmium
+    from citygen_footprints.osm_sorted import plain
+    elements = list(plain(osmium.FileProcessor(str(HELSINKI_PBF), osmium.osm.NODE | osmium.osm.WAY |
+                                               osmium.osm.RELATION)))
+    elements.sort(key=lambda e: e[0] == "n")  # (stable: ways and relations first, each in id order)
+    xml, doc = directory / "helsinki_overpass.osm", {"version": 0.6, "elements": []}
+    writer = osmium.SimpleWriter(str(xml))
+    mutable = osmium.osm.mutable
+    for kind, i, a, b in elements:
+        if kind == "n":
+            writer.add_node(mutable.Node(id=i, location=(a, b)))
+            doc["elements"].append({"type": "node", "id": i, "lon": a, "lat": b})
+        elif kind == "w":
+            writer.add_way(mutable.Way(id=i, nodes=a, tags=b))
+            doc["elements"].append({"type": "way", "id": i, "nodes": a, "tags": b})
+        else:
+            writer.add_relation(mutable.Relation(id=i, members=a, tags=b))
+            doc["elements"].append({"type": "relation", "id": i, "tags": b, "members": [
+                {"type": {"n": "node", "w": "way", "r": "relation"}[t], "ref": r, "role": role} for t, r, role in a]})
+    writer.close()
+    (directory / "helsinki_overpass.json").write_text(json.dumps(doc))
+    return [xml, directory / "helsinki_overpass.json"]
+
+
+def measure(path: Path, repeat: int):
+    read(path)  # warm up imports and PROJ's database
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        result = read(path)
+        times.append(time.perf_counter() - t0)
+    median = statistics.median(times)
+    print(f"{path.name}: {len(result.footprints)} footprints, {len(result.skipped)} skipped, "
+          f"{len(result.warnings)} warnings; median {median * 1000:.0f} ms, min {min(times) * 1000:.0f} ms "
+          f"({len(result.footprints) / median:.0f} footprints/s, {repeat} runs)")
+    return result
 
 
 def main() -> None:
@@ -26,16 +76,19 @@ def main() -> None:
     args = parser.parse_args()
     files = args.files or DEFAULT_FILES + ([FULL_DELFT] if FULL_DELFT.exists() else [])
     for path in files:
-        read_footprints(path, {})  # warm up imports and PROJ's database
-        times = []
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            result = read_footprints(path, {})
-            times.append(time.perf_counter() - t0)
-        median = statistics.median(times)
-        print(f"{path.name}: {len(result.footprints)} footprints, {len(result.skipped)} skipped, "
-              f"{len(result.warnings)} warnings; median {median * 1000:.0f} ms, min {min(times) * 1000:.0f} ms "
-              f"({len(result.footprints) / median:.0f} footprints/s, {args.repeat} runs)")
+        measure(path, args.repeat)
+    try:
+        import osmium  # noqa: F401
+    except ImportError:
+        return
+    if not args.files:
+        reference = measure(HELSINKI_PBF, args.repeat)
+        with tempfile.TemporaryDirectory() as tmp:
+            for path in overpass_copies(Path(tmp)):
+                result = measure(path, args.repeat)
+                same = [(f.id, f.polygon.wkb, f.height) for f in result.footprints] == \
+                    [(f.id, f.polygon.wkb, f.height) for f in reference.footprints]
+                print(f"  the same footprints as {HELSINKI_PBF.name}: {same}")
 
 
 if __name__ == "__main__":

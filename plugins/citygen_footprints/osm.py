@@ -150,7 +150,7 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
     skipped: dict[str, Skipped] = {}
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, by place in the file
     made: set[str] = set()
-    why, last = None, 0
+    last = 0
 
     def named(oid: str) -> str:
         oid, place = names[oid] if names else (oid, len(order))
@@ -164,8 +164,8 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
                 areas.append(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
             continue
         rank = _RANK[obj.type_str()]
-        if why is None and (rank < last or obj.id < 0):
-            why = "negative ids (an editor's new objects)" if obj.id < 0 else \
+        if rank < last or obj.id < 0:  # (the file is read again from a sorted copy: stop here)
+            return [], [], "negative ids (an editor's new objects)" if obj.id < 0 else \
                 "nodes or ways after the ways or relations that use them (as in Overpass exports)"
         last = rank
         if not _is_building(obj.tags):
@@ -190,7 +190,7 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
         skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
                                     "extract or fix the outline in OSM", f"{where}, {oid}")
     areas.sort(key=lambda a: a.index)
-    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), why
+    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), None
 
 
 def _with_parts(areas: list[_Area]) -> tuple[list[_Area], list[str]]:
