@@ -10,6 +10,7 @@ as OSM JSON -- which is read from a sorted copy, and whether its footprints equa
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import statistics
 import tempfile
@@ -77,11 +78,7 @@ def main() -> None:
     files = args.files or DEFAULT_FILES + ([FULL_DELFT] if FULL_DELFT.exists() else [])
     for path in files:
         measure(path, args.repeat)
-    try:
-        import osmium  # noqa: F401
-    except ImportError:
-        return
-    if not args.files:
+    if not args.files and importlib.util.find_spec("osmium"):
         reference = measure(HELSINKI_PBF, args.repeat)
         with tempfile.TemporaryDirectory() as tmp:
             for path in overpass_copies(Path(tmp)):
