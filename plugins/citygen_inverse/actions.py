@@ -5,12 +5,13 @@ Candidates are: every atom its own child; for each repeated region inside (§4.3
 instances whole; the same with runs of identical groups merged into one child (which a repeat rule then
 explains). Each grouping is written with the cheapest operator that fits its child sequence: ``repeat`` (periodic),
 ``repeatABA`` (A B A ... A), ``symsplit`` (odd palindrome) or ``split``. A region no line separates (a pinwheel,
-wu2014 §6.3) gets a ``grid`` rule over its terminals.
+wu2014 §6.3) gets a ``grid`` rule over its guillotine blocks.
 """
 from __future__ import annotations
 
 import math
 from bisect import bisect_left, bisect_right
+from collections import Counter
 from dataclasses import dataclass
 from functools import lru_cache
 from itertools import compress
@@ -140,7 +141,9 @@ def region_actions(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: Co
         else:
             _add_best(actions, axis, bl, m, groupings, piece, line)
     if not len(actions):
-        actions.add_action(_grid(index, sig, model))
+        for action in _grids(index, sig, sym, model, coarse=not best_only):
+            actions.add_action(action)
+        actions.greedy = len(actions) - 1  # (Eq. 5 ranks grids by their item count alone: see ``_grids``)
     return actions
 
 
@@ -393,6 +396,7 @@ class Candidates:
         self.heuristic: list[float] = []
         self._specs: list[tuple] = []
         self.built: list[Action | None] = []  # per candidate its rule once built (``self[k]`` builds it)
+        self.greedy: int | None = None  # the candidate a greedy run takes, where not the first of least H
 
     def __len__(self) -> int:
         return len(self.cost)
@@ -477,15 +481,75 @@ def _make(index: LayoutIndex, box: Box, axis: int, bl: list[int], edges: list[in
     return Action(op, axis, tuple(zip(sigs[:k], rels[:k])), tuple(children), cost, heuristic, tuple(ends[1:-1]))
 
 
-def _grid(index: LayoutIndex, sig: int, model: CostModel) -> Action:
-    """gridsplit (wu2014 §4.7) over the terminals of a region that no single line separates."""
+def _grids(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel, coarse: bool = True
+           ) -> list[Action]:
+    """gridsplit (wu2014 §4.7) of a region that no single line separates (§6.3), coarse to fine (the distinct
+    ones): its *guillotine blocks* (``_blocks``) as items, each a region of its own that split rules derive; the
+    blocks that are repeated regions (§4.3) or occur twice, the others written out by their terminals; every
+    terminal. Eq. 5 cannot rank them -- a coarser grid always has the lower H, though its blocks cost rules of
+    their own -- so a greedy run takes the finest (the grid of wu2014) and ADP's value function (Eq. 4), which
+    sees the blocks' sub-grammars, chooses among them. Without ``coarse``, only the finest."""
     box = index.sigs[sig].box
-    idx = index.inside(box).tolist()
-    x0, y0, x1, y1 = (v.take(idx).tolist() for v in (index.X0, index.Y0, index.X1, index.Y1))
-    xs = tuple(v - box[0] for v in sorted({*x0, *x1}))
-    ys = tuple(v - box[1] for v in sorted({*y0, *y1}))
-    term_sig = index.terminal_sigs()
-    items = [(term_sig[idx[k]], _rel(box, (x0[k], y0[k], x1[k], y1[k])))
-             for k in sorted(range(len(idx)), key=lambda k: (y0[k], x0[k]))]  # bottom to top, left to right
+    idx = index.inside(box)
+    terminals = list(zip(*(v.take(idx).tolist() for v in (index.X0, index.Y0, index.X1, index.Y1))))
+    if not coarse:
+        return [_grid(index, box, terminals, model)]
+    blocks = min((_blocks(terminals, first) for first in (0, 1)), key=len)
+    sigs = [index.sig(b, True) for b in blocks]
+    repeated, count = set(sym.group.tolist()), Counter(sigs)
+    kept = [b for b, s in zip(blocks, sigs) if index.sigs[s].n == 1 or s in repeated or count[s] > 1]
+    hybrid = kept + [t for t in terminals if not any(_covers(b, t) for b in kept)]
+    out, seen = [], set()
+    for items in (blocks, hybrid, terminals):
+        key = frozenset(items)
+        if key not in seen:
+            seen.add(key)
+            out.append(_grid(index, box, items, model))
+    return out
+
+
+def _covers(b: Box, t: Box) -> bool:
+    return b[0] <= t[0] and b[1] <= t[1] and t[2] <= b[2] and t[3] <= b[3]
+
+
+def _grid(index: LayoutIndex, box: Box, pieces: list[Box], model: CostModel) -> Action:
+    """The grid rule of ``box`` whose items are the tiled ``pieces`` (bottom to top, left to right) in the grid
+    of their edges."""
+    pieces = sorted(pieces, key=lambda b: (b[1], b[0]))
+    items = tuple((index.sig(b, True), _rel(box, b)) for b in pieces)
+    children, seen = [], set()
+    for s, rel in items:
+        if s not in seen and index.sigs[s].n > 1:
+            seen.add(s)
+            children.append((s, rel))
+    xs = tuple(sorted({v - box[0] for b in pieces for v in (b[0], b[2])}))
+    ys = tuple(sorted({v - box[1] for b in pieces for v in (b[1], b[3])}))
     cost = model.split + len(items)
-    return Action("grid", 0, tuple(items), (), cost, model.lambda1 * cost, (), (xs, ys))
+    return Action("grid", 0, items, tuple(children), cost, model.lambda1 * cost, (), (xs, ys))
+
+
+def _blocks(boxes: list[Box], first: int) -> list[Box]:
+    """The boxes merged while two of them share a whole side, along axis ``first``, then the other, and again
+    until none does: every block is then guillotine-cut (by the sides merged), and no two blocks form a rectangle.
+    In a region no line separates the merging stops at five blocks or more (a pinwheel is the least)."""
+    blocks = list(boxes)
+    axis, still = first, 0
+    while still < 2:  # (both axes tried without a merge)
+        other = 1 - axis
+        rows: dict[tuple[int, int], list[Box]] = {}  # per span across the axis, the blocks along it
+        for b in blocks:
+            rows.setdefault((b[other], b[other + 2]), []).append(b)
+        merged: list[Box] = []
+        for row in rows.values():
+            row.sort(key=lambda b: b[axis])
+            run = row[0]
+            for b in row[1:]:
+                if b[axis] == run[axis + 2]:  # abutting: one block
+                    run = (run[0], run[1], b[2], run[3]) if axis == 0 else (run[0], run[1], run[2], b[3])
+                else:
+                    merged.append(run)
+                    run = b
+            merged.append(run)
+        still = still + 1 if len(merged) == len(blocks) else 0
+        blocks, axis = merged, other
+    return blocks

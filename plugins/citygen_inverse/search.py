@@ -86,7 +86,8 @@ class GrammarSearch:
                 self._kidset[sig] = kidset = frozenset(c for ks in kids for c in ks)
                 for kid in kidset:
                     self._parents.setdefault(kid, []).append(sig)
-            self._greedy_k[sig] = min(range(len(heur)), key=heur.__getitem__)  # (the first least H)
+            self._greedy_k[sig] = min(range(len(heur)), key=heur.__getitem__) if acts.greedy is None \
+                else acts.greedy  # (the first least H, but for grids)
         return acts
 
     def _softmax(self, sig: int) -> list[float]:
@@ -197,8 +198,9 @@ class GrammarSearch:
 
     # ---- policies --------------------------------------------------------------------------------------------
     def _greedy(self, sig, masks, protected, rules) -> int:
-        if masks is None:
-            return self._greedy_k[sig]
+        k = self._greedy_k[sig]
+        if masks is None or not masks[k] & protected:
+            return k
         heur = self._actions[sig].heuristic
         return min((k for k in range(len(heur)) if not masks[k] & protected), key=heur.__getitem__)
 

@@ -11,7 +11,8 @@ LABELS = ("wall", "window", "sill", "door")
 
 def random_layout(rng: np.random.Generator, width: float = 12.0, height: float = 9.0, depth: int = 4,
                   pinwheel: float = 0.2) -> FacadeLayout:
-    """A random guillotine partition on a 0.5 m lattice, with some blocks replaced by a 5-piece pinwheel."""
+    """A random guillotine partition on a 0.5 m lattice, with some blocks replaced by a 5-piece pinwheel (whose
+    pieces may be split further)."""
     out: list[Region] = []
 
     def rec(x, y, w, h, d):
@@ -25,7 +26,10 @@ def random_layout(rng: np.random.Generator, width: float = 12.0, height: float =
                 pieces = [(x, y, c, b), (x + c, y, w - c, e), (x + a, y + e, w - a, h - e), (x, y + b, a, h - b),
                           (x + a, y + b, c - a, e - b)]
                 for k, p in enumerate(pieces):
-                    out.append(Region(*p, "T", LABELS[k % len(LABELS)]))
+                    if rng.random() < 0.5:  # an arm or the centre split further
+                        rec(*p, d - 1)
+                    else:
+                        out.append(Region(*p, "T", LABELS[k % len(LABELS)]))
                 return
         axis = 0 if (w > h if rng.random() < 0.7 else rng.random() < 0.5) else 1
         extent = w if axis == 0 else h

@@ -106,6 +106,55 @@ def test_pinwheel_goes_through_grid():
     assert_reproduces(result.text, layout)
 
 
+def _pinwheel_of_windows() -> FacadeLayout:
+    """A 12 x 9 m pinwheel (arms 9 x 3 and 3 x 6 m around a 6 x 3 m door) whose arms are bays (2.25 m) or floors
+    (2 m) of wall | window | wall: no line separates it."""
+    ts = []
+    for x0, y0, along in ((0, 0, 0), (3, 6, 0), (9, 0, 1), (0, 3, 1)):
+        for k in range(4 if along == 0 else 3):
+            for lo, size, label in ((0, 0.5, "wall"), (0.5, 1.25 if along == 0 else 1, "window"),
+                                    (1.75 if along == 0 else 1.5, 0.5, "wall")):
+                if along == 0:
+                    ts.append(Region(x0 + 2.25 * k + lo, y0, size, 3, "T", label))
+                else:
+                    ts.append(Region(x0, y0 + 2 * k + lo, 3, size, "T", label))
+    ts.append(Region(3, 3, 6, 3, "T", "door"))
+    return FacadeLayout(12, 9, Region(0, 0, 12, 9, "Facade", children=tuple(ts)))
+
+
+def test_a_pinwheel_grid_has_its_guillotine_blocks_as_items():
+    """A grid listed every terminal (43 items here); ADP may now take the pinwheel's five pieces as items, whose
+    windows repeat rules derive. Greedy still lists every terminal (Eq. 5 cannot rank grids)."""
+    layout = _pinwheel_of_windows()
+    greedy, adp = extract_grammar(layout, "greedy"), extract_grammar(layout, "adp", 200)
+
+    def facade_items(text):
+        rule = next(line for line in text.splitlines() if line.startswith("Facade -->"))
+        assert rule.startswith("Facade --> grid {")
+        return sum(name[0].isupper() for name in rule.split(";")[2].split())
+    assert facade_items(greedy.text) == 43 and facade_items(adp.text) == 5
+    assert "repeat(x)" in adp.text and "repeat(y)" in adp.text
+    assert greedy.cost > 43 and adp.cost < 25
+    assert_reproduces(greedy.text, layout)
+    assert_reproduces(adp.text, layout)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.integers(0, 1))
+def test_guillotine_blocks_partition_a_region_into_unmergeable_unions_of_terminals(seed, first):
+    from citygen_inverse.actions import _blocks
+    layout = random_layout(np.random.default_rng(seed), depth=5, pinwheel=0.5)
+    terminals = [(t.x, t.y, t.x + t.w, t.y + t.h) for t in layout.terminals()]
+    blocks = _blocks(terminals, first)
+    assert sum((b[2] - b[0]) * (b[3] - b[1]) for b in blocks) == pytest.approx(layout.width * layout.height)
+    owner = [[b for b in blocks if b[0] <= t[0] and b[1] <= t[1] and t[2] <= b[2] and t[3] <= b[3]]
+             for t in terminals]
+    assert all(len(o) == 1 for o in owner)  # every terminal in exactly one block: blocks are unions of terminals
+    assert len(blocks) <= len(terminals)
+    sides = {(b[axis + 2], axis, b[1 - axis], b[3 - axis]) for b in blocks for axis in (0, 1)}
+    assert not any((b[axis], axis, b[1 - axis], b[3 - axis]) in sides for b in blocks for axis in (0, 1))
+
+
 def test_bad_layouts_are_rejected():
     overlap = FacadeLayout(2, 1, Region(0, 0, 2, 1, "F", children=(Region(0, 0, 1.5, 1, "A", "wall"),
                                                                       Region(1, 0, 1, 1, "B", "window"))))
