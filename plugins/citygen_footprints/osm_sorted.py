@@ -9,8 +9,8 @@ id, every object once, no negative id. Common files break this, and without the 
   deleted objects marked ``action="delete"``, which libosmium reads as any other;
 * extracts concatenated instead of merged repeat objects (libosmium stops at the second).
 
-``sorted_copy`` writes the file's objects sorted by type and id, the last of repeated ones, without the deleted
-ones, negative ids moved above the largest id of their type. Nodes are held as arrays (24 bytes each), ways and
+``sorted_copy`` writes the file's objects sorted by type and id, the last of repeated ones, negative ids moved
+above the largest id of their type (``plain`` reads them with pyosmium, leaving the deleted ones out). Nodes are held as arrays (24 bytes each), ways and
 relations as tuples; nodes' tags are dropped (no building is a node).
 """
 from __future__ import annotations

@@ -487,8 +487,8 @@ def _grids(index: LayoutIndex, sig: int, sym: RepeatedRegions, model: CostModel,
     ones): its *guillotine blocks* (``_blocks``) as items, each a region of its own that split rules derive; the
     blocks that are repeated regions (§4.3) or occur twice, the others written out by their terminals; every
     terminal. Eq. 5 cannot rank them -- a coarser grid always has the lower H, though its blocks cost rules of
-    their own -- so a greedy run takes the finest (the grid of wu2014) and ADP's value function (Eq. 4), which
-    sees the blocks' sub-grammars, chooses among them. Without ``coarse``, only the finest."""
+    their own -- so a greedy run takes the finest (every terminal, the only grid before) and ADP's value function
+    (Eq. 4), which sees the blocks' sub-grammars, chooses among them. Without ``coarse``, only the finest."""
     box = index.sigs[sig].box
     idx = index.inside(box)
     terminals = list(zip(*(v.take(idx).tolist() for v in (index.X0, index.Y0, index.X1, index.Y1))))
