@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -31,29 +31,20 @@ def read(path: Path):
 
 
 def overpass_copies(directory: Path) -> list[Path]:
-    """The Helsinki extract in Overpass's order (``out body; >; out skel qt;``): as OSM XML and as OSM JSON."""
+    """The Helsinki extract in the Overpass API's order (ways and relations, then nodes): as OSM XML and as OSM
+    JSON (``tests.mutate.write_osm``)."""
     import osmium
     from citygen_footprints.osm_sorted import plain
+    sys.path.insert(0, str(REPO))
+    from tests.mutate import osm_model, write_osm
     elements = list(plain(osmium.FileProcessor(str(HELSINKI_PBF), osmium.osm.NODE | osmium.osm.WAY |
                                                osmium.osm.RELATION)))
-    elements.sort(key=lambda e: e[0] == "n")  # (stable: ways and relations first, each in id order)
-    xml, doc = directory / "helsinki_overpass.osm", {"version": 0.6, "elements": []}
-    writer = osmium.SimpleWriter(str(xml))
-    mutable = osmium.osm.mutable
-    for kind, i, a, b in elements:
-        if kind == "n":
-            writer.add_node(mutable.Node(id=i, location=(a, b)))
-            doc["elements"].append({"type": "node", "id": i, "lon": a, "lat": b})
-        elif kind == "w":
-            writer.add_way(mutable.Way(id=i, nodes=a, tags=b))
-            doc["elements"].append({"type": "way", "id": i, "nodes": a, "tags": b})
-        else:
-            writer.add_relation(mutable.Relation(id=i, members=a, tags=b))
-            doc["elements"].append({"type": "relation", "id": i, "tags": b, "members": [
-                {"type": {"n": "node", "w": "way", "r": "relation"}[t], "ref": r, "role": role} for t, r, role in a]})
-    writer.close()
-    (directory / "helsinki_overpass.json").write_text(json.dumps(doc))
-    return [xml, directory / "helsinki_overpass.json"]
+    model = osm_model({i: (a, b) for kind, i, a, b in elements if kind == "n" and a is not None},
+                      [e[1:] for e in elements if e[0] == "w"], [e[1:] for e in elements if e[0] == "r"])
+    paths = [directory / "helsinki_overpass.osm", directory / "helsinki_overpass.json"]
+    for path in paths:
+        write_osm(model, path)
+    return paths
 
 
 def measure(path: Path, repeat: int):

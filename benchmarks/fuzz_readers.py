@@ -233,7 +233,8 @@ def seeds() -> dict[str, list[tuple[str, str, str]]]:
         out["footprints"].append((path.name, path.read_text(), "json"))
     out["footprints"].append(("delft3.city.json", small_cityjson(), "json"))
     model = small_osm()
-    out["osm"] += [("helsinki.osm", model, "osm"), ("helsinki.opl", model, "osm"), ("helsinki.osm.pbf", model, "pbf")]
+    out["osm"] += [("helsinki.osm", model, "osm"), ("helsinki.opl", model, "osm"), ("helsinki.osm.pbf", model, "pbf"),
+                   ("helsinki_overpass.osm", model, "osm"), ("helsinki_overpass.json", model, "osmjson")]
     out["cityjsonseq"].append(("delft3.city.jsonl", small_cityjsonseq(), "jsonl"))
     out["extreme"] += [(what, spec, "extreme") for what, spec in EXTREME]
     for path in sorted(CMP.glob("*.xml")):
@@ -389,10 +390,10 @@ def cases(name: str, text: str, dialect: str, count: int, rng: random.Random, ex
 
 def osm_cases(name: str, model: dict, dialect: str, count: int, rng: random.Random, scratch: Path
               ) -> Iterator[tuple[str, str | bytes]]:
-    """``count`` OSM files: the model mutated (``mutate_osm``, one to three times) and written in ``name``'s format;
-    text formats also get a text mutation a third of the time, PBF a byte mutation (truncation, flipped bytes,
-    zeroed or repeated blocks) half of the time."""
-    path = scratch / f"render{''.join(Path(name).suffixes)}"
+    """``count`` OSM files: the model mutated (``mutate_osm``, one to three times) and written in ``name``'s format
+    (``write_osm``: also as Overpass writes XML and OSM JSON); text formats also get a text mutation a third of
+    the time, PBF a byte mutation (truncation, flipped bytes, zeroed or repeated blocks) half of the time."""
+    path = scratch / f"render-{name}"  # (the name chooses the format and order: see ``write_osm``)
     write_osm(model, path)
     seed = path.read_bytes()
     for i in range(count):
@@ -410,7 +411,7 @@ def osm_cases(name: str, model: dict, dialect: str, count: int, rng: random.Rand
         if dialect == "pbf":
             yield f"random model #{i}", mutate_bytes(data, rng) if rng.random() < 0.25 else data
         elif rng.random() < 1 / 3:
-            yield f"random model+text #{i}", mutate(data.decode(), "dsl", rng)
+            yield f"random model+text #{i}", mutate(data.decode(), "json" if dialect == "osmjson" else "dsl", rng)
         else:
             yield f"random model #{i}", data.decode()
 
@@ -437,7 +438,7 @@ def main() -> None:
             t_reader = time.process_time()
             for name, text, dialect in files:
                 rng = random.Random(f"{args.seed}:{reader}:{name}")
-                if dialect in ("osm", "pbf"):
+                if dialect in ("osm", "pbf", "osmjson"):
                     generated = osm_cases(name, text, dialect, args.cases, rng, Path(tmp))
                 elif dialect == "jsonl":
                     generated = ((f"random #{i}", mutate_jsonl(text, rng)) for i in range(args.cases))

@@ -280,18 +280,38 @@ def mutate_osm(model: dict, rng: random.Random) -> dict:
 
 
 def write_osm(model: dict, path: Path) -> None:
-    """Write the model as ``path``'s format (.osm XML, .opl, .osm.pbf) with pyosmium, sorted by type and id."""
+    """Write the model as ``path``'s format (.osm XML, .opl, .osm.pbf) with pyosmium, sorted by type and id; a name
+    with ``overpass`` in the order the Overpass API writes (ways and relations by id, then the nodes), and a
+    ``.json`` name as OSM JSON in that order."""
     import osmium
     from osmium.osm.mutable import Node, Relation, Way
+    nodes = sorted(model["nodes"].items())
+    ways, relations = sorted(model["ways"], key=lambda w: w[0]), sorted(model["relations"], key=lambda r: r[0])
     path.unlink(missing_ok=True)
+    if path.suffix == ".json":
+        names = {"n": "node", "w": "way", "r": "relation"}
+        elements = [{"type": "way", "id": i, "nodes": refs, "tags": tags} for i, refs, tags in ways]
+        elements += [{"type": "relation", "id": i, "tags": tags, "members": [
+            {"type": names.get(t, t), "ref": ref, "role": role} for t, ref, role in members]}
+            for i, members, tags in relations]
+        elements += [{"type": "node", "id": i, "lat": lat, "lon": lon} for i, (lon, lat) in nodes]
+        path.write_text(json.dumps({"version": 0.6, "generator": "Overpass API", "elements": elements}))
+        return
     writer = osmium.SimpleWriter(str(path))
-    try:
-        for nid, (lon, lat) in sorted(model["nodes"].items()):
+    overpass = "overpass" in path.name
+
+    def add_nodes() -> None:
+        for nid, (lon, lat) in nodes:
             writer.add_node(Node(id=nid, location=(lon, lat), version=1))
-        for wid, refs, tags in sorted(model["ways"], key=lambda w: w[0]):  # libosmium wants files sorted by id
+    try:
+        if not overpass:
+            add_nodes()
+        for wid, refs, tags in ways:  # libosmium wants files sorted by id
             writer.add_way(Way(id=wid, nodes=refs, tags=tags, version=1))
-        for rid, members, tags in sorted(model["relations"], key=lambda r: r[0]):
+        for rid, members, tags in relations:
             writer.add_relation(Relation(id=rid, members=members, tags=tags, version=1))
+        if overpass:
+            add_nodes()
     finally:
         writer.close()
 
