@@ -1,6 +1,8 @@
 """OpenStreetMap files: building ways, multipolygons, Simple 3D Buildings parts, and what cannot be a building."""
 from __future__ import annotations
 
+import bz2
+import gzip
 import sys
 from pathlib import Path
 
@@ -24,18 +26,28 @@ def _square(first: int, x: float, y: float, w: float, h: float) -> list[tuple[in
             for k, (dx, dy) in enumerate(((0, 0), (w, 0), (w, h), (0, h)))]
 
 
-def _osm(path: Path, nodes, ways, relations=()) -> Path:
-    """An OSM XML file: nodes (id, lon, lat); ways (id, node ids, tags); relations (id, [(type, ref, role)], tags)."""
+def _osm(path: Path, nodes, ways, relations=(), actions=None, generator="test", q='"') -> Path:
+    """An OSM XML file: nodes (id, lon, lat); ways (id, node ids, tags); relations (id, [(type, ref, role)], tags);
+    ``actions`` {(type letter, id): action} as an editor marks objects (JOSM: ``generator="JOSM", q="'"``, its
+    quotes; new objects have negative ids and no version); a ``.gz`` / ``.bz2`` name is compressed."""
+    actions = actions or {}
+
+    def attrs(kind, i):
+        action = actions.get((kind, i))
+        return f"id={q}{i}{q}" + (f" action={q}{action}{q}" if action else "") + ("" if i < 0 else f" version={q}1{q}")
+
     def tags(t):
-        return "".join(f'<tag k="{k}" v="{v}"/>' for k, v in t.items())
-    lines = ['<?xml version="1.0" encoding="UTF-8"?>', '<osm version="0.6" generator="test">']
-    lines += [f'<node id="{i}" version="1" lat="{lat:.9f}" lon="{lon:.9f}"/>' for i, lon, lat in nodes]
-    lines += [f'<way id="{i}" version="1">' + "".join(f'<nd ref="{n}"/>' for n in refs) + tags(t) + "</way>"
+        return "".join(f"<tag k={q}{k}{q} v={q}{v}{q}/>" for k, v in t.items())
+    lines = [f"<?xml version={q}1.0{q} encoding={q}UTF-8{q}?>", f"<osm version={q}0.6{q} generator={q}{generator}{q}>"]
+    lines += [f"<node {attrs('n', i)} lat={q}{lat:.9f}{q} lon={q}{lon:.9f}{q}/>" for i, lon, lat in nodes]
+    lines += [f"<way {attrs('w', i)}>" + "".join(f"<nd ref={q}{n}{q}/>" for n in refs) + tags(t) + "</way>"
               for i, refs, t in ways]
-    lines += [f'<relation id="{i}" version="1">' + "".join(f'<member type="{k}" ref="{r}" role="{role}"/>'
-                                                           for k, r, role in members) + tags(t) + "</relation>"
+    lines += [f"<relation {attrs('r', i)}>" + "".join(f"<member type={q}{k}{q} ref={q}{r}{q} role={q}{role}{q}/>"
+                                                      for k, r, role in members) + tags(t) + "</relation>"
               for i, members, t in relations]
-    path.write_text("\n".join([*lines, "</osm>"]))
+    text = "\n".join([*lines, "</osm>"]) + "\n"
+    opener = {".gz": gzip.compress, ".bz2": bz2.compress}.get(path.suffix)
+    path.write_bytes(opener(text.encode()) if opener else text.encode())
     return path
 
 

@@ -2,43 +2,18 @@
 nodes), files saved by an editor (JOSM: negative ids of new objects, objects marked deleted)."""
 from __future__ import annotations
 
-import bz2
-import gzip
-
 import pytest
 from citygen.errors import FootprintError
 
-from .test_osm import LAT, LON, _read, _ring, _square
+from .test_osm import LAT, LON, _osm, _read, _ring, _square
 
 pytest.importorskip("osmium")
 from citygen_footprints.osm_sorted import deleted_marks  # noqa: E402
 
 
 def _josm(path, nodes, ways, relations=(), actions=None):
-    """An editor's OSM XML: JOSM's quoting and attributes, ``actions`` {(type letter, id): action}."""
-    actions = actions or {}
-
-    def attrs(kind, i):
-        action = actions.get((kind, i))
-        return f"id='{i}'" + (f" action='{action}'" if action else "") + ("" if i < 0 else " version='3'")
-
-    def tags(t):
-        return "".join(f"<tag k='{k}' v='{v}' />" for k, v in t.items())
-    lines = ["<?xml version='1.0' encoding='UTF-8'?>", "<osm version='0.6' upload='never' generator='JOSM'>"]
-    lines += [f"  <node {attrs('n', i)} lat='{lat:.9f}' lon='{lon:.9f}' />" for i, lon, lat in nodes]
-    lines += [f"  <way {attrs('w', i)}>" + "".join(f"<nd ref='{n}' />" for n in refs) + tags(t) + "</way>"
-              for i, refs, t in ways]
-    lines += [f"  <relation {attrs('r', i)}>" + "".join(f"<member type='{k}' ref='{r}' role='{role}' />"
-                                                        for k, r, role in members) + tags(t) + "</relation>"
-              for i, members, t in relations]
-    text = "\n".join([*lines, "</osm>"]) + "\n"
-    if path.name.endswith(".gz"):
-        path.write_bytes(gzip.compress(text.encode()))
-    elif path.name.endswith(".bz2"):
-        path.write_bytes(bz2.compress(text.encode()))
-    else:
-        path.write_text(text)
-    return path
+    """An editor's OSM XML (JOSM's header and quotes)."""
+    return _osm(path, nodes, ways, relations, actions, generator="JOSM", q="'")
 
 
 def _new(first, x, w=20):
@@ -108,7 +83,7 @@ def test_an_overpass_export_with_ways_before_their_nodes_is_read(tmp_path, quad_
     _josm(path, [], [(100, _ring(a), {"building": "house"}), (200, _ring(b), {"building": "yes"})],
           [(300, [("w", 202, "outer"), ("w", 203, "inner")], {"type": "multipolygon", "building": "yes"})])
     tail = _josm(tmp_path / "tail.osm", nodes, [(202, _ring(outer), {}), (203, _ring(inner), {})])
-    body = [line for line in tail.read_text().splitlines() if line.startswith("  <")]
+    body = [line for line in tail.read_text().splitlines() if line.startswith(("<node", "<way", "<relation"))]
     text = path.read_text().replace("</osm>", "\n".join(body) + "\n</osm>")
     path.write_text(text.replace("generator='JOSM'", "generator='Overpass API 0.7.62'"))
     result = _read(path)
