@@ -150,6 +150,7 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
     skipped: dict[str, Skipped] = {}
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, by place in the file
     made: set[str] = set()
+    invisible: set[str] = set()
     last = 0
 
     def named(oid: str) -> str:
@@ -168,6 +169,10 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
             return [], [], "negative ids (an editor's new objects)" if obj.id < 0 else \
                 "nodes or ways after the ways or relations that use them (as in Overpass exports)"
         last = rank
+        if not obj.visible:  # (deleted: an osmChange <delete>, visible="false")
+            if rank:
+                invisible.add(f"{'way' if rank == 1 else 'relation'}/{obj.id}")
+            continue
         if not _is_building(obj.tags):
             continue
         if obj.is_way():
@@ -189,7 +194,7 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
             if oid.startswith("relation/") else "fewer than three distinct nodes, or a self-crossing libosmium rejects"
         skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
                                     "extract or fix the outline in OSM", f"{where}, {oid}")
-    areas.sort(key=lambda a: a.index)
+    areas = sorted((a for a in areas if a.id not in invisible), key=lambda a: a.index)
     return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), None
 
 

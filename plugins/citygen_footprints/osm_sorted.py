@@ -10,8 +10,8 @@ id, every object once, no negative id. Common files break this, and without the 
 * extracts concatenated instead of merged repeat objects (libosmium stops at the second).
 
 ``sorted_copy`` writes the file's objects sorted by type and id, the last of repeated ones, negative ids moved
-above the largest id of their type (``plain`` reads them with pyosmium, leaving the deleted ones out). Nodes are held as arrays (24 bytes each), ways and
-relations as tuples; nodes' tags are dropped (no building is a node).
+above the largest id of their type (``plain`` reads them with pyosmium, leaving the deleted ones out). Nodes are
+held as arrays (24 bytes each), ways and relations as tuples; nodes' tags are dropped (no building is a node).
 """
 from __future__ import annotations
 
@@ -53,12 +53,15 @@ def deleted_marks(path: Path, chunk: int = 1 << 24) -> set[tuple[str, int]]:
 
 
 def plain(objects, deleted: set[tuple[str, int]] = frozenset()):
-    """pyosmium's nodes, ways and relations as ``sorted_copy`` takes them, without the ``deleted`` ones."""
+    """pyosmium's nodes, ways and relations as ``sorted_copy`` takes them, without the ``deleted`` ones; an object
+    libosmium reads as deleted (``visible="false"``, an osmChange ``<delete>``) as a deleted one."""
     for obj in objects:
         kind = obj.type_str()
         if (kind, obj.id) in deleted:
             continue
-        if kind == "n":
+        if not obj.visible:
+            yield kind, obj.id, None, None
+        elif kind == "n":
             where = obj.location
             yield ("n", obj.id, where.lon, where.lat) if where.valid() else ("n", obj.id, None, None)
         elif kind == "w":
@@ -69,7 +72,8 @@ def plain(objects, deleted: set[tuple[str, int]] = frozenset()):
 
 def sorted_copy(osmium, elements, out: Path) -> dict[str, tuple[str, int]]:
     """Write ``elements`` -- ("n", id, lon, lat) (lon, lat None: no location), ("w", id, node ids, tags),
-    ("r", id, [(type letter, ref, role)], tags) -- to ``out`` as libosmium needs them (module docstring).
+    ("r", id, [(type letter, ref, role)], tags), a way or relation with None for both deleted (a later version
+    of an object replaces an earlier one) -- to ``out`` as libosmium needs them (module docstring).
     Returns per way and relation of the copy its name and place among the ways and relations read
     (``"way/-5"``, first appearance)."""
     ids, lons, lats = array("q"), array("d"), array("d")
@@ -107,9 +111,13 @@ def sorted_copy(osmium, elements, out: Path) -> dict[str, tuple[str, int]]:
             writer.add_node(mutable.Node(id=i, location=location() if x != x else location(x, y)))
         for i in sorted(ways, key=lambda i: new("w", i)):
             refs, tags = ways[i]
+            if tags is None:
+                continue
             writer.add_way(mutable.Way(id=new("w", i), tags=tags, nodes=[new("n", r) for r in refs]))
         for i in sorted(relations, key=lambda i: new("r", i)):
             members, tags = relations[i]
+            if tags is None:
+                continue
             writer.add_relation(mutable.Relation(id=new("r", i), tags=tags, members=[
                 (t, new(t, r), role) for t, r, role in members]))
     finally:

@@ -131,3 +131,20 @@ def test_negative_ids_too_far_from_the_others_to_renumber_are_an_error_naming_th
     with pytest.raises(FootprintError, match="too far apart") as err:
         _read(path)
     assert str(err.value).startswith(str(path)) and "osmium renumber" in str(err.value)
+
+
+def test_objects_libosmium_reads_as_deleted_are_left_out(tmp_path):
+    # was: built -- a way in an osmChange <delete> block, or visible="false" (the last version in a history file)
+    a, b = _square(1, 0, 0, 20, 10), _square(11, 40, 0, 20, 10)
+    ways = [(100, _ring(a), {"building": "yes"}), (101, _ring(b), {"building": "yes"})]
+    change = _osm(tmp_path / "c.osm", a + b, ways).read_text().replace('<osm version="0.6" generator="test">',
+                                                                       '<osmChange version="0.6"><create>')
+    deleted = next(line for line in change.splitlines() if line.startswith('<way id="101"'))
+    change = change.replace(deleted, "</create><delete>" + deleted + "</delete>").replace("</osm>", "</osmChange>")
+    (tmp_path / "c.osc").write_text(change)
+    history = _osm(tmp_path / "h.osm", a + b, ways).read_text()
+    history = history.replace(deleted, deleted + "\n" + deleted.replace('version="1"', 'version="2" visible="false"'))
+    (tmp_path / "h.osm").write_text(history)
+    for name in ("c.osc", "h.osm"):
+        result = _read(tmp_path / name)
+        assert [f.id for f in result.footprints] == ["way/100"] and result.skipped == (), name
