@@ -3,10 +3,12 @@
 One *iteration* builds a complete deterministic grammar top-down: non-terminal regions without a rule are taken
 bottom to top, left to right (only the first instance of a signature is split; later instances reuse its rule),
 and one action (rule) is chosen for each. *Greedy* takes the action of least heuristic H (Eq. 5); *importance
-sampling* draws from softmax(-H); *ADP* explores with probability epsilon (0.9, decaying exponentially) and
-otherwise exploits the value function approximation: min_a C(a) + sum of V(child) over the successors that have
-no rule yet, V being the best known cost of the sub-grammar a region introduced, stored per region with its
-best action (§4.5). Iterations protect a random non-overlapping set of important repeated regions
+sampling* draws from softmax(-H); *ADP* explores with probability epsilon (0.9, decaying exponentially to 0.01
+over the run, or over each cycle of ``CYCLE`` iterations of a longer run: a cycle ends like a whole run, with one
+exploiting iteration, so a run of k cycles begins with the one-cycle run and is never worse) and otherwise
+exploits the value function approximation: min_a C(a) + sum of V(child) over the successors that have no rule
+yet, V being the best known cost of the sub-grammar a region introduced, stored per region with its best action
+(§4.5). Iterations protect a random non-overlapping set of important repeated regions
 (f(a, o) = (a-1)(o-1), §4.7) from being cut. The best grammar over all iterations is returned; ADP's first
 iteration is the greedy one, so ADP is never worse than greedy.
 """
@@ -26,6 +28,7 @@ from citygen_inverse.regions import LayoutIndex
 from citygen_inverse.symmetry import RepeatedRegions, detect_symmetry
 
 METHODS = ("greedy", "is", "adp")
+CYCLE = 2000  # ADP's epsilon schedule restarts after this many iterations (longer runs are never worse)
 _NO_KIDS: frozenset[int] = frozenset()
 
 
@@ -271,7 +274,8 @@ class GrammarSearch:
         rng = derive_rng(seed, "citygen_inverse", method)
         self._u = []
         sample = self._sample(rng)
-        decay = (0.01 / 0.9) ** (1.0 / max(iterations, 1))
+        cycle = min(iterations, CYCLE)
+        decay = (0.01 / 0.9) ** (1.0 / cycle)
         done = 1
         for it in range(1, iterations):
             if time_limit is not None and time.perf_counter() - start > time_limit:
@@ -280,13 +284,17 @@ class GrammarSearch:
             if method == "is":
                 policy = sample
             else:
-                eps = 0.9 * decay ** it
+                eps = 0.9 * decay ** (it % cycle)
                 def policy(sig, masks, protected, rules, eps=eps):
                     if self._uniform(rng) < eps:
                         return sample(sig, masks, protected, rules)
                     return self._exploit(sig, masks, protected, rules)
             rules, cost = self.iterate(policy, protected)
             done += 1
+            if method == "adp" and (it + 1) % cycle == 0 and it + 1 < iterations:  # a cycle ends: exploit once
+                exploited, exploited_cost = self.iterate(self._exploit, 0)
+                if exploited_cost < cost:
+                    rules, cost = exploited, exploited_cost
             if cost < best_cost - 1e-9:
                 best_rules, best_cost = rules, cost
             history.append(best_cost)

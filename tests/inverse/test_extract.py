@@ -13,6 +13,8 @@ from citygen.request import FacadeRequest
 from citygen_inverse.actions import CostModel
 from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
+from citygen_inverse.regions import LayoutIndex
+from citygen_inverse.search import GrammarSearch
 
 from .helpers import assert_reproduces, random_layout
 
@@ -57,6 +59,20 @@ def test_adp_never_worse_than_greedy_and_is_deterministic():
     assert adp.cost <= greedy.cost + 1e-9
     assert extract_grammar(layout, "adp", 100, seed=5).text == adp.text
     assert extract_grammar(layout, "is", 50, seed=5).cost <= greedy.cost + 1e-9
+
+
+def test_a_longer_adp_run_repeats_the_schedule_and_is_never_worse(monkeypatch):
+    """Regression: epsilon decayed over the whole run, so ADP 10K explored differently from ADP 2K and ended
+    worse on average (cmp_b0001: 340.3 vs 329.8); now the schedule restarts every ``CYCLE`` iterations."""
+    monkeypatch.setattr("citygen_inverse.search.CYCLE", 40)
+    for k in range(4):
+        layout = random_layout(np.random.default_rng(20 + k))
+        index = LayoutIndex([layout], True, periodic=True)
+        one = GrammarSearch(index).run("adp", 40, seed=k)
+        three = GrammarSearch(index).run("adp", 120, seed=k)
+        assert three.history[:39] == one.history[:39]  # the first cycle is the one-cycle run ...
+        assert three.cost <= one.cost + 1e-9  # ... whose final exploitation ends it too
+        assert three.iterations == 120
 
 
 def test_size_independent_grammar_fills_other_sizes_with_floors():
@@ -234,8 +250,6 @@ def test_extraction_leaves_the_garbage_collector_as_it_found_it():
 @given(st.integers(0, 10_000), st.integers(0, 3))
 def test_memoised_exploitation_chooses_as_a_fresh_evaluation(layout_seed, seed):
     """ADP keeps Eq. 4 choices per region until a V they read improves: the same grammars as recomputing."""
-    from citygen_inverse.regions import LayoutIndex
-    from citygen_inverse.search import GrammarSearch
     layout = random_layout(np.random.default_rng(layout_seed), depth=5, pinwheel=0.1)
 
     def run(memo: bool):
@@ -276,8 +290,6 @@ def test_protection_masks_match_the_per_rule_definition(name):
     """§4.7 protection: per candidate rule, the bit mask of important instances strictly inside the region that
     one of its split lines crosses -- the vectorised masks equal the rule-by-rule definition for every region an
     ADP run visits (with the candidates' rules built)."""
-    from citygen_inverse.regions import LayoutIndex
-    from citygen_inverse.search import GrammarSearch
     search = GrammarSearch(LayoutIndex([import_cmp(DATA / f"{name}.xml")], True, periodic=True))
     search.run("adp", 60, 0)
     assert len(search._masks) > 10 and any(any(masks) for masks, _ in search._masks.values())
