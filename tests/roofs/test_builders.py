@@ -1,4 +1,5 @@
 import math
+import warnings
 from collections import Counter
 
 import numpy as np
@@ -200,6 +201,19 @@ def test_skillion_falls_towards_its_direction():
 def test_self_intersecting_outline_raises_roof_error():
     with pytest.raises(RoofError):
         GabledRoof().build(Polygon([(0, 0), (10, 10), (10, 0), (0, 10)]), TOP, RoofSpec("gabled"))
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof()], ids=lambda b: b.id)
+def test_sliver_that_folds_flat_at_once_is_too_thin_without_numpy_warnings(builder):
+    """Found by fuzz_readers --readers osm-city (a node moved to lon -180 made a 6,800 km sliver): the skeleton
+    finished the triangle at time 0 with two corners snapped onto one place and divided by that arc's zero length
+    (numpy RuntimeWarnings among the city's messages) on the way to the flat-roof fallback."""
+    sliver = Polygon([(0, 0), (0, 1), (-2e6, 0)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert not skeleton_faces(sliver, np.ones(3))[0][:, 2].any()  # no roof rises over it
+        with pytest.raises(RoofError, match="too thin"):
+            builder.build(sliver, TOP, RoofSpec(builder.id, height=2.0))
 
 
 @settings(max_examples=40)
