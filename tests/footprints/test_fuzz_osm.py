@@ -14,7 +14,7 @@ from citygen_footprints.plugin import read_footprints
 
 from ..mutate import mutate_bytes, mutate_jsonl, mutate_osm, osm_model, write_osm
 from .conftest import assert_read_or_refused
-from .test_osm import _osm, _read, _ring, _square
+from .test_osm import LON, _osm, _read, _ring, _square
 
 pytest.importorskip("osmium")
 
@@ -44,6 +44,22 @@ def test_osm_file_with_an_id_twice_is_read_once_from_a_sorted_copy(tmp_path):
     result = _read(path)
     assert [f.id for f in result.footprints] == ["way/100"]
     assert any("copy sorted" in w and "repeated" in w for w in result.warnings)
+
+
+def test_osm_building_with_a_node_thousands_of_km_off_is_skipped_and_the_frame_stays_on_the_rest(tmp_path):
+    # found by fuzz_readers --readers osm-city: a node moved to lon -180 made its building a 6,500 km sliver (kept:
+    # lon/lat files had no distance check) whose corner dragged the frame's centre 3,400 km away from central
+    # Helsinki, where the other buildings' hipped roofs fell back to flat
+    nodes = _square(1, 0, 0, 20, 10) + _square(11, 30, 0, 10, 10) + _square(21, 60, 0, 10, 10)
+    nodes[-1] = (24, -180.0, nodes[-1][2])
+    ways = [(100 + k, _ring(nodes[4 * k:4 * k + 4]), {"building": "yes"}) for k in range(3)]
+    result = _read(_osm(tmp_path / "a.osm", nodes, ways))
+    assert [f.id for f in result.footprints] == ["way/100", "way/101"]
+    (skip,) = result.skipped
+    assert skip.id == "way/102" and skip.reason.startswith("its corner at (-180, 60.17")
+    assert "km from the other buildings (more than 1,000 km) -- fix its coordinates" in skip.reason
+    assert result.georef.origin[0] == pytest.approx(LON, abs=1e-3)
+    assert all(abs(v) < 50 for f in result.footprints for v in f.polygon.bounds)
 
 
 HEADER = {"type": "CityJSON", "version": "2.0", "transform": {"scale": [0.5, 0.5, 1], "translate": [10, 20, 0]},
