@@ -500,7 +500,8 @@ class _Wavefront:
 
 
 def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
+    """Shoelace area about the first point (no cancellation far from the origin)."""
+    x, y = p[:, 0] - p[0, 0], p[:, 1] - p[0, 1]
     return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 
