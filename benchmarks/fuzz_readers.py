@@ -50,22 +50,17 @@ import warnings
 from collections import Counter, defaultdict
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from citygen.errors import CitygenError  # noqa: E402
-from citygen.footprints import ImportResult  # noqa: E402
 from citygen.layout import FacadeLayout  # noqa: E402
 from citygen.registry import default_registry  # noqa: E402
 from citygen.request import FacadeRequest  # noqa: E402
-from citygen.scene import Scene, load_scene  # noqa: E402
-from tests.mutate import (NUMBERS, mutate, mutate_bytes, mutate_jsonl, mutate_osm, number_spans,  # noqa: E402
-                          osm_model, write_osm)
-
-if TYPE_CHECKING:
-    from citygen.pipeline import Report
+from citygen.scene import load_scene  # noqa: E402
+from tests.mutate import (NUMBERS, city_of_footprints, generate_and_check, mutate, mutate_bytes,  # noqa: E402
+                          mutate_jsonl, mutate_osm, number_spans, osm_model, write_osm)
 
 REGISTRY = default_registry()
 RULESET_SUFFIXES = {"split": ".grammar", "layers": ".layers", "relayout": ".relayout", "safe": ".safe"}
@@ -290,52 +285,27 @@ class Runner:
             if name == SAFE_LAYOUT:
                 shutil.copy(REPO / "rulesets" / SAFE_LAYOUT, rulesets / SAFE_LAYOUT)
 
-    def _read(self, path: Path, options: dict) -> ImportResult:
-        """``path`` through its importer (the suffixes choose it); every footprint's numbers must be finite."""
-        result = REGISTRY.importer_for(path).read(path, options)
+    def _footprints(self, name: str, data: str | bytes) -> str:
+        path = self.root / f"fuzz{''.join(Path(name).suffixes)}"  # (the suffixes choose the importer)
+        write(path, data)
+        result = REGISTRY.importer_for(path).read(path, {})
         for fp in result.footprints:
             self._check_finite((fp.height, fp.base, fp.lift, *fp.polygon.bounds), f"footprint {fp.id}")
-        return result
-
-    def _footprints(self, name: str, data: str | bytes) -> str:
-        path = self.root / f"fuzz{''.join(Path(name).suffixes)}"
-        write(path, data)
-        result = self._read(path, {})
         return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
-
-    def _city(self, scene: Scene, out: Path) -> Report:
-        """``generate_city`` with one job into ``out``, then what every city run must give: zero ``citygen
-        validate`` errors, finite points, no building skipped with an internal error."""
-        from pxr import Usd, UsdGeom
-
-        from citygen.pipeline import generate_city
-        from citygen.usd.validate import validate_stage
-        report = generate_city(scene, out=out, jobs=1, registry=REGISTRY)
-        errors = [f for f in validate_stage(out) if f.severity == "error"]
-        if errors:
-            raise ValueError(f"citygen validate: {len(errors)} errors, e.g. {errors[0].where}: {errors[0].message}")
-        stage = Usd.Stage.Open(str(out))
-        for prim in stage.Traverse(Usd.PrimAllPrimsPredicate):
-            if prim.IsA(UsdGeom.PointBased):
-                self._check_finite((v for p in UsdGeom.PointBased(prim).GetPointsAttr().Get() or () for v in p),
-                                   f"{prim.GetPath()} points")
-        internal = [s for s in report.skipped if s.reason.startswith("internal error")]
-        if internal:
-            raise ValueError(f"skipped with an internal error: {internal[0].id}: {internal[0].reason}")
-        return report
 
     def _extreme(self, spec: dict) -> str:
         directory = self.root / "extreme"
         shutil.rmtree(directory, ignore_errors=True)
         directory.mkdir()
-        report = self._city(load_scene(extreme_files(directory, spec)), directory / "extreme.usda")
+        scene = extreme_files(directory, spec)
+        report = generate_and_check(load_scene(scene), directory / "extreme.usda", REGISTRY)
         if report.written < 3:
             raise ValueError(f"a good building was lost: written {report.written}, skipped "
                              f"{[(s.id, s.reason) for s in report.skipped]}")
         return f"generated ({report.written} written, {len(report.skipped)} skipped)"
 
     def _osm_city(self, name: str, data: str | bytes) -> str:
-        """The fuzzed file as the demo scene's footprints (the scene beside the copied ``rulesets/``)."""
+        """The fuzzed file as the footprints of the OSM demo scene, written beside the copied ``rulesets/``."""
         directory = self.root / "scenes"
         footprints = directory / f"fuzz-city{''.join(Path(name).suffixes)}"
         write(footprints, data)
@@ -345,23 +315,11 @@ class Runner:
         scene = load_scene(scene_path)
         if scene.footprints.resolve() != footprints.resolve():
             raise RuntimeError(f"{OSM_CITY_SCENE} no longer names its footprints as path = \"data/...\"")
-        options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
-                   **scene.footprint_options}  # (as generate_city reads them)
-        options.pop("format", None)
-        imported = self._read(footprints, options)  # a CitygenError here: the file refused, not a failure
-        kept = len(imported.footprints)
         out = self.root / "osm-city" / "city.usda"
         shutil.rmtree(out.parent, ignore_errors=True)
         out.parent.mkdir()
-        try:
-            report = self._city(scene, out)
-        except CitygenError as exc:
-            raise ValueError(f"the city of a file read with {kept} footprints failed: {type(exc).__name__}: {exc}"
-                             ) from exc
-        skipped = len(report.skipped) - len(imported.skipped)  # (generate_city's report starts with the import's)
-        if report.written + skipped != kept:
-            raise ValueError(f"{kept} footprints read, {report.written} written and {skipped} skipped")
-        return f"generated ({kept} read, {report.written} written, {skipped} skipped)"
+        kept, report = city_of_footprints(scene, out, REGISTRY)
+        return f"generated ({kept} read, {report.written} written, {kept - report.written} skipped)"
 
     def _cmp(self, name: str, text: str | bytes) -> str:
         from citygen.layout import check_partition
