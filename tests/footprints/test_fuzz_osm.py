@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import random
+import warnings
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -13,7 +15,7 @@ from citygen.errors import FootprintError
 from citygen_footprints.plugin import read_footprints
 
 from ..mutate import mutate_bytes, mutate_jsonl, mutate_osm, osm_model, write_osm
-from .conftest import assert_read_or_refused
+from .conftest import ROOT, assert_read_or_refused
 from .test_osm import LON, _osm, _read, _ring, _square
 
 pytest.importorskip("osmium")
@@ -110,3 +112,50 @@ def test_mutated_osm_files_raise_only_footprint_errors(tmp_path_factory, suffix,
     if suffix == ".osm.pbf" and rng.random() < 0.5:
         path.write_bytes(mutate_bytes(path.read_bytes(), rng))
     assert_read_or_refused(lambda p: read_footprints(p, {}) if suffix.endswith(".json") else _read(p), path)
+
+
+#: a small city: an outline drawn by its lifted part, a multipolygon, a house; roof and height tags on each
+CITY = osm_model({n: (lon, lat) for n, lon, lat in _square(1, 0, 0, 20, 10) + _square(11, 30, 0, 10, 10)
+                  + _square(21, 2, 1, 8, 8) + _square(31, 0, 20, 12, 8)},
+                 [(100, [1, 2, 3, 4, 1], {"building": "yes", "height": "12", "roof:shape": "gabled"}),
+                  (101, [21, 22, 23, 24, 21], {"building:part": "yes", "height": "15", "min_height": "3",
+                                               "building:levels": "4", "roof:shape": "hipped"}),
+                  (102, [11, 12, 13], {}), (103, [13, 14, 11], {}),
+                  (104, [31, 32, 33, 34, 31], {"building": "house", "building:levels": "2", "roof:shape": "pyramidal",
+                                               "roof:height": "2"})],
+                 [(500, [("w", 102, "outer"), ("w", 103, "outer")],
+                   {"type": "multipolygon", "building": "apartments", "roof:shape": "skillion"})])
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(suffix=st.sampled_from([".osm", ".osm.pbf", "_overpass.json"]), seed=st.integers(0, 2 ** 32 - 1))
+def test_mutated_osm_files_generate_valid_cities(tmp_path_factory, suffix, seed):
+    """fuzz_readers --readers osm-city in small: a mutated file the importer reads (any number of footprints)
+    generates a city without raising, with zero validation errors, finite points and every footprint written or
+    skipped with a reason that is no internal error, and no numpy or shapely RuntimeWarning on the way."""
+    from citygen.scene import load_scene
+
+    from ..mutate import city_of_footprints
+    rng = random.Random(seed)
+    directory = tmp_path_factory.getbasetemp()
+    model = CITY
+    for _ in range(rng.choice((1, 2, 3))):
+        model = mutate_osm(model, rng)
+    path = directory / f"city{suffix}"
+    write_osm(model, path)
+    if suffix == ".osm.pbf" and rng.random() < 0.5:
+        path.write_bytes(mutate_bytes(path.read_bytes(), rng))
+    apartment, house = ((ROOT / "rulesets" / name).as_posix() for name in ("apartment.grammar", "house.grammar"))
+    (directory / "city.toml").write_text(
+        f'[footprints]\npath = "{path.name}"\n[defaults]\nroof_shape = "hipped"\n'
+        f'[[assign]]\nwhen = {{ building = ["apartments"] }}\nruleset = "{apartment}"\nfallback = "{house}"\n'
+        f'[[assign]]\nruleset = "{house}"\n[output]\npath = "city.usda"\nground = true\n')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RuntimeWarning)
+        try:
+            city_of_footprints(load_scene(directory / "city.toml"), directory / "city.usda")
+        except FootprintError:
+            return  # the file refused, naming it
+    noise = [f"{Path(w.filename).name}:{w.lineno}: {w.message}" for w in caught
+             if issubclass(w.category, RuntimeWarning)]
+    assert not noise, noise  # numpy / shapely messages among the skip reasons
