@@ -10,7 +10,7 @@ JSON also mutated as a tree) through the public entry points: the ruleset kinds'
 ``load_scene`` and the footprint importers. Each mutation is also applied once per number (every number of the
 file replaced by every edge value) for files of at most ``--exhaustive-below`` characters.
 
-Three more readers: ``osm`` -- the building ways and multipolygons near the first ``building:part`` of
+Four more readers: ``osm`` -- the building ways and multipolygons near the first ``building:part`` of
 ``helsinki.osm.pbf`` written as .osm XML, .opl and .osm.pbf, mutated as objects (edge tag values of ``height``,
 ``building:levels``, ``min_height``, ``roof:*``, ``building:part``; ways cut to 0/1/2 nodes, unclosed, with missing
 or swapped nodes; duplicate ids; multipolygon members missing; nodes at edge coordinates), then as text, or the PBF
@@ -19,12 +19,18 @@ CityJSONSeq, lines dropped, duplicated, swapped, cut, mutated as JSON trees, the
 values; ``extreme`` -- a fixed list of huge-but-finite footprints (coordinates, z, heights, widths, tags; EXTREME)
 among three good ones through ``generate_city`` and ``citygen validate``: a run must write a stage with zero
 validation errors and finite points, keep the good buildings and skip the bad one with a reason (not an
-internal error). ``cmp``: the CMP annotations of ``tests/data/inverse`` (label maps and label table beside them)
+internal error); ``osm-city`` -- the ``osm`` reader's mutated files (``--cases`` // OSM_CITY_SHARE of them per
+format, at least one: each case is a city of up to 40 buildings) as the footprints of the Helsinki OSM demo scene
+(``scenes/helsinki_osm.toml``: its rules, roofs and ground) through ``generate_city``: when the importer reads
+the file (N footprints kept, any N, none required), the city run must not raise, must write a stage with zero
+validation errors and finite points, and every footprint must be written or skipped with a reason that is not an
+internal error. ``cmp``: the CMP annotations of ``tests/data/inverse`` (label maps and label table beside them)
 through ``import_cmp``, then greedy extraction: an import must give an exact partition whose grammar re-derives it.
 
 Prints per reader the cases run, how many loaded / were refused with a CitygenError, and every other exception
 (type, message, the last frame) and every case over the timeout, with the input written to ``--out`` to
-reproduce. A generated layout or footprint with a non-finite number counts as a failure too, and so does a
+reproduce (an ``osm-city`` input is the footprint file: run it with the demo scene's ``[footprints] path`` set to
+it). A generated layout or footprint with a non-finite number counts as a failure too, and so does a
 RuntimeWarning (numpy or shapely overflow printed among the messages) from a footprint reader.
 """
 from __future__ import annotations
@@ -33,6 +39,7 @@ import argparse
 import json
 import math
 import random
+import re
 import shutil
 import signal
 import sys
@@ -52,16 +59,19 @@ from citygen.layout import FacadeLayout  # noqa: E402
 from citygen.registry import default_registry  # noqa: E402
 from citygen.request import FacadeRequest  # noqa: E402
 from citygen.scene import load_scene  # noqa: E402
-from tests.mutate import (NUMBERS, mutate, mutate_bytes, mutate_jsonl, mutate_osm, number_spans,  # noqa: E402
-                          osm_model, write_osm)
+from tests.mutate import (NUMBERS, city_of_footprints, generate_and_check, mutate, mutate_bytes,  # noqa: E402
+                          mutate_jsonl, mutate_osm, number_spans, osm_model, write_osm)
 
 REGISTRY = default_registry()
 RULESET_SUFFIXES = {"split": ".grammar", "layers": ".layers", "relayout": ".relayout", "safe": ".safe"}
 SAFE_LAYOUT = "cmp_b0035.layout.json"
-EXTREME_SLACK = 6  # an extreme case generates and validates a city: its limit is this many times --timeout
+EXTREME_SLACK = 6  # an extreme or osm-city case generates and validates a city: its limit is this many --timeout
+CITY_READERS = ("extreme", "osm-city")
+OSM_CITY_SHARE = 5  # osm-city runs --cases // OSM_CITY_SHARE mutated files per format (a city each, ~1.5 s CPU)
+OSM_CITY_SCENE = "helsinki_osm.toml"  # its rules and output settings, with a fuzzed file as its footprints
 CMP = REPO / "tests/data/inverse"  # CMP annotations (with their label maps and label table)
 #: readers whose runs must not print numpy / shapely RuntimeWarnings either
-FOOTPRINT_READERS = ("footprints", "osm", "cityjsonseq", "extreme")
+FOOTPRINT_READERS = ("footprints", "osm", "cityjsonseq", *CITY_READERS)
 
 
 #: huge-but-finite values end to end: (case, spec); each spec is one bad building among three good ones (x, y:
@@ -235,6 +245,7 @@ def seeds() -> dict[str, list[tuple[str, str, str]]]:
     model = small_osm()
     out["osm"] += [("helsinki.osm", model, "osm"), ("helsinki.opl", model, "osm"), ("helsinki.osm.pbf", model, "pbf"),
                    ("helsinki_overpass.osm", model, "osm"), ("helsinki_overpass.json", model, "osmjson")]
+    out["osm-city"] = list(out["osm"])
     out["cityjsonseq"].append(("delft3.city.jsonl", small_cityjsonseq(), "jsonl"))
     out["extreme"] += [(what, spec, "extreme") for what, spec in EXTREME]
     for path in sorted(CMP.glob("*.xml")):
@@ -283,30 +294,32 @@ class Runner:
         return f"read ({len(result.footprints)} kept, {len(result.skipped)} skipped)"
 
     def _extreme(self, spec: dict) -> str:
-        from pxr import Usd, UsdGeom
-
-        from citygen.pipeline import generate_city
-        from citygen.usd.validate import validate_stage
         directory = self.root / "extreme"
         shutil.rmtree(directory, ignore_errors=True)
         directory.mkdir()
         scene = extreme_files(directory, spec)
-        report = generate_city(load_scene(scene), out=directory / "extreme.usda", jobs=1, registry=REGISTRY)
-        errors = [f for f in validate_stage(directory / "extreme.usda") if f.severity == "error"]
-        if errors:
-            raise ValueError(f"citygen validate: {len(errors)} errors, e.g. {errors[0].where}: {errors[0].message}")
-        stage = Usd.Stage.Open(str(directory / "extreme.usda"))
-        for prim in stage.Traverse(Usd.PrimAllPrimsPredicate):
-            if prim.IsA(UsdGeom.PointBased):
-                self._check_finite((v for p in UsdGeom.PointBased(prim).GetPointsAttr().Get() or () for v in p),
-                                   f"{prim.GetPath()} points")
-        internal = [s for s in report.skipped if s.reason.startswith("internal error")]
-        if internal:
-            raise ValueError(f"skipped with an internal error: {internal[0].id}: {internal[0].reason}")
+        report = generate_and_check(load_scene(scene), directory / "extreme.usda", REGISTRY)
         if report.written < 3:
             raise ValueError(f"a good building was lost: written {report.written}, skipped "
                              f"{[(s.id, s.reason) for s in report.skipped]}")
         return f"generated ({report.written} written, {len(report.skipped)} skipped)"
+
+    def _osm_city(self, name: str, data: str | bytes) -> str:
+        """The fuzzed file as the footprints of the OSM demo scene, written beside the copied ``rulesets/``."""
+        directory = self.root / "scenes"
+        footprints = directory / f"fuzz-city{''.join(Path(name).suffixes)}"
+        write(footprints, data)
+        demo = (REPO / "scenes" / OSM_CITY_SCENE).read_text(encoding="utf-8")
+        scene_path = directory / "fuzz-city.toml"
+        write(scene_path, re.sub(r'(?m)^path = "data/[^"]*"', f'path = "{footprints.name}"', demo, count=1))
+        scene = load_scene(scene_path)
+        if scene.footprints.resolve() != footprints.resolve():
+            raise RuntimeError(f"{OSM_CITY_SCENE} no longer names its footprints as path = \"data/...\"")
+        out = self.root / "osm-city" / "city.usda"
+        shutil.rmtree(out.parent, ignore_errors=True)
+        out.parent.mkdir()
+        kept, report = city_of_footprints(scene, out, REGISTRY)
+        return f"generated ({kept} read, {report.written} written, {kept - report.written} skipped)"
 
     def _cmp(self, name: str, text: str | bytes) -> str:
         from citygen.layout import check_partition
@@ -338,13 +351,15 @@ class Runner:
             return self._footprints(name, text)
         if reader == "extreme":
             return self._extreme(text)
+        if reader == "osm-city":
+            return self._osm_city(name, text)
         if reader == "cmp":
             return self._cmp(name, text)
         raise ValueError(reader)
 
     def case(self, reader: str, name: str, text: str | bytes) -> tuple[str, str | None, float]:
         """(outcome, failure description or None, CPU seconds)."""
-        limit = self.timeout * (EXTREME_SLACK if reader == "extreme" else 1)  # (a whole city run per case)
+        limit = self.timeout * (EXTREME_SLACK if reader in CITY_READERS else 1)  # (a whole city run per case)
         signal.setitimer(signal.ITIMER_REAL, limit)
         t0 = time.process_time()
         try:
@@ -418,9 +433,10 @@ def osm_cases(name: str, model: dict, dialect: str, count: int, rng: random.Rand
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", type=int, default=300, help="random mutations per shipped file")
+    parser.add_argument("--cases", type=int, default=300, help="random mutations per shipped file (osm-city: a "
+                        f"city per case, --cases // {OSM_CITY_SHARE} per file)")
     parser.add_argument("--readers", nargs="*", help="subset of: " + ", ".join(
-        [*RULESET_SUFFIXES, "layout", "scene", "footprints", "osm", "cityjsonseq", "extreme", "cmp"]))
+        [*RULESET_SUFFIXES, "layout", "scene", "footprints", "osm", "osm-city", "cityjsonseq", "extreme", "cmp"]))
     parser.add_argument("--timeout", type=float, default=10.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--exhaustive-below", type=int, default=1600, help="file size for exhaustive mutations")
@@ -439,7 +455,8 @@ def main() -> None:
             for name, text, dialect in files:
                 rng = random.Random(f"{args.seed}:{reader}:{name}")
                 if dialect in ("osm", "pbf", "osmjson"):
-                    generated = osm_cases(name, text, dialect, args.cases, rng, Path(tmp))
+                    count = max(1, args.cases // OSM_CITY_SHARE) if reader == "osm-city" else args.cases
+                    generated = osm_cases(name, text, dialect, count, rng, Path(tmp))
                 elif dialect == "jsonl":
                     generated = ((f"random #{i}", mutate_jsonl(text, rng)) for i in range(args.cases))
                 elif dialect == "extreme":

@@ -24,7 +24,7 @@ import numpy as np
 from citygen.builder import Builder, BuildingOutcome
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError
-from citygen.footprints import Footprint, Skipped
+from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.scene import Scene
@@ -108,10 +108,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     out = out or scene.output.path
     report = Report()
     t0 = time.perf_counter()
-    options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
-               **scene.footprint_options}
-    importer = registry.importer_for(scene.footprints, options.pop("format", None))
-    imported = importer.read(scene.footprints, options)
+    imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
     t1 = time.perf_counter()
@@ -165,6 +162,15 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
                       "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
     return report
+
+
+def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportResult:
+    """The scene's footprint file through its importer (``format`` or the file's suffix), the scene's
+    ``[defaults]`` heights and ``[footprints]`` keys as its options: what :func:`generate_city` builds."""
+    options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
+               **scene.footprint_options}
+    importer = (registry or default_registry()).importer_for(scene.footprints, options.pop("format", None))
+    return importer.read(scene.footprints, options)
 
 
 def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:

@@ -361,3 +361,46 @@ def mutate_jsonl(text: str, rng: random.Random) -> str:
     except ValueError:
         lines[i] = rng.choice(text_mutations("json"))(lines[i], rng)
     return "\n".join(lines) + "\n"
+
+
+# --- whole cities: a scene generated from (fuzzed) footprints, and what every run must give -------------------------
+
+def generate_and_check(scene: Any, out: Path, registry: Any = None) -> Any:
+    """``generate_city`` of ``scene`` with one job into ``out``, then what every city run must give whatever its
+    footprints: zero ``citygen validate`` errors, finite points, no building skipped with an internal error (an
+    AssertionError names the first problem). Returns the run's report."""
+    import numpy as np
+    from pxr import Usd, UsdGeom
+
+    from citygen.pipeline import generate_city
+    from citygen.usd.validate import validate_stage
+    report = generate_city(scene, out=out, jobs=1, registry=registry)
+    errors = [f for f in validate_stage(out) if f.severity == "error"]
+    assert not errors, f"citygen validate: {len(errors)} errors, e.g. {errors[0].where}: {errors[0].message}"
+    stage = Usd.Stage.Open(str(out))
+    for prim in stage.Traverse(Usd.PrimAllPrimsPredicate):
+        if prim.IsA(UsdGeom.PointBased):
+            points = UsdGeom.PointBased(prim).GetPointsAttr().Get()
+            assert points is None or np.isfinite(np.asarray(points)).all(), f"{prim.GetPath()} has non-finite points"
+    internal = [s for s in report.skipped if s.reason.startswith("internal error")]
+    assert not internal, f"skipped with an internal error: {internal[0].id}: {internal[0].reason}"
+    return report
+
+
+def city_of_footprints(scene: Any, out: Path, registry: Any = None) -> tuple[int, Any]:
+    """The scene's footprint file read as ``generate_city`` reads it (a CitygenError propagates: the file is
+    refused), then its city through :func:`generate_and_check`. Once the file is read -- with N footprints kept,
+    any N -- the run must not raise at all, and every footprint must be written or skipped with a reason.
+    Returns N and the report."""
+    from citygen.errors import CitygenError
+    from citygen.pipeline import import_footprints
+    imported = import_footprints(scene, registry)
+    kept = len(imported.footprints)
+    try:
+        report = generate_and_check(scene, out, registry)
+    except CitygenError as exc:
+        raise AssertionError(f"the city of a file read with {kept} footprints failed: {type(exc).__name__}: "
+                             f"{exc}") from exc
+    skipped = len(report.skipped) - len(imported.skipped)  # (the report lists the import's skips first)
+    assert report.written + skipped == kept, f"{kept} footprints read, {report.written} written, {skipped} skipped"
+    return kept, report

@@ -24,6 +24,12 @@ from citygen_footprints.repair import FeatureProblem, Part, build_polygon
 #: no building may lie further than this from the scene origin, nor its base or top further from z = 0 (metres):
 #: 10,000 km is beyond any city, and the stage's float32 points still resolve a metre there
 MAX_DISTANCE = 1e7
+#: in a lon/lat file no building may lie further than this (metres on the sphere) from the others: the local
+#: frame is one transverse Mercator around the data's centre, so one far corner would drag every building away from
+#: the origin (a node at lon -180 put central Helsinki 3,400 km off, where its roofs fell back to flat) and be drawn
+#: as a building thousands of kilometres long; 1,000 km is beyond any city
+MAX_SPREAD_LONLAT = 1e6
+EARTH_RADIUS = 6_371_008.8  # metres, the mean radius (IUGG)
 
 
 @dataclass(frozen=True)
@@ -90,24 +96,47 @@ def _stray_lonlat(features: Sequence[RawFeature]) -> tuple[list[RawFeature], lis
     return [f for f in features if id(f) not in gone], skipped
 
 
-def _far_apart(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
-    """Features of a metric file (projected or unknown CRS) with a coordinate more than ``MAX_DISTANCE`` from the
-    median of the features' first corners are skipped when fewer than half of the features (bad coordinates in a
-    few buildings would otherwise drag the frame's centre away from the rest); else all are kept."""
+def _far_apart(features: Sequence[RawFeature], lonlat: bool
+               ) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
+    """Features with a coordinate far from the median of the features' first corners -- in a metric file (projected
+    or unknown CRS) more than ``MAX_DISTANCE`` units in x or y, in a ``lonlat`` file more than
+    ``MAX_SPREAD_LONLAT`` metres on the sphere -- are skipped when fewer than half of the features (bad coordinates
+    in a few buildings would otherwise drag the frame's centre away from the rest); else all are kept."""
     if not features:
         return [], []
     rings = [[np.asarray(r, dtype=float).reshape(-1, 2) for p in f.parts for r in p] for f in features]
     centre = np.median([r[0][0] for r in rings], axis=0)
-    reach = [max(float(np.abs(r - centre).max()) for r in f) for f in rings]
-    bad = [k for k, d in enumerate(reach) if not d <= MAX_DISTANCE]
+    limit = MAX_SPREAD_LONLAT if lonlat else MAX_DISTANCE
+    reach, corners = [], []
+    for f in rings:
+        points = np.concatenate(f)
+        distance = _sphere_distance(points, centre) if lonlat else np.abs(points - centre).max(axis=1)
+        far = int(np.argmax(distance))  # (the first NaN, if any)
+        reach.append(float(distance[far]))
+        corners.append(points[far])
+    bad = [k for k, d in enumerate(reach) if not d <= limit]
     if not bad or 2 * len(bad) >= len(features):
         return list(features), []
-    skipped = [(features[k].index, Skipped(features[k].id, f"its coordinates lie {reach[k]:.3g} units of the file's "
-                                                          f"CRS from the other buildings (more than {MAX_DISTANCE:g}) "
-                                                          "-- fix them in the source data", features[k].where))
-               for k in bad]
+    skipped = []
+    for k in bad:
+        if lonlat:
+            reason = (f"its corner at ({corners[k][0]:.7g}, {corners[k][1]:.7g}) lies {reach[k] / 1e3:,.0f} km from "
+                      f"the other buildings (more than {limit / 1e3:,.0f} km) -- fix its coordinates in the source "
+                      "data")
+        else:
+            reason = (f"its coordinates lie {reach[k]:.3g} units of the file's CRS from the other buildings (more "
+                      f"than {limit:g}) -- fix them in the source data")
+        skipped.append((features[k].index, Skipped(features[k].id, reason, features[k].where)))
     gone = set(bad)
     return [f for k, f in enumerate(features) if k not in gone], skipped
+
+
+def _sphere_distance(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """Great-circle distances (metres) of lon/lat ``points`` ``(n, 2)`` from ``centre`` (haversine)."""
+    lon, lat = np.radians(points[:, 0]), np.radians(points[:, 1])
+    lon0, lat0 = np.radians(centre)
+    h = np.sin((lat - lat0) / 2) ** 2 + np.cos(lat) * np.cos(lat0) * np.sin((lon - lon0) / 2) ** 2
+    return 2 * EARTH_RADIUS * np.arcsin(np.sqrt(np.clip(h, 0.0, 1.0)))
 
 
 def _out_of_reach(parts: Sequence[Part], base: float, top: float) -> str | None:
@@ -132,12 +161,12 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
     features, id_warnings = unique_ids(features)
     out_warnings = list(warnings) + id_warnings
     out_skipped = list(skipped)
-    if crs is not None and options.crs_check and is_geographic(crs):
+    lonlat = crs is not None and is_geographic(crs)
+    if lonlat and options.crs_check:
         features, stray = _stray_lonlat(features)
         out_skipped += stray
-    elif crs is None or not is_geographic(crs):
-        features, far = _far_apart(features)
-        out_skipped += far
+    features, far = _far_apart(features, lonlat)
+    out_skipped += far
     points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
     frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
     footprints = []

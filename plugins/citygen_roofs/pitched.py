@@ -153,7 +153,10 @@ def _merge(meshes: list[MeshData]) -> MeshData:
 
 
 def _area(xy: np.ndarray) -> float:
-    x, y = xy[:, 0], xy[:, 1]
+    """Signed area (shoelace) of a polygon's points ``(k, 2+)``, taken about its first point: in the scene's
+    coordinates a building hundreds of kilometres from the origin lost its area to cancellation (a 10 x 15 m outline
+    in EPSG:3067 metres was off by more than the coverage check's 1e-6 of it: a flat roof)."""
+    x, y = xy[:, 0] - xy[0, 0], xy[:, 1] - xy[0, 1]
     return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 

@@ -408,10 +408,12 @@ class _Wavefront:
                 continue
             pa, pb = np.asarray(self.nodes[a]), np.asarray(self.nodes[b])
             d = pb - pa
-            s = (xy - pa) @ d / (d @ d)
-            off = np.abs((xy - pa) @ np.array([-d[1], d[0]])) / math.sqrt(d @ d)
-            inner = sorted({(s[m], nodes[m]) for m in range(len(ring))
-                            if 0 < s[m] < 1 and off[m] < 1e-7 * self.scale and nodes[m] not in (a, b)})
+            inner = []
+            if d @ d > 0:  # (two nodes of time 0 snapped onto one place, e.g. a sliver's corners, have no arc length)
+                s = (xy - pa) @ d / (d @ d)
+                off = np.abs((xy - pa) @ np.array([-d[1], d[0]])) / math.sqrt(d @ d)
+                inner = sorted({(s[m], nodes[m]) for m in range(len(ring))
+                                if 0 < s[m] < 1 and off[m] < 1e-7 * self.scale and nodes[m] not in (a, b)})
             chain = [a, *[n for _, n in inner], b]
             for p, q in zip(chain, chain[1:]):
                 if p != q:
@@ -498,7 +500,8 @@ class _Wavefront:
 
 
 def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
+    """Shoelace area about the first point (no cancellation far from the origin)."""
+    x, y = p[:, 0] - p[0, 0], p[:, 1] - p[0, 1]
     return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 

@@ -1,10 +1,12 @@
 import math
+import warnings
 from collections import Counter
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shapely import affinity
 from shapely.geometry import MultiPolygon, Polygon, box
 
 from citygen.roof import RoofSpec, roof_notes
@@ -200,6 +202,36 @@ def test_skillion_falls_towards_its_direction():
 def test_self_intersecting_outline_raises_roof_error():
     with pytest.raises(RoofError):
         GabledRoof().build(Polygon([(0, 0), (10, 10), (10, 0), (0, 10)]), TOP, RoofSpec("gabled"))
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof()], ids=lambda b: b.id)
+def test_sliver_that_folds_flat_at_once_is_too_thin_without_numpy_warnings(builder):
+    """Found by fuzz_readers --readers osm-city (a node moved to lon -180 made a 6,800 km sliver): the skeleton
+    finished the triangle at time 0 with two corners snapped onto one place and divided by that arc's zero length
+    (numpy RuntimeWarnings among the city's messages) on the way to the flat-roof fallback."""
+    sliver = Polygon([(0, 0), (0, 1), (-2e6, 0)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert not skeleton_faces(sliver, np.ones(3))[0][:, 2].any()  # no roof rises over it
+        with pytest.raises(RoofError, match="too thin"):
+            builder.build(sliver, TOP, RoofSpec(builder.id, height=2.0))
+
+
+@pytest.mark.parametrize("builder", [HippedRoof(), GabledRoof()], ids=lambda b: b.id)
+def test_outline_far_from_the_origin_gets_the_roof_it_gets_near_it(builder):
+    """Was: flat (RoofError 'skeleton faces cover 12.105 m² of a 12.105 m² outline'): the coverage check's shoelace
+    in scene coordinates lost the area to cancellation 300 km from the origin (where a far OSM node dragged the
+    frame, found by fuzz_readers --readers osm-city): 6 of the first 200 Helsinki OSM buildings lost their hipped
+    roofs there, 49 at 1,000 km."""
+    shed = Polygon([(0, 0), (0.2, -3.5), (3.6, -3.3), (3.5, 0.2)])
+    near = builder.build(shed, TOP, RoofSpec(builder.id, pitch=25))
+    far = builder.build(affinity.translate(shed, 300_000, 300_000), TOP, RoofSpec(builder.id, pitch=25))
+
+    def centroids(mesh, offset):  # per triangle, sorted (the welded points come in another order)
+        p, tris = _triangles(mesh)
+        c = (p - offset)[tris].mean(axis=1)
+        return c[np.lexsort(np.round(c, 1).T[::-1])]
+    assert np.allclose(centroids(far, (300_000, 300_000, 0)), centroids(near, (0, 0, 0)), atol=0.02)
 
 
 @settings(max_examples=40)
