@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import tempfile
@@ -154,12 +155,16 @@ class GrammarCommand(Command):
         sub = parser.add_subparsers(dest="grammar_command", required=True)
         ext = sub.add_parser("extract", help="layout JSON -> grammar in citygen's DSL")
         ext.add_argument("layouts", nargs="+", help="layout JSON file(s); several give one joint grammar")
-        ext.add_argument("--method", choices=("greedy", "is", "adp"), default="adp",
+        ext.add_argument("--method", choices=("greedy", "is", "adp", "exact"), default="adp",
                          help="search (wu2014 §4): greedy by the splitting heuristic, importance sampling or "
-                              "approximate dynamic programming (default adp)")
+                              "approximate dynamic programming (default adp); exact: adp, then the cheapest grammar "
+                              "over the same candidate rules as an integer program (HiGHS), with a lower bound")
         ext.add_argument("--iterations", type=int, default=2000,
                          help="grammars built by is / adp, at least 1 (default 2000; greedy builds one)")
         ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp (default 0)")
+        ext.add_argument("--time-limit", type=float, default=None,
+                         help="seconds after which is / adp stop iterating and exact's integer program stops "
+                              "(default: none; exact's program stops after 20 s)")
         _cost_options(ext)
         ext.add_argument("--size-independent", action="store_true",
                          help="a grammar for any face: floor slabs on the building's floor lines, a door on entrance "
@@ -175,6 +180,8 @@ class GrammarCommand(Command):
                for name in ("split_cost", "repeat_cost") if not 0 <= getattr(args, name) < float("inf")]
         if args.grammar_command == "extract" and args.method != "greedy" and args.iterations < 1:
             bad.append(f"--iterations must be at least 1, got {args.iterations}")
+        if args.grammar_command == "extract" and args.time_limit is not None and not 0 < args.time_limit < math.inf:
+            bad.append(f"--time-limit must be a number of seconds > 0, got {args.time_limit:g}")
         if bad:
             return report(CitygenError("; ".join(bad), where=where))
         try:
@@ -202,11 +209,13 @@ class GrammarCommand(Command):
                                 "--iterations", str(args.iterations), "--seed", str(args.seed),
                                 "--size-independent"])
             result = extract_size_independent(layouts[0], args.method, args.iterations, args.seed, model,
-                                              header=(f"made by: {command}",))
+                                              args.time_limit, header=(f"made by: {command}",))
             check = ""
         else:
-            result = extract_grammar(layouts, args.method, args.iterations, args.seed, model)
+            result = extract_grammar(layouts, args.method, args.iterations, args.seed, model, args.time_limit)
             check = "  " + verified(result.text, layouts, args.layouts)
+            if result.verdict():
+                check += f"  {result.verdict()}"
         write_text(args.output, result.text)
         print(f"cost {result.cost:.2f}  rules {result.rules}  terminals {result.terminals}  "
               f"time {result.seconds:.3f} s  ({result.method}, {result.iterations} iterations){check}",

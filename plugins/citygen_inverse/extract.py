@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from citygen.gcpause import cyclic_gc_paused
 from citygen.layout import FacadeLayout
@@ -25,6 +25,19 @@ class Extraction:
     terminals: int
     method: str
     cpu_seconds: float = 0.0  # process time of index, symmetry detection and search (``seconds`` is wall time)
+    bound: float | None = None  # method exact: lower bound on the cost of any grammar over the candidate rules
+    optimal: bool = False  # method exact: proven the cheapest over the candidate rules
+    stopped: bool = False  # method exact: its integer program was stopped by the time limit
+
+    def verdict(self) -> str:
+        """Method exact: what the integer program proved (empty for the other methods)."""
+        if self.bound is None:
+            return ""
+        if self.optimal:
+            return "optimal over the candidate rules"
+        gap = 100 * (1 - self.bound / self.cost) if self.cost > 0 else 0.0
+        stop = ", stopped at the time limit" if self.stopped else ""
+        return f"lower bound {self.bound:.1f} ({gap:.1f} % below){stop}"
 
 
 @cyclic_gc_paused()
@@ -48,9 +61,18 @@ def extract_grammar(layouts: FacadeLayout | list[FacadeLayout], method: str = "a
     header = [f"extracted by citygen grammar extract (wu2014), method {method}, {result.iterations} iterations, "
               f"seed {seed}",
               f"{terminals} terminals; cost {cost:.1f} (split {model.split}, repeat {model.repeat}); {rules} rules"]
+    found = Extraction("", "", cost, rules, wall, result.iterations, terminals, method, cpu, _bound(result, cost),
+                       result.optimal, result.stopped)
+    if found.verdict():
+        header.append(f"integer program: {found.verdict()}")
     if len(layouts) > 1:
         header.append(f"joint grammar of {len(layouts)} facades: the axiom picks one")
     exact = writer.text(header)
     independent = writer.text([*header, "size-independent version (wu2014 §5)"], independent=True,
                               floors=len(layouts) == 1)
-    return Extraction(exact, independent, cost, rules, wall, result.iterations, terminals, method, cpu)
+    return replace(found, text=exact, size_independent=independent)
+
+
+def _bound(result: SearchResult, cost: float) -> float | None:
+    """The search's lower bound moved by what the written grammar adds to the searched one (a joint axiom)."""
+    return None if result.bound is None else result.bound + cost - result.cost

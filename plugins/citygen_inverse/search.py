@@ -24,11 +24,13 @@ import numpy as np
 
 from citygen.rng import derive_rng
 from citygen_inverse.actions import Action, Candidates, CostModel, region_actions
+from citygen_inverse.exact import solve_exact
 from citygen_inverse.regions import LayoutIndex
 from citygen_inverse.symmetry import RepeatedRegions, detect_symmetry
 
-METHODS = ("greedy", "is", "adp")
+METHODS = ("greedy", "is", "adp", "exact")
 CYCLE = 2000  # ADP's epsilon schedule restarts after this many iterations (longer runs are never worse)
+EXACT_SECONDS = 20.0  # method exact: the integer program's time limit when the run has none
 _NO_KIDS: frozenset[int] = frozenset()
 
 
@@ -41,6 +43,9 @@ class SearchResult:
     iterations: int
     seconds: float
     history: tuple[float, ...]
+    bound: float | None = None  # method exact: a lower bound on every grammar's cost over the candidate rules
+    optimal: bool = False  # method exact: the grammar is proven the cheapest over the candidate rules
+    stopped: bool = False  # method exact: the integer program was stopped by the time limit
 
 
 class GrammarSearch:
@@ -257,11 +262,15 @@ class GrammarSearch:
 
     def run(self, method: str = "adp", iterations: int = 2000, seed: int = 0,
             time_limit: float | None = None) -> SearchResult:
+        """The best grammar of ``method``; ``exact`` is ADP followed by the integer program of ``exact.py``, the
+        cheaper of the two being returned with the program's lower bound. ``time_limit`` (seconds) stops ADP's
+        iterations and then the integer program (without one, the program stops after ``EXACT_SECONDS``)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         if method != "greedy" and not iterations >= 1:
             raise ValueError(f"{method} needs at least 1 iteration, got {iterations!r}")
         start = time.perf_counter()
+        exact, method = method == "exact", "adp" if method == "exact" else method
         if self._best_only != (method == "greedy"):  # (a search run again with another method starts afresh)
             for table in (self._actions, self._cost, self._kids, self._greedy_k, self._cum, self._weights,
                           self._masks, self._kidset, self._parents, self._exploited, self.value, self.best_action):
@@ -303,4 +312,11 @@ class GrammarSearch:
             if cost < best_cost - 1e-9:
                 best_rules, best_cost = rules, cost
         chosen = {s: self._actions[s][k] for s, k in best_rules.items()}
-        return SearchResult(chosen, best_cost, done, time.perf_counter() - start, tuple(history))
+        if not exact:
+            return SearchResult(chosen, best_cost, done, time.perf_counter() - start, tuple(history))
+        left = EXACT_SECONDS if time_limit is None else max(time_limit - (time.perf_counter() - start), 1e-3)
+        program = solve_exact(self, left)
+        if program.rules is not None and program.cost < best_cost - 1e-9:
+            chosen, best_cost = program.rules, program.cost
+        return SearchResult(chosen, best_cost, done, time.perf_counter() - start, tuple(history), program.bound,
+                            program.optimal or best_cost <= program.bound + 1e-7 * best_cost, program.stopped)

@@ -35,7 +35,7 @@ def test_import_cmp_to_stdout(capsys):
     assert json.loads(out)["width"] > 0 and "terminals" in err
 
 
-@pytest.mark.parametrize("method", ["greedy", "is", "adp"])
+@pytest.mark.parametrize("method", ["greedy", "is", "adp", "exact"])
 def test_extract_each_method(layout_json, tmp_path, capsys, method):
     out = tmp_path / f"{method}.grammar"
     assert main(["grammar", "extract", str(layout_json), "--method", method, "--iterations", "15", "--seed", "3",
@@ -46,6 +46,17 @@ def test_extract_each_method(layout_json, tmp_path, capsys, method):
     assert main(["grammar", "cost", str(out)]) == 0
     assert float(capsys.readouterr().out.split()[1]) == pytest.approx(cost, abs=0.005)
     assert f"method {method}" in out.read_text()
+    if method == "exact":  # (the integer program ends on this facade: its grammar is proven optimal)
+        assert "optimal over the candidate rules" in err and "# integer program: optimal" in out.read_text()
+
+
+def test_extract_time_limit_is_checked(layout_json, capsys):
+    assert main(["grammar", "extract", str(layout_json), "--time-limit", "0"]) == 2
+    assert "--time-limit must be a number of seconds > 0" in capsys.readouterr().err
+    assert main(["grammar", "extract", str(layout_json), "--method", "exact", "--iterations", "5",
+                 "--time-limit", "30"]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("# extracted by citygen grammar extract (wu2014), method exact") and "optimal" in err
 
 
 def test_extract_size_independent(layout_json, tmp_path, capsys):
