@@ -160,8 +160,8 @@ class GrammarCommand(Command):
                               "approximate dynamic programming (default adp); exact: adp, then the cheapest grammar "
                               "over the same candidate rules as an integer program (HiGHS), with a lower bound")
         ext.add_argument("--iterations", type=int, default=2000,
-                         help="grammars built by is / adp, at least 1 (default 2000; greedy builds one)")
-        ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp (default 0)")
+                         help="grammars built by is / adp / exact, at least 1 (default 2000; greedy builds one)")
+        ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp / exact (default 0)")
         ext.add_argument("--time-limit", type=float, default=None,
                          help="seconds after which is / adp stop iterating and exact's integer program stops "
                               "(default: none; exact's program stops after 20 s)")
