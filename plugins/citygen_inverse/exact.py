@@ -30,7 +30,8 @@ from citygen_inverse.actions import Action
 @dataclass(frozen=True)
 class ExactResult:
     """The best grammar the solver found (``rules``: signature -> action, None when it found none), its cost, the
-    lower bound on every grammar's cost over the candidates and whether the grammar is proven optimal."""
+    lower bound on every grammar's cost over the candidates (0 when stopped before it had one) and whether the
+    grammar is proven optimal."""
 
     rules: dict[int, Action] | None
     cost: float
@@ -78,7 +79,8 @@ def solve_exact(search, time_limit: float | None) -> ExactResult:
     res = milp(np.concatenate([cost, np.zeros(n_sig)]), integrality=np.r_[np.ones(n_act), np.zeros(n_sig)],
                bounds=Bounds(low_var, 1.0), constraints=LinearConstraint(matrix, lower, np.zeros(n_sig + n_pair)),
                options=options)
-    bound, stopped = float(getattr(res, "mip_dual_bound", np.nan)), res.status == 1
+    bound, stopped = getattr(res, "mip_dual_bound", None), res.status == 1
+    bound = 0.0 if bound is None else float(bound)  # (stopped before any bound: costs are >= 0)
     if res.x is None:
         return ExactResult(None, np.inf, bound, False, stopped)
     chosen = {order[owner[j]]: j - first[owner[j]] for j in np.flatnonzero(res.x[:n_act] > 0.5).tolist()}

@@ -35,6 +35,8 @@ class Extraction:
             return ""
         if self.optimal:
             return "optimal over the candidate rules"
+        if self.bound <= 0:
+            return "no lower bound: stopped at the time limit before the integer program had one"
         gap = 100 * (1 - self.bound / self.cost) if self.cost > 0 else 0.0
         stop = ", stopped at the time limit" if self.stopped else ""
         return f"lower bound {self.bound:.1f} ({gap:.1f} % below){stop}"

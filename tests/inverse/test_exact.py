@@ -100,3 +100,14 @@ def test_joint_extraction_with_exact_bounds_the_written_cost():
     joint = extract_grammar(facades, "exact", 50, seed=0)
     assert joint.cost <= extract_grammar(facades, "adp", 50, seed=0).cost + 1e-9
     assert joint.optimal and joint.bound == pytest.approx(joint.cost)
+
+
+def test_a_program_stopped_before_any_bound_keeps_adps_grammar():
+    """Regression: HiGHS stopped by the time limit before its first bound returned no dual bound, and
+    ``float(None)`` raised a TypeError (cmp_b0001 with --time-limit 0.3)."""
+    layout = import_cmp(DATA / "cmp_b0045.xml")
+    exact = extract_grammar(layout, "exact", 3, seed=0, time_limit=1e-4)
+    assert exact.stopped and not exact.optimal and exact.bound == 0.0
+    assert exact.verdict().startswith("no lower bound: stopped at the time limit")
+    assert exact.cost == pytest.approx(extract_grammar(layout, "adp", 1, seed=0).cost)  # (no iteration but one)
+    assert_reproduces(exact.text, layout)
