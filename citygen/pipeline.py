@@ -117,8 +117,11 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         try:
             masses.append(build_mass(fp))
             footprints.append(fp)
-        except Exception as exc:
+        except CitygenError as exc:
             report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
+        except Exception as exc:  # a bug skips one building, not the city, and says it is one
+            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
+                                          fp.source))
     cover = neighbour_cover(masses)
     ground = _ground(masses) if scene.output.ground and masses else None
     taken: set[str] = set()

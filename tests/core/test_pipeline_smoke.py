@@ -20,6 +20,26 @@ def test_a_face_the_ruleset_cannot_dress_becomes_plain_wall(small_scene, test_re
     assert errors == []
 
 
+def test_a_bug_building_one_mass_skips_that_building_as_an_internal_error(small_scene, test_registry, monkeypatch):
+    """A mass builder that raises something other than a CitygenError is a bug: the building is skipped with a
+    reason saying so (as a facade or roof bug is), which the fuzz harness looks for; the rest is written."""
+    import citygen.pipeline as pipeline
+    original = pipeline.build_mass
+    first = []
+
+    def broken(footprint):
+        if not first:
+            first.append(footprint.id)
+            raise ZeroDivisionError("float division by zero")
+        return original(footprint)
+
+    monkeypatch.setattr(pipeline, "build_mass", broken)
+    report = generate_city(load_scene(small_scene), registry=test_registry)
+    assert report.written == 2
+    (skip,) = [s for s in report.skipped if s.id == first[0]]
+    assert skip.reason == "internal error ZeroDivisionError building its mass: float division by zero"
+
+
 def _picky(monkeypatch, bays):
     """GridKind fails on faces narrower than 13 m with the rulesets whose bay (m) is in the set ``bays``."""
     from citygen.errors import RulesetError
