@@ -7,6 +7,8 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -19,8 +21,9 @@ from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
-from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
+from citygen.layout import FacadeLayout, check_partition, hidden_behind
 from citygen.mass import Mass
+from citygen.plausible import check_plausible, plain_wall, summary
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
@@ -37,6 +40,21 @@ class BuildingOutcome:
     record: BuildingRecord | None
     skipped: Skipped | None
     warnings: tuple[str, ...]
+    faces: tuple[tuple[str, int], ...] = ()  # (:func:`face_tally`)
+
+
+def face_tally(layouts: Sequence[FacadeLayout]) -> Counter[str]:
+    """How a building's generated faces ended: ``dressed`` by the assigned ruleset, dressed by the ``fallback``
+    ruleset, ``plain`` wall (the ruleset failed or was implausible), ``outside-range`` (a plain wall: the face's
+    size lies outside every size the ruleset takes); and ``finding:CODE`` once per face a plausibility rule
+    rejected (:mod:`citygen.plausible`)."""
+    tally: Counter[str] = Counter()
+    for layout in layouts:
+        meta = layout.meta
+        tally["outside-range" if meta.get("outside_range") else "plain" if meta.get("fallback")
+              else "fallback" if meta.get("fell_back_from") else "dressed"] += 1
+        tally.update(f"finding:{code}" for code in {f.split(":", 1)[0] for f in meta.get("findings", ())})
+    return tally
 
 
 def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
@@ -81,6 +99,7 @@ class Builder:
             plan = plan_building(footprint, mass, bins, self.scene.defaults, self.seed)
             layouts: dict[int, FacadeLayout] = {}
             used: list[str] = []
+            tally: Counter[str] = Counter()
             for scope, courtyard in (("street", False), ("courtyard", True)):
                 requests = [r for r in plan.requests if r.context.is_courtyard == courtyard]
                 if not requests:
@@ -92,9 +111,10 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                dressed = self._generate(kind, ruleset, requests)
+                dressed = self._held(kind.id, self._generate(kind, ruleset, requests), requests)
                 if assignment.fallback is not None:
-                    dressed = self._fall_back(assignment.fallback, requests, dressed, used)
+                    dressed = self._fall_back(assignment.fallback, requests, dressed, used, warnings)
+                tally.update(face_tally(dressed))
                 outside: list[tuple[FacadeRequest, str]] = []
                 for request, layout in zip(requests, dressed):
                     face = request.context.face_index
@@ -117,7 +137,8 @@ class Builder:
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
                       "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
-        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings),
+                               tuple(sorted(tally.items())))
 
     def _materials(self, footprint: Footprint) -> tuple[str, str]:
         """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for
@@ -175,16 +196,28 @@ class Builder:
             try:
                 layouts.append(kind.generate(ruleset, request))
             except CitygenError as exc:
-                layouts.append(FacadeLayout(request.width, request.height,
-                                            Region(0.0, 0.0, request.width, request.height, "Wall", "wall"),
-                                            meta={"fallback": f"the ruleset failed: {exc}"}))
+                layouts.append(plain_wall(request, f"the ruleset failed: {exc}"))
         return layouts
 
+    def _held(self, kind_id: str, layouts: list[FacadeLayout], requests: list[FacadeRequest]) -> list[FacadeLayout]:
+        """``layouts`` held to the scene's plausibility rules: a layout with findings (after the entrance repair
+        geometry would make) becomes a plain wall whose ``meta["fallback"]`` names them, so the scene's fallback
+        ruleset gets the face and the report says why."""
+        out = []
+        for layout, request in zip(layouts, requests):
+            if not layout.meta.get("fallback"):
+                findings = check_plausible(enforce_entrance(layout, request)[0], request, self.scene.plausibility)
+                if findings:
+                    layout = plain_wall(request, f"implausible layout: {summary(findings)}", findings, kind=kind_id)
+            out.append(layout)
+        return out
+
     def _fall_back(self, path: Path, requests: list[FacadeRequest], layouts: list[FacadeLayout],
-                   used: list[str]) -> list[FacadeLayout]:
+                   used: list[str], warnings: list[str]) -> list[FacadeLayout]:
         """The faces the assigned ruleset left plain (``meta["fallback"]``) dressed by the ``fallback`` ruleset, face
-        by face on the same floor lines and entrance; where it cannot dress one either, the face stays plain.
-        The faces it dressed are named in ``used`` (the building's ruleset attribute)."""
+        by face on the same floor lines and entrance, held to the same plausibility rules; where it cannot dress
+        one either, the face stays plain. The faces it dressed are named in ``used`` (the building's ruleset
+        attribute) and in one warning with the first face's reason."""
         plain = [k for k, layout in enumerate(layouts) if layout.meta.get("fallback")]
         if not plain:
             return layouts
@@ -192,14 +225,19 @@ class Builder:
         ruleset, out, dressed = self._loaded(kind, path), list(layouts), []
         for k in plain:
             try:
-                layout = kind.generate(ruleset, requests[k])
+                layout = self._held(kind.id, [kind.generate(ruleset, requests[k])], [requests[k]])[0]
             except CitygenError:
                 continue
             if not layout.meta.get("fallback"):
-                out[k] = replace(layout, meta={**layout.meta, "fell_back_from": layouts[k].meta["fallback"]})
-                dressed.append(requests[k].context.face_index)
+                out[k] = replace(layout, meta={**layout.meta, "fell_back_from": layouts[k].meta["fallback"],
+                                               "findings": layouts[k].meta.get("findings", [])})
+                dressed.append(k)
         if dressed:
-            used.append(f"{kind.id}:{path.name} (fallback on faces {', '.join(map(str, dressed))})")
+            faces = ", ".join(str(requests[k].context.face_index) for k in dressed)
+            used.append(f"{kind.id}:{path.name} (fallback on faces {faces})")
+            first = requests[dressed[0]].context
+            warnings.append(f"{first.building_id}: faces {faces} dressed by the fallback {path.name}; face "
+                            f"{first.face_index}: {layouts[dressed[0]].meta['fallback']}")
         return out
 
     @staticmethod

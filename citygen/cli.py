@@ -11,7 +11,8 @@ from citygen import __version__
 from citygen.cliargs import add_size_arguments, whole
 from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
-from citygen.layout import check_partition
+from citygen.layout import FacadeLayout, check_partition
+from citygen.plausible import DEFAULT_RULES, PlausibilityRules, check_plausible
 from citygen.pipeline import generate_city, terminal_progress
 from citygen.registry import Registry, default_registry
 from citygen.request import FacadeRequest, check_request
@@ -65,6 +66,24 @@ def _cmd_plugins(args: argparse.Namespace, registry: Registry) -> int:
     return 0
 
 
+#: ``citygen facade`` exit codes, worst first (README "Command line"): the outcome a caller got.
+FACADE_EXIT = {"dressed": 0, "implausible": 3, "constraints-broken": 4, "fell-back": 5}
+
+
+def facade_outcome(layout: FacadeLayout, request: FacadeRequest, rules: PlausibilityRules = DEFAULT_RULES
+                   ) -> tuple[str, list[str]]:
+    """What a preview got: ``fell-back`` (the generator could not dress the face: a plain wall), else
+    ``constraints-broken`` (not a partition, or the request's floor lines / entrance / corners broken), else
+    ``implausible`` (plausibility findings), else ``dressed``; and the lines that say why."""
+    if layout.meta.get("fallback"):
+        return "fell-back", [str(layout.meta["fallback"]), *layout.meta.get("findings", ())]
+    problems = check_partition(layout) + check_request(layout, request)
+    if problems:
+        return "constraints-broken", problems
+    findings = check_plausible(layout, request, rules)
+    return ("implausible", [str(f) for f in findings]) if findings else ("dressed", [])
+
+
 def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
     path = Path(args.ruleset)
     kind = registry.ruleset_kind(args.kind) if args.kind else registry.kind_for_path(path)
@@ -73,7 +92,7 @@ def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
     request = FacadeRequest.preview(width, height, floor_height=args.floor_height, ground_height=args.ground_height,
                                     entrance=not args.no_entrance, seed=args.seed)
     layout = kind.generate(ruleset, request)
-    problems = check_partition(layout) + check_request(layout, request)
+    outcome, reasons = facade_outcome(layout, request)
     if args.explain:
         print(kind.explain(ruleset, request))
     if args.json:
@@ -86,9 +105,10 @@ def _cmd_facade(args: argparse.Namespace, registry: Registry) -> int:
         for r in layout.leaves:
             counts[r.label or "(transparent)"] = counts.get(r.label or "(transparent)", 0) + 1
         print(f"{path.name} [{kind.id}] {width} x {height} m: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
-    for p in problems:
-        print(f"constraint: {p}", file=sys.stderr)
-    return 1 if problems else 0
+    print(f"status: {outcome}", file=sys.stderr)
+    for reason in reasons:
+        print(f"  {reason}", file=sys.stderr)
+    return FACADE_EXIT[outcome]
 
 
 def build_parser(registry: Registry) -> argparse.ArgumentParser:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import pickle
 import threading
+from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -69,6 +70,7 @@ class TileResult:
     prototypes: tuple[ProtoKey | ModuleKey, ...]
     skipped: tuple[Skipped, ...]
     warnings: tuple[str, ...]
+    faces: tuple[tuple[str, int], ...] = ()  # (summed :attr:`BuildingOutcome.faces`)
 
 
 _BUILDERS = threading.local()
@@ -91,12 +93,14 @@ def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
     layer = f"{tile_name(tile)}{job.suffix}"
     skipped: list[Skipped] = []
     warnings: list[str] = []
+    faces: Counter[str] = Counter()
     writer: StageWriter | None = None
     stats = None
     try:
         for item in items:
             outcome = builder.build(*item)
             warnings += outcome.warnings
+            faces.update(dict(outcome.faces))
             if outcome.record is None:
                 skipped.append(outcome.skipped)
                 continue
@@ -110,7 +114,7 @@ def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
     finally:
         clear_module_cache()
     return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
-                      tuple(skipped), tuple(warnings))
+                      tuple(skipped), tuple(warnings), tuple(sorted(faces.items())))
 
 
 @contextmanager

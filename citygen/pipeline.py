@@ -8,6 +8,7 @@ cluster instead (:mod:`citygen.distributed`).
 from __future__ import annotations
 
 import itertools
+from collections import Counter
 import math
 import pickle
 import sys
@@ -43,6 +44,7 @@ class Report:
     warnings: list[str] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     stats: StageStats | None = None
+    faces: Counter[str] = field(default_factory=Counter)  # (:func:`citygen.builder.face_tally`, summed)
 
     def summary(self) -> str:
         lines = [f"written {self.written} buildings, skipped {len(self.skipped)}, warnings {len(self.warnings)}"]
@@ -52,6 +54,8 @@ class Report:
         if len(self.warnings) > len(shown):
             lines.append(f"  ... and {len(self.warnings) - len(shown)} more warnings (all of them: citygen generate "
                          f"--report FILE.json)")
+        if self.faces:
+            lines.append(_faces_line(self.faces))
         if self.stats:
             s = self.stats
             lines.append(f"stage {s.path.name}: {s.bytes / 1e6:.1f} MB, {s.prims} prims, {s.meshes} meshes, "
@@ -63,7 +67,19 @@ class Report:
         """The whole report as JSON-ready data (every skipped building and warning, the stage's figures)."""
         stats = None if self.stats is None else {**asdict(self.stats), "path": str(self.stats.path)}
         return {"written": self.written, "skipped": [asdict(s) for s in self.skipped], "warnings": self.warnings,
-                "stage": stats, "timings": self.timings}
+                "faces": dict(sorted(self.faces.items())), "stage": stats, "timings": self.timings}
+
+
+def _faces_line(faces: Counter[str]) -> str:
+    """``facades: 3120 dressed, 40 by fallback rulesets, 12 plain walls (implausible: small-opening 9, ...)``."""
+    parts = [f"{faces['dressed']} dressed"]
+    parts += [f"{faces[key]} {text}" for key, text in (("fallback", "by fallback rulesets"), ("plain", "plain walls"),
+                                                        ("outside-range", "outside their ruleset's size range"))
+              if faces[key]]
+    codes = sorted(((k.split(":", 1)[1], v) for k, v in faces.items() if k.startswith("finding:")),
+                   key=lambda kv: (-kv[1], kv[0]))
+    found = f" (implausible: {', '.join(f'{code} {n}' for code, n in codes)})" if codes else ""
+    return "facades: " + ", ".join(parts) + found
 
 
 _Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
@@ -153,6 +169,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
             writer.ground(*ground)
         for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
             report.warnings += outcome.warnings
+            report.faces.update(dict(outcome.faces))
             if outcome.record is None:
                 report.skipped.append(outcome.skipped)
                 continue
@@ -199,6 +216,7 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
         t1 = time.perf_counter()
         for result in results:
             report.warnings += result.warnings
+            report.faces.update(dict(result.faces))
             report.skipped += result.skipped
             if result.stats is not None:
                 writer.add_tile_layer(result.layer, result.stats, result.prototypes)

@@ -11,10 +11,12 @@ import re
 import tomllib
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
+from dataclasses import fields as dataclass_fields
 from pathlib import Path
 from typing import Any
 
 from citygen.errors import SceneError, SourceLocation, read_user_text
+from citygen.plausible import PlausibilityRules
 from citygen.request import MIN_STOREY
 
 UP_AXES = ("Z", "Y")
@@ -105,6 +107,7 @@ class Scene:
     assignments: tuple[Assignment, ...]
     output: Output
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    plausibility: PlausibilityRules = field(default_factory=PlausibilityRules)
 
 
 def _line_of(text: str, key: str, start: int = 0) -> int | None:
@@ -193,9 +196,10 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
     r = _Reader(path, text, roof_shapes, kinds)
-    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
+    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output", "plausibility"})
     if unknown:
-        r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",
+        r.fail(f"unknown table [{unknown[0]}]",
+               hint="valid tables: scene, footprints, defaults, assign, output, plausibility",
                line=_line_of(text, unknown[0]) or 1)
     meta = r.table(data, "scene", {"name", "seed", "description"})
     seed = meta.get("seed", 0)
@@ -229,7 +233,18 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
                  assignments=_assignments(r, data.get("assign", [])), output=output,
-                 metadata={"description": meta.get("description", "")})
+                 metadata={"description": meta.get("description", "")}, plausibility=_plausibility(r, data))
+
+
+def _plausibility(r: _Reader, data: Mapping[str, Any]) -> PlausibilityRules:
+    """The ``[plausibility]`` table's rules (docs/scene.md); its errors name the line of the offending key."""
+    table = r.table(data, "plausibility", {f.name for f in dataclass_fields(PlausibilityRules)})
+    for key, value in table.items():
+        try:
+            PlausibilityRules.from_mapping({key: value})
+        except SceneError as exc:
+            r.fail(exc.message, key, hint=exc.hint)
+    return PlausibilityRules.from_mapping(table)
 
 
 def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:

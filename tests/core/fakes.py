@@ -39,7 +39,7 @@ class GridKind(RulesetKind):
             for b in range(bays):
                 x = left + b * bw
                 label = "door" if (k == 0 and request.entrance and b == bays // 2) else "window"
-                ww, wh = min(ruleset["window"], 0.8 * bw), min(1.6, 0.7 * h)
+                ww, wh = min(ruleset["window"], 0.8 * bw), min(2.0 if label == "door" else 1.6, 0.7 * h)
                 wy = 0.0 if label == "door" else 0.25 * (h - wh)
                 cells += [Region(x, y0, (bw - ww) / 2, h, "Wall", "wall"),
                           Region(x + (bw + ww) / 2, y0, (bw - ww) / 2, h, "Wall", "wall"),

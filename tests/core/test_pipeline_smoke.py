@@ -63,7 +63,7 @@ def _openings(stage_path):
 
 def test_a_fallback_ruleset_dresses_the_faces_the_assigned_one_cannot(small_scene, test_registry, monkeypatch):
     """``[[assign]] fallback``: the faces the assigned ruleset leaves plain get the fallback ruleset instead (same
-    floor lines; no warning, since that is what the scene asked for); the building's ruleset attribute names them."""
+    floor lines; one warning naming them and why); the building's ruleset attribute names them."""
     from pxr import Usd
     failing = {3.0, 2.0}
     _picky(monkeypatch, failing)
