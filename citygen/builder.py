@@ -100,7 +100,7 @@ class Builder:
             layouts: dict[int, FacadeLayout] = {}
             used: list[str] = []
             tally: Counter[str] = Counter()
-            for scope, courtyard in (("street", False), ("courtyard", True)):
+            for scope, courtyard in () if self.scene.output.masses else (("street", False), ("courtyard", True)):
                 requests = [r for r in plan.requests if r.context.is_courtyard == courtyard]
                 if not requests:
                     continue

@@ -5,6 +5,7 @@ import argparse
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from citygen import __version__
@@ -22,6 +23,8 @@ from citygen.usd.validate import validate_stage
 
 def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     scene = load_scene(args.scene, registry.roof_builders, registry.ruleset_kinds)
+    if args.masses:
+        scene = replace(scene, output=replace(scene.output, masses=True))
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
     if args.scheduler and args.executor != "dask":
         raise CitygenError("--scheduler needs --executor dask", hint="add --executor dask")
@@ -120,6 +123,8 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
     g.add_argument("--seed", type=whole(0), help="override the scene seed (an integer >= 0)")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
+    g.add_argument("--masses", action="store_true",
+                   help="masses only (LOD1: extruded walls and roofs, no facades), as [output] masses = true")
     g.add_argument("--jobs", type=whole(0), default=0,
                    help="worker processes (default 0: one per CPU core); the output does not depend on it")
     g.add_argument("--executor", choices=EXECUTORS, default="local",

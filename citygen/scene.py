@@ -92,6 +92,7 @@ class Output:
     uvs: bool = False
     lod: bool = False
     ground: bool = False
+    masses: bool = False
 
 
 @dataclass(frozen=True)
@@ -217,14 +218,14 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     defaults = Defaults(**numbers, roof_shape=shape)
     r.pitch(defaults.roof_pitch, _line_of(text, "roof_pitch", at))
     out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers", "uvs", "lod",
-                                     "ground"})
+                                     "ground", "masses"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
-    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "lod", "ground")}
+    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "lod", "ground", "masses")}
     for key, value in flags.items():
         if not isinstance(value, bool):
             r.fail(f"{key} must be true or false, got {value!r}", key)

@@ -80,3 +80,11 @@ def test_a_fallback_ruleset_dresses_the_faces_the_assigned_one_cannot(small_scen
     rulesets = [p.GetAttribute("citygen:ruleset").Get() for p in stage.Traverse() if p.HasAttribute("citygen:ruleset")]
     assert any("testgrid:wide.testgrid (fallback on faces" in r for r in rulesets)
 
+
+def test_masses_only_builds_walls_and_roofs_without_generating_a_facade(small_scene, test_registry, monkeypatch):
+    """``[output] masses = true`` (``citygen generate --masses``): no ruleset is loaded, no face generated."""
+    from citygen.builder import Builder
+    monkeypatch.setattr(Builder, "ruleset", lambda *a: pytest.fail("a ruleset was loaded in masses-only mode"))
+    small_scene.write_text(small_scene.read_text().replace("[output]\n", "[output]\nmasses = true\n"))
+    report = generate_city(load_scene(small_scene), registry=test_registry)
+    assert report.written == 3 and not report.faces and report.stats.instances == 0

@@ -140,3 +140,4 @@ def test_a_bad_plausibility_table_names_its_line(tmp_path):
     path.write_text(path.read_text() + "[plausibility]\nsliver = 0.05\nmin_size = 3\n")
     with pytest.raises(SceneError, match=r"scene.toml:\d+: plausibility rule min_size = 3: not a table"):
         load_scene(path)
+
