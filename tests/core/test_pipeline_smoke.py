@@ -1,3 +1,5 @@
+import pytest
+
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
