@@ -88,6 +88,19 @@ class RoofBuilder(ABC):
         the outline at ``top`` so it closes the walls; raise on an outline it cannot roof (the pipeline then builds
         a flat roof and warns)."""
 
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        """About how tall (metres above the walls) :meth:`build` makes the roof at ``spec.pitch`` when no height
+        is given: what the pipeline splits a building's height by (it then builds the roof to that height exactly).
+        Default: the pitch's slope times the outline's inscribed radius (the run of a hipped or gabled roof)."""
+        return spec.slope * inscribed_radius(outline)
+
+
+def inscribed_radius(outline: Polygon | MultiPolygon) -> float:
+    """The radius of the largest circle inside ``outline`` (of its largest part): a pitched roof's run."""
+    import shapely
+    parts = getattr(outline, "geoms", [outline])
+    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.01)).tolist(), default=0.0)
+
 
 class Command(ABC):
     """A CLI sub-command contributed by a plugin."""

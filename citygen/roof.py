@@ -114,14 +114,26 @@ def rectangle_like(part: Polygon) -> bool:
             and part.area >= RECTANGLE_FILL * part.minimum_rotated_rectangle.area)
 
 
+def roof_angle(attributes: Mapping[str, Any]) -> float | None:
+    """The tagged ``roof:angle`` in degrees when it parses and lies in (0, 90), else None."""
+    angle = _number(attributes.get("roof:angle"))
+    return angle if angle is not None and 0 < angle < 90 else None
+
+
+def roof_levels(attributes: Mapping[str, Any]) -> float | None:
+    """The tagged ``roof:levels`` (storeys inside the roof) when it parses and is positive, else None."""
+    levels = _number(attributes.get("roof:levels"))
+    return levels if levels is not None and levels > 0 else None
+
+
 def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "flat",
               pitch: float = 30.0, party: tuple[int, ...] = ()) -> RoofSpec:
     """The roof of a building with OSM-style ``attributes``; ``shape`` and ``pitch`` apply where it has no tags;
     ``party``: its party-wall edges."""
     tag = attributes.get("roof:shape")
     shape = str(tag).strip().lower() if tag not in (None, "") else shape
-    angle = _number(attributes.get("roof:angle"))
-    if angle is not None and 0 < angle < 90:
+    angle = roof_angle(attributes)
+    if angle is not None:
         pitch = angle
     pitch = min(max(pitch, PITCH_RANGE[0]), PITCH_RANGE[1])
     height = _number(attributes.get("roof:height"))

@@ -14,7 +14,7 @@ import numpy as np
 from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.geometry.building import MeshData
-from citygen.registry import RoofBuilder
+from citygen.registry import RoofBuilder, inscribed_radius
 from citygen.roof import RoofSpec
 from citygen_roofs.pitched import _merge, _parts, skeleton_roof, star_around_centroid, welded_mesh
 
@@ -69,3 +69,6 @@ class OnionRoof(RoofBuilder):
         return _merge([(None if party else onion(part, top, spec))
                        or skeleton_roof(part, top, spec, "dome", False, party)
                        for part, party in _parts(outline, spec.party)])
+
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        return ONION_HEIGHT * inscribed_radius(outline)
