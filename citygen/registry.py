@@ -99,7 +99,7 @@ def inscribed_radius(outline: Polygon | MultiPolygon) -> float:
     """The radius of the largest circle inside ``outline`` (of its largest part): a pitched roof's run."""
     import shapely
     parts = getattr(outline, "geoms", [outline])
-    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.01)).tolist(), default=0.0)
+    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.1)).tolist(), default=0.0)
 
 
 class Command(ABC):

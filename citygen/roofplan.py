@@ -7,10 +7,14 @@ The roof's height above the walls, first that applies:
 
 1. a flat roof (``roof:shape = flat``, or a shape no roof builder makes): none;
 2. ``roof:height`` (metres);
-3. ``roof:levels`` times the scene's storey height (``[defaults] floor_height``);
-4. ``roof:angle``: what the roof builder rises at that pitch over the outline (``RoofBuilder.rise``);
-5. else the scene's pitch (``roof_pitch``: ``[[assign]]`` rule or ``[defaults]``), its rise capped at
-   ``ROOF_STOREYS`` storeys and at ``ROOF_SHARE`` of the total (of walls + roof where only the walls are known).
+3. ``roof:angle``: what the roof builder rises at that pitch over the outline (``RoofBuilder.rise``);
+4. ``roof:levels`` times the scene's storey height (``[defaults] floor_height``);
+5. a tagged ``roof:shape`` without any of these: its rise at the scene's pitch (``roof_pitch``: ``[[assign]]``
+   rule or ``[defaults]``), at most ``TAGGED_SHARE`` of the total;
+6. an untagged roof (shape from the scene): its rise at the scene's pitch, at most ``ROOF_STOREYS`` storeys and
+   ``ROOF_SHARE`` of the total.
+
+"Of the total" is of walls + roof where only the walls are known (level counts).
 
 Where the total is given, the roof leaves at least ``MIN_WALL_SHARE`` of it to the walls (a warning when tagged
 roof data had to be cut). The roof is then built to exactly that height, so a tagged building's highest point is
@@ -34,6 +38,8 @@ from citygen.scene import Scene
 ROOF_STOREYS = 1.0
 #: ... and at most this share of the building's total height.
 ROOF_SHARE = 0.25
+#: A roof whose shape the data tag (but not its height) is at most this share of the total.
+TAGGED_SHARE = 0.5
 #: A roof from the data leaves at least this share of a given total height to the walls.
 MIN_WALL_SHARE = 0.1
 
@@ -78,14 +84,16 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
         rise, source = 0.0, "flat"
     elif spec.height:
         rise, source = spec.height, "roof:height"
-    elif levels is not None:
-        rise, source = levels * storey, "roof:levels"
     elif roof_angle(attrs) is not None:
         rise, source = builder.rise(outline, spec), "roof:angle"
+    elif levels is not None:
+        rise, source = levels * storey, "roof:levels"
     else:
         natural = builder.rise(outline, spec)
-        share = ROOF_SHARE * total if total is not None else ROOF_SHARE / (1 - ROOF_SHARE) * footprint.height
-        rise = min(natural, ROOF_STOREYS * storey, share)
+        tagged = attrs.get("roof:shape") not in (None, "")
+        share = TAGGED_SHARE if tagged else ROOF_SHARE
+        most = share * total if total is not None else share / (1 - share) * footprint.height
+        rise = min(natural, most) if tagged else min(natural, ROOF_STOREYS * storey, most)
         source = "pitch" if rise >= natural else "pitch, capped"
     warnings = []
     walls = footprint.height

@@ -142,8 +142,9 @@ class HeightSettings:
 class Height:
     """A resolved height (metres above ``base_offset``), where it came from, and the problems met.
 
-    ``total``: the height includes the roof (height tags, the scene default), else it is the walls' (level counts:
-    ``levels`` counts the storeys below the roof; ``roof:levels`` are the roof's, :mod:`citygen.roofplan`).
+    ``total``: the height includes the roof (height tags, the scene default, levels with ``roof:levels``), else it
+    is the walls' (level counts alone: the roof goes on top, :mod:`citygen.roofplan`). ``levels`` counts the storeys
+    below the roof (``building:levels`` less ``building:min_level``).
     ``rejected`` lists the tags whose values were present but unusable (unparsable or implausible);
     ``warnings`` holds one message per problem, naming the feature, tag and value.
     """
@@ -168,7 +169,7 @@ def _round_levels(levels: float) -> int:
 
 def resolve_height(tags: Mapping[str, object], feature_id: str, settings: HeightSettings) -> Height:
     """The height of one feature from ``tags``, in the order height tags (a total, roof included), level tags
-    (``building:levels``: the walls' storeys), scene default (a total).
+    (``building:levels``: the walls' storeys, plus ``roof:levels`` in the roof), scene default (a total).
 
     Heights outside ``(0, max_height]`` and level totals of zero are rejected like unparsable values (with a
     warning) and the next source is tried. ``min_height`` / ``building:min_level`` lift the base when
@@ -192,14 +193,17 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
             return None
 
     levels = None
+    roof_levels = 0.0
     level_tag = ""
     for tag in LEVEL_TAGS:
         if (levels := read(tag, parse_levels)) is not None:
             level_tag = tag
             break
-    if levels is not None and levels <= 0:
-        reject(level_tag, "no levels below the roof")
-        levels = None
+    if levels is not None:
+        roof_levels = read("roof:levels", parse_levels) or 0.0
+        if levels + roof_levels <= 0:
+            reject(level_tag, "no levels above ground")
+            levels = None
 
     offset = offset_levels = 0.0
     if settings.base_offsets:
@@ -220,11 +224,13 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
             reject(tag, f"{top:g} m is not a plausible building height, must be in (0, {settings.max_height:g}]")
             continue
         return _with_offset(top, tag, levels, offsets, warnings, rejected, total=True)
-    if levels is not None:
-        top = levels * settings.floor_height
+    if levels is not None:  # with roof levels a total (a part may be all roof), else the walls' height
+        top = (levels + roof_levels) * settings.floor_height
         if top <= settings.max_height:
-            return _with_offset(top, level_tag, levels, offsets, warnings, rejected, total=False)
-        reject(level_tag, f"{levels:g} levels of {settings.floor_height:g} m exceed {settings.max_height:g} m")
+            source = level_tag + ("+roof:levels" if roof_levels else "")
+            return _with_offset(top, source, levels, offsets, warnings, rejected, total=roof_levels > 0)
+        reject(level_tag, f"{levels + roof_levels:g} levels of {settings.floor_height:g} m exceed "
+                          f"{settings.max_height:g} m")
     return Height(settings.default_height, "default", None, offset, tuple(warnings), tuple(rejected))
 
 

@@ -57,7 +57,7 @@ RESOLVE = [
     ({"building:height": "21"}, 21.0, "building:height", None),
     ({"measuredHeight": 6.5}, 6.5, "measuredHeight", None),
     ({"building:levels": "4"}, 12.0, "building:levels", 4),
-    ({"building:levels": "3.5", "roof:levels": "1"}, 13.5, "building:levels+roof:levels", 5),
+    ({"building:levels": "3.5", "roof:levels": "1"}, 13.5, "building:levels+roof:levels", 4),  # walls: 4 storeys
     ({"building:levels": "2", "roof:levels": "0"}, 6.0, "building:levels", 2),
     ({"storeysAboveGround": 3}, 9.0, "storeysAboveGround", 3),
     ({}, 10.0, "default", None),
