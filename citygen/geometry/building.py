@@ -349,7 +349,8 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     roof, gables = roof.split_vertical() if roof is not None else (None, None)
     if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail
         key = ("wall", wall_material)
-        meshes = dict(sorted({**meshes, key: MeshData.concat([meshes[key], gables]) if key in meshes else gables}.items()))
+        joined = MeshData.concat([meshes[key], gables]) if key in meshes else gables
+        meshes = dict(sorted({**meshes, key: joined}.items()))
         mass_walls = MeshData.concat([mass_walls, gables]) if mass_walls is not None else None
     return BuildingGeometry(meshes=meshes, instances=sink.instances(), modules=protos, roof=roof,
                             walls=mass_walls, roof_material=roof_material)

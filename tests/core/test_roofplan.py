@@ -70,6 +70,19 @@ def test_every_height_tagged_helsinki_building_tops_out_at_its_height(helsinki):
         assert mass.top == pytest.approx(ground + parse_length(fp.attributes["height"]))
 
 
+def test_simple_3d_buildings_parts_top_out_at_their_height():
+    """The OSM file's buildings and building parts with a ``height`` (28, lifted parts among them: ``min_height``
+    lifts the base, ``height`` is still measured from the ground) top out at ground + height."""
+    pytest.importorskip("osmium")
+    city = City(REPO / "scenes" / "helsinki_osm.toml")
+    tagged = [fp for fp in city.footprints if fp.attributes.get("height") not in (None, "")]
+    assert len(tagged) == 28 and sum(fp.lift > 0 for fp in tagged) >= 3
+    for fp in tagged:
+        record, _ = city.build(fp.id)
+        assert top(record.geometry) == pytest.approx(fp.base - fp.lift + parse_length(fp.attributes["height"]),
+                                                     abs=0.01), fp.id
+
+
 def test_stockmann_is_39_m_with_a_one_storey_roof_and_floor_lines_on_its_walls(helsinki):
     record, mass = helsinki.build(STOCKMANN)
     assert top(record.geometry) == pytest.approx(39.0, abs=0.01)
