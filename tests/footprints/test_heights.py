@@ -77,6 +77,17 @@ def test_resolve_height(tags, height, source, levels):
     assert (h.height, h.source, h.levels) == (pytest.approx(height), source, levels)
 
 
+@pytest.mark.parametrize("tags, total", [
+    ({"height": "18", "building:levels": "5"}, True), ({"measuredHeight": 6.5}, True), ({}, True),
+    ({"building:levels": "4"}, False), ({"building:levels": "4", "roof:levels": "1"}, True),
+])
+def test_heights_say_whether_they_include_the_roof(tags, total):
+    """Issue 22: ``height`` is a total (Simple 3D Buildings), ``building:levels`` count the walls' storeys; with
+    ``roof:levels`` the level count is a total again, its roof those levels (``citygen.roofplan``)."""
+    assert resolve_height(tags, "way/1", S).total is total
+    assert infer_height(resolve_height({"building": "kiosk"}, "way/1", S), {"building": "kiosk"}, 5.0, S).total is False
+
+
 def test_unusable_values_warn_naming_feature_tag_and_value():
     h = resolve_height({"height": "5000", "building:levels": "lots"}, "way/77", S)
     assert h.rejected == ("building:levels", "height")
