@@ -67,20 +67,6 @@ class MeshData:
                    np.concatenate([m.counts for m in meshes]).astype(np.int32),
                    np.concatenate([m.indices + o for m, o in zip(meshes, offsets)]).astype(np.int32))
 
-    def face_normals(self) -> np.ndarray:
-        """``(m, 3)`` unnormalised face normals (Newell's method, so any planar polygon works)."""
-        starts = np.cumsum(self.counts) - self.counts
-        face = np.repeat(np.arange(len(self.counts)), self.counts)
-        following = np.arange(len(self.indices)) + 1
-        last = starts + self.counts - 1
-        following[last] = starts  # each face's last corner wraps to its first
-        here = self.points[self.indices].astype(np.float64)
-        here -= self.points[self.indices[starts]][face]  # about each face's first corner: no cancellation far away
-        there = self.points[self.indices[following]].astype(np.float64) - self.points[self.indices[starts]][face]
-        normals = np.zeros((len(self.counts), 3))
-        np.add.at(normals, face, np.cross(here, there))
-        return normals
-
     def subset(self, faces: np.ndarray) -> MeshData:
         """The faces selected by the boolean mask ``faces``, with only the points they use."""
         corner = np.repeat(faces, self.counts)
@@ -90,10 +76,10 @@ class MeshData:
     def split_vertical(self, tol: float = VERTICAL_TOL) -> tuple[MeshData | None, MeshData | None]:
         """(the faces that are not vertical, the vertical ones): the gables and steps of a roof are walls.
 
-        A face is vertical when its unit normal's z is within ``tol`` of 0. Either part is None when empty."""
-        normals = self.face_normals()
-        length = np.linalg.norm(normals, axis=1)
-        vertical = (length > 0) & (np.abs(normals[:, 2]) <= tol * length)
+        A face is vertical when its unit normal's z is within ``tol`` of 0 (one of no area is not). Either part is
+        None when empty."""
+        from citygen.usd.normals import polygon_normals  # (the stage's normals: that module imports this one)
+        vertical = np.abs(polygon_normals(self.points, self.counts, self.indices)[:, 2]) <= tol
         return (self.subset(~vertical) if not vertical.all() else None,
                 self.subset(vertical) if vertical.any() else None)
 
