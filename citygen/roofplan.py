@@ -17,7 +17,7 @@ The roof's height above the walls, first that applies:
 "Of the total" is of walls + roof where only the walls are known (level counts).
 
 Where the total is given, the roof leaves at least ``MIN_WALL_SHARE`` of it to the walls (a warning when tagged
-roof data had to be cut). The roof is then built to exactly that height, so a tagged building's highest point is
+roof data exceed the total; a part that is all roof keeps a low wall). The roof is then built to exactly that height, so a tagged building's highest point is
 its base plus its ``height``.
 """
 from __future__ import annotations
@@ -100,10 +100,10 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
     if total is not None:
         most = (1 - MIN_WALL_SHARE) * total
         if rise > most:
-            if source.startswith("roof:"):
-                warnings.append(f"{footprint.id}: a {rise:.2f} m roof ({source}) leaves too little of the "
-                                f"{total:g} m height for walls; the roof is {most:.2f} m, the walls "
-                                f"{total - most:.2f} m -- check its height tags")
+            if rise > total and source.startswith("roof:"):
+                warnings.append(f"{footprint.id}: a {rise:.2f} m roof ({source}) is taller than the building's "
+                                f"{total:g} m; the roof is {most:.2f} m, the walls {total - most:.2f} m -- check its "
+                                f"height tags")
             rise = most
         walls = total - rise
     if rise <= 0:  # (a shape no builder makes stays named: the builder warns and builds it flat)

@@ -173,7 +173,9 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
 
     Heights outside ``(0, max_height]`` and level totals of zero are rejected like unparsable values (with a
     warning) and the next source is tried. ``min_height`` / ``building:min_level`` lift the base when
-    ``settings.base_offsets`` is on; the wall then runs from the offset to the top.
+    ``settings.base_offsets`` is on; the wall then runs from the offset to the top. A lifted part with no height or
+    levels but a ``roof:height`` is all roof: its top is the offset plus the roof's height (Helsinki Cathedral's
+    corner domes).
     """
     warnings: list[str] = []
     rejected: list[str] = []
@@ -231,6 +233,10 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
             return _with_offset(top, source, levels, offsets, warnings, rejected, total=roof_levels > 0)
         reject(level_tag, f"{levels + roof_levels:g} levels of {settings.floor_height:g} m exceed "
                           f"{settings.max_height:g} m")
+    roof = read("roof:height", parse_length) if offset > 0 else None
+    if roof and offset + roof <= settings.max_height:  # a lifted part with only its roof's height: all roof
+        source = ("min_height" if _present(tags, "min_height") else "building:min_level") + "+roof:height"
+        return _with_offset(offset + roof, source, None, offsets, warnings, rejected, total=True)
     return Height(settings.default_height, "default", None, offset, tuple(warnings), tuple(rejected))
 
 

@@ -157,6 +157,27 @@ def test_a_part_that_is_all_roof_keeps_its_lifted_base():
     assert split.walls == pytest.approx(MIN_WALL_SHARE * 3.3) and split.total == pytest.approx(3.3)
 
 
+def test_cathedral_corner_domes_stand_on_their_lift_all_roof(helsinki):
+    """Regression: Helsinki Cathedral's corner domes (min_height = 18, roof:height = 5, no height) got the scene's
+    18 m default as walls on top of their 18 m lift (top 41 m, then 36 m); they are all roof: top 23 m."""
+    domes = [fp for fp in helsinki.footprints if fp.height_source == "min_height+roof:height"]
+    assert len(domes) == 4
+    for fp in domes:
+        record, mass = helsinki.build(fp.id)
+        assert (fp.base, mass.roof.shape, mass.height) == (18.0, "dome", pytest.approx(0.5))
+        assert top(record.geometry) == pytest.approx(23.0, abs=0.01)
+
+
+def test_a_roof_taller_than_the_building_is_cut_with_a_warning(helsinki):
+    k = helsinki.index["way/419479428"]
+    fp = helsinki.footprints[k]
+    wrong = replace(fp, attributes={**fp.attributes, "roof:height": "20"})
+    split = split_height(wrong, helsinki.masses[k].outline, helsinki.scene, helsinki.roofs)
+    assert (split.walls, split.roof.height) == (pytest.approx(1.3), pytest.approx(11.7))
+    assert split.warnings == ("way/419479428: a 20.00 m roof (roof:height) is taller than the building's 13 m; the "
+                              "roof is 11.70 m, the walls 1.30 m -- check its height tags",)
+
+
 def test_delft_buildings_top_out_at_their_cityjson_height():
     """CityJSON: the LoD1 solid's extent (``cityjson_height = "geometry"``; ``measuredHeight`` otherwise) is the
     total; Delft's low terraces get gabled roofs inside it."""

@@ -66,6 +66,8 @@ RESOLVE = [
     ({"height": "5000"}, 10.0, "default", None),
     ({"height": "unknown", "building:levels": "many"}, 10.0, "default", None),
     ({"building:levels": "0"}, 10.0, "default", None),
+    ({"min_height": "18", "roof:height": "5"}, 5.0, "min_height+roof:height", None),  # a lifted dome: all roof
+    ({"building:min_level": "2", "roof:height": "4"}, 4.0, "building:min_level+roof:height", None),
     # regression (found by hypothesis): 334 levels x 3 m passed as a 1002 m height
     ({"building:levels": 34, "roof:levels": 300}, 10.0, "default", None),
 ]
