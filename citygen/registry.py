@@ -18,6 +18,7 @@ import pluggy
 
 from citygen import hookspecs
 from citygen.errors import PluginError
+from citygen.roof import inscribed_radius
 
 if TYPE_CHECKING:
     from shapely.geometry import MultiPolygon, Polygon
@@ -93,13 +94,6 @@ class RoofBuilder(ABC):
         is given: what the pipeline splits a building's height by (it then builds the roof to that height exactly).
         Default: the pitch's slope times the outline's inscribed radius (the run of a hipped or gabled roof)."""
         return spec.slope * inscribed_radius(outline)
-
-
-def inscribed_radius(outline: Polygon | MultiPolygon) -> float:
-    """The radius of the largest circle inside ``outline`` (of its largest part): a pitched roof's run."""
-    import shapely
-    parts = getattr(outline, "geoms", [outline])
-    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.1)).tolist(), default=0.0)
 
 
 class Command(ABC):

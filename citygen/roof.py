@@ -21,7 +21,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from shapely.geometry import Polygon
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
 
 #: A pitch outside this range (degrees) is clamped: flatter is a flat roof, steeper a tower.
 PITCH_RANGE = (5.0, 75.0)
@@ -112,6 +113,12 @@ def rectangle_like(part: Polygon) -> bool:
     """Four sides, no courtyard and nearly filling its minimum rotated rectangle: ``roof:orientation`` applies."""
     return (not part.interiors and len(part.exterior.coords) == 5
             and part.area >= RECTANGLE_FILL * part.minimum_rotated_rectangle.area)
+
+
+def inscribed_radius(outline: Polygon | MultiPolygon) -> float:
+    """The radius of the largest circle inside ``outline`` (of its largest part, to 0.1 m): a pitched roof's run."""
+    parts = getattr(outline, "geoms", [outline])
+    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.1)).tolist(), default=0.0)
 
 
 def roof_angle(attributes: Mapping[str, Any]) -> float | None:

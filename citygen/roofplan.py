@@ -17,8 +17,8 @@ The roof's height above the walls, first that applies:
 "Of the total" is of walls + roof where only the walls are known (level counts).
 
 Where the total is given, the roof leaves at least ``MIN_WALL_SHARE`` of it to the walls (a warning when tagged
-roof data exceed the total; a part that is all roof keeps a low wall). The roof is then built to exactly that height, so a tagged building's highest point is
-its base plus its ``height``.
+roof data exceed the total; a part that is all roof keeps a low wall). The roof is then built to exactly that
+height, so a tagged building's highest point is its base plus its ``height``.
 """
 from __future__ import annotations
 

@@ -14,8 +14,8 @@ import numpy as np
 from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.geometry.building import MeshData
-from citygen.registry import RoofBuilder, inscribed_radius
-from citygen.roof import RoofSpec
+from citygen.registry import RoofBuilder
+from citygen.roof import RoofSpec, inscribed_radius
 from citygen_roofs.pitched import _merge, _parts, skeleton_roof, star_around_centroid, welded_mesh
 
 #: (height share, scale of the outline about its centroid): widest at a fifth of the height, then a concave neck

@@ -27,8 +27,8 @@ from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
-from citygen.registry import RoofBuilder, inscribed_radius
-from citygen.roof import ORIENTATIONS, RoofSpec, note, rectangle_like
+from citygen.registry import RoofBuilder
+from citygen.roof import ORIENTATIONS, RoofSpec, inscribed_radius, note, rectangle_like
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 
 
