@@ -27,7 +27,7 @@ from citygen.plausible import check_plausible, plain_wall, summary
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import rectangle_like, roof_notes, roof_spec
+from citygen.roof import rectangle_like, roof_notes
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE, colour_material
 from citygen.usd.writer import BuildingRecord
@@ -58,7 +58,8 @@ def face_tally(layouts: Sequence[FacadeLayout]) -> Counter[str]:
 
 
 def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
-    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height and area."""
+    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height (the data's: a total,
+    roof included, or for level counts the walls') and area."""
     return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
 
 
@@ -133,7 +134,8 @@ class Builder:
         except Exception as exc:  # a plugin bug must skip one building, not the city
             reason = f"internal error {type(exc).__name__}: {exc}"
             return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
-        attributes = {"sourceId": footprint.id, "height": float(footprint.height),
+        attributes = {"sourceId": footprint.id, "height": mass.top - mass.base, "wallHeight": mass.height,
+                      "roofHeight": mass.roof.height or 0.0, "roofHeightSource": mass.roof_source,
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
                       "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
@@ -152,16 +154,10 @@ class Builder:
 
     def _roof(self, footprint: Footprint, mass: Mass, party: tuple[int, ...], warnings: list[str]
               ) -> MeshData | None:
-        """The building's roof: shape from its ``roof:shape`` tag, else the first matching ``[[assign]]`` rule
-        that sets one, else ``[defaults]``; an unknown tag or a failing builder gives a flat roof (with a warning).
-        The faces the coordinator found to be party walls (``party``) are passed on in the spec."""
-        attrs = assign_attributes(footprint, mass)
-        rule = next((a for a in self.scene.assignments if (a.roof_shape or a.roof_pitch) and a.matches(attrs)), None)
-        defaults = self.scene.defaults
-        spec = roof_spec(footprint.attributes, mass.height,
-                         shape=(rule and rule.roof_shape) or defaults.roof_shape,
-                         pitch=(rule and rule.roof_pitch) or defaults.roof_pitch,
-                         party=party)
+        """The roof the mass carries (``mass.roof``: shape and height decided with the walls,
+        :mod:`citygen.roofplan`); an unknown shape or a failing builder gives a flat roof (with a warning). The
+        faces the coordinator found to be party walls (``party``) are passed on in the spec."""
+        spec = replace(mass.roof, party=party)
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
         if spec.shape not in self.roofs:

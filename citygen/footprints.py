@@ -29,9 +29,12 @@ class Footprint:
     """One building's outline and attributes.
 
     ``polygon`` is valid, oriented (exterior counter-clockwise, holes clockwise) and in metres in the local frame.
-    ``height`` is the wall height in metres and ``height_source`` says where it came from
-    (``"height"``, ``"measuredHeight"``, ``"building:levels"``, ``"default"``, ...). ``levels`` is the number of
-    above-ground floors when known from the data, else ``None``; ``base`` is the elevation of the wall's foot:
+    ``height`` is the height the data give in metres and ``height_source`` says where it came from
+    (``"height"``, ``"measuredHeight"``, ``"building:levels"``, ``"default"``, ...): the building's total height,
+    roof included, when ``height_is_total`` (OSM ``height``, CityJSON ``measuredHeight``, a scene default), else the
+    walls' height (level counts; the roof goes on top). The pipeline splits it into walls and roof
+    (:mod:`citygen.roofplan`). ``levels`` is the number of above-ground floors below the roof when known from the
+    data, else ``None``; ``base`` is the elevation of the wall's foot:
     the ground, plus ``lift`` for a building (part) that starts above it (OSM ``min_height`` /
     ``building:min_level``: an upper part of a Simple 3D Buildings model, a bridge building), whose foot is not at
     street level.
@@ -46,6 +49,7 @@ class Footprint:
     attributes: Mapping[str, Any] = field(default_factory=dict)
     source: str = ""
     lift: float = 0.0
+    height_is_total: bool = False
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,9 @@ def citygen_footprint_importers() -> list[FootprintImporter]:
 
 @hookspec
 def citygen_roof_builders() -> list[RoofBuilder]:
-    """Register roof builders; a scene or footprint attribute ``roof:shape`` selects one by id."""
+    """Register roof builders; a scene or footprint attribute ``roof:shape`` selects one by id. The pipeline asks
+    a builder how tall its roof rises at a pitch (``rise``) to split a building's height into walls and roof, then
+    has it ``build`` the roof to exactly that height (``RoofSpec.height``)."""
 
 
 @hookspec

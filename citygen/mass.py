@@ -7,7 +7,7 @@ shorter than the tolerance are absorbed into their neighbours instead of becomin
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -15,6 +15,7 @@ from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
 from citygen.footprints import Footprint
+from citygen.roof import RoofSpec
 
 
 @dataclass(frozen=True)
@@ -49,12 +50,26 @@ class Face:
 
 @dataclass(frozen=True)
 class Mass:
-    """A building's volume: the cleaned outline extruded from ``base`` by ``height``, and its wall faces."""
+    """A building's volume: the cleaned outline extruded from ``base`` by ``height`` (its walls), its wall faces,
+    and the ``roof`` it carries (shape, pitch and height above the walls, decided with the wall height by
+    :mod:`citygen.roofplan`; ``roof_source``: which rule set the roof's height)."""
 
     outline: Polygon | MultiPolygon
     base: float
     height: float
     faces: tuple[Face, ...]
+    roof: RoofSpec = RoofSpec()
+    roof_source: str = "flat"
+
+    @property
+    def top(self) -> float:
+        """The highest point: base, walls and roof."""
+        return self.base + self.height + (self.roof.height or 0.0)
+
+    def with_walls(self, height: float, roof: RoofSpec, roof_source: str) -> Mass:
+        """This mass with walls ``height`` tall carrying ``roof``."""
+        faces = tuple(replace(f, height=float(height)) for f in self.faces)
+        return replace(self, height=float(height), faces=faces, roof=roof, roof_source=roof_source)
 
 
 def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.ndarray:

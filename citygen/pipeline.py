@@ -26,8 +26,9 @@ from citygen.builder import Builder, BuildingOutcome
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, ImportResult, Skipped
-from citygen.mass import Mass, build_mass, neighbour_cover
+from citygen.mass import Mass, neighbour_cover
 from citygen.registry import Registry, default_registry, load_registry
+from citygen.roofplan import plan_mass
 from citygen.scene import Scene
 from citygen.usd.writer import StageStats, StageWriter, prim_name
 
@@ -129,10 +130,13 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.warnings += imported.warnings
     t1 = time.perf_counter()
     footprints, masses = [], []
+    roofs = registry.roof_builders
     for fp in imported.footprints:
         try:
-            masses.append(build_mass(fp))
+            mass, notes = plan_mass(fp, scene, roofs)
+            masses.append(mass)
             footprints.append(fp)
+            report.warnings += notes
         except CitygenError as exc:
             report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
         except Exception as exc:  # a bug skips one building, not the city, and says it is one

@@ -18,6 +18,7 @@ import pluggy
 
 from citygen import hookspecs
 from citygen.errors import PluginError
+from citygen.roof import inscribed_radius
 
 if TYPE_CHECKING:
     from shapely.geometry import MultiPolygon, Polygon
@@ -87,6 +88,12 @@ class RoofBuilder(ABC):
         height, direction, orientation, party-wall edges; None: the builder's defaults). Its open boundary must be
         the outline at ``top`` so it closes the walls; raise on an outline it cannot roof (the pipeline then builds
         a flat roof and warns)."""
+
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        """About how tall (metres above the walls) :meth:`build` makes the roof at ``spec.pitch`` when no height
+        is given: what the pipeline splits a building's height by (it then builds the roof to that height exactly).
+        Default: the pitch's slope times the outline's inscribed radius (the run of a hipped or gabled roof)."""
+        return spec.slope * inscribed_radius(outline)
 
 
 class Command(ABC):

@@ -21,7 +21,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from shapely.geometry import Polygon
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
 
 #: A pitch outside this range (degrees) is clamped: flatter is a flat roof, steeper a tower.
 PITCH_RANGE = (5.0, 75.0)
@@ -114,14 +115,32 @@ def rectangle_like(part: Polygon) -> bool:
             and part.area >= RECTANGLE_FILL * part.minimum_rotated_rectangle.area)
 
 
+def inscribed_radius(outline: Polygon | MultiPolygon) -> float:
+    """The radius of the largest circle inside ``outline`` (of its largest part, to 0.1 m): a pitched roof's run."""
+    parts = getattr(outline, "geoms", [outline])
+    return max(shapely.length(shapely.maximum_inscribed_circle(list(parts), 0.1)).tolist(), default=0.0)
+
+
+def roof_angle(attributes: Mapping[str, Any]) -> float | None:
+    """The tagged ``roof:angle`` in degrees when it parses and lies in (0, 90), else None."""
+    angle = _number(attributes.get("roof:angle"))
+    return angle if angle is not None and 0 < angle < 90 else None
+
+
+def roof_levels(attributes: Mapping[str, Any]) -> float | None:
+    """The tagged ``roof:levels`` (storeys inside the roof) when it parses and is positive, else None."""
+    levels = _number(attributes.get("roof:levels"))
+    return levels if levels is not None and levels > 0 else None
+
+
 def roof_spec(attributes: Mapping[str, Any], wall_height: float, shape: str = "flat",
               pitch: float = 30.0, party: tuple[int, ...] = ()) -> RoofSpec:
     """The roof of a building with OSM-style ``attributes``; ``shape`` and ``pitch`` apply where it has no tags;
     ``party``: its party-wall edges."""
     tag = attributes.get("roof:shape")
     shape = str(tag).strip().lower() if tag not in (None, "") else shape
-    angle = _number(attributes.get("roof:angle"))
-    if angle is not None and 0 < angle < 90:
+    angle = roof_angle(attributes)
+    if angle is not None:
         pitch = angle
     pitch = min(max(pitch, PITCH_RANGE[0]), PITCH_RANGE[1])
     height = _number(attributes.get("roof:height"))

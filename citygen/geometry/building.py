@@ -32,6 +32,8 @@ from citygen.usd.materials import COLOUR_PREFIX
 BUILDING_RENDER = "render"
 #: Depth of trim labels whose regions say 0 (metres along the normal).
 TRIM_DEPTH = {"cornice": 0.3, "ledge": 0.12, "molding": 0.05, "deco": 0.04, "pillar": 0.1}
+#: A face is vertical (a wall, e.g. a roof's gable) when its unit normal's z is at most this (0.06 degrees).
+VERTICAL_TOL = 1e-3
 #: Material of a label when neither the region nor the building palette says otherwise.
 LABEL_MATERIAL = {"window": "frame_white", "door": "door_wood", "shop": "frame_dark", "glass": "frame_dark",
                   "balcony": "railing_metal", "sill": "stone", "blind": "shutter_green", "cornice": "trim_white",
@@ -56,6 +58,30 @@ class MeshData:
         ok = ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
               & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
         return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
+
+    @classmethod
+    def concat(cls, meshes: Sequence[MeshData]) -> MeshData:
+        """One mesh of ``meshes`` (points not welded)."""
+        offsets = np.cumsum([0, *(len(m.points) for m in meshes[:-1])])
+        return cls(np.concatenate([m.points for m in meshes]).astype(np.float32),
+                   np.concatenate([m.counts for m in meshes]).astype(np.int32),
+                   np.concatenate([m.indices + o for m, o in zip(meshes, offsets)]).astype(np.int32))
+
+    def subset(self, faces: np.ndarray) -> MeshData:
+        """The faces selected by the boolean mask ``faces``, with only the points they use."""
+        corner = np.repeat(faces, self.counts)
+        used, indices = np.unique(self.indices[corner], return_inverse=True)
+        return MeshData(self.points[used], self.counts[faces], indices.astype(np.int32).ravel())
+
+    def split_vertical(self, tol: float = VERTICAL_TOL) -> tuple[MeshData | None, MeshData | None]:
+        """(the faces that are not vertical, the vertical ones): the gables and steps of a roof are walls.
+
+        A face is vertical when its unit normal's z is within ``tol`` of 0 (one of no area is not). Either part is
+        None when empty."""
+        from citygen.usd.normals import polygon_normals  # (the stage's normals: that module imports this one)
+        vertical = np.abs(polygon_normals(self.points, self.counts, self.indices)[:, 2]) <= tol
+        return (self.subset(~vertical) if not vertical.all() else None,
+                self.subset(vertical) if vertical.any() else None)
 
 
 @dataclass(frozen=True)
@@ -275,7 +301,8 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
 
     With ``modules``, repeated subtrees become module instances (:mod:`citygen.geometry.modules`); the remaining
     terminals become facade quads and element instances. With ``walls``, the mass is also kept as plain walls
-    (the ``mass`` level of detail).
+    (the ``mass`` level of detail). The roof's vertical faces (gables, steps between roof pieces) are wall: they
+    join the ``("wall", wall_material)`` mesh (and the plain walls), the roof keeps the rest.
     """
     sink = _Sink()
     protos: dict[ModuleKey, ModuleProto] = {}
@@ -303,6 +330,13 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
                            np.asarray(scale))
     plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), face.matrix())
              for face, _ in layouts] if walls else []
-    return BuildingGeometry(meshes=sink.meshes(), instances=sink.instances(), modules=protos, roof=roof,
-                            walls=MeshData.from_quads(np.concatenate(plain)) if plain else None,
-                            roof_material=roof_material)
+    meshes = sink.meshes()
+    mass_walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
+    roof, gables = roof.split_vertical() if roof is not None else (None, None)
+    if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail
+        key = ("wall", wall_material)
+        joined = MeshData.concat([meshes[key], gables]) if key in meshes else gables
+        meshes = dict(sorted({**meshes, key: joined}.items()))
+        mass_walls = MeshData.concat([mass_walls, gables]) if mass_walls is not None else None
+    return BuildingGeometry(meshes=meshes, instances=sink.instances(), modules=protos, roof=roof,
+                            walls=mass_walls, roof_material=roof_material)

@@ -194,7 +194,7 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
         footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
                                     height_source=height.source, levels=height.levels,
                                     base=base, attributes=dict(feature.attributes),
-                                    source=feature.source, lift=height.base_offset))
+                                    source=feature.source, lift=height.base_offset, height_is_total=height.total))
     ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
     return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)
 

@@ -140,8 +140,11 @@ class HeightSettings:
 
 @dataclass(frozen=True)
 class Height:
-    """A resolved wall height (metres above ``base_offset``), where it came from, and the problems met.
+    """A resolved height (metres above ``base_offset``), where it came from, and the problems met.
 
+    ``total``: the height includes the roof (height tags, the scene default, levels with ``roof:levels``), else it
+    is the walls' (level counts alone: the roof goes on top, :mod:`citygen.roofplan`). ``levels`` counts the storeys
+    below the roof (``building:levels`` less ``building:min_level``).
     ``rejected`` lists the tags whose values were present but unusable (unparsable or implausible);
     ``warnings`` holds one message per problem, naming the feature, tag and value.
     """
@@ -152,6 +155,7 @@ class Height:
     base_offset: float = 0.0
     warnings: tuple[str, ...] = ()
     rejected: tuple[str, ...] = ()
+    total: bool = True
 
 
 def _present(tags: Mapping[str, object], key: str) -> bool:
@@ -164,11 +168,14 @@ def _round_levels(levels: float) -> int:
 
 
 def resolve_height(tags: Mapping[str, object], feature_id: str, settings: HeightSettings) -> Height:
-    """The wall height of one feature from ``tags``, in the order height tags, level tags, scene default.
+    """The height of one feature from ``tags``, in the order height tags (a total, roof included), level tags
+    (``building:levels``: the walls' storeys, plus ``roof:levels`` in the roof), scene default (a total).
 
     Heights outside ``(0, max_height]`` and level totals of zero are rejected like unparsable values (with a
     warning) and the next source is tried. ``min_height`` / ``building:min_level`` lift the base when
-    ``settings.base_offsets`` is on; the wall then runs from the offset to the top.
+    ``settings.base_offsets`` is on; the wall then runs from the offset to the top. A lifted part with no height or
+    levels but a ``roof:height`` is all roof: its top is the offset plus the roof's height (Helsinki Cathedral's
+    corner domes).
     """
     warnings: list[str] = []
     rejected: list[str] = []
@@ -187,7 +194,8 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
             reject(tag, str(exc))
             return None
 
-    levels = roof_levels = None
+    levels = None
+    roof_levels = 0.0
     level_tag = ""
     for tag in LEVEL_TAGS:
         if (levels := read(tag, parse_levels)) is not None:
@@ -209,7 +217,6 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
         elif min_level is not None:
             offset, offset_levels = min_level * settings.floor_height, min_level
 
-    total = None if levels is None else levels + roof_levels
     offsets = (offset, offset_levels, feature_id)
     for tag in HEIGHT_TAGS:
         top = read(tag, parse_length)
@@ -218,24 +225,29 @@ def resolve_height(tags: Mapping[str, object], feature_id: str, settings: Height
         if not 0 < top <= settings.max_height:
             reject(tag, f"{top:g} m is not a plausible building height, must be in (0, {settings.max_height:g}]")
             continue
-        return _with_offset(top, tag, total, offsets, warnings, rejected)
-    if total is not None:
-        top = total * settings.floor_height
+        return _with_offset(top, tag, levels, offsets, warnings, rejected, total=True)
+    if levels is not None:  # with roof levels a total (a part may be all roof), else the walls' height
+        top = (levels + roof_levels) * settings.floor_height
         if top <= settings.max_height:
             source = level_tag + ("+roof:levels" if roof_levels else "")
-            return _with_offset(top, source, total, offsets, warnings, rejected)
-        reject(level_tag, f"{total:g} levels of {settings.floor_height:g} m exceed {settings.max_height:g} m")
+            return _with_offset(top, source, levels, offsets, warnings, rejected, total=roof_levels > 0)
+        reject(level_tag, f"{levels + roof_levels:g} levels of {settings.floor_height:g} m exceed "
+                          f"{settings.max_height:g} m")
+    roof = read("roof:height", parse_length) if offset > 0 else None
+    if roof and offset + roof <= settings.max_height:  # a lifted part with only its roof's height: all roof
+        source = ("min_height" if _present(tags, "min_height") else "building:min_level") + "+roof:height"
+        return _with_offset(offset + roof, source, None, offsets, warnings, rejected, total=True)
     return Height(settings.default_height, "default", None, offset, tuple(warnings), tuple(rejected))
 
 
-def _with_offset(top: float, source: str, total_levels: float | None, offsets: tuple[float, float, str],
-                 warnings: list[str], rejected: list[str]) -> Height:
+def _with_offset(top: float, source: str, wall_levels: float | None, offsets: tuple[float, float, str],
+                 warnings: list[str], rejected: list[str], total: bool) -> Height:
     offset, offset_levels, feature_id = offsets
     if offset and offset >= top:
         warnings.append(f"{feature_id}: base offset {offset:g} m is not below the top {top:g} m; ignoring it")
         offset = offset_levels = 0.0
-    levels = None if total_levels is None else _round_levels(max(total_levels - offset_levels, 1.0))
-    return Height(top - offset, source, levels, offset, tuple(warnings), tuple(rejected))
+    levels = None if wall_levels is None else _round_levels(max(wall_levels - offset_levels, 1.0))
+    return Height(top - offset, source, levels, offset, tuple(warnings), tuple(rejected), total)
 
 
 def infer_height(height: Height, tags: Mapping[str, object], least_width: float, settings: HeightSettings) -> Height:
@@ -255,4 +267,4 @@ def infer_height(height: Height, tags: Mapping[str, object], least_width: float,
         return height
     levels = max(1, int(levels))  # (the wall runs from any base offset up, like the default height)
     return replace(height, height=min(levels * settings.floor_height, settings.max_height), source=source,
-                   levels=levels)
+                   levels=levels, total=False)

@@ -15,7 +15,7 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
-from citygen.roof import RoofSpec
+from citygen.roof import RoofSpec, inscribed_radius
 from citygen_roofs.pitched import _merge, _parts, skeleton_roof, star_around_centroid, welded_mesh
 
 #: (height share, scale of the outline about its centroid): widest at a fifth of the height, then a concave neck
@@ -69,3 +69,6 @@ class OnionRoof(RoofBuilder):
         return _merge([(None if party else onion(part, top, spec))
                        or skeleton_roof(part, top, spec, "dome", False, party)
                        for part, party in _parts(outline, spec.party)])
+
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        return ONION_HEIGHT * inscribed_radius(outline)

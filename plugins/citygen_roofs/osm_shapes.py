@@ -280,3 +280,13 @@ class ButterflyRoof(_PlaneRoof):
 class SawtoothRoof(_PlaneRoof):
     id = "sawtooth"
     description = "sawtooth roof: parallel teeth, slopes facing roof:direction, vertical glazed walls"
+
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        """The slope over one tooth (the direction's, else the longest outer wall's)."""
+        widths = []
+        for part in getattr(outline, "geoms", [outline]):
+            outer = np.asarray(part.exterior.coords)[:-1, :2]
+            k = int(np.argmax(np.hypot(*(np.roll(outer, -1, axis=0) - outer).T)))
+            down = _compass(spec.direction) if spec.direction is not None else _outward(outer, k)
+            widths.append(_Teeth(part, down, 0.0).width)
+        return spec.slope * max(widths)

@@ -19,6 +19,7 @@ triangles wound outward. A failure raises :class:`RoofError`; the pipeline then 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import mapbox_earcut
 import numpy as np
@@ -27,7 +28,7 @@ from shapely.geometry.polygon import orient
 
 from citygen.geometry.building import MeshData
 from citygen.registry import RoofBuilder
-from citygen.roof import ORIENTATIONS, RoofSpec, note, rectangle_like
+from citygen.roof import ORIENTATIONS, RoofSpec, inscribed_radius, note, rectangle_like
 from citygen_roofs.skeleton import SkeletonError, straight_skeleton
 
 
@@ -504,6 +505,11 @@ class _SkeletonRoof(RoofBuilder):
                                      ridge_orientation(part, spec) if self.oriented else None)
                        for part, party in parts])
 
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        """The profile's height over the inscribed radius (the skeleton's run where the outline is convex)."""
+        run = inscribed_radius(outline)
+        return float(profile(self.id, replace(spec, height=None, cap=math.inf), run)[1][-1]) if run > 0 else 0.0
+
 
 class HippedRoof(_SkeletonRoof):
     id = "hipped"
@@ -574,3 +580,7 @@ class SkillionRoof(RoofBuilder):
     def build(self, outline: Polygon | MultiPolygon, top: float, spec: RoofSpec | None = None) -> MeshData:
         spec = spec or RoofSpec(self.id)
         return _merge([skillion(part, top, spec, party) for part, party in _parts(outline, spec.party)])
+
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        """The slope over the whole depth: the plane runs from one side to the other."""
+        return 2.0 * super().rise(outline, spec)

@@ -46,6 +46,9 @@ class FlatRoof(RoofBuilder):
         tris = np.concatenate(faces)
         return MeshData(np.concatenate(points).astype(np.float32), np.full(len(tris), 3, np.int32), tris.ravel())
 
+    def rise(self, outline: Polygon | MultiPolygon, spec: RoofSpec) -> float:
+        return 0.0
+
 
 @hookimpl
 def citygen_roof_builders():

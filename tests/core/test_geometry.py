@@ -124,6 +124,44 @@ def test_plain_walls_are_built_only_for_the_mass_level_of_detail():
     assert len(walls.counts) == 4 and np.isclose(walls.points[:, 2].max(), 3.0)
 
 
+def test_gables_leave_the_roof_as_wall_in_the_wall_material():
+    """Bug fixture (issue 22): a gabled roof's vertical triangles were in the roof mesh, with the roof material and
+    label ``roof``; they are wall: in the ``("wall", wall material)`` mesh of both levels of detail."""
+    from shapely.geometry import Polygon
+
+    from citygen.footprints import Footprint
+    from citygen.geometry.building import build_geometry
+    from citygen.mass import build_mass
+    from citygen.registry import default_registry
+    from citygen.roof import RoofSpec
+    from citygen.usd.normals import polygon_normals
+
+    outline = Polygon([(0, 0), (10, 0), (10, 6), (0, 6)])
+    mass = build_mass(Footprint("b", outline, 3.0, "height"))
+    roof = default_registry().roof_builders["gabled"].build(mass.outline, 3.0, RoofSpec("gabled", 30.0))
+    geo = build_geometry(mass, [(f, None) for f in mass.faces], "plaster_ochre", roof, walls=True)
+    normals = polygon_normals(geo.roof.points, geo.roof.counts, geo.roof.indices)
+    assert len(geo.roof.counts) == 4 and np.all(np.abs(normals[:, 2]) > 0.5)
+    wall = geo.meshes[("wall", "plaster_ochre")]
+    gables = wall.subset(wall.counts == 3)
+    assert len(gables.counts) == 2 and np.isclose(gables.points[:, 2].max(), 3.0 + 3.0 * np.tan(np.radians(30.0)))
+    assert np.all(np.abs(polygon_normals(gables.points, gables.counts, gables.indices)[:, 2]) < 1e-6)
+    assert int(np.sum(geo.walls.counts == 3)) == 2  # the mass level of detail keeps them too
+    assert set(geo.meshes) == {("wall", "plaster_ochre")}  # no mesh of the roof material beside the roof
+
+
+def test_split_vertical_keeps_every_face_once_and_handles_polygons_far_from_the_origin():
+    from citygen.geometry.building import MeshData
+
+    far = np.array([3.0e5, 6.7e6, 0.0])  # EPSG:3067-like coordinates
+    points = (np.array([[0, 0, 0], [4, 0, 0], [4, 0, 2], [0, 0, 2], [4, 3, 2], [0, 3, 2.5]]) + far).astype(np.float32)
+    mesh = MeshData(points, np.array([4, 3, 3], np.int32), np.array([0, 1, 2, 3, 3, 2, 4, 3, 4, 5], np.int32))
+    roof, walls = mesh.split_vertical()
+    assert walls.counts.tolist() == [4] and len(walls.points) == 4
+    assert roof.counts.tolist() == [3, 3] and len(roof.points) == 4
+    assert mesh.subset(np.zeros(3, bool)).counts.tolist() == []
+
+
 @settings(max_examples=50, deadline=None)
 @given(st.lists(st.tuples(st.integers(0, 9), st.integers(0, 9), st.integers(0, 2)), min_size=1, max_size=60,
                 unique_by=lambda c: c[:2]))

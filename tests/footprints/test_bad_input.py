@@ -36,7 +36,7 @@ def test_good_features_come_through(bad):
     assert len(hole.polygon.interiors) == 1 and hole.polygon.area == pytest.approx(400 - 25, rel=0.01)
     multi = _footprint(bad, "way/3")
     assert multi.polygon.geom_type == "MultiPolygon" and len(multi.polygon.geoms) == 2
-    assert (multi.height, multi.height_source, multi.levels) == (13.5, "building:levels+roof:levels", 5)
+    assert (multi.height, multi.height_source, multi.levels) == (13.5, "building:levels+roof:levels", 4)  # walls: 4
     assert _footprint(bad, "way/1").source == "bad_footprints.geojson#0"
 
 

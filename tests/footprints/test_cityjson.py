@@ -19,8 +19,8 @@ def test_delft_160_buildings(delft):
     assert delft.georef.origin == (84941.0, 447540.0)
     for f in delft.footprints:
         assert f.polygon.is_valid and f.polygon.area > 1
-        assert f.height_source == "geometry" and f.attributes["cityjson:type"] == "Building"
-        # 3dfier writes measuredHeight as the absolute roof elevation: it equals base + wall height
+        assert f.height_source == "geometry" and f.attributes["cityjson:type"] == "Building" and f.height_is_total
+        # 3dfier writes measuredHeight as the absolute roof elevation: it equals base + height (the total)
         assert f.base + f.height == pytest.approx(f.attributes["measuredHeight"], abs=1e-6)
     heights = [f.height for f in delft.footprints]
     assert min(heights) == pytest.approx(0.73) and max(heights) == pytest.approx(8.29)

@@ -57,7 +57,7 @@ RESOLVE = [
     ({"building:height": "21"}, 21.0, "building:height", None),
     ({"measuredHeight": 6.5}, 6.5, "measuredHeight", None),
     ({"building:levels": "4"}, 12.0, "building:levels", 4),
-    ({"building:levels": "3.5", "roof:levels": "1"}, 13.5, "building:levels+roof:levels", 5),
+    ({"building:levels": "3.5", "roof:levels": "1"}, 13.5, "building:levels+roof:levels", 4),  # walls: 4 storeys
     ({"building:levels": "2", "roof:levels": "0"}, 6.0, "building:levels", 2),
     ({"storeysAboveGround": 3}, 9.0, "storeysAboveGround", 3),
     ({}, 10.0, "default", None),
@@ -66,6 +66,8 @@ RESOLVE = [
     ({"height": "5000"}, 10.0, "default", None),
     ({"height": "unknown", "building:levels": "many"}, 10.0, "default", None),
     ({"building:levels": "0"}, 10.0, "default", None),
+    ({"min_height": "18", "roof:height": "5"}, 5.0, "min_height+roof:height", None),  # a lifted dome: all roof
+    ({"building:min_level": "2", "roof:height": "4"}, 4.0, "building:min_level+roof:height", None),
     # regression (found by hypothesis): 334 levels x 3 m passed as a 1002 m height
     ({"building:levels": 34, "roof:levels": 300}, 10.0, "default", None),
 ]
@@ -75,6 +77,17 @@ RESOLVE = [
 def test_resolve_height(tags, height, source, levels):
     h = resolve_height(tags, "way/1", S)
     assert (h.height, h.source, h.levels) == (pytest.approx(height), source, levels)
+
+
+@pytest.mark.parametrize("tags, total", [
+    ({"height": "18", "building:levels": "5"}, True), ({"measuredHeight": 6.5}, True), ({}, True),
+    ({"building:levels": "4"}, False), ({"building:levels": "4", "roof:levels": "1"}, True),
+])
+def test_heights_say_whether_they_include_the_roof(tags, total):
+    """Issue 22: ``height`` is a total (Simple 3D Buildings), ``building:levels`` count the walls' storeys; with
+    ``roof:levels`` the level count is a total again, its roof those levels (``citygen.roofplan``)."""
+    assert resolve_height(tags, "way/1", S).total is total
+    assert infer_height(resolve_height({"building": "kiosk"}, "way/1", S), {"building": "kiosk"}, 5.0, S).total is False
 
 
 def test_unusable_values_warn_naming_feature_tag_and_value():

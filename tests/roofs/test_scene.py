@@ -16,7 +16,9 @@ SCENE = REPO / "scenes" / "roofs.toml"
 
 
 def _roofs(path):
-    """Per source id: (triangles, vertical triangles, lowest z, highest z) of each building's roof."""
+    """Per source id: (triangles, gable triangles, lowest z, highest z) of each building's roof. The roof's
+    vertical faces (gables) are wall: triangles in the building's wall meshes (whose facade faces are quads);
+    the roof mesh itself has none."""
     stage = Usd.Stage.Open(str(path))
     out = {}
     for prim in stage.Traverse():
@@ -25,8 +27,11 @@ def _roofs(path):
             p = np.array(mesh.GetPointsAttr().Get(), float)
             t = np.array(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3)
             n = np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]])
-            vertical = int(np.sum(np.abs(n[:, 2]) < 1e-4 * np.linalg.norm(n, axis=1)))
-            out[prim.GetParent().GetAttribute("citygen:sourceId").Get()] = (len(t), vertical, p[:, 2].min(),
+            assert not np.any(np.abs(n[:, 2]) < 1e-4 * np.linalg.norm(n, axis=1)), prim.GetPath()
+            facade = prim.GetParent().GetChild("Facade")
+            walls = [c for c in facade.GetChildren() if c.GetName().startswith("wall_")] if facade else []
+            gables = sum(int(np.sum(np.array(UsdGeom.Mesh(w).GetFaceVertexCountsAttr().Get()) == 3)) for w in walls)
+            out[prim.GetParent().GetAttribute("citygen:sourceId").Get()] = (len(t), gables, p[:, 2].min(),
                                                                              p[:, 2].max())
     return out
 
@@ -49,7 +54,8 @@ def test_roof_demo_scene_is_valid_with_every_shape(demo, capsys):
     assert roofs["way/3"][0] == 4  # pyramid over a square
     assert roofs["way/7"][2] == roofs["way/7"][3]  # flat
     assert roofs["way/8"][0] == 16 * 23  # onion over a 16-gon: 11 bands of quads and the tip
-    assert roofs["way/8"][3] - roofs["way/8"][2] == pytest.approx(3 * 4.5 * math.cos(math.pi / 16), abs=0.1)  # 4.5 m
+    # height = 14 is the total: the tagged onion (3 x its 4.5 m radius at will) takes half of it, walls the rest
+    assert (roofs["way/8"][2], roofs["way/8"][3]) == (pytest.approx(7.0, abs=1e-4), pytest.approx(14.0, abs=1e-4))
     assert roofs["way/9"][1] == 2  # untagged house: gabled by its [[assign]] rule
     assert roofs["way/12"][1] == 6  # gambrel: two five-sided gables
     assert roofs["way/10"][0] > 24 * 6 and roofs["way/11"][1] == 0  # a dome in bands over the 24-gon; mansard
