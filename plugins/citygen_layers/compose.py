@@ -193,7 +193,8 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
             ) -> tuple[FacadeLayout, list[str]]:
     """Last-resort safety net of a best-effort solve: openings that straddle a floor line become wall, openings
     that enter a corner strip are cut at the strip line (the part in the strip becomes wall; all of it when the
-    rest is under half the opening). Every repair is reported; a solved layout never needs one."""
+    rest is under half the opening). Every repair is reported in the notes, and openings made wall are counted in
+    ``meta["relabelled"]`` (a plausibility finding, :mod:`citygen.plausible`: never silent)."""
     lines = [float(v) for v in floor_lines[1:-1]]
     eps = 1e-6 * max(layout.width, layout.height, 1.0)
     left, right = corner_widths
@@ -229,4 +230,8 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
 
     root = fix(layout.root)
     del fix    # the recursive closure refers to itself: break the cycle so it is freed at once
-    return FacadeLayout(layout.width, layout.height, root, layout.meta), notes
+    if root is layout.root:
+        return layout, notes
+    relabelled = sum(note.endswith("made wall") for note in notes)
+    meta = {**layout.meta, "relabelled": relabelled} if relabelled else layout.meta
+    return FacadeLayout(layout.width, layout.height, root, meta), notes

@@ -1,22 +1,23 @@
 """The ``layers`` ruleset kind: registers the layer-stack generator with citygen."""
 from __future__ import annotations
 
-from collections import OrderedDict
-from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 from citygen.entrance import enforce_entrance
 from citygen.gcpause import cyclic_gc_paused
 from citygen.hookspecs import hookimpl
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
+from citygen.plausible import check_plausible, plain_wall, summary
 from citygen.registry import RulesetKind
 from citygen.request import FacadeRequest
+from citygen_layers.alternatives import Alternatives, blamed_axes, clear_solved
 from citygen_layers.candidates import Candidate
 from citygen_layers.compose import compose, conform, look
 from citygen_layers.explain import explain_text
 from citygen_layers.model import Pattern, Ruleset
 from citygen_layers.parser import _symbols_of, load
-from citygen_layers.solver import DirectionSolution, solve_axis
+from citygen_layers.solver import DirectionSolution, axis_solutions
 from citygen_layers.words import Letter, pattern_counters
 
 
@@ -60,62 +61,41 @@ def _opening_bands(ruleset: Ruleset, axis: str, interval: tuple[float, float]):
     return bands
 
 
-#: Solved directions kept per process, most recently used last: the faces of a building share their height and
-#: floor lines (so their vertical solve), opposite faces often their width. A solve is deterministic, so a kept
-#: solution is exactly what solving again would return; solves cut by the CPU-time limit are not kept.
-_SOLVED: OrderedDict[tuple, tuple[Ruleset, DirectionSolution]] = OrderedDict()
-KEEP_SOLVED = 256
-
-
-def clear_solved() -> None:
-    """Forget the kept direction solutions (benchmarks of cold solves, tests of the solver itself)."""
-    _SOLVED.clear()
-
-
-def _reused(ruleset: Ruleset, key: tuple, solve: Callable[[], DirectionSolution]) -> DirectionSolution:
-    key = (id(ruleset), *key)
-    kept = _SOLVED.get(key)
-    if kept is not None and kept[0] is ruleset:
-        _SOLVED.move_to_end(key)
-        return kept[1]
-    solution = solve()
-    if not solution.timed_out:
-        _SOLVED[key] = (ruleset, solution)
-        if len(_SOLVED) > KEEP_SOLVED:
-            _SOLVED.popitem(last=False)
-    return solution
-
-
 def _axis_counters(ruleset: Ruleset, axis: str) -> set[str]:
     return set().union(*(pattern_counters(ruleset.patterns[layer.x if axis == "x" else layer.y])
                          for layer in ruleset.layers))
 
 
-def solve_request(ruleset: Ruleset, request: FacadeRequest, reuse: bool = True
-                  ) -> tuple[DirectionSolution, DirectionSolution]:
-    """Both directions of the request; with ``reuse`` a direction solved before in this process for the same
-    ruleset, extent, floor lines, entrance (if the direction's patterns use it) and bands is taken again."""
+def alternatives(ruleset: Ruleset, request: FacadeRequest, reuse: bool = True
+                 ) -> tuple[Alternatives, Alternatives]:
+    """Both directions' solutions for the request; with ``reuse`` a direction solved before in this process for
+    the same ruleset, extent, floor lines, entrance (if the direction's patterns use it) and bands is kept."""
     left, right = request.corner_widths
     x_bands = _opening_bands(ruleset, "x", (left, request.width - right)) if left or right else None
     y_bands = _opening_bands(ruleset, "y", (0.0, request.height)) if len(request.floor_lines) > 2 else None
-
-    def x() -> DirectionSolution:
-        return solve_axis(ruleset, "x", request.width, (), request.entrance, x_bands)
-
-    def y() -> DirectionSolution:
-        return solve_axis(ruleset, "y", request.height, request.floor_lines, request.entrance, y_bands)
-
-    if not reuse:
-        return x(), y()
     door = {axis: request.entrance if "entrance" in _axis_counters(ruleset, axis) else None for axis in "xy"}
-    return (_reused(ruleset, ("x", request.width, door["x"], (left, right) if x_bands else None), x),
-            _reused(ruleset, ("y", request.height, request.floor_lines, door["y"], y_bands is not None), y))
+    x_key = (id(ruleset), "x", request.width, door["x"], (left, right) if x_bands else None)
+    y_key = (id(ruleset), "y", request.height, request.floor_lines, door["y"], y_bands is not None)
+    return (Alternatives(ruleset, x_key if reuse else None,
+                         lambda: axis_solutions(ruleset, "x", request.width, (), request.entrance, x_bands)),
+            Alternatives(ruleset, y_key if reuse else None,
+                         lambda: axis_solutions(ruleset, "y", request.height, request.floor_lines, request.entrance,
+                                                y_bands)))
 
 
-@cyclic_gc_paused()
-def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
-    """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack)."""
-    sx, sy = solve_request(ruleset, request)
+def solve_request(ruleset: Ruleset, request: FacadeRequest, reuse: bool = True
+                  ) -> tuple[DirectionSolution, DirectionSolution]:
+    """The first solution of both directions (see :func:`alternatives`)."""
+    xs, ys = alternatives(ruleset, request, reuse)
+    return xs.get(0), ys.get(0)
+
+
+#: Pairs of direction solutions a request tries before it gives up (each costs a composition and a check).
+TRIES = 12
+
+
+def _layout(ruleset: Ruleset, request: FacadeRequest, sx: DirectionSolution, sy: DirectionSolution
+            ) -> FacadeLayout:
     diagnostics = [*sx.diagnostics, *sy.diagnostics]
     meta = {"kind": "layers", "ruleset": ruleset.source, "status": {"x": sx.status, "y": sy.status},
             "mu": {"x": sx.mu, "y": sy.mu}, "expansions": sx.expansions + sy.expansions,
@@ -128,6 +108,32 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     if diagnostics:
         layout = FacadeLayout(layout.width, layout.height, layout.root, {**layout.meta, "diagnostics": diagnostics})
     return layout
+
+
+@cyclic_gc_paused()
+def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
+    """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack): the first
+    pair of direction solutions whose layout :func:`citygen.plausible.check_plausible` accepts, advancing the
+    direction(s) each layout's findings blame; a plain wall with the findings when none is within ``TRIES``."""
+    xs, ys = alternatives(ruleset, request)
+    i = j = tries = 0
+    first: tuple[FacadeLayout, list] | None = None
+    while tries < TRIES:
+        sx, sy = xs.get(i), ys.get(j)
+        if sx is None or sy is None:
+            break
+        tries += 1
+        layout = _layout(ruleset, request, sx, sy)
+        findings = check_plausible(layout, request)
+        if not findings:
+            return layout if tries == 1 else replace(layout, meta={**layout.meta, "tries": tries})
+        first = first or (layout, findings)
+        axes = blamed_axes(findings)
+        i, j = i + ("x" in axes), j + ("y" in axes)
+    layout, findings = first
+    return plain_wall(request, f"no plausible layer-stack layout in {tries} tried: {summary(findings)}", findings,
+                      kind="layers", ruleset=ruleset.source, status=layout.meta["status"],
+                      diagnostics=layout.meta.get("diagnostics", []))
 
 
 class LayersKind(RulesetKind):

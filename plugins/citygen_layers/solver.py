@@ -3,7 +3,7 @@ until a solution is found (§5), bounded by an expansion/time budget with a best
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -81,15 +81,26 @@ def align_candidate(candidate: Candidate, spec: DirectionSpec, mu: float, budget
     return tuple(matrices)
 
 
-def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
-                    bands: Callable[[Candidate], Bands] | None = None,
-                    floor_lines: Sequence[float] = ()) -> DirectionSolution:
+def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
+                        bands: Callable[[Candidate], Bands] | None = None,
+                        floor_lines: Sequence[float] = ()) -> Iterator[DirectionSolution]:
+    """The solved layouts of one direction in the solver's order: candidates in lexicographic order, the first
+    that aligns within mu (raised round by round) first, each candidate once, all within one budget.
+
+    A candidate is solved only when its sizing keeps every constraint: one size per symbol (synchronisation),
+    pins and bands. One whose pins and bands leave no common size is skipped (the next counter assignment or
+    candidate may admit one), not sized without synchronisation. When no candidate is solved, the sequence is
+    one best-effort solution: the first candidate whose sizing had to relax, else the first candidate aligned
+    greedily."""
     options = ruleset.options
     mu = options.tolerance if options.tolerance is not None else 0.05 * spec.canvas
     mu = max(mu, 1e-3)
     diagnostics: list[str] = []
     fallback: tuple[Candidate, float] | None = None
-    # per hash of a candidate's words (hashed once: letters are slow to hash), [words, matrices, cutoff searched]
+    relaxed: DirectionSolution | None = None
+    relaxed_at = solved = 0
+    # per hash of a candidate's words (hashed once: letters are slow to hash), [words, matrices, cutoff searched,
+    # done (yielded or rejected: never sized again)]
     cache: dict[int, list[list]] = {}
     memo = WordMemo()
     network = NetworkMemo()
@@ -103,28 +114,45 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
             bucket = cache.setdefault(hash(key), [])
             entry = next((e for e in bucket if e[0] == key), None)
             if entry is None:
-                entry = [key, None, 0.0]
+                entry = [key, None, 0.0, False]
                 bucket.append(entry)
-            _, matrices, cutoff = entry
+            _, matrices, cutoff, done = entry
+            if done:
+                continue
             if matrices is None and cutoff < mu:
                 # searched with the next round's tolerance, so a failure is not repeated in that round
                 cutoff = mu * options.growth
                 matrices = align_candidate(candidate, spec, cutoff, budget, prealigner=prealigner, memo=network)
-                entry[1:] = matrices, cutoff
+                entry[1:3] = matrices, cutoff
             if matrices is not None and all(m.alignment.error <= mu + 1e-9 and
                                             m.alignment.size <= spec.canvas + mu + 1e-9 for m in matrices):
-                _note_prealignment(spec, prealigner, diagnostics)
-                return _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
-                              diagnostics)
+                entry[3] = True
+                solution = _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
+                                  [*diagnostics, *_prealignment_notes(spec, prealigner)])
+                if solution.sizing.relaxed:
+                    if relaxed is None:
+                        relaxed, relaxed_at = replace(solution, status="best-effort"), len(diagnostics)
+                    continue
+                solved += 1
+                yield solution
         if budget.exhausted:
-            why = "time" if budget.timed_out else "expansion"
-            diagnostics.append(f"{spec.axis}: {why} budget exhausted at mu={mu:.3g} after {budget.used} "
-                               "expansions; best-effort layout")
             break
         mu *= options.growth
+    if solved:
+        return
+    if budget.exhausted:
+        why = "time" if budget.timed_out else "expansion"
+        diagnostics.append(f"{spec.axis}: {why} budget exhausted at mu={mu:.3g} after {budget.used} "
+                           "expansions; best-effort layout")
+    elif relaxed is not None:
+        diagnostics.append(f"{spec.axis}: the candidates aligned within mu={mu / options.growth:.3g} leave no "
+                           "common size per symbol (pins and bands); best-effort layout")
     else:
         diagnostics.append(f"{spec.axis}: no alignment within mu={mu / options.growth:.3g}; best-effort layout")
-    _note_prealignment(spec, prealigner, diagnostics)
+    diagnostics += _prealignment_notes(spec, prealigner)
+    if relaxed is not None:
+        yield replace(relaxed, diagnostics=(*relaxed.diagnostics, *diagnostics[relaxed_at:]))
+        return
     late = False
     if fallback is None:
         *fallback, late = _any_candidate(ruleset, spec, diagnostics)
@@ -134,14 +162,22 @@ def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
         diagnostics += [f"{spec.axis}/{m.group}: {v}" for v in m.alignment.violations]
     solution = _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines,
                       diagnostics)
-    return replace(solution, timed_out=True) if late else solution
+    yield replace(solution, timed_out=True) if late else solution
 
 
-def _note_prealignment(spec: DirectionSpec, prealigner: Prealigner | None, diagnostics: list[str]) -> None:
-    if prealigner is not None and (prealigner.restricted or prealigner.failed):
-        diagnostics.append(f"{spec.axis}: prealignment restricted {prealigner.restricted} matrix searches, "
-                           f"{prealigner.fallbacks} found nothing and were searched unrestricted; "
-                           f"{prealigner.failed} control alignments failed")
+def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
+                    bands: Callable[[Candidate], Bands] | None = None,
+                    floor_lines: Sequence[float] = ()) -> DirectionSolution:
+    """The first of :func:`direction_solutions`."""
+    return next(direction_solutions(ruleset, spec, budget, bands, floor_lines))
+
+
+def _prealignment_notes(spec: DirectionSpec, prealigner: Prealigner | None) -> list[str]:
+    if prealigner is None or not (prealigner.restricted or prealigner.failed):
+        return []
+    return [f"{spec.axis}: prealignment restricted {prealigner.restricted} matrix searches, "
+            f"{prealigner.fallbacks} found nothing and were searched unrestricted; "
+            f"{prealigner.failed} control alignments failed"]
 
 
 def _any_candidate(ruleset: Ruleset, spec: DirectionSpec, diagnostics: list[str]
@@ -218,16 +254,24 @@ def _floor_bands(sizing: Sizing, wanted: Bands, lines: Sequence[float]) -> dict 
     return out if straddle else None
 
 
-def solve_axis(ruleset: Ruleset, axis: str, extent: float, floor_lines: Sequence[float] = (),
-               entrance: bool = False, bands: Callable[[Candidate], Bands] | None = None) -> DirectionSolution:
-    """Solve one direction of a canvas side ``extent`` (floor lines bind the vertical direction only)."""
+def axis_solutions(ruleset: Ruleset, axis: str, extent: float, floor_lines: Sequence[float] = (),
+                   entrance: bool = False, bands: Callable[[Candidate], Bands] | None = None
+                   ) -> Iterator[DirectionSolution]:
+    """:func:`direction_solutions` of one direction of a canvas side ``extent`` (floor lines bind the vertical
+    direction only)."""
     counters: dict[str, Counter] = dict(ruleset.counters)
     counters["entrance"] = Counter("entrance", int(entrance), int(entrance))
     options = ruleset.options
     heights = tuple(np.diff(np.asarray(floor_lines, dtype=float))) if axis == "y" and len(floor_lines) > 1 else ()
     budget = Budget(options.expansions, time.process_time() + options.time / 2)
-    return solve_direction(ruleset, direction_spec(ruleset, axis, extent, counters, heights), budget, bands,
-                           floor_lines if axis == "y" else ())
+    return direction_solutions(ruleset, direction_spec(ruleset, axis, extent, counters, heights), budget, bands,
+                               floor_lines if axis == "y" else ())
+
+
+def solve_axis(ruleset: Ruleset, axis: str, extent: float, floor_lines: Sequence[float] = (),
+               entrance: bool = False, bands: Callable[[Candidate], Bands] | None = None) -> DirectionSolution:
+    """The first solution of :func:`axis_solutions`."""
+    return next(axis_solutions(ruleset, axis, extent, floor_lines, entrance, bands))
 
 
 def solve(ruleset: Ruleset, width: float, height: float, floor_lines: Sequence[float] = (),
@@ -239,4 +283,5 @@ def solve(ruleset: Ruleset, width: float, height: float, floor_lines: Sequence[f
             solve_axis(ruleset, "y", height, floor_lines, entrance, y_bands))
 
 
-__all__ = ["Alignment", "DirectionSolution", "solve", "solve_axis", "solve_direction"]
+__all__ = ["Alignment", "DirectionSolution", "axis_solutions", "direction_solutions", "solve", "solve_axis",
+           "solve_direction"]
