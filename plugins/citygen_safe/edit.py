@@ -302,16 +302,20 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
     gap = target - start.facade.width
     n0, per_copy = len(start.facade.leaves), len(one.facade.leaves) - len(start.facade.leaves)
     counts = sorted({max(1, k - 1), k, k + 1})
-    options = [(round(abs(gap - m * cand.delta), 2), m, None, 0) for m in counts]
+    options = [(round(abs(gap - m * cand.delta), 2), 1, m, None, 0) for m in counts]
     others = [c for c in candidates if round(c.delta, 2) != round(cand.delta, 2)
               and not c.changes(start.facade, settings.keep)]
-    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), m, c, b)
+    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), 1, m, c, b)
              for m in counts for c in others for b in range(1, m)]
-    best_mix = min(mixes, key=lambda o: (o[0], o[3], o[1]), default=None)
+    best_mix = min(mixes, key=lambda o: (o[0], o[4], o[2]), default=None)
     if best_mix is not None and best_mix[0] < min(o[0] for o in options):
         options.append(best_mix)
+    twin = _twin(start.facade, cand, candidates, settings)
+    if twin is not None:  # half the copies on the other side of a centred door, tried first
+        options += [(round(abs(gap - (m - m // 2) * cand.delta - m // 2 * twin.delta), 2), 0, m, twin, m // 2)
+                    for m in counts if m > 1]
     out = []
-    for _, m, other, b in sorted(options, key=lambda o: (o[0], o[1], o[3])):
+    for _, _, m, other, b in sorted(options, key=lambda o: (o[1], o[0], o[2], o[4])):
         leaves = n0 + m * per_copy
         if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
             continue
@@ -328,6 +332,19 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
         if state is not None:
             out.append((state, size(state.facade, settings, target, root=state.root)))
     return out
+
+
+def _twin(facade: Facade, cand: Candidate, candidates: list[Candidate], settings: Settings) -> Candidate | None:
+    """The insertion of ``cand``'s source column on the other side of the centred door, nearest ``cand``'s mirror
+    image about it (None: no centred label, or no such insertion)."""
+    doors = [f for f in facade.leaves if f.label in settings.centre]
+    if len(doors) != 1:
+        return None
+    middle = doors[0].x + 0.5 * doors[0].w
+    side = cand.slabs[0][0] < middle
+    twins = [c for c in candidates if c.jump.source == cand.jump.source and c.jump.grid == cand.jump.grid
+             and (c.slabs[0][0] < middle) != side and not c.changes(facade, settings.keep)]
+    return min(twins, key=lambda c: (abs(c.slabs[0][0] + cand.slabs[0][0] - 2 * middle), str(c.jump)), default=None)
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:

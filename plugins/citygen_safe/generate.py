@@ -94,7 +94,8 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIM
         chosen = variations[0] if variations else Variation((), facade, 0.0)
         findings = rejected[0][1] if rejected else ()
         reason = (f"no plausible variation of {len(variations)}: {'; '.join(findings[:3])}" if rejected
-                  else "no feasible sizing" + (f" ({'; '.join(notes[-1:])})" if notes else ""))
+                  else "no feasible sizing of the " + ("widths" if heights.success else "floors")
+                  + " with every element at its least plausible size" + (f" ({notes[-1]})" if notes else ""))
         meta = {"kind": PLUGIN_ID, "ruleset": ruleset.name, "findings": list(findings)}
         layout, note = enforce_entrance(fallback_layout(request, reason, meta), request)
         layout = _noted(layout, notes + ([note] if note else []))

@@ -4,8 +4,9 @@ E(x) (Eq. 1) measures a variation against the facade *after* its jumps, so a jum
 fuses two strips into one costs nothing there, and such a variation could outrank the clean resize. Each
 *defect* below adds ``DEFECT`` to the cost, which makes every defect-free variation rank first:
 
-* ``cut`` / ``fused``: an element (a labelled terminal that is neither wall nor thin) whose width after the jumps
-  differs from its input terminal's by more than ``CHANGED`` (a slab edge ran through it, or copies of it merged);
+* ``cut`` / ``fused``: an element (a labelled terminal that is neither wall nor one of the ``BANDS`` jumps stretch
+  legitimately) whose width after the jumps differs from its input terminal's by more than ``CHANGED`` (a slab
+  edge ran through it, or copies of it merged);
 * ``sliver``: an element sized below ``2 x sliver`` although its input terminal is not;
 * ``off-centre``: a door whose centre is off the facade's middle by more than ``CENTRED`` of the width when the
   input's door is centred.
@@ -19,6 +20,7 @@ from citygen_safe.bounds import COLLAPSIBLE
 from citygen_safe.leaves import Facade
 
 DEFECT = 1e6  #: cost of one defect, in units of E(x)
+BANDS = frozenset({"sill", "frame", "molding", "ledge", "cornice"})  #: labels a jump stretches with its columns
 CHANGED = 0.05  #: relative width change of an element by a jump that counts as cut or fused
 CENTRED = 0.02  #: a door within this fraction of the width from the middle is centred
 
@@ -43,7 +45,7 @@ def defects(natural: Facade, sized: Facade, reference: Mapping[int, float], cent
     the input terminals' widths, ``centre`` the labels to keep centred."""
     out = []
     for f in natural.leaves:
-        if f.label in COLLAPSIBLE or f.label in rules.thin_labels or f.origin not in reference:
+        if f.label in COLLAPSIBLE or f.label in BANDS or f.origin not in reference:
             continue
         w0 = reference[f.origin]
         if abs(f.w - w0) > CHANGED * w0:
