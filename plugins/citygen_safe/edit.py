@@ -29,7 +29,7 @@ from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, 
                                removal_slab, source_columns)
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
-from citygen_safe.rank import DEFECT, defects, reference_widths
+from citygen_safe.rank import defects, penalty, reference_widths
 from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
@@ -94,8 +94,8 @@ class Variation:
 
     @property
     def cost(self) -> float:
-        """The ranking: E(x) plus ``DEFECT`` per defect."""
-        return self.objective + DEFECT * len(self.defects)
+        """The ranking: E(x) plus the plausibility terms of its defects (:func:`citygen_safe.rank.penalty`)."""
+        return self.objective + penalty(self.defects)
 
 
 @dataclass(frozen=True)
@@ -439,7 +439,8 @@ def _add(found: list[Variation], path: Path, res: SpatialResult, reference: dict
          settings: Settings) -> None:
     if res.success:
         found.append(Variation(path.jumps, res.facade, res.objective, res.dropped,
-                               defects(path.facade, res.facade, reference, settings.centre, settings.rules)))
+                               defects(path.facade, res.facade, reference, settings.centre,
+                                       any(j.op == "remove" for j in path.jumps), settings.rules)))
 
 
 def pick(variations: Sequence[Variation], rng: np.random.Generator) -> Variation:

@@ -7,10 +7,12 @@ of the request's corner strips by inequality rows of the width QP.
 Every call has a work budget (``Settings.budget``, nominal CPU seconds counted as leaves sized, so the output does
 not depend on the machine): floor jumps stop at 40 % of it, column jumps at 80 %; a spent budget
 means fewer jumps (the facade resized without jumps is always available) and a note in ``meta.diagnostics``.
-When the edit cannot meet the request (a floor count no row jump reaches, an element in a corner strip, a door
-outside the ground floor), the face falls back like the other kinds: a misplaced door becomes wall and
-:func:`citygen.entrance.enforce_entrance` carves one; any other problem gives plain wall floors with the reason in
-``meta.fallback`` (which the pipeline reports), again with a carved door on the entrance face.
+Every variation is dressed (a misplaced door becomes wall and :func:`citygen.entrance.enforce_entrance` carves
+one) and held to the request and :func:`citygen.plausible.check_plausible`; the generator picks among the near-best
+plausible ones. When none is (a floor count no row jump reaches, an element in a corner strip, no sizing with
+every element at its least plausible size), the face falls back like the other kinds: plain wall floors with the
+reason in ``meta.fallback`` and the findings in ``meta.findings`` (which the pipeline reports), again with a
+carved door on the entrance face.
 """
 from __future__ import annotations
 

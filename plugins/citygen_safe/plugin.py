@@ -12,7 +12,8 @@ from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
-from citygen_safe.generate import edit
+from citygen_safe.edit import Variation
+from citygen_safe.generate import Edit, edit
 from citygen_safe.ruleset import SafeRuleset, load_ruleset
 
 
@@ -32,7 +33,7 @@ class SafeKind(RulesetKind):
         lines = [f"safe ruleset {ruleset.name}: {len(ruleset.facade.leaves)} input leaves, grids "
                  f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
                  f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}"]
-        rejected = dict((id(v), f) for v, f in result.rejected)
+        rejected = {id(v): f for v, f in result.rejected}
         for k, v in enumerate(result.variations):
             mark = "*" if v is result.chosen and not result.layout.meta.get("fallback") else " "
             lines.append(f"{mark} variation {k}: {_describe(v)}")
@@ -41,10 +42,11 @@ class SafeKind(RulesetKind):
         return "\n".join(lines)
 
 
-def _describe(v) -> str:
-    return (f"cost {v.cost:.4g} (E={v.objective:.4g}" + (f", {len(v.defects)} defects: {'; '.join(v.defects[:2])}"
-                                                          if v.defects else "")
-            + f"), {len(v.facade.leaves)} leaves: {'; '.join(map(str, v.jumps)) or 'resize only'}")
+def _describe(v: Variation) -> str:
+    """A variation on one line: its cost, E(x), first defects, leaf count and jumps."""
+    defects = f", {len(v.defects)} defects: {'; '.join(v.defects[:2])}" if v.defects else ""
+    return (f"cost {v.cost:.4g} (E={v.objective:.4g}{defects}), {len(v.facade.leaves)} leaves: "
+            f"{'; '.join(map(str, v.jumps)) or 'resize only'}")
 
 
 class EditCommand(Command):
@@ -79,7 +81,7 @@ class EditCommand(Command):
         return 0 if shown else 1
 
 
-def shortfall(result, count: int) -> str:
+def shortfall(result: Edit, count: int) -> str:
     """Why fewer than ``count`` variations were listed: how many distinct ones the edit found, how many of them
     were implausible (with the first finding) and the fallback reason when none was plausible."""
     text = (f"{len(result.plausible)} of {count} variations: the edit found {len(result.variations)} distinct "

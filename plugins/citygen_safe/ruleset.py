@@ -102,7 +102,8 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
         elif head == "relabel":
             need("a label and its new label", len(args) == 2)
             if args[0][0] in relabels:
-                raise ParseError(f"label '{args[0][0]}' relabelled twice", where=SourceLocation(source, lineno, args[0][1]))
+                raise ParseError(f"label '{args[0][0]}' relabelled twice",
+                                 where=SourceLocation(source, lineno, args[0][1]))
             relabels[args[0][0]] = (args[1][0], SourceLocation(source, lineno, args[0][1]))
         elif head == "active":
             need("one or more grid names", len(args) >= 1)

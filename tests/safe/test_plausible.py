@@ -71,9 +71,10 @@ def test_ranking_counts_cut_and_fused_elements_and_an_off_centre_door():
         (0.0, 0.0, 0.8, 3.0, "window"), (0.8, 0.0, 1.2, 3.0, "wall"), (2.0, 0.0, 1.0, 2.2, "door"),
         (2.0, 2.2, 1.0, 0.8, "wall"), (3.0, 0.0, 3.0, 3.0, "deco")]))
     reference = {0: 1.6, 1: 1.2, 2: 1.0, 3: 1.0, 4: 1.5}
-    found = defects(natural, natural, reference, frozenset({"door"}))
+    found = defects(natural, natural, reference, frozenset({"door"}), removed=True)
     assert [d.split()[0] for d in found] == ["cut", "fused", "off-centre"]
-    assert defects(natural, natural, reference_widths(natural), frozenset()) == ()
+    assert defects(natural, natural, reference_widths(natural), frozenset(), removed=True) == ()
+    assert [d.split()[0] for d in defects(natural, natural, reference, frozenset(), removed=False)] == ["fused"]
 
 
 def test_count_gives_k_distinct_plausible_variations(cmp_ruleset):
