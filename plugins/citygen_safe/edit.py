@@ -311,13 +311,14 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
     if best_mix is not None and best_mix[0] < min(o[0] for o in options):
         options.append(best_mix)
     twin = _twin(start.facade, cand, candidates, settings)
-    if twin is not None:  # half the copies on the other side of a centred door, tried first
+    if twin is not None:  # half the copies on the other side of a centred door: tried first, one-sided if none fits
         options += [(round(abs(gap - (m - m // 2) * cand.delta - m // 2 * twin.delta), 2), 0, m, twin, m // 2)
                     for m in counts if m > 1]
     out = []
-    for _, _, m, other, b in sorted(options, key=lambda o: (o[1], o[0], o[2], o[4])):
+    balanced = False
+    for _, one_sided, m, other, b in sorted(options, key=lambda o: (o[1], o[0], o[2], o[4])):
         leaves = n0 + m * per_copy
-        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
+        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline or one_sided and balanced:
             continue
         if other is None:
             state = one if m == 1 else repeated(start, cand, m, settings)
@@ -325,6 +326,7 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
             state = mixed(start, cand, m - b, other, b, settings)
         if state is not None:
             out.append((state, size(state.facade, settings, target, root=state.root)))
+            balanced = balanced or not one_sided and out[-1][1].success
     if not out:
         fit = min(k, int((min(MAX_LEAVES, deadline - settings.work.spent) - n0) // max(1, per_copy)))
         notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {max(0, fit)} of {k} column jumps")

@@ -23,7 +23,7 @@ from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region, check_parti
 from citygen.plausible import PlausibilityRules, check_plausible
 from citygen.request import FacadeRequest, check_request
 from citygen_safe.compose import to_layout
-from citygen_safe.edit import Settings, Variation, pick, width_variations
+from citygen_safe.edit import NEAR_BEST, Settings, Variation, pick, width_variations
 from citygen_safe.floors import fit_floors
 from citygen_safe.leaves import Facade
 from citygen_safe.rank import is_centred
@@ -63,10 +63,11 @@ def settings_for(ruleset: SafeRuleset, request: FacadeRequest | None = None) -> 
                     centre=CENTRE if ruleset.symmetry and is_centred(ruleset.facade, CENTRE) else frozenset())
 
 
-def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIMIT) -> Edit:
-    """Floors, then the width variations for ``limit`` wanted (:func:`width_variations`), each dressed and held
-    to the plausibility rules and the request; the generator's choice among the near-best plausible ones, or
-    the fallback (plain wall floors, ``meta["fallback"]`` and ``meta["findings"]``) when none is."""
+def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIMIT, wanted: int = 1) -> Edit:
+    """Floors, then the width variations for ``limit`` wanted (:func:`width_variations`), least cost first, each
+    dressed and held to the plausibility rules and the request until ``wanted`` plausible ones and all within
+    ``NEAR_BEST`` of the best are found; the generator's choice among the near-best plausible ones, or the fallback
+    (plain wall floors, ``meta["fallback"]`` and ``meta["findings"]``) when none is."""
     settings = settings_for(ruleset, request)
     notes: list[str] = []
     path, heights, floor_notes = _floors(ruleset, settings, tuple(request.floor_lines),
@@ -82,7 +83,9 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIM
     plausible: list[tuple[Variation, FacadeLayout]] = []
     rejected: list[tuple[Variation, tuple[str, ...]]] = []
     if heights.success:
-        for v in variations:
+        for v in variations:  # least cost first: dressed until ``wanted`` plausible ones and the near-best are in
+            if len(plausible) >= wanted and v.cost > NEAR_BEST * plausible[0][0].cost + 1e-9:
+                break
             layout, repairs = _dressed(v, request, ruleset, floor_jumps)
             findings = _findings(layout, request, settings.rules)
             if findings:

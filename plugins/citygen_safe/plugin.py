@@ -34,9 +34,10 @@ class SafeKind(RulesetKind):
                  f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
                  f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}"]
         rejected = {id(v): f for v, f in result.rejected}
+        checked = rejected.keys() | {id(v) for v, _ in result.plausible}
         for k, v in enumerate(result.variations):
             mark = "*" if v is result.chosen and not result.layout.meta.get("fallback") else " "
-            lines.append(f"{mark} variation {k}: {_describe(v)}")
+            lines.append(f"{mark} variation {k}: {_describe(v)}" + ("" if id(v) in checked else " (not checked)"))
             lines += [f"      implausible: {f}" for f in rejected.get(id(v), ())[:3]]
         lines += [f"note: {d}" for d in result.diagnostics] + [f"problem: {p}" for p in result.problems]
         return "\n".join(lines)
@@ -70,7 +71,7 @@ class EditCommand(Command):
         width, height = args.size
         request = FacadeRequest.preview(width, height, args.floor_height, entrance=not args.no_entrance,
                                         seed=args.seed)
-        result = edit(ruleset, request, limit=args.count)
+        result = edit(ruleset, request, limit=args.count, wanted=args.count)
         shown = result.plausible[:args.count]
         if not write_layouts([layout for _, layout in shown], args.json, args.png):
             print(f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}")

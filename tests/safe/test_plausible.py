@@ -55,7 +55,7 @@ def test_regression_narrow_face_ranks_a_clean_variation_first(cmp_ruleset):
     0.3 m shop sliver, ranked above the clean resize. Now the variations whose jumps cut elements (here the
     signboards over the shop windows) rank after the defect-free ones, and the chosen one keeps the door centred."""
     request = _preview(8.5, 15.0)
-    result = edit(cmp_ruleset, request, limit=5)
+    result = edit(cmp_ruleset, request, limit=5, wanted=5)
     ranked = [v for v, _ in result.plausible]
     assert ranked[0].defects == () and result.chosen.defects == ()
     assert any(v.defects for v in ranked)
@@ -80,7 +80,7 @@ def test_ranking_counts_cut_and_fused_elements_and_an_off_centre_door():
 def test_count_gives_k_distinct_plausible_variations(cmp_ruleset):
     """Issue 21: ``--count 5`` returned 3-4 variations. Now K distinct plausible ones where they exist."""
     for width in (8.5, 20.0, 26.0):
-        result = edit(cmp_ruleset, _preview(width, 15.0), limit=5)
+        result = edit(cmp_ruleset, _preview(width, 15.0), limit=5, wanted=5)
         layouts = [lay for _, lay in result.plausible[:5]]
         assert len(layouts) == 5, width
         assert len({lay.dumps() for lay in layouts}) == 5
