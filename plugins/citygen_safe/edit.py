@@ -22,11 +22,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from citygen.layout import FLOOR_BOUND_LABELS
+from citygen.plausible import DEFAULT_RULES, PlausibilityRules
+from citygen_safe.bounds import MARGIN, minimum_extents
 from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
 from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, merge_leaves, remove_slab,
                                removal_slab, source_columns)
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
+from citygen_safe.rank import defects, penalty, reference_widths
 from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
@@ -53,7 +56,8 @@ class Work:
 class Settings:
     """How an edit is solved: active grid specs, constraint switches, labels never duplicated or removed (the
     door, whose budget the building coordinator owns), corner strips and the labels kept out of them, and the
-    budget in nominal CPU seconds (``work`` counts what is spent, in leaves: ``units`` is the budget's)."""
+    budget in nominal CPU seconds (``work`` counts what is spent, in leaves: ``units`` is the budget's), the
+    plausibility ``rules`` whose sizes bound the QP, and the labels kept ``centre``d (the input's centred door)."""
 
     active: tuple[GridSpec, ...]
     alignment: bool = True
@@ -62,6 +66,8 @@ class Settings:
     corners: tuple[float, float] = (0.0, 0.0)
     corner_labels: frozenset[str] = frozenset()
     budget: float = BUDGET_S
+    rules: PlausibilityRules = DEFAULT_RULES
+    centre: frozenset[str] = frozenset()
     work: Work = field(default_factory=Work, compare=False, repr=False)
 
     @property
@@ -77,12 +83,19 @@ class Settings:
 
 @dataclass(frozen=True)
 class Variation:
-    """A facade after ``jumps`` and the spatial optimisation, with its distortion E(x)."""
+    """A facade after ``jumps`` and the spatial optimisation, with its distortion E(x) and its defects (cut or
+    fused elements, slivers, an off-centre door: :mod:`citygen_safe.rank`)."""
 
     jumps: tuple[Jump, ...]
     facade: Facade
     objective: float
     dropped: tuple[str, ...] = ()
+    defects: tuple[str, ...] = ()
+
+    @property
+    def cost(self) -> float:
+        """The ranking: E(x) plus the plausibility terms of its defects (:func:`citygen_safe.rank.penalty`)."""
+        return self.objective + penalty(self.defects)
 
 
 @dataclass(frozen=True)
@@ -121,11 +134,16 @@ def grids_of(facade: Facade, specs: Sequence[GridSpec]) -> list[FacadeGrid]:
 
 def size(facade: Facade, settings: Settings, target: float, lines: Lines | None = None,
          root: Node | None = None) -> SpatialResult:
-    """The spatial optimisation of ``facade`` at width ``target`` (``lines`` refer to nodes of ``root``)."""
+    """The spatial optimisation of ``facade`` at width ``target`` (``lines`` refer to nodes of ``root``), leaves
+    bounded by the plausibility rules' sizes and wall slabs thinner than a sliver collapsed."""
     settings.work.spent += len(facade.leaves)
-    return optimise_widths(facade, root or decompose(facade), grids_of(facade, settings.active), target, lines=lines,
+    root = root or decompose(facade)
+    centred = () if facade.transposed else [i for i, f in enumerate(facade.leaves) if f.label in settings.centre]
+    return optimise_widths(facade, root, grids_of(facade, settings.active), target, lines=lines,
                            corners=settings.corners, corner_labels=settings.corner_labels,
-                           alignment=settings.alignment, symmetry=settings.symmetry)
+                           alignment=settings.alignment, symmetry=settings.symmetry,
+                           minimum=minimum_extents(facade, root, settings.rules),
+                           collapse_below=settings.rules.sliver + MARGIN, centred=centred)
 
 
 def kept(facade: Facade, labels: frozenset[str]) -> int:
@@ -284,18 +302,23 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
     gap = target - start.facade.width
     n0, per_copy = len(start.facade.leaves), len(one.facade.leaves) - len(start.facade.leaves)
     counts = sorted({max(1, k - 1), k, k + 1})
-    options = [(round(abs(gap - m * cand.delta), 2), m, None, 0) for m in counts]
+    options = [(round(abs(gap - m * cand.delta), 2), 1, m, None, 0) for m in counts]
     others = [c for c in candidates if round(c.delta, 2) != round(cand.delta, 2)
               and not c.changes(start.facade, settings.keep)]
-    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), m, c, b)
+    mixes = [(round(abs(gap - (m - b) * cand.delta - b * c.delta), 2), 1, m, c, b)
              for m in counts for c in others for b in range(1, m)]
-    best_mix = min(mixes, key=lambda o: (o[0], o[3], o[1]), default=None)
+    best_mix = min(mixes, key=lambda o: (o[0], o[4], o[2]), default=None)
     if best_mix is not None and best_mix[0] < min(o[0] for o in options):
         options.append(best_mix)
+    twin = _twin(start.facade, cand, candidates, settings)
+    if twin is not None:  # half the copies on the other side of a centred door: tried first, one-sided if none fits
+        options += [(round(abs(gap - (m - m // 2) * cand.delta - m // 2 * twin.delta), 2), 0, m, twin, m // 2)
+                    for m in counts if m > 1]
     out = []
-    for _, m, other, b in sorted(options, key=lambda o: (o[0], o[1], o[3])):
+    balanced = False
+    for _, one_sided, m, other, b in sorted(options, key=lambda o: (o[1], o[0], o[2], o[4])):
         leaves = n0 + m * per_copy
-        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline:
+        if leaves > MAX_LEAVES or settings.work.spent + leaves > deadline or one_sided and balanced:
             continue
         if other is None:
             state = one if m == 1 else repeated(start, cand, m, settings)
@@ -303,6 +326,7 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
             state = mixed(start, cand, m - b, other, b, settings)
         if state is not None:
             out.append((state, size(state.facade, settings, target, root=state.root)))
+            balanced = balanced or not one_sided and out[-1][1].success
     if not out:
         fit = min(k, int((min(MAX_LEAVES, deadline - settings.work.spent) - n0) // max(1, per_copy)))
         notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {max(0, fit)} of {k} column jumps")
@@ -310,6 +334,19 @@ def far_variations(start: Path, settings: Settings, target: float, deadline: flo
         if state is not None:
             out.append((state, size(state.facade, settings, target, root=state.root)))
     return out
+
+
+def _twin(facade: Facade, cand: Candidate, candidates: list[Candidate], settings: Settings) -> Candidate | None:
+    """The insertion of ``cand``'s source column on the other side of the centred door, nearest ``cand``'s mirror
+    image about it (None: no centred label, or no such insertion)."""
+    doors = [f for f in facade.leaves if f.label in settings.centre]
+    if len(doors) != 1:
+        return None
+    middle = doors[0].x + 0.5 * doors[0].w
+    side = cand.slabs[0][0] < middle
+    twins = [c for c in candidates if c.jump.source == cand.jump.source and c.jump.grid == cand.jump.grid
+             and (c.slabs[0][0] < middle) != side and not c.changes(facade, settings.keep)]
+    return min(twins, key=lambda c: (abs(c.slabs[0][0] + cand.slabs[0][0] - 2 * middle), str(c.jump)), default=None)
 
 
 def pitch(facade: Facade, settings: Settings) -> float | None:
@@ -328,25 +365,25 @@ def pitch(facade: Facade, settings: Settings) -> float | None:
 
 def width_variations(facade: Facade, settings: Settings, target: float, limit: int = 8,
                      deadline: float = float("inf"), notes: list[str] | None = None) -> list[Variation]:
-    """Variations of ``facade`` at width ``target``, least distortion first (ties by jump description).
+    """The distinct variations of ``facade`` at width ``target``, least cost first (ties by jump description),
+    for ``limit`` wanted: the column counts within ``spread(limit)`` of the one the pitch suggests.
 
-    The resized facade without jumps is always among them (the fallback when the budget is spent); budget cuts
+    The resized facade without jumps is always tried (the fallback when the budget is spent); budget cuts
     are appended to ``notes``."""
     notes = notes if notes is not None else []
     start = Path(*merge_leaves(facade, settings.fixed))
     facade = start.facade
+    reference = reference_widths(facade)
     found: list[Variation] = []
-    res = size(facade, settings, target, root=start.root)
-    if res.success:
-        found.append(Variation((), res.facade, res.objective, res.dropped))
+    _add(found, start, size(facade, settings, target, root=start.root), reference, settings)
     step = pitch(facade, settings)
     best_k = 0 if step is None else int(round((target - facade.width) / step))
-    counts = {best_k - 1, best_k, best_k + 1} - {0} if step is not None else set()
+    counts = {best_k + d for d in range(-spread(limit), spread(limit) + 1)} - {0} if step is not None else set()
     for sign in (1, -1):
         wanted = sorted(abs(k) for k in counts if k * sign > 0)
         if sign > 0 and wanted and wanted[0] >= FAR_COPIES:
             for state, res in far_variations(start, settings, target, deadline, notes):
-                _add(found, state, res)
+                _add(found, state, res, reference, settings)
             continue
         path, res = start, None
         while wanted and len(path.jumps) < wanted[-1]:
@@ -354,7 +391,8 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
                 notes.append(f"budget {settings.budget:g} s spent after {len(path.jumps)} of {wanted[-1]} "
                              "column jumps")
                 if path.jumps and len(path.jumps) not in wanted:  # the partial path: fewer jumps, one more QP
-                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root), reference,
+                         settings)
                 break
             ahead = min(k for k in wanted if k > len(path.jumps)) - len(path.jumps)
             copies = _affordable(path, ahead, deadline, settings)
@@ -362,7 +400,8 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
                 notes.append(f"budget {settings.budget:g} s or {MAX_LEAVES} leaves reached: {len(path.jumps)} "
                              f"of {wanted[-1]} column jumps")
                 if path.jumps and len(path.jumps) not in wanted:
-                    _add(found, path, res or size(path.facade, settings, target, root=path.root))
+                    _add(found, path, res or size(path.facade, settings, target, root=path.root), reference,
+                         settings)
                 break
             nxt = greedy_step(path, column_candidates(path.facade, settings, sign > 0), settings, target, deadline,
                               copies)
@@ -370,15 +409,15 @@ def width_variations(facade: Facade, settings: Settings, target: float, limit: i
                 break
             path, res = nxt
             if len(path.jumps) in wanted:
-                _add(found, path, res or size(path.facade, settings, target, root=path.root))
-    found.sort(key=lambda v: (v.objective, [str(j) for j in v.jumps]))
+                _add(found, path, res or size(path.facade, settings, target, root=path.root), reference, settings)
+    found.sort(key=lambda v: (v.cost, [str(j) for j in v.jumps]))
     unique, seen = [], set()
     for v in found:
         key = tuple(sorted((round(f.x, 6), round(f.w, 6), f.origin) for f in v.facade.leaves))
         if key not in seen:
             seen.add(key)
             unique.append(v)
-    return unique[:limit]
+    return unique
 
 
 def _affordable(path: Path, copies: int, deadline: float, settings: Settings) -> int:
@@ -393,13 +432,21 @@ def _affordable(path: Path, copies: int, deadline: float, settings: Settings) ->
     return max(0, min(copies, int((left - n) // per_copy)))
 
 
-def _add(found: list[Variation], path: Path, res: SpatialResult) -> None:
+def spread(limit: int) -> int:
+    """How many column counts either side of the pitch's count are tried for ``limit`` variations."""
+    return max(1, limit // 2)
+
+
+def _add(found: list[Variation], path: Path, res: SpatialResult, reference: dict[int, float],
+         settings: Settings) -> None:
     if res.success:
-        found.append(Variation(path.jumps, res.facade, res.objective, res.dropped))
+        found.append(Variation(path.jumps, res.facade, res.objective, res.dropped,
+                               defects(path.facade, res.facade, reference, settings.centre,
+                                       any(j.op == "remove" for j in path.jumps), settings.rules)))
 
 
 def pick(variations: Sequence[Variation], rng: np.random.Generator) -> Variation:
-    """One of the near-best variations (objective within NEAR_BEST of the least), chosen by ``rng``."""
-    best = variations[0].objective
-    near = [v for v in variations if v.objective <= best * NEAR_BEST + 1e-9]
+    """One of the near-best variations (cost within NEAR_BEST of the least), chosen by ``rng``."""
+    best = variations[0].cost
+    near = [v for v in variations if v.cost <= best * NEAR_BEST + 1e-9]
     return near[int(rng.integers(len(near)))]

@@ -16,12 +16,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from citygen_safe.bounds import MIN_SIZE, collapse, node_minimum, share
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
 from citygen_safe.tree import GROUP, X, Node
 
 WEIGHT_CAP = 10.0
-MIN_SIZE = 1e-3  #: the bound standing for x > 0 (metres)
 SAME_SIZE_TOL = 0.01  #: grid elements of one label whose widths agree within this fraction have the same size
 ACTIVE_SET_ROUNDS = 12  #: KKT solves before the DAQP fallback
 #: variables up to which the dense DAQP fallback runs: its time grows with their cube (2,000: ~3 s), and it is
@@ -156,8 +156,14 @@ def _same_size_pairs(facade: Facade, grids: Sequence[FacadeGrid]) -> list[tuple[
 def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], target: float,
                     lines: Lines | None = None, corners: tuple[float, float] = (0.0, 0.0),
                     corner_labels: frozenset[str] = frozenset(), alignment: bool = True,
-                    symmetry: bool = True) -> SpatialResult:
-    """Solve Eq. 1 for the widths of ``facade`` (tree ``root``) at width ``target``."""
+                    symmetry: bool = True, minimum: np.ndarray | None = None, collapse_below: float = 0.0,
+                    centred: Sequence[int] = ()) -> SpatialResult:
+    """Solve Eq. 1 for the widths of ``facade`` (tree ``root``) at width ``target``.
+
+    ``minimum``: each leaf's least width (default 1 mm; :func:`citygen_safe.bounds.minimum_extents`), bounding
+    the variable nodes by their subtrees' least widths; slabs of walls thinner than ``collapse_below`` are then
+    removed (:func:`citygen_safe.bounds.collapse`). ``centred``: leaves whose centre is pinned to the facade's
+    middle (a centred door; with ``symmetry``), the first constraint group dropped when infeasible."""
     leaf_node = {n.leaves[0]: n for n in root.walk() if n.split is None}
     columns = [[i for i in grid.column(c) if i is not None and i in leaf_node]
                for grid in grids for c in range(len(grid.columns))] if alignment else []
@@ -166,7 +172,9 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     cornered = [i for i, f in enumerate(facade.leaves) if f.label in corner_labels and i in leaf_node] \
         if any(corners) else []
     constrained = {id(leaf_node[i]) for col in columns for i in col} | {id(leaf_node[i]) for p in pairs for i in p}
-    constrained |= {id(leaf_node[i]) for i in cornered} | {id(node) for node in (lines.nodes if lines else ())}
+    centred = [i for i in centred if i in leaf_node] if symmetry else []
+    constrained |= {id(leaf_node[i]) for i in (*cornered, *centred)}
+    constrained |= {id(node) for node in (lines.nodes if lines else ())}
     sys_ = _System(root, constrained)
     n = len(sys_.var_nodes)
     alpha = lambda i: sys_.alpha[id(leaf_node[i])]  # noqa: E731
@@ -187,23 +195,29 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
             rhs_a.append((fa.x + eps * fa.w) - (fb.x + eps * fb.w))
     groups["alignment"] = (rows_a, rhs_a)
     groups["symmetry"] = ([_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs))
+    groups["centring"] = ([_comb((1.0, beta(i)), (0.5, alpha(i))) for i in centred], [0.5 * target] * len(centred))
     x_star = np.array([v.w for v in sys_.var_nodes])
     area = np.array([v.w * v.h for v in sys_.var_nodes])
     weight = np.minimum(facade.width * facade.height / np.maximum(area, EPS), WEIGHT_CAP)
+    mins = minimum if minimum is not None else np.full(len(facade.leaves), MIN_SIZE)
+    least = node_minimum(root, facade, mins)
     G_rows: list[Vec] = [{k: -1.0} for k in range(n)]
-    h_rows = [-MIN_SIZE] * n
+    h_rows = [-max(MIN_SIZE, least[id(v)]) for v in sys_.var_nodes]
     for i in cornered:
         G_rows += [_comb((-1.0, beta(i))), _comb((1.0, beta(i)), (1.0, alpha(i)))]
         h_rows += [-corners[0], target - corners[1]]
     G, h = _matrix(G_rows, n), np.asarray(h_rows, dtype=float)
     dropped: list[str] = []
-    for drop in ((), ("symmetry",), ("symmetry", "alignment")):
+    for drop in ((), ("centring",), ("centring", "symmetry"), ("centring", "symmetry", "alignment")):
         rows = [r for k, (rs, _) in groups.items() if k not in drop for r in rs]
         rhs = [v for k, (_, vs) in groups.items() if k not in drop for v in vs]
         x = _solve(weight, x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), G, h)
         if x is not None:
             objective = float(np.sum((weight * (x - x_star)) ** 2))
-            return SpatialResult(_place(facade, root, sys_, x, target), True, objective, n, tuple(drop))
+            placed = _place(facade, root, sys_, x, target, least)
+            if collapse_below > 0:
+                placed = collapse(placed, root, collapse_below)
+            return SpatialResult(placed, True, objective, n, tuple(drop))
         dropped = list(drop) or ["(inconsistent)"]
     return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
 
@@ -278,8 +292,10 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     return x, sol[n:]
 
 
-def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float) -> Facade:
-    """Leaf x and w from the solution: variable nodes get their width; collapsed subtrees share the change."""
+def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float, least: dict[int, float]
+           ) -> Facade:
+    """Leaf x and w from the solution: variable nodes get their width; collapsed subtrees share the change (each
+    child kept at its least width ``least``)."""
     var_width = {id(v): float(x[k]) for k, v in enumerate(sys_.var_nodes)}
     lefts: dict[int, tuple[float, float]] = {}
 
@@ -300,7 +316,7 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
                 lefts[i] = (left + (f.x - node.x) * scale, f.w * scale)
         elif node.split == X:
             if collapsed:
-                widths = _share_evenly([c.w for c in node.children], w)
+                widths = share([c.w for c in node.children], [least[id(c)] for c in node.children], w)
             else:
                 widths = [width(c) for c in node.children]
             for c, cw in zip(node.children, widths):
@@ -313,14 +329,3 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
     place(root, 0.0, target)
     leaves = tuple(Leaf(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin) for i, f in enumerate(facade.leaves))
     return replace(facade, width=target, leaves=leaves)
-
-
-def _share_evenly(widths: list[float], total: float) -> list[float]:
-    """The change of a collapsed node spread evenly over its children, proportionally where even would make a
-    child non-positive."""
-    delta = (total - sum(widths)) / len(widths)
-    even = [w + delta for w in widths]
-    if min(even) > MIN_SIZE:
-        return even
-    s = sum(widths)
-    return [w * total / s for w in widths] if s > EPS else [total / len(widths)] * len(widths)

@@ -12,7 +12,8 @@ from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
-from citygen_safe.generate import edit
+from citygen_safe.edit import Variation
+from citygen_safe.generate import Edit, edit
 from citygen_safe.ruleset import SafeRuleset, load_ruleset
 
 
@@ -32,11 +33,21 @@ class SafeKind(RulesetKind):
         lines = [f"safe ruleset {ruleset.name}: {len(ruleset.facade.leaves)} input leaves, grids "
                  f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
                  f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}"]
+        rejected = {id(v): f for v, f in result.rejected}
+        checked = rejected.keys() | {id(v) for v, _ in result.plausible}
         for k, v in enumerate(result.variations):
-            mark = "*" if v is result.chosen else " "
-            lines.append(f"{mark} variation {k}: E={v.objective:.4g} {'; '.join(map(str, v.jumps)) or 'resize only'}")
+            mark = "*" if v is result.chosen and not result.layout.meta.get("fallback") else " "
+            lines.append(f"{mark} variation {k}: {_describe(v)}" + ("" if id(v) in checked else " (not checked)"))
+            lines += [f"      implausible: {f}" for f in rejected.get(id(v), ())[:3]]
         lines += [f"note: {d}" for d in result.diagnostics] + [f"problem: {p}" for p in result.problems]
         return "\n".join(lines)
+
+
+def _describe(v: Variation) -> str:
+    """A variation on one line: its cost, E(x), first defects, leaf count and jumps."""
+    defects = f", {len(v.defects)} defects: {'; '.join(v.defects[:2])}" if v.defects else ""
+    return (f"cost {v.cost:.4g} (E={v.objective:.4g}{defects}), {len(v.facade.leaves)} leaves: "
+            f"{'; '.join(map(str, v.jumps)) or 'resize only'}")
 
 
 class EditCommand(Command):
@@ -52,7 +63,6 @@ class EditCommand(Command):
         add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
-        from citygen_safe.generate import _finish
         try:
             ruleset = load_ruleset(args.ruleset)
         except CitygenError as exc:
@@ -61,15 +71,27 @@ class EditCommand(Command):
         width, height = args.size
         request = FacadeRequest.preview(width, height, args.floor_height, entrance=not args.no_entrance,
                                         seed=args.seed)
-        result = edit(ruleset, request, limit=args.count)
-        layouts = [_finish(v.facade, request, ruleset, v, list(result.floor_jumps)) for v in result.variations]
-        if not write_layouts(layouts, args.json, args.png):
+        result = edit(ruleset, request, limit=args.count, wanted=args.count)
+        shown = result.plausible[:args.count]
+        if not write_layouts([layout for _, layout in shown], args.json, args.png):
             print(f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}")
-            for k, v in enumerate(result.variations):
-                mark = "*" if v is result.chosen else " "
-                print(f"{mark} variation {k}: E={v.objective:.4g}, {len(v.facade.leaves)} leaves: "
-                      f"{'; '.join(map(str, v.jumps)) or 'resize only'}")
-        return 0 if layouts else 1
+            for k, (v, _) in enumerate(shown):
+                print(f"{'*' if v is result.chosen else ' '} variation {k}: {_describe(v)}")
+        if len(shown) < args.count:
+            print(shortfall(result, args.count), file=sys.stderr)
+        return 0 if shown else 1
+
+
+def shortfall(result: Edit, count: int) -> str:
+    """Why fewer than ``count`` variations were listed: how many distinct ones the edit found, how many of them
+    were implausible (with the first finding) and the fallback reason when none was plausible."""
+    text = (f"{len(result.plausible)} of {count} variations: the edit found {len(result.variations)} distinct "
+            f"layout(s) at this size")
+    if result.rejected:
+        text += f", {len(result.rejected)} implausible (first: {result.rejected[0][1][0]})"
+    if not result.plausible:
+        text += f"; the face falls back: {result.layout.meta.get('fallback', '')}"
+    return text
 
 
 @hookimpl

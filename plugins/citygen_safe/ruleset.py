@@ -3,6 +3,7 @@
     # comment
     safe NAME                       first statement: the ruleset's name
     layout "PATH"                   the input FacadeLayout JSON (relative to the ruleset file)
+    relabel LABEL NEW               the input's LABEL terminals read as NEW (an import's mislabelled class)
     grid NAME LABEL...              a general grid of every leaf with one of the labels
     active NAME...                  grids whose columns/rows topological jumps insert or remove
     alignment on|off                alignment constraints C_a (default on)
@@ -15,7 +16,7 @@ without ``active`` the ``window`` grid is active. Errors name file:line:column a
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from citygen.errors import CitygenError, ParseError, SourceLocation, read_user_text
@@ -68,6 +69,7 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
     name = layout = None
     grids: dict[str, GridSpec] = {}
     active: list[tuple[str, int, int]] = []
+    relabels: dict[str, tuple[str, SourceLocation]] = {}
     switches = {"alignment": True, "symmetry": True}
     budget = BUDGET_S
     last = (1, 1)
@@ -97,6 +99,12 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
             if args[0][0] in grids:
                 raise ParseError(f"grid '{args[0][0]}' defined twice", where=SourceLocation(source, lineno, args[0][1]))
             grids[args[0][0]] = GridSpec(args[0][0], tuple(a for a, _ in args[1:]))
+        elif head == "relabel":
+            need("a label and its new label", len(args) == 2)
+            if args[0][0] in relabels:
+                raise ParseError(f"label '{args[0][0]}' relabelled twice",
+                                 where=SourceLocation(source, lineno, args[0][1]))
+            relabels[args[0][0]] = (args[1][0], SourceLocation(source, lineno, args[0][1]))
         elif head == "active":
             need("one or more grid names", len(args) >= 1)
             active += [(a, lineno, c) for a, c in args]
@@ -108,7 +116,7 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
             switches[head] = args[0][0] == "on"
         else:
             raise ParseError(f"unknown statement '{head}'", where=where,
-                             hint="expected one of safe, layout, grid, active, alignment, symmetry, budget")
+                             hint="expected one of safe, layout, relabel, grid, active, alignment, symmetry, budget")
     if name is None:
         raise ParseError("empty ruleset", where=SourceLocation(source, 1, 1), hint="start with 'safe NAME'")
     if layout is None:
@@ -123,7 +131,7 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
                          hint="name a UTF-8 FacadeLayout JSON file") from exc
     except CitygenError as exc:
         raise ParseError(f"layout {layout[0]!r} is invalid: {exc}", where=layout[1]) from exc
-    facade = facade_from_layout(lay)
+    facade = facade_from_layout(_relabelled(lay, relabels))
     specs = grids or {s.name: s for s in auto_specs(facade)}
     for grid_name, lineno, col in active:
         if grid_name not in specs:
@@ -132,6 +140,25 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
     chosen = tuple(specs[a] for a, _, _ in active) or tuple(s for s in specs.values() if s.name == "window")
     return SafeRuleset(name, source, facade, tuple(specs.values()), chosen, switches["alignment"],
                        switches["symmetry"], budget)
+
+
+def _relabelled(layout: FacadeLayout, relabels: dict[str, tuple[str, SourceLocation]]) -> FacadeLayout:
+    """``layout`` with each relabelled label's terminals carrying the new label (and a symbol named after it)."""
+    present = {r.label for r in layout.leaves}
+    for old, (_, where) in relabels.items():
+        if old not in present:
+            raise ParseError(f"relabel: the layout has no '{old}' terminal", where=where,
+                             hint="labels in the layout: " + ", ".join(sorted(str(x) for x in present if x)))
+
+    def visit(region):
+        if region.children:
+            return replace(region, children=tuple(visit(c) for c in region.children))
+        if region.label in relabels:
+            new = relabels[region.label][0]
+            return replace(region, label=new, symbol=new.capitalize())
+        return region
+
+    return replace(layout, root=visit(layout.root)) if relabels else layout
 
 
 def _positive(text: str) -> bool:

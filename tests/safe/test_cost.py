@@ -89,7 +89,7 @@ def test_typical_face_is_cheap(cmp_ruleset):
 
 def _budget_ruleset(tmp_path, budget: float):
     return parse_ruleset(f'safe b\nlayout "{ROOT / "rulesets" / "cmp_b0035.layout.json"}"\ngrid window window\n'
-                         f'budget {budget}\n', "b.safe", base=tmp_path)
+                         f'relabel shop deco\nbudget {budget}\n', "b.safe", base=tmp_path)
 
 
 def test_budget_bounds_a_huge_face_and_says_so(tmp_path):
@@ -167,15 +167,19 @@ def test_regression_wide_face_reaches_its_width_without_stretching(cmp_ruleset):
     """110 x 36 m from the 15.6 m input (12 floors, one of the scene's widest faces): the greedy path of single
     jumps stopped at the 4000-leaf cap after 23 of 32 column jumps and the face came out stretched (windows 1.79 m
     instead of at most 1.6 m, E ~3e6). Now one jump inserts k copies of a column (k with the least width
-    mismatch) and the face is met within the default budget."""
+    mismatch) and the face is met within the default budget. The input's door is centred, so the copies are split
+    on both sides of it (two jumps of many copies, issue 21: they all went right of the door, which stayed at
+    7.9 m of 110 m); centring costs some distortion (E ~3e3 instead of ~1)."""
     request = FacadeRequest.preview(110.0, 36.0, 3.0)
     result = edit(cmp_ruleset, request)
     assert result.diagnostics == () and result.problems == () and "fallback" not in result.layout.meta
     assert result.work <= JUMPS_SHARE * cmp_ruleset.budget * LEAVES_PER_SECOND
-    assert result.chosen.objective < 10.0
+    assert result.chosen.objective < 1e4 and result.chosen.defects == ()
     widest = max(f.w for f in cmp_ruleset.facade.leaves if f.label == "window")
     assert max(r.w for r in result.layout.leaves if r.label == "window") <= widest + 0.01
-    assert len(result.chosen.jumps) >= 29 and len(set(result.chosen.jumps)) == 1  # one jump of k copies
+    assert len(result.chosen.jumps) >= 29 and len(set(result.chosen.jumps)) == 2  # two jumps of k copies
+    door = next(r for r in result.layout.leaves if r.label == "door")
+    assert abs(door.x + 0.5 * door.w - 55.0) < 0.01
     assert check_partition(result.layout) == [] and check_request(result.layout, request) == []
 
 
