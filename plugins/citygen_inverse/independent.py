@@ -28,7 +28,8 @@ import numpy as np
 import citygen_split
 from citygen.errors import LayoutError
 from citygen.gcpause import cyclic_gc_paused
-from citygen.layout import FacadeLayout, Region, check_partition
+from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region, check_partition
+from citygen.plausible import OPENING_LABELS
 from citygen_inverse.actions import CostModel
 from citygen_inverse.emit import GrammarWriter, _num
 from citygen_inverse.extract import Extraction
@@ -42,30 +43,44 @@ _RESERVED = frozenset({"Facade", "GroundFloor", "EntranceRow"})
 
 
 def floor_cuts(layout: FacadeLayout) -> list[float]:
-    """Heights that cut ``layout`` into floor slabs: one valid line (no terminal crosses it) between consecutive
-    rows of openings, the one nearest the middle of the gap; rows with no valid line between them stay together."""
+    """Heights that cut ``layout`` into floor slabs, one between each two consecutive rows of openings (openings
+    overlapping in y form one row): the valid line (no terminal crosses it) in the gap nearest its middle, else
+    the line in the gap that crosses the fewest terminals (floor-bound ones, windows or balconies, counting
+    most), nearest the middle -- :func:`slab_layouts` cuts the terminals it crosses (a pilaster spanning three
+    storeys becomes three pieces), so each storey of the input is a slab of its own and no storey is lost."""
     ts = layout.terminals()
     y0 = np.array([t.y for t in ts])
     y1 = np.array([t.y + t.h for t in ts])
+    bound = np.array([t.label in FLOOR_BOUND_LABELS for t in ts], dtype=bool)
     eps = 1e-9 * max(layout.width, layout.height)
-    lines = np.unique(y0[y0 > eps])
-    valid = lines[[not np.any((y0 < c - eps) & (y1 > c + eps)) for c in lines]]
     rows: list[list[float]] = []
     for a, b in sorted((t.y, t.y + t.h) for t in ts if t.label in ROW_LABELS):
         if rows and a < rows[-1][1] - eps:
             rows[-1][1] = max(rows[-1][1], b)
         else:
             rows.append([a, b])
+    lines = np.unique(np.concatenate([y0, y1]))
     cuts: list[float] = []
     for (_, top), (bottom, _) in zip(rows, rows[1:]):
-        gap = valid[(valid >= top - eps) & (valid <= bottom + eps)]
-        if gap.size:
-            cuts.append(float(gap[np.argmin(np.abs(gap - 0.5 * (top + bottom)))]))
+        gap = lines[(lines >= top - eps) & (lines <= bottom + eps)]
+        if not gap.size:
+            continue
+        crossed = (y0[None, :] < gap[:, None] - eps) & (y1[None, :] > gap[:, None] + eps)
+        cost = crossed.sum(axis=1) + 100 * (crossed & bound[None, :]).sum(axis=1)
+        middle = np.abs(gap - 0.5 * (top + bottom))
+        cuts.append(float(gap[np.lexsort((middle, cost))[0]]))
     return cuts
 
 
 def _slab(layout: FacadeLayout, lo: float, hi: float, eps: float) -> list[Region]:
-    return [replace(t, y=t.y - lo, children=()) for t in layout.terminals() if t.y >= lo - eps and t.y + t.h <= hi + eps]
+    """The terminals between heights ``lo`` and ``hi``, moved down by ``lo``; terminals crossing ``lo`` or
+    ``hi`` contribute the piece inside."""
+    out = []
+    for t in layout.terminals():
+        a, b = max(t.y, lo), min(t.y + t.h, hi)
+        if b - a > eps:
+            out.append(replace(t, y=a - lo, h=b - a, children=()))
+    return out
 
 
 def _as_layout(width: float, height: float, ts: list[Region]) -> FacadeLayout:
@@ -77,24 +92,51 @@ def _no_doors(ts: list[Region], keep: Region | None = None) -> list[Region]:
     return [replace(t, label="window", symbol="Window") if t.label == "door" and t is not keep else t for t in ts]
 
 
-def _with_door(ts: list[Region], width: float) -> list[Region]:
-    """The ground slab with exactly one door: the input's largest (most central on ties), else one carved into
-    the largest wall touching the ground (or the largest terminal relabelled when there is no such wall)."""
+#: A carved door: its width (metres, at most half the slab) and its height as a share of the ground slab, so
+#: the door stays a door (>= 1.9 m) on any ground floor of 2.4 m or more whatever the input slab's height.
+DOOR_WIDTH = 1.2
+DOOR_SHARE = 0.8
+
+
+def _with_door(ts: list[Region], width: float, height: float) -> list[Region]:
+    """The ground slab with exactly one door: the input's largest (most central on ties), else one carved
+    (:func:`_carve_door`)."""
     doors = [t for t in ts if t.label == "door"]
     if doors:
         main = max(doors, key=lambda t: (round(t.w * t.h, 9), -abs(t.x + 0.5 * t.w - 0.5 * width)))
         return _no_doors(ts, keep=main)
-    walls = [t for t in ts if t.label == "wall" and t.y <= 1e-9 * width]
-    if not walls:
-        big = max(ts, key=lambda t: t.w * t.h)
-        return [replace(t, label="door", symbol="Door", depth=-0.3) if t is big else t for t in ts]
-    wall = max(walls, key=lambda t: t.w * t.h)
-    dw, dh = min(1.2, 0.5 * wall.w), min(2.2, 0.75 * wall.h)
-    dx = wall.x + 0.5 * (wall.w - dw)
-    pieces = [Region(dx, wall.y, dw, dh, "Door", "door", depth=-0.3),
-              replace(wall, w=dx - wall.x), replace(wall, x=dx + dw, w=wall.x + wall.w - dx - dw),
-              replace(wall, x=dx, y=wall.y + dh, w=dw, h=wall.h - dh)]
-    return [t for t in ts if t is not wall] + [p for p in pieces if p.w > 0 and p.h > 0]
+    return _carve_door(ts, width, height)
+
+
+def _carve_door(ts: list[Region], width: float, height: float) -> list[Region]:
+    """A door ``DOOR_WIDTH`` wide and ``DOOR_SHARE`` of the slab tall, standing on the ground, where it covers
+    the least of the slab's openings and leaves no terminal pieces thinner than 0.15 m (nearest the middle on
+    ties); the terminals it covers are cut around it (the slab stays a partition)."""
+    dw, dh = min(DOOR_WIDTH, 0.5 * width), DOOR_SHARE * height
+    edges = sorted({e for t in ts for e in (t.x, t.x + t.w)})
+    starts = {min(max(x, 0.0), width - dw) for e in edges for x in (e, e - dw)} | {0.5 * (width - dw)}
+
+    def score(x: float) -> tuple[float, int, float]:
+        covered, thin = 0.0, 0
+        for t in ts:
+            ox = min(t.x + t.w, x + dw) - max(t.x, x)
+            oy = min(t.y + t.h, dh) - t.y
+            if ox > 1e-9 and oy > 1e-9:
+                covered += ox * oy * (t.label in OPENING_LABELS)
+                thin += sum(0 < piece < 0.15 for piece in (x - t.x, t.x + t.w - x - dw, t.y + t.h - dh))
+        return (round(covered, 6), thin, abs(x + 0.5 * dw - 0.5 * width))
+
+    dx = min(sorted(starts), key=score)
+    out = [Region(dx, 0.0, dw, dh, "Door", "door", depth=-0.3)]
+    for t in ts:
+        if not (t.x < dx + dw - 1e-9 and t.x + t.w > dx + 1e-9 and t.y < dh - 1e-9):
+            out.append(t)
+            continue
+        a, b = max(t.x, dx), min(t.x + t.w, dx + dw)
+        pieces = [replace(t, w=a - t.x), replace(t, x=b, w=t.x + t.w - b),
+                  replace(t, x=a, y=dh, w=b - a, h=t.y + t.h - dh)]
+        out += [p for p in pieces if p.w > 1e-9 and p.h > 1e-9]
+    return out
 
 
 def slab_layouts(layout: FacadeLayout) -> tuple[list[FacadeLayout], list[str]]:
@@ -108,7 +150,7 @@ def slab_layouts(layout: FacadeLayout) -> tuple[list[FacadeLayout], list[str]]:
     edges = [0.0, *floor_cuts(layout), float(layout.height)]
     slabs = [(_slab(layout, lo, hi, eps), hi - lo) for lo, hi in zip(edges, edges[1:])]
     (ground, gh), upper = slabs[0], slabs[1:]
-    out = [_as_layout(layout.width, gh, _with_door(ground, layout.width)),
+    out = [_as_layout(layout.width, gh, _with_door(ground, layout.width, gh)),
            _as_layout(layout.width, gh, _no_doors(ground))]
     names = ["GroundDoor", "Ground"]
     for k, (ts, h) in enumerate(upper, start=1):

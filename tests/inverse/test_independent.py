@@ -191,3 +191,51 @@ def test_wider_faces_get_more_bays_not_wider_windows():
     assert w1 == pytest.approx(w0, rel=1e-6)  # a relative-only grammar would make them 4x wider
     assert wide.count("window") > 3 * narrow.count("window")
     assert wide.count("door") == 1
+
+
+# ---- issue 21: storeys kept, carved doors of a door's size ---------------------------------------------------
+def test_every_row_of_openings_gets_its_own_slab_even_where_pilasters_cross_storeys():
+    """Regression (issue 21): cmp_b0009's pillars span three window storeys, so no line cut them apart and one
+    slab of 17 m was squeezed into one storey (balconies 0.14 m tall at 20 x 12 m, two storeys lost)."""
+    layout = cmp_layout("cmp_b0009")
+    rows = []
+    for a, b in sorted((t.y, t.y + t.h) for t in layout.terminals() if t.label in ("window", "door", "shop")):
+        if rows and a < rows[-1][1] - 1e-9:
+            rows[-1][1] = max(rows[-1][1], b)
+        else:
+            rows.append([a, b])
+    cuts = floor_cuts(layout)
+    assert len(cuts) == len(rows) - 1
+    slabs, _ = slab_layouts(layout)
+    assert all(check_partition(s) == [] for s in slabs)
+    assert all(s.height < 7.0 for s in slabs)  # (was one slab of 17.5 m)
+
+
+def _plinth_facade():
+    """Door-less: a 0.5 m plinth along the ground, shop windows above it, two floors of windows."""
+    ts = [Region(0, 0, 12, 0.5, "P", "wall")]
+    for c in range(4):
+        ts += [Region(3 * c, 0.5, 1, 3, "W", "wall"), Region(3 * c + 1, 0.5, 1.6, 2.5, "S", "shop"),
+               Region(3 * c + 1, 3.0, 1.6, 0.5, "W", "wall"), Region(3 * c + 2.6, 0.5, 0.4, 3, "W", "wall")]
+    for f in range(2):
+        y = 3.5 + 3 * f
+        ts += [Region(0, y, 12, 1, "W", "wall"), Region(0, y + 2.5, 12, 0.5, "W", "wall")]
+        ts += [r for c in range(4) for r in (Region(3 * c, y + 1, 1, 1.5, "W", "wall"),
+               Region(3 * c + 1, y + 1, 1, 1.5, "N", "window"), Region(3 * c + 2, y + 1, 1, 1.5, "W", "wall"))]
+    return FacadeLayout(12, 9.5, Region(0, 0, 12, 9.5, "F", children=tuple(ts)))
+
+
+@pytest.mark.parametrize("ground", [2.6, 3.0, 4.0, 5.5])
+def test_a_carved_door_is_a_door_on_any_ground_floor(ground):
+    """Regression (issue 21): doors carved into door-less facades were hatches 0.49-1.79 m tall (carved into the
+    largest wall touching the ground: here the 0.5 m plinth)."""
+    layout = _plinth_facade()
+    slabs, _ = slab_layouts(layout)
+    door = next(t for t in slabs[0].terminals() if t.label == "door")
+    assert door.y == 0 and door.h >= 0.75 * slabs[0].height and check_partition(slabs[0]) == []
+    g = citygen_split.parse(extract_size_independent(layout, "greedy").text, "plinth")
+    req = FacadeRequest.preview(12.0, ground + 6.0, floor_height=3.0, ground_height=ground)
+    out = citygen_split.derive(g, req)
+    doors = [t for t in out.terminals() if t.label == "door"]
+    assert len(doors) == 1 and doors[0].y == 0 and doors[0].h >= 1.9
+    assert not any(t.label == "shop" and t.w < 0.8 for t in out.terminals())  # no shop cut into a sliver
