@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import re
+from bisect import bisect_right
 from collections import Counter
 from dataclasses import replace
 
@@ -31,6 +32,7 @@ from citygen.gcpause import cyclic_gc_paused
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region, check_partition
 from citygen.plausible import OPENING_LABELS
 from citygen_inverse.actions import CostModel
+from citygen_inverse.bays import Bays, clipped, crosses, find_bays
 from citygen_inverse.emit import GrammarWriter, _num
 from citygen_inverse.extract import Extraction
 from citygen_inverse.regions import LayoutIndex
@@ -39,7 +41,10 @@ from citygen_inverse.search import GrammarSearch
 ROW_LABELS = frozenset({"window", "door", "shop"})
 #: Faces up to this width (metres) keep the entrance tile aligned with the tiles of the other floors.
 MAX_ALIGNED_WIDTH = 100.0
-_RESERVED = frozenset({"Facade", "GroundFloor", "EntranceRow"})
+_RESERVED = frozenset({"Facade", "GroundFloor", "EntranceRow", "EntranceBays", "NarrowWall"})
+#: Labels a bay boundary through the ground slab must not cut.
+DOOR_LABELS = frozenset({"door", "shop", "window"})
+EPS = 1e-9
 
 
 def floor_cuts(layout: FacadeLayout) -> list[float]:
@@ -159,6 +164,52 @@ def slab_layouts(layout: FacadeLayout) -> tuple[list[FacadeLayout], list[str]]:
     return out, names
 
 
+def _pieces(slabs: list[FacadeLayout], names: list[str], has_door: bool
+            ) -> tuple[Bays | None, bool, list[tuple[str, FacadeLayout]], list[tuple[str, ...]]]:
+    """The layouts to extract and, per slab, the names of its pieces: ``(left, bay, right)`` (left/right may be
+    "") for slabs that repeat the facade's bays (:func:`citygen_inverse.bays.find_bays`), ``(whole,)`` for the
+    others. The ground slabs use the bays when they share them (no bay boundary through a door or shop); the
+    door variant is then its door's piece (a bay, or a margin): ``GroundDoorBay``, ``GroundDoorLeft``, ..."""
+    uppers = slabs[2:]
+    bays = find_bays([slabs[1], *uppers]) if uppers else find_bays(slabs[1:2])
+    ground = bays is not None and not crosses(bays, slabs[0], DOOR_LABELS)
+    if bays is None and uppers:
+        bays = find_bays(uppers)
+    pieces: list[tuple[str, FacadeLayout]] = []
+    parts: list[tuple[str, ...]] = []
+    for k, (slab, name) in enumerate(zip(slabs, names)):
+        if bays is None or (k < 2 and not ground):
+            pieces.append((name, slab))
+            parts.append((name,))
+            continue
+        left, bay, right = (clipped(slab, 0.0, bays.start), clipped(slab, bays.cuts[0], bays.cuts[1]),
+                            clipped(slab, bays.end, slab.width))
+        if k == 0:  # the door's piece, other pieces as in the ground slab without door
+            door = next(t for t in slab.terminals() if t.label == "door")
+            middle = door.x + 0.5 * door.w
+            j = min(bisect_right(bays.cuts, middle) - 1, bays.count - 1)
+            if not has_door:  # carved: into the middle bay
+                bay = _as_layout(bay.width, bay.height, _carve_door(
+                    clipped(slabs[1], bays.cuts[bays.count // 2], bays.cuts[bays.count // 2 + 1]).terminals(),
+                    bay.width, bay.height))
+            elif middle < bays.start or middle >= bays.end:
+                bay = left if middle < bays.start else right
+            else:
+                bay = clipped(slab, bays.cuts[j], bays.cuts[j + 1])
+            where = "Left" if has_door and middle < bays.start else "Right" if has_door and middle >= bays.end \
+                else "Bay"
+            pieces.append((f"{name}{where}", bay))
+            parts.append((where, f"{name}{where}"))
+            continue
+        named = (f"{name}Left" if bays.start > EPS * slab.width else "", f"{name}Bay",
+                 f"{name}Right" if bays.end < (1 - EPS) * slab.width else "")
+        for piece_name, piece in zip(named, (left, bay, right)):
+            if piece_name:
+                pieces.append((piece_name, piece))
+        parts.append(named)
+    return bays, ground, pieces, parts
+
+
 @cyclic_gc_paused()
 def extract_size_independent(layout: FacadeLayout, method: str = "adp", iterations: int = 2000, seed: int = 0,
                              model: CostModel = CostModel(), time_limit: float | None = None,
@@ -168,34 +219,77 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
     ``cost`` and ``rules`` are those of the written file (``citygen grammar cost``), not of the joint search.
     """
     slabs, names = slab_layouts(layout)
-    index = LayoutIndex(slabs)
+    bays, ground_bays, pieces, parts = _pieces(slabs, names, layout.count("door") > 0)
+    index = LayoutIndex([piece for _, piece in pieces])
     result = GrammarSearch(index, model).run(method, iterations, seed, time_limit)
-    roots = [index.sig(b) for b in index.roots]
-    writer = GrammarWriter(index, result.rules, names, reserved=_RESERVED | {f"{n}Row" for n in names})
-    sym = [writer.names[r] for r in roots]  # identical slabs share the first one's name
-    W = _num(layout.width)
-    rules = [f"Facade --> floors {{ {_selectors(sym)} }}",
-             f"GroundFloor --> case entrance: EntranceRow  else: {sym[1]}Row",
-             _entrance(sym[0], f"{sym[1]}Row", layout.width)]
-    first = dict(zip(reversed(sym), reversed(slabs)))  # each name's first slab
+    piece_names = [name for name, _ in pieces]
+    reserved = {f"{n}{suffix}" for n in names for suffix in ("Row", "Bays", "Narrow", "Pane", "Opening")}
+    writer = GrammarWriter(index, result.rules, piece_names, reserved=_RESERVED | reserved)
+    written = {name: writer.names[index.sig(b)] for name, b in zip(piece_names, index.roots)}  # shared names
+    W = layout.width
+    # slabs of one content (all pieces alike) share a row, named after the first of them
+    keys = [tuple(written.get(p, "") for p in part) for part in parts]
+    row = [names[keys.index(key)] for key in keys]
+    first = {row[k]: slabs[k] for k in reversed(range(len(slabs)))}
+    rules = [f"Facade --> floors {{ {_selectors(row)} }}",
+             f"GroundFloor --> case entrance: EntranceRow  else: {row[1]}Row"]
     narrow: list[str] = []
-    for s in dict.fromkeys(sym[1:]):
-        rules.append(f"{s}Row --> case width < {_num(0.5 * layout.width)}: {s}Narrow\n"
-                     f"    else: repeat(x) {{ ~{W}: {s} }}")
-        narrow += _narrow(s, first[s], ROW_LABELS - {"door"}, entrance=False)
-    narrow += _narrow(sym[0], first[sym[0]], frozenset({"door"}), entrance=True)
-    body = "\n".join(_merge_identical(rules + writer.rule_lines("linear") + narrow)) + "\n"
+    for k in range(1, len(slabs)):
+        if row[k] != names[k]:
+            continue
+        uses_bays = bays is not None and (k >= 2 or ground_bays)
+        body = _row_body(keys[k], bays if uses_bays else None, W)
+        least = (bays.start + W - bays.end + 0.75 * bays.tile) if uses_bays else 0.5 * W
+        rules.append(f"{row[k]}Row --> case width >= {_num(least)}: {body}\n    else: {row[k]}Narrow")
+        if uses_bays:
+            rules.append(f"{keys[k][1]}s --> repeat(x) {{ ~{_num(bays.tile)}: {keys[k][1]} }}")
+        narrow += _narrow(row[k], first[row[k]], ROW_LABELS - {"door"}, entrance=False)
+    door = keys[0][-1]
+    if bays is not None and ground_bays:
+        where = parts[0][0]
+        ground = keys[1]
+        least = bays.start + W - bays.end + 0.75 * bays.tile
+        if where == "Bay":
+            middle = "'1: EntranceBays"
+            rules.append(_entrance("EntranceBays", door, f"{ground[1]}s", bays.tile, narrow=None))
+        else:
+            middle = f"'1: {ground[1]}s"
+        items = [f"{_num(bays.start)}: {door if where == 'Left' else ground[0]}" if ground[0] or where == "Left"
+                 else "", middle,
+                 f"{_num(W - bays.end)}: {door if where == 'Right' else ground[2]}" if ground[2] or where == "Right"
+                 else ""]
+        rules.append(f"EntranceRow --> case width >= {_num(least)}: split(x) {{ {' | '.join(i for i in items if i)} }}"
+                     f"\n    else: {names[0]}Narrow")
+    else:
+        rules.append(_entrance("EntranceRow", door, f"{row[1]}Row", W, narrow=f"{names[0]}Narrow"))
+    narrow += _narrow(names[0], slabs[0], frozenset({"door"}), entrance=True)
+    lines_ = list(dict.fromkeys(rules + writer.rule_lines("linear") + narrow))
+    body = "\n".join(_merge_identical(lines_)) + "\n"
     grammar = citygen_split.parse(body, "<size-independent>")
     cost = citygen_split.grammar_cost(grammar, model.split, model.repeat)
     count = sum(1 for r in grammar.rules if type(r.body).__name__ != "Terminal")
+    repeat = (f"{bays.count} bays of {bays.tile:.2f} m between x = {bays.start:.2f} and {bays.end:.2f} m repeat"
+              + ("" if ground_bays else " above the ground floor")) if bays else "no repeated bays: the slab repeats"
     lines = [*(f"# {h}" for h in header),
              f"# size-independent grammar (wu2014 §5) extracted by citygen grammar extract, method {method}, "
              f"{result.iterations} iterations, seed {seed}",
-             f"# {int(index.X0.size)} terminals in {len(slabs) - 1} floor slabs; cost {cost:.1f} "
+             f"# {int(index.X0.size)} terminals in {len(slabs) - 1} floor slabs ({repeat}); cost {cost:.1f} "
              f"(split {model.split}, repeat {model.repeat}); {count} rules",
-             f"@size {W} {_num(layout.height)}"]
+             f"@size {_num(W)} {_num(layout.height)}"]
     text = "\n".join(lines) + "\n" + body
     return Extraction(text, text, cost, count, result.seconds, result.iterations, int(index.X0.size), method)
+
+
+def _row_body(key: tuple[str, ...], bays: Bays | None, width: float) -> str:
+    """A floor row: the whole slab repeated, or its margins at their input width around its repeated bays."""
+    if bays is None:
+        return f"repeat(x) {{ ~{_num(width)}: {key[0]} }}"
+    left, bay, right = key
+    if not left and not right:
+        return f"{bay}s"
+    items = ([f"{_num(bays.start)}: {left}"] if left else []) + [f"'1: {bay}s"] + (
+        [f"{_num(width - bays.end)}: {right}"] if right else [])
+    return f"split(x) {{ {' | '.join(items)} }}"
 
 
 def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: bool) -> list[str]:
@@ -254,15 +348,18 @@ def _selectors(sym: list[str]) -> str:
     return " | ".join(parts)
 
 
-def _entrance(door: str, row: str, width: float) -> str:
-    """``EntranceRow``: as many slab tiles as ``repeat`` would place (n = round(L / W)), the middle one with the
-    door, so the ground floor's tiles line up with the other floors' (for faces up to MAX_ALIGNED_WIDTH)."""
-    top = max(1, math.ceil(MAX_ALIGNED_WIDTH / width + 0.5))
-    alts = [f"case width < {_num(0.5 * width)}: {door}Narrow"]
+def _entrance(name: str, door: str, row: str, tile: float, narrow: str | None) -> str:
+    """``name``: as many tiles as ``repeat`` would place (n = round(L / tile)), the middle one ``door``, so the
+    ground floor's tiles line up with the other floors' (for faces up to MAX_ALIGNED_WIDTH); ``narrow`` below half
+    a tile."""
+    top = max(1, math.ceil(MAX_ALIGNED_WIDTH / tile + 0.5))
+    alts = [f"case width < {_num(0.5 * tile)}: {narrow}"] if narrow else []
     for n in range(1, top + 1):
         left = (n - 1) // 2
         right = n - 1 - left
         items = ([f"'{left}: {row}"] if left else []) + [f"'1: {door}"] + ([f"'{right}: {row}"] if right else [])
         body = door if n == 1 else f"split(x) {{ {' | '.join(items)} }}"
-        alts.append(body if n == top else f"case width < {_num((n + 0.5) * width)}: {body}")
-    return "EntranceRow --> " + "\n    ".join(alts[:-1]) + "\n    else: " + alts[-1]
+        alts.append(body if n == top else f"case width < {_num((n + 0.5) * tile)}: {body}")
+    if len(alts) == 1:
+        return f"{name} --> {alts[0]}"
+    return f"{name} --> " + "\n    ".join(alts[:-1]) + "\n    else: " + alts[-1]
