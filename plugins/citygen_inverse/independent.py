@@ -189,9 +189,9 @@ def _pieces(slabs: list[FacadeLayout], names: list[str], has_door: bool
             middle = door.x + 0.5 * door.w
             j = min(bisect_right(bays.cuts, middle) - 1, bays.count - 1)
             if not has_door:  # carved: into the middle bay
-                bay = _as_layout(bay.width, bay.height, _carve_door(
-                    clipped(slabs[1], bays.cuts[bays.count // 2], bays.cuts[bays.count // 2 + 1]).terminals(),
-                    bay.width, bay.height))
+                c = bays.count // 2
+                mid = clipped(slabs[1], bays.cuts[c], bays.cuts[c + 1])
+                bay = _as_layout(mid.width, mid.height, _carve_door(mid.terminals(), mid.width, mid.height))
             elif middle < bays.start or middle >= bays.end:
                 bay = left if middle < bays.start else right
             else:

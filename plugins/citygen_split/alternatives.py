@@ -6,7 +6,8 @@ derives with the first alternative everywhere (the plain semantics of docs/gramm
 plausibility findings (:func:`citygen.plausible.check_plausible`) or breaks the request
 (:func:`citygen.request.check_request`), it walks from each offending terminal up to the root and advances the
 deepest choice point on that path that has alternatives left (one fewer tile, the next holding branch, ...), and
-derives again, within a budget of derivations. A move is kept when it does not make the layout worse. Choice points
+derives again, within a budget of derivations. A move is kept when it does not make the layout worse (else the
+point's next alternative is tried; a point none of whose alternatives helps is left). Choice points
 are keyed by symbol and region size, so regions that derive alike keep deriving alike (a row of equal bays stays
 equal). If no layout within the budget is plausible, the result is :func:`citygen.plausible.plain_wall` with the
 findings of the best one, and the building's fallback chain takes over.
@@ -52,15 +53,18 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
         key = _next_point(current, tried)
         if key is None:
             break
-        trial = {**current.alternatives, key: current.alternatives.get(key, 0) + 1}
-        attempt = _attempt(grammar, request, trial, rules)
-        derivations += 1
-        if attempt.score <= current.score:
-            current = attempt
-            if attempt.score < best.score:
-                best = attempt
-        else:
+        k, moved = current.alternatives.get(key, 0), False
+        while k + 1 < current.points[key] and derivations < budget:  # the point's next alternative not worse
+            k += 1
+            attempt = _attempt(grammar, request, {**current.alternatives, key: k}, rules)
+            derivations += 1
+            if attempt.score <= current.score:
+                current, moved = attempt, True
+                break
+        if not moved:
             tried.add(key)
+        if current.score < best.score:
+            best = current
     if best.findings:
         layout = plain_wall(request, f"implausible layout: {summary(list(best.findings))}", best.findings,
                             kind=PLUGIN_ID, ruleset=grammar.source)

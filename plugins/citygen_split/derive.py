@@ -172,9 +172,11 @@ class _Derivation:
         if isinstance(body, Choice):
             n = len(body.alternatives)
             drawn = self.draw(rule.symbol, body)
-            order = [drawn, *(i for i in range(n + (body.otherwise is not None)) if i != drawn)]
-            k = order[self.alternative(rule.symbol, w, h, len(order)) if body.each else
-                      self.alternative(rule.symbol, 0.0, 0.0, len(order))]  # once per face: one choice point
+            # alternative 0: the drawn one; j > 0: alternative j - 1 (else last) for every region of the point
+            count = 1 + n + (body.otherwise is not None)
+            j = (self.alternative(rule.symbol, w, h, count) if body.each else
+                 self.alternative(rule.symbol, 0.0, 0.0, count))  # drawn once per face: one choice point
+            k = drawn if j == 0 else j - 1
             chosen = body.alternatives[k][1] if k < n else body.otherwise
             assert chosen is not None
             if not self.tracing:
