@@ -47,7 +47,7 @@ class Bays:
 def find_bays(slabs: Sequence[FacadeLayout], agree: float = 0.85) -> Bays | None:
     """The widest run of repeated bays common to all ``slabs`` (of one width), or None (module doc)."""
     width = float(slabs[0].width)
-    cuts = _pier_middles(slabs, width)
+    cuts, piers = _piers(slabs, width)
     m = len(cuts) - 1
     best: Bays | None = None
     rasters: dict[tuple[int, int], list[np.ndarray]] = {}
@@ -71,7 +71,8 @@ def find_bays(slabs: Sequence[FacadeLayout], agree: float = 0.85) -> Bays | None
                 k += 1
             cover = cuts[s + k * p] - cuts[s]
             if k >= 2 and cover >= MIN_COVER * width and (best is None or cover > best.end - best.start + 1e-9):
-                best = Bays(cuts[s], cuts[s + k * p], k, tuple(cuts[s:s + k * p + 1:p]))
+                start, end = _outer(cuts, piers, s, p, k)
+                best = Bays(start, end, k, (start, *cuts[s + p:s + k * p:p], end))
     return best
 
 
@@ -92,17 +93,35 @@ def clipped(layout: FacadeLayout, a: float, b: float) -> FacadeLayout:
     return FacadeLayout(b - a, layout.height, Region(0.0, 0.0, b - a, layout.height, "Slab", children=tuple(ts)))
 
 
-def _pier_middles(slabs: Sequence[FacadeLayout], width: float) -> list[float]:
-    """0, the middle of every pier, and ``width``."""
+def _piers(slabs: Sequence[FacadeLayout], width: float) -> tuple[list[float], list[tuple[float, float]]]:
+    """Bay boundary candidates: 0, the middle of every pier and ``width``; and the pier (free x interval) each lies
+    in."""
     kept = sorted((t.x, t.x + t.w) for s in slabs for t in s.terminals()
                   if (t.label or "") not in CUTTABLE or (t.label == "balcony" and t.w <= BAND_SHARE * width))
-    cuts, x = [0.0], 0.0
+    cuts, piers, x = [0.0], [(0.0, 0.0)], 0.0
     for a, b in kept:
-        if a > x + 1e-9 and x > 1e-9:
-            cuts.append(0.5 * (x + a))
+        if a > x + 1e-9:
+            if x > 1e-9:
+                cuts.append(0.5 * (x + a))
+                piers.append((x, a))
+            else:
+                piers[0] = (0.0, a)
         x = max(x, b)
     cuts.append(width)
-    return sorted(set(cuts))
+    piers.append((x, width) if x < width - 1e-9 else (width, width))
+    return cuts, piers
+
+
+def _outer(cuts: list[float], piers: list[tuple[float, float]], s: int, p: int, k: int) -> tuple[float, float]:
+    """The run's outer boundaries: a bay's width (the median of the inner bays, else the wider end bay) away from
+    the first and last inner boundary, within the end piers (pier middles make the end bays short where the run
+    ends at a pilaster or a margin: their pier is only half a bay's)."""
+    widths = [cuts[s + (i + 1) * p] - cuts[s + i * p] for i in range(k)]
+    tile = float(np.median(widths[1:-1])) if k > 2 else max(widths)
+    lo, hi = piers[s], piers[s + k * p]
+    start = min(max(cuts[s + p] - tile, lo[0]), lo[1]) if lo[1] > lo[0] else cuts[s]
+    end = min(max(cuts[s + (k - 1) * p] + tile, hi[0]), hi[1]) if hi[1] > hi[0] else cuts[s + k * p]
+    return start, end
 
 
 def _raster(slab: FacadeLayout, a: float, b: float) -> np.ndarray:

@@ -35,6 +35,7 @@ from citygen_inverse.actions import CostModel
 from citygen_inverse.bays import Bays, clipped, crosses, find_bays
 from citygen_inverse.emit import GrammarWriter, _num
 from citygen_inverse.extract import Extraction
+from citygen_inverse.pinwheels import open_pinwheels
 from citygen_inverse.regions import LayoutIndex
 from citygen_inverse.search import GrammarSearch
 
@@ -101,22 +102,33 @@ def _no_doors(ts: list[Region], keep: Region | None = None) -> list[Region]:
 #: the door stays a door (>= 1.9 m) on any ground floor of 2.4 m or more whatever the input slab's height.
 DOOR_WIDTH = 1.2
 DOOR_SHARE = 0.8
+#: An input door at least this share of the ground slab tall keeps its height.
+DOOR_TALL = 0.7
 
 
 def _with_door(ts: list[Region], width: float, height: float) -> list[Region]:
-    """The ground slab with exactly one door: the input's largest (most central on ties), else one carved
-    (:func:`_carve_door`)."""
+    """The ground slab with exactly one door standing on the ground: the input's largest (most central on ties),
+    reaching down to the ground and, when lower than ``DOOR_TALL`` of the slab, up to ``DOOR_SHARE`` of it where no
+    opening is in the way (a CMP door
+    above steps, or 2 m tall in a 6 m ground floor, was a floating door or a hatch at 3-4 m ground floors); else
+    one carved (:func:`_carve_door`)."""
     doors = [t for t in ts if t.label == "door"]
-    if doors:
-        main = max(doors, key=lambda t: (round(t.w * t.h, 9), -abs(t.x + 0.5 * t.w - 0.5 * width)))
-        return _no_doors(ts, keep=main)
-    return _carve_door(ts, width, height)
+    if not doors:
+        return _carve_door(ts, width, height)
+    main = max(doors, key=lambda t: (round(t.w * t.h, 9), -abs(t.x + 0.5 * t.w - 0.5 * width)))
+    ts = _no_doors(ts, keep=main)
+    top = main.y + main.h
+    above = [t.y for t in ts if t.label in OPENING_LABELS and t is not main and t.y >= top - 1e-9
+             and t.x < main.x + main.w - 1e-9 and t.x + t.w > main.x + 1e-9]
+    if top < DOOR_TALL * height:
+        top = max(top, min([DOOR_SHARE * height, *above]))
+    return _carve(ts, replace(main, y=0.0, h=top)) if main.y > 0 or top > main.y + main.h else ts
 
 
 def _carve_door(ts: list[Region], width: float, height: float) -> list[Region]:
     """A door ``DOOR_WIDTH`` wide and ``DOOR_SHARE`` of the slab tall, standing on the ground, where it covers
     the least of the slab's openings and leaves no terminal pieces thinner than 0.15 m (nearest the middle on
-    ties); the terminals it covers are cut around it (the slab stays a partition)."""
+    ties)."""
     dw, dh = min(DOOR_WIDTH, 0.5 * width), DOOR_SHARE * height
     edges = sorted({e for t in ts for e in (t.x, t.x + t.w)})
     starts = {min(max(x, 0.0), width - dw) for e in edges for x in (e, e - dw)} | {0.5 * (width - dw)}
@@ -132,14 +144,23 @@ def _carve_door(ts: list[Region], width: float, height: float) -> list[Region]:
         return (round(covered, 6), thin, abs(x + 0.5 * dw - 0.5 * width))
 
     dx = min(sorted(starts), key=score)
-    out = [Region(dx, 0.0, dw, dh, "Door", "door", depth=-0.3)]
+    return _carve(ts, Region(dx, 0.0, dw, dh, "Door", "door", depth=-0.3))
+
+
+def _carve(ts: list[Region], door: Region) -> list[Region]:
+    """``door`` (standing on the ground) placed over ``ts``: the terminals it covers are cut around it (left,
+    right and above; a terminal inside it, such as the door it replaces, vanishes), so the slab stays a
+    partition."""
+    dx, dw, dh = door.x, door.w, door.h
+    out = [door]
     for t in ts:
         if not (t.x < dx + dw - 1e-9 and t.x + t.w > dx + 1e-9 and t.y < dh - 1e-9):
             out.append(t)
             continue
         a, b = max(t.x, dx), min(t.x + t.w, dx + dw)
+        top = max(t.y, dh)
         pieces = [replace(t, w=a - t.x), replace(t, x=b, w=t.x + t.w - b),
-                  replace(t, x=a, y=dh, w=b - a, h=t.y + t.h - dh)]
+                  replace(t, x=a, y=top, w=b - a, h=t.y + t.h - top)]
         out += [p for p in pieces if p.w > 1e-9 and p.h > 1e-9]
     return out
 
@@ -172,7 +193,7 @@ def _pieces(slabs: list[FacadeLayout], names: list[str], has_door: bool
     door variant is then its door's piece (a bay, or a margin): ``GroundDoorBay``, ``GroundDoorLeft``, ..."""
     uppers = slabs[2:]
     bays = find_bays([slabs[1], *uppers]) if uppers else find_bays(slabs[1:2])
-    ground = bays is not None and not crosses(bays, slabs[0], DOOR_LABELS)
+    ground = bays is not None and not (has_door and crosses(bays, slabs[0], DOOR_LABELS))  # else carved in a bay
     if bays is None and uppers:
         bays = find_bays(uppers)
     pieces: list[tuple[str, FacadeLayout]] = []
@@ -220,7 +241,7 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
     """
     slabs, names = slab_layouts(layout)
     bays, ground_bays, pieces, parts = _pieces(slabs, names, layout.count("door") > 0)
-    index = LayoutIndex([piece for _, piece in pieces])
+    index = LayoutIndex([open_pinwheels(piece) for _, piece in pieces])
     result = GrammarSearch(index, model).run(method, iterations, seed, time_limit)
     piece_names = [name for name, _ in pieces]
     reserved = {f"{n}{suffix}" for n in names for suffix in ("Row", "Bays", "Narrow", "Pane", "Opening")}

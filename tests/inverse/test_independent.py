@@ -239,3 +239,84 @@ def test_a_carved_door_is_a_door_on_any_ground_floor(ground):
     doors = [t for t in out.terminals() if t.label == "door"]
     assert len(doors) == 1 and doors[0].y == 0 and doors[0].h >= 1.9
     assert not any(t.label == "shop" and t.w < 0.8 for t in out.terminals())  # no shop cut into a sliver
+
+
+# ---- issue 21: bays repeat, not the whole facade; pinwheels opened ------------------------------------------
+def _pilastered_facade(bays=4, floors=3):
+    """Pilasters 0.6 m at both ends, ``bays`` bays of 2.5 m (wall | window 1.2 m | wall), a ground floor of
+    shop bays, string courses across the whole width."""
+    W = 1.2 + 2.5 * bays
+    ts = [Region(0, 0, 0.6, 3.5 + 3 * floors, "P", "pillar", depth=0.1),
+          Region(W - 0.6, 0, 0.6, 3.5 + 3 * floors, "P", "pillar", depth=0.1)]
+    for b in range(bays):
+        x = 0.6 + 2.5 * b
+        ts += [Region(x, 0, 0.4, 3.5, "W", "wall"), Region(x + 0.4, 0, 1.7, 2.8, "S", "shop"),
+               Region(x + 0.4, 2.8, 1.7, 0.7, "W", "wall"), Region(x + 2.1, 0, 0.4, 3.5, "W", "wall")]
+    for f in range(floors):
+        y = 3.5 + 3 * f
+        ts += [Region(0.6, y, W - 1.2, 0.2, "C", "molding", depth=0.05)]
+        for b in range(bays):
+            x = 0.6 + 2.5 * b
+            ts += [Region(x, y + 0.2, 0.65, 2.8, "W", "wall"), Region(x + 0.65, y + 0.2, 1.2, 0.8, "W", "wall"),
+                   Region(x + 0.65, y + 1.0, 1.2, 1.5, "N", "window", depth=-0.25),
+                   Region(x + 0.65, y + 2.5, 1.2, 0.5, "W", "wall"), Region(x + 1.85, y + 0.2, 0.65, 2.8, "W", "wall")]
+    H = 3.5 + 3 * floors
+    return FacadeLayout(W, H, Region(0, 0, W, H, "F", children=tuple(ts)))
+
+
+def test_bays_are_found_between_the_pilasters():
+    from citygen_inverse.bays import find_bays
+    slabs, _ = slab_layouts(_pilastered_facade())
+    bays = find_bays(slabs[1:])
+    assert bays.count == 4 and bays.start == pytest.approx(0.6) and bays.tile == pytest.approx(2.5)
+
+
+@pytest.mark.parametrize("factor", [1.7, 2.0, 3.0])
+def test_a_wider_face_repeats_the_bays_not_the_whole_facade(factor):
+    """Regression (issue 21): at 1.7x its width the whole facade was duplicated side by side, with its pilasters
+    in the middle (a seam); now the pilasters stay at the ends and the bays repeat between them."""
+    layout = _pilastered_facade()
+    text = extract_size_independent(layout, "greedy").text
+    assert "4 bays of 2.50 m" in text
+    g = citygen_split.parse(text, "pilasters")
+    req = FacadeRequest.preview(factor * layout.width, layout.height, floor_height=3.0, ground_height=3.5)
+    out = citygen_split.derive(g, req)
+    assert check_partition(out) == [] and check_request(out, req) == []
+    pillars = {round(t.x, 6) for t in out.terminals() if t.label == "pillar"}
+    assert pillars == {0.0, round(req.width - 0.6, 6)}
+    windows = [t for t in out.terminals() if t.label == "window"]
+    bays = round((req.width - 1.2) / 2.5)
+    assert len(windows) == 3 * bays
+    assert all(abs(t.w - 1.2 * (req.width - 1.2) / bays / 2.5) < 1e-6 for t in windows)
+
+
+def test_a_door_lands_in_the_middle_bay_and_the_ground_floor_keeps_the_bays():
+    layout = _pilastered_facade()
+    g = citygen_split.parse(extract_size_independent(layout, "greedy").text, "pilasters")
+    req = FacadeRequest.preview(2 * layout.width, layout.height, floor_height=3.0, ground_height=3.5)
+    out = citygen_split.derive(g, req)
+    doors = [t for t in out.terminals() if t.label == "door"]
+    assert len(doors) == 1 and doors[0].h >= 1.9 and doors[0].y == 0
+    assert abs(doors[0].x + 0.5 * doors[0].w - 0.5 * req.width) < 2.5  # in a middle bay
+
+
+def test_pinwheels_are_opened_where_walls_allow_and_keep_the_label_map():
+    """Issue 21: 26 of 78 ADP grammars held grid rules, 8 of them of 67-133 items. A pinwheel of walls around
+    a window is cut open (walls cut in two); the label map is unchanged."""
+    from citygen_inverse.pinwheels import open_pinwheels
+    ts = (Region(0, 0, 2, 1, "a", "wall"), Region(2, 0, 1, 2, "b", "wall"), Region(1, 2, 2, 1, "c", "wall"),
+          Region(0, 1, 1, 2, "d", "wall"), Region(1, 1, 1, 1, "e", "window"))
+    layout = FacadeLayout(3, 3, Region(0, 0, 3, 3, "F", children=ts))
+    assert "grid" in extract_grammar(layout, "greedy").text
+    opened = open_pinwheels(layout)
+    assert check_partition(opened) == [] and "grid" not in extract_grammar(opened, "greedy").text
+    for layout_ in (layout, random_layout(np.random.default_rng(3), pinwheel=0.5)):
+        opened = open_pinwheels(layout_)
+        assert check_partition(opened) == []
+        for px in np.linspace(0.05, layout_.width - 0.05, 23):
+            for py in np.linspace(0.05, layout_.height - 0.05, 19):
+                assert _label_at(opened, px, py) == _label_at(layout_, px, py)
+
+
+def _label_at(layout, x, y):
+    return next(t.label for t in layout.terminals() if t.x <= x < t.x + t.w and t.y <= y < t.y + t.h)
