@@ -6,8 +6,9 @@ derives with the first alternative everywhere (the plain semantics of docs/gramm
 plausibility findings (:func:`citygen.plausible.check_plausible`) or breaks the request
 (:func:`citygen.request.check_request`), it walks from each offending terminal up to the root and advances the
 deepest choice point on that path that has alternatives left (one fewer tile, the next holding branch, ...), and
-derives again, within a budget of derivations. A move is kept when it does not make the layout worse (else the
-point's next alternative is tried; a point none of whose alternatives helps is left). Choice points
+derives again, within a budget of derivations. A move is kept when it makes the layout better (fewer request
+problems, else fewer offending terminals); else the point's next alternatives are tried (the next three and its
+last, e.g. the fewest tiles), and a point none of whose alternatives helps is left for the next point up. Choice points
 are keyed by symbol and region size, so regions that derive alike keep deriving alike (a row of equal bays stays
 equal). If no layout within the budget is plausible, the result is :func:`citygen.plausible.plain_wall` with the
 findings of the best one, and the building's fallback chain takes over.
@@ -54,11 +55,13 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
         if key is None:
             break
         k, moved = current.alternatives.get(key, 0), False
-        while k + 1 < current.points[key] and derivations < budget:  # the point's next alternative not worse
-            k += 1
-            attempt = _attempt(grammar, request, {**current.alternatives, key: k}, rules)
+        count = current.points[key]
+        for j in dict.fromkeys(min(j, count - 1) for j in (k + 1, k + 2, k + 3, count - 1)):
+            if derivations >= budget:
+                break
+            attempt = _attempt(grammar, request, {**current.alternatives, key: j}, rules)
             derivations += 1
-            if attempt.score <= current.score:
+            if attempt.score < current.score:
                 current, moved = attempt, True
                 break
         if not moved:
@@ -86,7 +89,11 @@ class _Attempt:
 
     @property
     def score(self) -> tuple[int, int]:
-        return (len(self.problems), len(self.findings))
+        """(request problems, offending terminals): a finding is one terminal, a summary line
+        ("... and N more", :func:`citygen.plausible.check_plausible`) N of them."""
+        more = sum(int(f.message.split()[2]) for f in self.findings
+                   if f.region is None and f.message.startswith("... and "))
+        return (len(self.problems), len(self.findings) + more)
 
 
 def _attempt(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int],
