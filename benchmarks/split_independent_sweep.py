@@ -74,13 +74,14 @@ def main() -> int:
                     outcome, reasons = facade_outcome(out, req)
                     counts[mode][outcome] += 1
                     if outcome != "dressed":
-                        codes[mode].update({r.split(":")[0] for r in reasons if ":" in r})
+                        codes[mode].update({" ".join(r.split()[:2]).rstrip(":") for r in reasons[1:] or reasons
+                                            if ":" in r and not r.split(":")[1].startswith(" ...")})
     cases = len(files) * len(FACTORS) ** 2
     print(f"{len(files)} facades x {len(FACTORS) ** 2} sizes = {cases} cases, {time.perf_counter() - start:.0f} s")
     for mode in counts:
         if counts[mode]:
             print(f"{mode:>9}: " + ", ".join(f"{k} {v}" for k, v in counts[mode].most_common()) + "  | codes: "
-                  + ", ".join(f"{k} {v}" for k, v in codes[mode].most_common(6)))
+                  + ", ".join(f"{k} {v}" for k, v in codes[mode].most_common(8)))
     with_grid = [g for g in grids if g]
     print(f"grid rules: in {len(with_grid)} of {len(grids)} grammars; largest "
           f"{sorted((max(g) for g in with_grid), reverse=True)[:8]} items")

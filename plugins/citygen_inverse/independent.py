@@ -42,7 +42,7 @@ from citygen_inverse.search import GrammarSearch
 ROW_LABELS = frozenset({"window", "door", "shop"})
 #: Faces up to this width (metres) keep the entrance tile aligned with the tiles of the other floors.
 MAX_ALIGNED_WIDTH = 100.0
-_RESERVED = frozenset({"Facade", "GroundFloor", "EntranceRow", "EntranceBays", "NarrowWall"})
+_RESERVED = frozenset({"Facade", "GroundFloor", "EntranceRow", "EntranceBays", "EntranceTiles", "NarrowWall"})
 #: Labels a bay boundary through the ground slab must not cut.
 DOOR_LABELS = frozenset({"door", "shop", "window"})
 EPS = 1e-9
@@ -272,7 +272,7 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
         least = bays.start + W - bays.end + 0.75 * bays.tile
         if where == "Bay":
             middle = "'1: EntranceBays"
-            rules.append(_entrance("EntranceBays", door, f"{ground[1]}s", bays.tile, narrow=None))
+            rules.append(_entrance("EntranceBays", door, f"{ground[1]}s", bays.tile))
         else:
             middle = f"'1: {ground[1]}s"
         items = [f"{_num(bays.start)}: {door if where == 'Left' else ground[0]}" if ground[0] or where == "Left"
@@ -282,7 +282,8 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
         rules.append(f"EntranceRow --> case width >= {_num(least)}: split(x) {{ {' | '.join(i for i in items if i)} }}"
                      f"\n    else: {names[0]}Narrow")
     else:
-        rules.append(_entrance("EntranceRow", door, f"{row[1]}Row", W, narrow=f"{names[0]}Narrow"))
+        rules.append(f"EntranceRow --> case width >= {_num(0.5 * W)}: EntranceTiles\n    else: {names[0]}Narrow")
+        rules.append(_entrance("EntranceTiles", door, f"{row[1]}Row", W))
     narrow += _narrow(names[0], slabs[0], frozenset({"door"}), entrance=True)
     lines_ = list(dict.fromkeys(rules + writer.rule_lines("linear") + narrow))
     body = "\n".join(_merge_identical(lines_)) + "\n"
@@ -316,8 +317,9 @@ def _row_body(key: tuple[str, ...], bays: Bays | None, width: float) -> str:
 def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: bool) -> list[str]:
     """``<name>Narrow``: the slab on a face narrower than half its tile, where squeezing the tile would give
     slivers of windows: plain wall with the slab's most common opening of ``labels`` once in the middle at its
-    input size (input height profile kept), or wall alone when the face cannot hold it. The entrance variant
-    always has its door, narrowed with the face when needed."""
+    input size (input height profile kept), or wall alone when the face cannot hold it (also the alternative the
+    generator takes when the opening is implausible there). The entrance variant always has its door, narrowed
+    with the face when needed."""
     ts = [t for t in slab.terminals() if t.label in labels]
     if not ts:
         return [f"{name}Narrow --> NarrowWall", "NarrowWall --> terminal(wall)"]
@@ -331,7 +333,7 @@ def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: boo
         small, least = f"split(x) {{ '1: NarrowWall | '8: {name}Pane | '1: NarrowWall }}", t.w + 0.4
     else:  # a window needs piers beside it: at least 0.8 m and its own width of wall in all
         small, least = "NarrowWall", max(t.w + 0.8, 2 * t.w)
-    return [f"{name}Narrow --> case width < {_num(least)}: {small}\n    else: {fits}",
+    return [f"{name}Narrow --> case width >= {_num(least)}: {fits}\n    else: {small}",
             f"{name}Pane --> split(y) {{ {pane} }}",
             f"{name}Opening --> terminal({t.label}{depth})",
             "NarrowWall --> terminal(wall)"]
@@ -369,12 +371,11 @@ def _selectors(sym: list[str]) -> str:
     return " | ".join(parts)
 
 
-def _entrance(name: str, door: str, row: str, tile: float, narrow: str | None) -> str:
+def _entrance(name: str, door: str, row: str, tile: float) -> str:
     """``name``: as many tiles as ``repeat`` would place (n = round(L / tile)), the middle one ``door``, so the
-    ground floor's tiles line up with the other floors' (for faces up to MAX_ALIGNED_WIDTH); ``narrow`` below half
-    a tile."""
+    ground floor's tiles line up with the other floors' (for faces up to MAX_ALIGNED_WIDTH)."""
     top = max(1, math.ceil(MAX_ALIGNED_WIDTH / tile + 0.5))
-    alts = [f"case width < {_num(0.5 * tile)}: {narrow}"] if narrow else []
+    alts: list[str] = []
     for n in range(1, top + 1):
         left = (n - 1) // 2
         right = n - 1 - left
