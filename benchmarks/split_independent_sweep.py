@@ -6,8 +6,8 @@ broken but reported as dressed (issue 21).
 Per facade (every S-th CMP base facade, at most K): import, extract the ``--size-independent`` grammar, derive it
 through the split kind (``generate``: alternatives tried, else plain wall) at width and height factors
 0.5, 0.65, 0.8, 1, 1.25, 1.5, 1.7, 2 (3 m storeys, 4 m ground floor, entrance), each case classified as
-``citygen facade`` does. Prints the outcome counts, the most common finding codes, the grid rules in the grammars
-and, with ``--plain``, the counts of the plain derivation (no alternatives: what the generator did before).
+``citygen facade`` does. Prints the outcome counts, the most common finding codes and labels, how many facades
+have repeated bays, the grid rules in the grammars and, with ``--plain``, the counts of the plain derivation (no alternatives: what the generator did before).
 Skips cleanly when the shared data is absent.
 """
 from __future__ import annotations
@@ -55,11 +55,12 @@ def main() -> int:
     kind = default_registry().ruleset_kind("split")
     counts: dict[str, Counter] = {"generate": Counter(), "plain": Counter()}
     codes: dict[str, Counter] = {"generate": Counter(), "plain": Counter()}
-    grids, start = [], time.perf_counter()
+    grids, with_bays, start = [], 0, time.perf_counter()
     for path in files:
         layout = import_cmp(path)
         result = extract_size_independent(layout, args.method, args.iterations)
         grids.append(grid_items(result.text))
+        with_bays += " bays of " in result.text.split("@size")[0]
         grammar = citygen_split.parse(result.text, path.name)
         for fw in FACTORS:
             for fh in FACTORS:
@@ -82,6 +83,7 @@ def main() -> int:
         if counts[mode]:
             print(f"{mode:>9}: " + ", ".join(f"{k} {v}" for k, v in counts[mode].most_common()) + "  | codes: "
                   + ", ".join(f"{k} {v}" for k, v in codes[mode].most_common(8)))
+    print(f"repeated bays found in {with_bays} of {len(files)} facades")
     with_grid = [g for g in grids if g]
     print(f"grid rules: in {len(with_grid)} of {len(grids)} grammars; largest "
           f"{sorted((max(g) for g in with_grid), reverse=True)[:8]} items")
