@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 import citygen_split
 from citygen.coordinator import plan_floor_lines
 from citygen.layout import FacadeLayout, Region, check_partition
+from citygen.plausible import check_plausible
 from citygen.request import FaceContext, FacadeRequest, check_request
 from citygen.scene import Defaults
 from citygen_inverse.cmp import import_cmp
@@ -320,3 +321,17 @@ def test_pinwheels_are_opened_where_walls_allow_and_keep_the_label_map():
 
 def _label_at(layout, x, y):
     return next(t.label for t in layout.terminals() if t.x <= x < t.x + t.w and t.y <= y < t.y + t.h)
+
+
+@pytest.mark.parametrize("factor", [0.8, 1.0, 1.3])
+def test_no_storey_loses_its_windows_at_other_heights(factor):
+    """Regression (issue 21): cmp_b0009's three pillared window storeys were one slab given to one building
+    storey (the other storeys took other slabs), squeezed to 0.14 m balconies and 0.3 m windows."""
+    layout = cmp_layout("cmp_b0009")
+    g = citygen_split.parse(extract_size_independent(layout, "greedy").text, "b0009")
+    req = FacadeRequest.preview(layout.width, factor * layout.height, floor_height=3.0, ground_height=4.0)
+    out = citygen_split.derive(g, req)
+    lines = req.floor_lines
+    for lo, hi in zip(lines[1:], lines[2:]):
+        assert any(t.label == "window" and lo - 1e-9 <= t.y < hi for t in out.terminals()), (lo, hi)
+    assert check_plausible(out, req) == []

@@ -100,3 +100,13 @@ def _loaded(path: Path):
     if path not in _GRAMMARS:
         _GRAMMARS[path] = load(path)
     return _GRAMMARS[path]
+
+
+def test_cmp_b0002_at_5_5_x_7_has_no_slivers_of_windows_or_balconies():
+    """Regression (issue 21): the extracted cmp_b0002.grammar gave windows 0.19 m wide and balcony slivers
+    0.06-0.23 m wide at 5.5 x 7 m, reported as dressed."""
+    g = _loaded(REPO / "rulesets" / "cmp_b0002.grammar")
+    req = sweep_request(5.5, 7.0, 3.0)
+    layout = KIND.generate(g, req)
+    assert facade_outcome(layout, req)[0] == "dressed"
+    assert all(t.w >= 0.3 for t in layout.terminals() if t.label in ("window", "balcony"))
