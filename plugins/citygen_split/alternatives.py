@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from citygen.entrance import enforce_entrance
 from citygen.layout import FacadeLayout, Region
 from citygen.plausible import DEFAULT_RULES, Finding, PlausibilityRules, check_plausible, plain_wall, summary
 from citygen.request import FacadeRequest, check_request
@@ -42,7 +43,8 @@ class Outcome:
 def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUDGET,
                      rules: PlausibilityRules = DEFAULT_RULES) -> Outcome:
     """The first plausible layout of ``grammar`` on ``request`` found by advancing choice points (module doc); a
-    plain wall (``meta["fallback"]``) when none is found within ``budget`` derivations. A layout whose only
+    plain wall (``meta["fallback"]``, with the entrance's door when the face has one) when none is found within
+    ``budget`` derivations. A layout whose only
     problems are request problems it cannot avoid (e.g. a grammar without a door on the entrance face) is returned
     as it is: the builder repairs the entrance."""
     chosen: dict[PointKey, int] = {}
@@ -69,8 +71,8 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
         if current.score < best.score:
             best = current
     if best.findings:
-        layout = plain_wall(request, f"implausible layout: {summary(list(best.findings))}", best.findings,
-                            kind=PLUGIN_ID, ruleset=grammar.source)
+        layout, _ = enforce_entrance(plain_wall(request, f"implausible layout: {summary(list(best.findings))}",
+                                                best.findings, kind=PLUGIN_ID, ruleset=grammar.source), request)
         return Outcome(layout, best.alternatives, derivations, tuple(best.findings), best.problems)
     layout = best.layout
     if best.alternatives:
