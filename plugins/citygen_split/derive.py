@@ -31,20 +31,35 @@ MAX_DEPTH = 200
 MAX_REGIONS = 500_000
 
 
-def derive(grammar: Grammar, request: FacadeRequest) -> FacadeLayout:
-    """The layout of ``grammar`` on ``request``'s face (see docs/grammar.md for the semantics)."""
-    return _Derivation(grammar, request).run()
+#: A choice point of a derivation: the rule's symbol and the region's size (regions of one symbol and size choose
+#: alike, so the translation cache stays valid).
+PointKey = tuple[str, float, float]
 
 
-def explain(grammar: Grammar, request: FacadeRequest) -> str:
+def point_key(symbol: str, w: float, h: float) -> PointKey:
+    return (symbol, round(w, 6), round(h, 6))
+
+
+def derive(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None) -> FacadeLayout:
+    """The layout of ``grammar`` on ``request``'s face (see docs/grammar.md for the semantics).
+
+    ``alternatives`` picks, per choice point, which alternative to take instead of the first (0): the k-th
+    holding branch of a ``case`` (``else`` last), k fewer tiles of a ``repeat`` / ``repeatABA``, the k-th other
+    alternative of a stochastic rule (see :mod:`citygen_split.alternatives`).
+    """
+    return _Derivation(grammar, request, alternatives=alternatives).run()
+
+
+def explain(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None) -> str:
     """The derivation tree as indented text: symbol, size, position and the rule applied."""
-    derivation = _Derivation(grammar, request, trace=True)
+    derivation = _Derivation(grammar, request, trace=True, alternatives=alternatives)
     derivation.run()
     return "\n".join(derivation.trace)
 
 
 class _Derivation:
-    def __init__(self, grammar: Grammar, request: FacadeRequest, trace: bool = False) -> None:
+    def __init__(self, grammar: Grammar, request: FacadeRequest, trace: bool = False,
+                 alternatives: dict[PointKey, int] | None = None) -> None:
         if not (request.width > 0 and request.height > 0):
             raise RulesetError(f"facade size {request.width} x {request.height} is not positive", plugin=PLUGIN_ID)
         self.grammar = grammar
@@ -66,6 +81,9 @@ class _Derivation:
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
+        self.alternatives = alternatives or {}
+        #: Choice points met: key -> number of alternatives (the first included).
+        self.points: dict[PointKey, int] = {}
 
     def run(self) -> FacadeLayout:
         r = self.request
@@ -139,15 +157,26 @@ class _Derivation:
         body = rule.body
         if isinstance(body, Case):
             env = {**self.face, "width": w, "height": h, "floor": floor}
-            for k, (cond, branch) in enumerate(body.branches):
-                if evaluate(cond, env, self.attributes, rule.symbol):
-                    return branch, (f"case {k + 1}: {_describe(branch)}" if self.tracing else "")
+            holds = (k for k, (cond, _) in enumerate(body.branches)
+                     if evaluate(cond, env, self.attributes, rule.symbol))
+            k = next(holds, len(body.branches))
+            later = len(body.branches) - k - 1 + (body.otherwise is not None)  # at most this many alternatives
+            for _ in range(self.alternative(rule.symbol, w, h, 1 + max(later, 0)) if later > 0 else 0):
+                k = next(holds, len(body.branches))  # the next holding branch, else ``else``
+            if k < len(body.branches):
+                branch = body.branches[k][1]
+                return branch, (f"case {k + 1}: {_describe(branch)}" if self.tracing else "")
             if body.otherwise is not None:
                 return body.otherwise, (f"else: {_describe(body.otherwise)}" if self.tracing else "")
             return _WALL, "no case holds and no else: wall"
         if isinstance(body, Choice):
-            k = self.draw(rule.symbol, body)
             n = len(body.alternatives)
+            drawn = self.draw(rule.symbol, body)
+            # alternative 0: the drawn one; j > 0: alternative j - 1 (else last) for every region of the point
+            count = 1 + n + (body.otherwise is not None)
+            j = (self.alternative(rule.symbol, w, h, count) if body.each else
+                 self.alternative(rule.symbol, 0.0, 0.0, count))  # drawn once per face: one choice point
+            k = drawn if j == 0 else j - 1
             chosen = body.alternatives[k][1] if k < n else body.otherwise
             assert chosen is not None
             if not self.tracing:
@@ -155,6 +184,14 @@ class _Derivation:
             label = f"{body.alternatives[k][0]:g}%" if k < n else "else"
             return chosen, f"{'each ' if body.each else ''}choice {label}: {_describe(chosen)}"
         return body, (_describe(body) if self.tracing else "")
+
+    def alternative(self, symbol: str, w: float, h: float, count: int) -> int:
+        """Which of ``count`` alternatives the choice point of ``symbol`` on a ``w x h`` region takes."""
+        if count < 2:
+            return 0
+        key = point_key(symbol, w, h)
+        self.points[key] = count
+        return min(self.alternatives.get(key, 0), count - 1)
 
     def draw(self, symbol: str, body: Choice) -> int:
         """Index of the alternative (len(alternatives) = else): once per symbol per face, or per region."""
@@ -189,11 +226,13 @@ class _Derivation:
             sizes = [i.size for i in body.items]
             self.check_tiles(rule, preferred_length(sizes), length)
             n = repeat_count(preferred_length(sizes), length)
+            n -= self.alternative(rule.symbol, w, h, n)
             extents = resolve(sizes, length / n) * n
             items: Sequence[Item] = body.items * n
         elif isinstance(body, RepeatABA):
             self.check_tiles(rule, preferred_length([body.a.size, body.b.size]), length)
             n = aba_count(preferred_length([body.a.size]), preferred_length([body.b.size]), length)
+            n -= self.alternative(rule.symbol, w, h, n + 1)
             items = [body.a, body.b] * n + [body.a]
             extents = resolve([i.size for i in items], length)
         elif isinstance(body, SymSplit):

@@ -7,8 +7,9 @@ from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
 from citygen.registry import RulesetKind
 from citygen.request import FacadeRequest
+from citygen_split.alternatives import derive_plausible
 from citygen_split.ast import Grammar
-from citygen_split.derive import derive, explain
+from citygen_split.derive import explain
 from citygen_split.parser import load
 
 
@@ -23,10 +24,17 @@ class SplitGrammarKind(RulesetKind):
         return load(path)
 
     def generate(self, ruleset: Grammar, request: FacadeRequest) -> FacadeLayout:
-        return derive(ruleset, request)
+        """The grammar's first plausible derivation, else a plain wall with findings
+        (:mod:`citygen_split.alternatives`)."""
+        return derive_plausible(ruleset, request).layout
 
     def explain(self, ruleset: Grammar, request: FacadeRequest) -> str:
-        return explain(ruleset, request)
+        outcome = derive_plausible(ruleset, request)
+        head = [f"# {len(outcome.alternatives)} choice point(s) moved to other alternatives in "
+                f"{outcome.derivations} derivations"] if outcome.derivations > 1 else []
+        if outcome.findings:
+            head.append(f"# no plausible derivation: plain wall ({outcome.layout.meta['fallback']})")
+        return "\n".join([*head, explain(ruleset, request, outcome.alternatives)])
 
 
 @hookimpl
