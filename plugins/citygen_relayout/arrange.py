@@ -191,7 +191,23 @@ class _Layout:
         if self.node.door is not None and self._doors() * mult != self.node.door:
             self.ctx.blame("entrance door budget of the face")
             return False
+        if self._empty_floor():
+            self.ctx.blame("every storey gets an opening")
+            return False
         return bool(self.st.elems)
+
+    def _empty_floor(self) -> bool:
+        """Whether a y-arrangement that puts its openings in floors leaves a floor it could hold one in (it covers
+        at least the smallest opening-bearing child) without any: a storey without windows is not a storey."""
+        taken = {k for k in self.st.floor if k is not None}
+        if self.axis != "y" or self.floors is None or not taken:
+            return False
+        opening = self.ctx.compiled.opening
+        least = min((self.min_size[s] for s, _ in self.st.elems if opening[s]), default=0.0)
+        lines, (k0, k1) = self.ctx.floor_lines, self.floors
+        a, b = self.off, self.off + self.total
+        return any(k not in taken and min(b, lines[k + 1]) - max(a, lines[k]) >= least - 1e-9
+                   for k in range(k0, k1 + 1))
 
     def _order(self, cands: list) -> list:
         """Stochastic order of the successor set: ⊣ is favoured once the sampled sizes fill the region."""
