@@ -200,9 +200,10 @@ class _Layout:
         """Whether a y-arrangement that puts its openings in floors leaves a floor it could hold one in (it covers
         at least the smallest opening-bearing child) without any: a storey without windows is not a storey."""
         taken = {k for k in self.st.floor if k is not None}
-        if self.axis != "y" or self.floors is None or not taken:
-            return False
         opening = self.ctx.compiled.opening
+        if self.axis != "y" or self.floors is None or not taken \
+                or any(k is None and opening[s] for k, (s, _) in zip(self.st.floor, self.st.elems)):
+            return False  # an opening-bearing element spanning floors places its openings itself
         least = min((self.min_size[s] for s, _ in self.st.elems if opening[s]), default=0.0)
         lines, (k0, k1) = self.ctx.floor_lines, self.floors
         a, b = self.off, self.off + self.total
