@@ -5,14 +5,15 @@ without them (issue 21): the automatic segmentation (:mod:`citygen_relayout.hier
 and these defaults turn its structure into bao2013 §5.2 repetitions and generous size ranges:
 
 * the facade repeats each storey above the ground (``Ground Storey+ Top``), so storey counts vary;
-* a row (x-split) repeats each run of a repeated unit of one to three children (``Wall (Bay Pier)+ Bay Wall``:
-  the unit occurs twice or more in the input), so bay counts vary and a door between two runs stays between
-  bays, where the input had it, never at the facade's end;
+* a row (x-split) repeats each run of a repeated unit of one to three children holding a bay
+  (``Wall (Bay Pier)+ Bay Wall``: the unit occurs twice or more in the input; plain walls match each other and
+  so do window bays), so bay counts vary and a door between two runs stays between bays, where the input had
+  it, never at the facade's end;
 * a door-bearing child of a row may also be one of the row's opening bays (``{DoorBay Bay}``), once per row
   (``freq ... 1..1``): a face without entrance takes a window bay there (the door budget of §9.1 relaxes it);
 * size ranges: openings 50-150 % of their input size (never below the plausibility minimums, doors at least
-  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites 40-250 %, storeys
-  55-160 % of their height, so faces far from the input size and storeys of other heights fit; the minimum
+  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what their content allows, storeys
+  55-160 % of their height, the parts of rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys of other heights fit; the minimum
   sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever axis their parent splits.
 
 Every default yields to what the model file states for that composite or symbol.
@@ -29,7 +30,7 @@ from citygen_relayout.model import Frequency, SizeRange, Symbol
 #: (low, high) fractions of the input size by kind of symbol, and sigma of the initial-size distribution.
 OPENING_RANGE = (0.5, 1.5)
 PLAIN_RANGE = (0.25, 3.0)
-COMPOSITE_RANGE = (0.4, 2.5)
+COMPOSITE_RANGE = (0.4, 20.0)  # the upper bound: in effect what the content allows
 STOREY_RANGE = (0.55, 1.6)
 GAP_RANGE = (0.05, 2.0)  # metres: a gap band absorbs the top band's height in every storey pitch
 SIGMA = 0.1
@@ -72,7 +73,8 @@ def frequencies(sym: Symbol, symbols: Mapping[str, Symbol]) -> list[Frequency]:
 
 def size_range(sym: Symbol, axis: str, role: str | None = None) -> SizeRange:
     """Default size range of ``sym`` along ``axis`` (see the module doc); ``role``: ``storey``, ``gap`` or
-    ``top`` for the facade's storeys, the wall bands between them and the top band."""
+    ``top`` for the facade's storeys, the wall bands between them and the top band; ``band`` for a part of a row
+    without openings (it stretches with the facade's width)."""
     base = sym.extent[0 if axis == "x" else 1]
     if role == "gap" and axis == "y":
         return SizeRange(min(GAP_RANGE[0], base), max(GAP_RANGE[1], 3 * base), base, SIGMA * max(base, 1.0))
@@ -80,6 +82,8 @@ def size_range(sym: Symbol, axis: str, role: str | None = None) -> SizeRange:
         lo, hi = STOREY_RANGE
     elif role == "top" and axis == "y":
         lo, hi = PLAIN_RANGE
+    elif role == "band" and axis == "x":
+        lo, hi = PLAIN_RANGE[0], COMPOSITE_RANGE[1]
     elif not sym.is_terminal:
         lo, hi = COMPOSITE_RANGE
     elif sym.label in OPENING_LABELS:
@@ -149,31 +153,45 @@ def _bays(children: tuple[str, ...], symbols: Mapping[str, Symbol], doors: froze
 
 
 def _row_pattern(children: tuple[str, ...], symbols: Mapping[str, Symbol]) -> gen.Node:
-    """Runs of a repeated unit become ``(unit)+``; a door-bearing child may also be the row's commonest bay."""
+    """Runs of a repeated unit become ``(unit)+``; units match by kind (plain walls alike, window bays alike), and a
+    run's items are the symbols found at that place of the unit. A door-bearing child may also be the row's
+    commonest bay."""
     doors = frozenset(c for c in children if holds_label(c, "door", symbols))
     bays = _bays(children, symbols, doors)
 
-    def item(c: str) -> gen.Node:
-        return gen.Node("item", item=frozenset({c, bays[0]}) if c in doors and bays else frozenset({c}))
+    def kind(c: str) -> str:
+        sym = symbols[c]
+        if sym.is_terminal and sym.label == "wall":
+            return "wall"
+        return "bay" if c in bays else c
+
+    keys = [kind(c) for c in children]
+
+    def item(names) -> gen.Node:
+        names = set(names)
+        if names & doors and bays:
+            names.add(bays[0])
+        return gen.Node("item", item=frozenset(names))
 
     parts: list[gen.Node] = []
     i, n = 0, len(children)
     while i < n:
         best_len, best_reps = 1, 1
         for size in range(1, _MAX_UNIT + 1):
-            unit = children[i:i + size]
-            if len(unit) < size or doors & set(unit):
-                break
+            unit = keys[i:i + size]
+            if len(unit) < size or doors & set(children[i:i + size]) or "bay" not in unit:
+                continue
             reps = 1
-            while children[i + reps * size:i + (reps + 1) * size] == unit:
+            while keys[i + reps * size:i + (reps + 1) * size] == unit:
                 reps += 1
             if reps >= 2 and reps * size > best_len * best_reps:
                 best_len, best_reps = size, reps
         if best_reps >= 2:
-            unit = tuple(item(c) for c in children[i:i + best_len])
+            run = children[i:i + best_len * best_reps]
+            unit = tuple(item(run[k::best_len]) for k in range(best_len))
             parts.append(gen.Node("+", parts=(gen.Node("seq", parts=unit),)))
             i += best_len * best_reps
         else:
-            parts.append(item(children[i]))
+            parts.append(item((children[i],)))
             i += 1
     return gen.Node("seq", parts=tuple(parts))

@@ -411,17 +411,27 @@ class _Builder:
                                          name in self.symmetric)
         sizes = dict(self.sizes)
         lo, hi, sig = DEFAULT_RANGE
+        bands = _band_parts(self.symbols) if seg is not None else frozenset()
         for sym in self.symbols.values():
             for axis, base in zip("xy", sym.extent):
-                sizes.setdefault((sym.name, axis), inferred.size_range(sym, axis, _role(sym.name, seg))
+                sizes.setdefault((sym.name, axis), inferred.size_range(sym, axis, _role(sym.name, seg, bands))
                                  if seg is not None else SizeRange(lo * base, hi * base, base, sig * base))
         return Model(self.name, self.root, dict(self.symbols), sizes, rules, tuple(self.alignments),
                      tuple(self.samesizes), dict(self.mirror), self.source,
                      inferred.terminal_minimums(self.symbols) if seg is not None else {})
 
 
-def _role(name: str, seg: Segmentation) -> str | None:
-    """A child's role in the facade's storey segmentation (``storey``, ``gap``, ``top``), if it has one."""
-    if not seg.storeys or name not in seg.symbols[seg.root].children:
-        return None
-    return "gap" if name in seg.gaps else "top" if name in seg.bands else "storey"
+def _role(name: str, seg: Segmentation, bands: frozenset[str]) -> str | None:
+    """A symbol's role in the facade's storey segmentation (``storey``, ``gap``, ``top``), or ``band`` for a part
+    of a row without openings (a molding or wall band), if it has one."""
+    if seg.storeys and name in seg.symbols[seg.root].children:
+        return "gap" if name in seg.gaps else "top" if name in seg.bands else "storey"
+    return "band" if name in bands else None
+
+
+def _band_parts(symbols) -> frozenset[str]:
+    """Terminals of rows (x-splits) that hold no opening: they stretch with the facade's width."""
+    memo: dict[str, bool] = {}
+    return frozenset(c for sym in symbols.values() if sym.split == "x"
+                     and not any(inferred.opening_bearing(k, symbols, memo) for k in sym.children)
+                     for c in sym.children if symbols[c].is_terminal)
