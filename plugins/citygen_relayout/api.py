@@ -1,8 +1,12 @@
 """Public entry points: one relayout, or several variations of one size."""
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+
 import numpy as np
 
+from citygen.layout import FacadeLayout
+from citygen.plausible import check_plausible
 from citygen.rng import derive_rng
 from citygen_relayout.model import Model
 from citygen_relayout.search import Constraints, RelayoutResult, Search
@@ -10,8 +14,12 @@ from citygen_relayout.search import Constraints, RelayoutResult, Search
 
 def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: np.random.Generator | None = None,
              constraints: Constraints | None = None, budget_s: float = 10.0, backtrack_budget: int = 12000,
-             restarts: str = "luby") -> RelayoutResult:
+             restarts: str = "luby", judge: Callable[[FacadeLayout], Sequence] | None = check_plausible
+             ) -> RelayoutResult:
     """One variation of ``model`` for a ``width x height`` target (bao2013 §7); never raises on infeasibility.
+
+    A complete layout is held to ``judge`` (default: :func:`citygen.plausible.check_plausible` without a request;
+    ``None`` accepts any): one with findings is rejected and the search restarts within its budget.
 
     The search budget is counted in work (``backtrack_budget`` backtracks over all restarts; ``restarts`` is the
     cutoff schedule, ``"luby"`` or the paper's ``"fixed"`` 1000), so results do not depend on machine speed;
@@ -24,7 +32,7 @@ def relayout(model: Model, width: float, height: float, *, seed: int = 0, rng: n
         if constraints is None:
             constraints = Constraints(key_salt=(seed,))
     return Search(model, width, height, rng, constraints, budget_s=budget_s, backtrack_budget=backtrack_budget,
-                  restarts=restarts).run()
+                  restarts=restarts, judge=judge).run()
 
 
 def variations(model: Model, width: float, height: float, count: int, *, seed: int = 0,

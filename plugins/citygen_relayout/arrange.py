@@ -110,6 +110,38 @@ class _Layout:
     def _mult(self) -> int:
         return 2 if self.symmetric else 1
 
+    def _centre(self, sym: str) -> bool:
+        """Whether ``sym``, as the last element of a symmetric half, may be its centre (counted once)."""
+        return self.symmetric and self.ctx.model.mirrored(sym) == sym
+
+    def _weights(self, n: int, mirror: bool = False) -> np.ndarray:
+        """How often each of the first ``n`` elements occurs in the finished arrangement: twice in the half of a
+        symmetric region, except a last element that may be the centre (§7.3)."""
+        if not self.symmetric or mirror:
+            return np.ones(n)
+        w = np.full(n, 2.0)
+        if n and self._centre(self.st.elems[n - 1][0]):
+            w[-1] = 1.0
+        return w
+
+    def _final_ok(self, centre: bool) -> bool:
+        """Frequencies and the door budget of the finished arrangement (the last element the centre, or not)."""
+        mult = self._mult()
+        last = self.st.elems[-1][0] if self.st.elems else None
+
+        def total(members) -> int:
+            return self._count(members) * mult - (1 if centre and last in members else 0)
+        for f, lo, hi in self.freq:
+            if not lo <= total(f.members) <= hi:
+                self.ctx.blame(f"{f.text} (line {f.line})")
+                return False
+        if self.node.door is not None:
+            doors = self._doors() * mult - (self.st.doors[-1] if centre and self.st.doors else 0)
+            if doors != self.node.door:
+                self.ctx.blame("entrance door budget of the face")
+                return False
+        return True
+
     def _count(self, members) -> int:
         return sum(1 for s, _ in self.st.elems if s in members)
 
@@ -142,8 +174,9 @@ class _Layout:
                 out.append(((END, 0, 0), nxt, rnxt))
                 continue
             doors = [0]
+            step = 1 if self._centre(sym) else mult
             if self.node.door is not None and comp.door[sym]:
-                doors = [d for d in (1, 0) if (d == 1 and self._doors() * mult + mult <= self.node.door)
+                doors = [d for d in (1, 0) if (d == 1 and self._doors() * mult + step <= self.node.door)
                          or (d == 0 and comp.doorless[sym])]
             if self.node.door and not self.symmetric and self._doors() < self.node.door \
                     and not comp.door_ahead(self.node.symbol, nxt):
@@ -151,11 +184,11 @@ class _Layout:
             if not doors:
                 ctx.blame("entrance door budget of the face")
                 continue
-            if any(sym in f.members and self._count(f.members) * mult + mult > hi for f, _, hi in self.freq):
+            if any(sym in f.members and self._count(f.members) * mult + step > hi for f, _, hi in self.freq):
                 ctx.blame(next(f"{f.text} (line {f.line})" for f, _, hi in self.freq if sym in f.members
-                               and self._count(f.members) * mult + mult > hi))
+                               and self._count(f.members) * mult + step > hi))
                 continue
-            if used_lo + self.min_size[sym] * mult > self.total + 1e-9:
+            if used_lo + self.min_size[sym] * step > self.total + 1e-9:
                 ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
                 continue
             if self.straddles and comp.bound[(sym, "y")]:
@@ -179,19 +212,31 @@ class _Layout:
         return choices
 
     def _can_end(self) -> bool:
-        mult = self._mult()
-        for f, lo, _ in self.freq:
-            if self._count(f.members) * mult < lo:
-                self.ctx.blame(f"{f.text} (line {f.line})")
-                return False
         for sym, (lo, _) in self.inst.items():
             if any(s == sym for s, _ in self.st.elems) and len({i for s, i in self.st.elems if s == sym}) < lo:
                 self.ctx.blame(f"instances of {sym} in {self.node.symbol}")
                 return False
-        if self.node.door is not None and self._doors() * mult != self.node.door:
-            self.ctx.blame("entrance door budget of the face")
+        centre = bool(self.st.elems) and self._centre(self.st.elems[-1][0])
+        if not (self._final_ok(False) or (centre and self._final_ok(True))):
+            return False
+        if self._empty_floor():
+            self.ctx.blame("every storey gets an opening")
             return False
         return bool(self.st.elems)
+
+    def _empty_floor(self) -> bool:
+        """Whether a y-arrangement that puts its openings in floors leaves a floor it could hold one in (it covers
+        at least the smallest opening-bearing child) without any: a storey without windows is not a storey."""
+        taken = {k for k in self.st.floor if k is not None}
+        opening = self.ctx.compiled.opening
+        if self.axis != "y" or self.floors is None or not taken \
+                or any(k is None and opening[s] for k, (s, _) in zip(self.st.floor, self.st.elems)):
+            return False  # an opening-bearing element spanning floors places its openings itself
+        least = min((self.min_size[s] for s, _ in self.st.elems if opening[s]), default=0.0)
+        lines, (k0, k1) = self.ctx.floor_lines, self.floors
+        a, b = self.off, self.off + self.total
+        return any(k not in taken and min(b, lines[k + 1]) - max(a, lines[k]) >= least - 1e-9
+                   for k in range(k0, k1 + 1))
 
     def _order(self, cands: list) -> list:
         """Stochastic order of the successor set: ⊣ is favoured once the sampled sizes fill the region."""
@@ -413,9 +458,10 @@ class _Layout:
         n = len(st.elems)
         xbar, lo, hi = np.asarray(st.xbar), np.asarray(st.lo), np.asarray(st.hi)
         rows = st.rows
-        mult = 2.0 if self.symmetric and not mirror else 1.0
+        weights = self._weights(n, mirror)
         if (not total_eq and len(rows) == new_from and st.x.size == n - 1
-                and mult * (float(np.sum(st.x)) + min(max(xbar[-1], lo[-1]), hi[-1])) <= self.total + 1e-9):
+                and float(np.dot(weights[:-1], st.x)) + weights[-1] * min(max(xbar[-1], lo[-1]), hi[-1])
+                <= self.total + 1e-9):
             st.x = np.append(st.x, min(max(xbar[-1], lo[-1]), hi[-1]))  # no newly active row: still optimal
             return True
         group = list(range(n))
@@ -456,7 +502,7 @@ class _Layout:
             if key not in seen:
                 seen.add(key)
                 (eq_rows if r.eq else le_rows).append((vec, r.rhs))
-        total = ((np.bincount(member, minlength=m) * mult).tolist(), self.total)
+        total = (np.bincount(member, weights=weights, minlength=m).tolist(), self.total)
         (eq_rows if total_eq else le_rows).append(total)
         E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
         L = np.array([v for v, _ in le_rows]).reshape(-1, m)
@@ -489,9 +535,10 @@ class _Layout:
         st, mirror = self.st, self.ctx.model.mirrored
         left = list(st.elems)
         options = []
-        if left and mirror(left[-1][0]) == left[-1][0]:
+        if left and mirror(left[-1][0]) == left[-1][0] and self._final_ok(True):
             options.append(left[:-1])  # odd: the last element is the centre
-        options.append(left)
+        if self._final_ok(False):
+            options.append(left)
         for base in self.ctx.rng.permutation(len(options)):
             half = options[base]
             centre = left[len(half):]

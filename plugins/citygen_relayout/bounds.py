@@ -27,7 +27,7 @@ def extent_bounds(model, automata, door: dict[str, bool], relax_doors: bool) -> 
         if key not in lo:
             sym = model.symbols[name]
             if sym.is_terminal:
-                lo[key], hi[key] = 0.0, math.inf
+                lo[key], hi[key] = model.terminal_min.get(key, 0.0), math.inf
             else:
                 kids = list(dict.fromkeys(sym.children))
                 if sym.split == axis:

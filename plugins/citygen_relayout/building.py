@@ -5,13 +5,16 @@ A request's floor lines become floor constraints (regions holding openings stay 
 door-bearing regions are pruned and door-only frequency minimums relaxed), its corner widths corner strips.
 Across faces, ``samesize ... across`` references are shared: the first face solved fixes them for the others
 (the entrance face goes first). A face that cannot be relayouted gets a plain fallback layout that still meets
-the request, and the failure is recorded in its ``meta``.
+the request, and the failure is recorded in its ``meta``. Every layout is held to
+:func:`citygen.plausible.check_plausible` for its request inside the search (an implausible one is not a solution:
+the search restarts); when none is found, the fallback's ``meta["findings"]`` lists what the last one had.
 """
 from __future__ import annotations
 
 from collections.abc import Sequence
 
 from citygen.layout import FacadeLayout, Region
+from citygen.plausible import check_plausible
 from citygen.request import FacadeRequest
 from citygen_relayout.api import relayout
 from citygen_relayout.model import Model
@@ -25,14 +28,16 @@ def solve_face(model: Model, request: FacadeRequest, shared: dict | None = None,
     constraints = Constraints(floor_lines=tuple(request.floor_lines), corners=tuple(request.corner_widths),
                               doors=1 if request.entrance else 0, shared=shared, key_salt=tuple(request.seed))
     return relayout(model, request.width, request.height, rng=request.rng(PLUGIN_ID, model.name),
-                    constraints=constraints, budget_s=budget_s, backtrack_budget=backtrack_budget)
+                    constraints=constraints, budget_s=budget_s, backtrack_budget=backtrack_budget,
+                    judge=lambda layout: check_plausible(layout, request))
 
 
 def generate_face(model: Model, request: FacadeRequest, shared: dict | None = None) -> FacadeLayout:
     result = solve_face(model, request, shared)
     if result.success:
         return result.layout
-    return fallback_layout(request, result.message, outside_range=result.status == "infeasible")
+    return fallback_layout(request, result.message, outside_range=result.status == "infeasible",
+                           findings=result.findings)
 
 
 def generate_building(model: Model, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
@@ -44,10 +49,11 @@ def generate_building(model: Model, requests: Sequence[FacadeRequest]) -> list[F
     return [out[i] for i in range(len(requests))]
 
 
-def fallback_layout(request: FacadeRequest, reason: str, outside_range: bool = False) -> FacadeLayout:
+def fallback_layout(request: FacadeRequest, reason: str, outside_range: bool = False,
+                    findings: Sequence = ()) -> FacadeLayout:
     """Wall bands per floor, with a door centred between the corner strips on an entrance face. ``outside_range``:
     the face's size lies outside every size the model can take (``meta["outside_range"]``; the pipeline reports
-    such faces once per building)."""
+    such faces once per building); ``findings``: what the last complete layout had (``meta["findings"]``)."""
     w, h = request.width, request.height
     lines = list(request.floor_lines)
     bands = []
@@ -57,7 +63,8 @@ def fallback_layout(request: FacadeRequest, reason: str, outside_range: bool = F
         else:
             bands.append(Region(0.0, y0, w, y1 - y0, "FallbackWall", "wall"))
     root = Region(0.0, 0.0, w, h, "Fallback", None, children=tuple(bands))
-    meta = {"kind": PLUGIN_ID, "fallback": reason, **({"outside_range": True} if outside_range else {})}
+    meta = {"kind": PLUGIN_ID, "fallback": reason, "findings": [str(f) for f in findings],
+            **({"outside_range": True} if outside_range else {})}
     return FacadeLayout(w, h, root, meta=meta)
 
 

@@ -1,24 +1,45 @@
 """Hierarchical segmentation (bao2013 §4) from a FacadeLayout.
 
 A composite whose children already tile it along one axis keeps its structure. Any other composite (a flat list
-of labelled rectangles, as annotation importers produce) is re-segmented by recursive guillotine cuts, preferring
-horizontal splitting lines (floors) first, then vertical ones, alternating by level. Symbols come from the layout;
-regions that share a symbol must be identical (same size and decomposition), otherwise the later ones get a
-numbered symbol (``window_2``). Composites created by the segmentation are named after their content and shared
-between identical ones, so repeated floors and columns get one symbol.
+of labelled rectangles, as annotation importers produce) is segmented into **storeys** first: the horizontal
+splitting lines that no rectangle straddles cut the facade into slices; a slice holding an opening at least
+:data:`CORE_HEIGHT` tall (a window, door, shop or balcony, not a sign or vent) is a storey's core, and the bands
+between two cores belong to the storey above (its sills and floor moldings), the bands below the first core to the
+ground storey (``Ground``) and the bands above the last core to the top band (``Top``); the other storeys are
+``Storey`` (``Storey_2`` ... for differing ones). Each storey is then cut into **bays** (vertical splitting lines
+first), and recursively by guillotine cuts alternating the axis. Symbols come from the layout; regions that share
+a symbol must be identical (same size and decomposition), otherwise the later ones get a numbered symbol
+(``window_2``). Composites created by the segmentation are named after their content and shared between
+identical ones, so repeated storeys and bays get one symbol.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region
+from citygen.plausible import OPENING_LABELS
 from citygen_relayout.model import Symbol
 
 _EPS = 1e-6
 _TOL = 1e-3
+#: An opening at least this tall (m) makes its slice of the facade a storey's core.
+CORE_HEIGHT = 1.0
 
 
-def symbols_from_layout(layout: FacadeLayout, tolerance: float = 1e-3) -> tuple[dict[str, Symbol], str]:
-    """Symbols of the segmentation of ``layout`` and the root symbol.
+@dataclass(frozen=True)
+class Segmentation:
+    """Symbols of a layout's segmentation, its root, and the root's storeys above the ground (repeatable)."""
+
+    symbols: dict[str, Symbol]
+    root: str
+    storeys: tuple[str, ...] = ()
+    gaps: tuple[str, ...] = ()  # the plain wall bands between storeys
+    bands: tuple[str, ...] = ()  # the top band
+
+
+def symbols_from_layout(layout: FacadeLayout, tolerance: float = 1e-3) -> Segmentation:
+    """The segmentation of ``layout``: symbols, root and (for a flat layout) the storeys above the ground.
 
     Regions with the same label and decomposition whose sizes agree within ``tolerance`` (relative) are taken as
     identical and share a symbol: the regularisation of almost-equal regions that bao2013 §4 asks the user for.
@@ -27,8 +48,60 @@ def symbols_from_layout(layout: FacadeLayout, tolerance: float = 1e-3) -> tuple[
     _TOL = tolerance
     table: dict[str, Symbol] = {}
     signatures: dict[tuple, str] = {}
-    root = _segment(layout.root, table, signatures, prefer="y", is_root=True)
-    return table, root
+    region = layout.root
+    if not region.is_terminal and _axis(region) is None:
+        leaves = [t for t in region.terminals() if t.w > _EPS and t.h > _EPS]
+        return _storeys(region, leaves, table, signatures)
+    return Segmentation(table, _segment(region, table, signatures, prefer="y", is_root=True))
+
+
+def _storeys(box: Region, leaves: list[Region], table: dict, signatures: dict) -> Segmentation:
+    """The facade as a y-split of storeys (see the module doc); with fewer than two storey cores, plain guillotine
+    cuts. Between two cores, the plain wall slice nearest the middle of the gap becomes a ``Gap`` child of its
+    own (the spandrel that keeps the storey pitch while the top band shares the top floor), else the storeys part
+    at the splitting line nearest the middle."""
+    lo, hi = box.y, box.y + box.h
+    edges = [lo, *_cuts(leaves, lo, hi, "y"), hi]
+    slices = [(a, b, [r for r in leaves if a - _EPS <= r.y and r.y + r.h <= b + _EPS]) for a, b in zip(edges, edges[1:])]
+    cores = [(a, b) for a, b, inside in slices
+             if any(r.label in OPENING_LABELS and r.h >= CORE_HEIGHT - _EPS for r in inside)]
+    if len(cores) < 2:
+        return Segmentation(table, _guillotine(box, leaves, table, signatures, "y", box.symbol))
+    parts: list[tuple[float, float, str]] = []  # (bottom, top, role)
+    start = lo
+    for (_, top), (bottom, _) in zip(cores, cores[1:]):
+        middle = (top + bottom) / 2
+        walls = [(a, b) for a, b, inside in slices if top - _EPS <= a and b <= bottom + _EPS and len(inside) == 1
+                 and inside[0].label == "wall" and inside[0].w >= box.w - _EPS]
+        if walls:
+            a, b = min(walls, key=lambda ab: abs((ab[0] + ab[1]) / 2 - middle))
+            parts += [(start, a, "storey"), (a, b, "gap")]
+            start = b
+        else:
+            cut = min((e for e in edges if top - _EPS <= e <= bottom + _EPS), key=lambda e: abs(e - middle))
+            parts.append((start, cut, "storey"))
+            start = cut
+    if hi - cores[-1][1] > _EPS:
+        parts += [(start, cores[-1][1], "storey"), (cores[-1][1], hi, "top")]
+    else:
+        parts.append((start, hi, "storey"))
+    kids, roles = [], []
+    for k, (a, b, role) in enumerate(parts):
+        part = Region(box.x, a, box.w, b - a, "S")
+        inside = [r for r in leaves if a - _EPS <= r.y and r.y + r.h <= b + _EPS]
+        if role == "gap":
+            leaf = inside[0]
+            kids.append(_register(Symbol("Gap", (box.w, b - a), leaf.label, leaf.depth, leaf.material, leaf.asset),
+                                  table))
+        else:
+            name = {"top": "Top"}.get(role, "Ground" if k == 0 else "Storey")
+            kids.append(_guillotine(part, inside, table, signatures, "x", name))
+        roles.append(role)
+    root = _register(Symbol(box.symbol, (box.w, box.h), None, 0.0, None, None, "y", tuple(kids)), table)
+
+    def having(role: str, skip_first: bool = False) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(c for k, (c, r) in enumerate(zip(kids, roles)) if r == role and (k or not skip_first)))
+    return Segmentation(table, root, having("storey", skip_first=True), having("gap"), having("top"))
 
 
 def _axis(region: Region) -> str | None:

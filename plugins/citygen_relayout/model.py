@@ -129,6 +129,9 @@ class Model:
     samesizes: tuple[SameSize, ...] = ()
     mirror: Mapping[str, str] = field(default_factory=dict)
     source: str = "<model>"
+    #: least extent of a terminal along an axis, whichever axis its parent splits (``(symbol, axis)``; e.g. the
+    #: plausible minimum of an opening of a model built from a layout); terminals not listed have none
+    terminal_min: Mapping[tuple[str, str], float] = field(default_factory=dict)
 
     @property
     def width(self) -> float:

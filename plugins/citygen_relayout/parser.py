@@ -1,7 +1,8 @@
 """Parser of ``.relayout`` model files (syntax in docs/relayout.md).
 
 Pass 1 reads the segmentation (``root``/``split``/``terminal``/``label`` statements, or a ``layout`` JSON);
-pass 2 reads the constraints, resolving symbols and ``@label`` sets against it.
+pass 2 reads the constraints, resolving symbols and ``@label`` sets against it. A model built from a layout gets
+the defaults of :mod:`citygen_relayout.inferred` for every composite and symbol its file says nothing about.
 """
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from pathlib import Path
 from citygen.errors import LayoutError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout
 from citygen_relayout import generators as gen
-from citygen_relayout.hierarchy import symbols_from_layout
+from citygen_relayout import inferred
+from citygen_relayout.hierarchy import Segmentation, symbols_from_layout
 from citygen_relayout.model import (ANCHORS, BEGIN, END, Alignment, CompositeRules, Frequency, InstancePolicy, Model,
                                     Pattern, SameSize, SizeRange, Symbol)
 from citygen_relayout.tokens import Cursor, tokenize
@@ -70,6 +72,7 @@ class _Builder:
         self.mirror: dict[str, str] = {}
         self.alignments: list[Alignment] = []
         self.samesizes: list[SameSize] = []
+        self.segmentation: Segmentation | None = None  # when the segmentation came from a layout JSON
 
     # ---- pass 1: segmentation
     def def_model(self, cur: Cursor) -> None:
@@ -91,7 +94,8 @@ class _Builder:
                              hint="name a UTF-8 FacadeLayout JSON file") from exc
         try:
             layout = FacadeLayout.loads(text, str(path))
-            self.symbols, self.root = symbols_from_layout(layout, tolerance)
+            self.segmentation = symbols_from_layout(layout, tolerance)
+            self.symbols, self.root = dict(self.segmentation.symbols), self.segmentation.root
         except LayoutError as exc:
             raise ParseError(f"layout {path.name}: {exc.message}",
                              where=SourceLocation(self.source, tok.line, tok.column), hint=exc.hint) from exc
@@ -394,17 +398,40 @@ class _Builder:
         self.samesizes.append(SameSize(a, b, within, across, cur.text, cur.lineno))
 
     def build(self) -> Model:
-        rules = {}
+        rules, seg = {}, self.segmentation
         for name, sym in self.symbols.items():
             if sym.is_terminal:
                 continue
-            seqs = self.sequences.get(name) or gen.replication(tuple(frozenset({c}) for c in sym.children))
-            rules[name] = CompositeRules(tuple(seqs), tuple(self.freqs.get(name, ())),
-                                         dict(self.instances.get(name, {})), name in self.symmetric)
+            seqs, freqs = self.sequences.get(name), self.freqs.get(name, [])
+            if not seqs and seg is not None:
+                seqs = inferred.sequences(sym, self.symbols, seg)
+                freqs = freqs or inferred.frequencies(sym, self.symbols)
+            seqs = seqs or gen.replication(tuple(frozenset({c}) for c in sym.children))
+            rules[name] = CompositeRules(tuple(seqs), tuple(freqs), dict(self.instances.get(name, {})),
+                                         name in self.symmetric)
         sizes = dict(self.sizes)
         lo, hi, sig = DEFAULT_RANGE
+        bands = _band_parts(self.symbols) if seg is not None else frozenset()
         for sym in self.symbols.values():
             for axis, base in zip("xy", sym.extent):
-                sizes.setdefault((sym.name, axis), SizeRange(lo * base, hi * base, base, sig * base))
+                sizes.setdefault((sym.name, axis), inferred.size_range(sym, axis, _role(sym.name, seg, bands))
+                                 if seg is not None else SizeRange(lo * base, hi * base, base, sig * base))
         return Model(self.name, self.root, dict(self.symbols), sizes, rules, tuple(self.alignments),
-                     tuple(self.samesizes), dict(self.mirror), self.source)
+                     tuple(self.samesizes), dict(self.mirror), self.source,
+                     inferred.terminal_minimums(self.symbols) if seg is not None else {})
+
+
+def _role(name: str, seg: Segmentation, bands: frozenset[str]) -> str | None:
+    """A symbol's role in the facade's storey segmentation (``storey``, ``gap``, ``top``), or ``band`` for a part
+    of a row without openings (a molding or wall band), if it has one."""
+    if seg.storeys and name in seg.symbols[seg.root].children:
+        return "gap" if name in seg.gaps else "top" if name in seg.bands else "storey"
+    return "band" if name in bands else None
+
+
+def _band_parts(symbols) -> frozenset[str]:
+    """Terminals of rows (x-splits) that hold no opening: they stretch with the facade's width."""
+    memo: dict[str, bool] = {}
+    return frozenset(c for sym in symbols.values() if sym.split == "x"
+                     and not any(inferred.opening_bearing(k, symbols, memo) for k in sym.children)
+                     for c in sym.children if symbols[c].is_terminal)

@@ -15,6 +15,7 @@ from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_relayout import building
 from citygen_relayout.api import variations
+from citygen_relayout.listing import symbol_lines
 from citygen_relayout.model import Model
 from citygen_relayout.parser import load_model
 
@@ -54,6 +55,9 @@ class RelayoutCommand(Command):
     def configure(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("model", type=Path, help="a .relayout model file")
         add_size_arguments(parser)
+        next(a for a in parser._actions if a.dest == "size").required = False  # not with --symbols
+        parser.add_argument("--symbols", action="store_true",
+                            help="list the model's symbols (its segmentation) with labels and sizes, then exit")
         parser.add_argument("--count", type=whole(1), default=1, help="variations (default 1)")
         parser.add_argument("--seed", type=int, default=0)
         parser.add_argument("--budget", type=seconds, default=10.0,
@@ -65,6 +69,12 @@ class RelayoutCommand(Command):
             model = load_model(args.model)
         except CitygenError as exc:
             print(f"error: {exc}", file=sys.stderr)
+            return 2
+        if args.symbols:
+            print("\n".join(symbol_lines(model)))
+            return 0
+        if args.size is None:
+            print("error: give --size W H (or --symbols)", file=sys.stderr)
             return 2
         width, height = args.size
         results = variations(model, width, height, args.count, seed=args.seed, budget_s=args.budget)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections import Counter
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -58,6 +59,7 @@ class RelayoutResult:
     qp_calls: int = 0
     blockers: tuple[tuple[str, int], ...] = ()
     seconds: float = 0.0
+    findings: tuple = ()  # the judge's findings on the last complete but implausible layout
 
 
 @dataclass(slots=True)
@@ -103,7 +105,8 @@ class Constraints:
 class Search:
     def __init__(self, model: Model, width: float, height: float, rng: np.random.Generator,
                  constraints: Constraints | None = None, budget_s: float = 10.0, backtrack_budget: int = 12000,
-                 restarts: str = "luby", accept_temperature: float = 0.0, relative: bool = True) -> None:
+                 restarts: str = "luby", accept_temperature: float = 0.0, relative: bool = True,
+                 judge: Callable[[FacadeLayout], Sequence] | None = None) -> None:
         if restarts not in RESTARTS:
             raise ValueError(f"restarts must be one of {RESTARTS}, got {restarts!r}")
         self.model, self.compiled = model, compile_model(model)
@@ -115,6 +118,7 @@ class Search:
         self.max_backtracks = 0  # cutoff of the current attempt
         self.accept_temperature = accept_temperature
         self.relative = relative  # QP on relative size deviations (x - xbar)^2 / xbar^2; False: the paper's
+        self.judge = judge  # findings of a complete layout (empty: accepted)
         self.blockers: Counter[str] = Counter()
         self.dead: Counter[str] = Counter()  # regions whose arrangements were exhausted without any solution
         self.dead_causes: Counter[str] = Counter()
@@ -211,6 +215,7 @@ class Search:
         self._ticks = 0
         status = "exhausted"
         restarts = root_failures = 0
+        findings: tuple = ()
         for restarts in itertools.count():
             left = self.backtrack_budget - self.total_backtracks
             if left <= 0:
@@ -218,8 +223,15 @@ class Search:
             self.max_backtracks = min(left, 1000 if self.restarts == "fixed" else 100 * luby(restarts + 1))
             try:
                 if self._attempt():
-                    return RelayoutResult(True, self._build(), "solved", "ok", restarts, self.total_backtracks,
-                                          self.qp_calls, seconds=time.perf_counter() - t0)
+                    built = self._build()
+                    found = tuple(self.judge(built)) if self.judge is not None else ()
+                    if not found:
+                        return RelayoutResult(True, built, "solved", "ok", restarts, self.total_backtracks,
+                                              self.qp_calls, seconds=time.perf_counter() - t0)
+                    findings, status = found, "implausible"
+                    self.blockers.update(f"implausible: {f.code}" for f in found if hasattr(f, "code"))
+                    self.total_backtracks += self.max_backtracks  # a rejected layout costs its attempt's cutoff
+                    continue
                 status = "infeasible-root"
                 if not self.frames[0].yielded and not self.accept_temperature:
                     # the root itself has no arrangement: retrying will not help
@@ -238,8 +250,10 @@ class Search:
                      + "; there: " + names)
         msg = (f"no {self.model.name} layout of {self.width:g} x {self.height:g} found ({status}, "
                f"{restarts + 1} attempts, {self.total_backtracks} backtracks); blocking constraints: {names}")
+        if findings:
+            msg += "; the last complete layout was implausible: " + "; ".join(str(f) for f in findings[:3])
         return RelayoutResult(False, None, status, msg, restarts, self.total_backtracks, self.qp_calls, top,
-                              time.perf_counter() - t0)
+                              time.perf_counter() - t0, findings)
 
     def _static_check(self) -> str | None:
         """A reason when the target is outside the root's static extent bounds (see ``bounds``)."""
