@@ -36,7 +36,7 @@ def analyse_learned(image: np.ndarray, source: str = "<photo>", *, width: float 
     facade = regular_facade(prob, period)
     pitch = facade.pitch or period
     if not width and not pitch:
-        raise LayoutError("no floors found: neither rows of windows nor a repetition of floors", where=source,
+        raise LayoutError("no floors found: no rows of windows and no repetition of floors", where=source,
                           hint="crop the photo to the facade (--crop x0 y0 x1 y1), or give --width")
     scale = width / w if width else floor_height / pitch
     windows = sum(1 for _, label in facade.elements if label == "window")

@@ -34,6 +34,8 @@ RUN_SHARE = 0.4
 SAME_SIZE = 0.25
 #: A tile holds a window when the mean window (or blind) probability in its box reaches this.
 VOTE = 0.25
+#: A window's sides lie where its row's (column's) window probability reaches this share of its peak.
+TIGHT = 0.5
 #: A gap between rows of windows this many pitches long holds more floors.
 MISSING_ROW = 1.6
 #: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
@@ -137,7 +139,10 @@ def regular_facade(prob: np.ndarray, period: float | None = None) -> RegularFaca
         inside[max(int(a), 0):min(int(np.ceil(b)), upper.shape[0])] = True
     columns = runs(gaussian_filter1d(upper[inside].mean(axis=0), 1.0), least=max(2, round(0.01 * w))) \
         if inside.any() else []
-    columns = synchronised(columns)
+    glass = prob[..., WINDOW]  # (sides from the glass alone: open shutters beside a window are not the window)
+    rows = [_tightened(glass, row, columns, 0) for row in rows]  # each row's height from its windows' pixels
+    columns = synchronised([_tightened(glass[:upper.shape[0]], column, rows, 1) for column in columns])
+    rows = synchronised(rows)
     tiles = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
     elements: list[tuple[Box, str]] = []
     for a, b in rows:
@@ -149,6 +154,26 @@ def regular_facade(prob: np.ndarray, period: float | None = None) -> RegularFaca
         elements += _ground(prob, ground_top)
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
+
+
+def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) -> Span:
+    """A row (``axis`` 0) or column (1) of windows narrowed to where the window probability, averaged over the
+    ``across`` columns (rows) of windows, reaches ``TIGHT`` of its peak: every tile of the row votes on the
+    windows' common height (mueller2007 §3.2), so a sill or a blind reaching into one tile does not stretch it."""
+    if not across:
+        return span
+    n = window.shape[axis]
+    mask = np.zeros(window.shape[1 - axis], dtype=bool)
+    for a, b in across:
+        mask[max(int(a), 0):min(int(np.ceil(b)), mask.size)] = True
+    pad = 0.25 * (span[1] - span[0])
+    lo, hi = max(int(span[0] - pad), 0), min(int(np.ceil(span[1] + pad)), n)
+    block = window[lo:hi][:, mask] if axis == 0 else window[:, lo:hi][mask]
+    profile = block.mean(axis=1 - axis) if block.size else np.zeros(0)
+    if profile.size == 0 or profile.max() < 0.1:
+        return span
+    above = np.flatnonzero(profile >= TIGHT * profile.max())
+    return (float(lo + above[0]), float(lo + above[-1] + 1))
 
 
 def _monotonic(lines: list[float], h: int, least: float = 2.0) -> list[float]:

@@ -169,8 +169,9 @@ def test_no_repetition_is_a_clear_error(tmp_path):
     noise = (np.random.default_rng(0).random((200, 200)) * 255).astype(np.uint8)
     path = tmp_path / "noise.png"
     Image.fromarray(noise).save(path)
-    with pytest.raises(LayoutError, match="no repetition of floors"):
-        layout_from_photo(path)
+    for parser in ("learned", "contrast"):
+        with pytest.raises(LayoutError, match="no repetition of floors"):
+            layout_from_photo(path, parser=parser)
 
 
 def test_cli_from_photo(tmp_path, capsys):
