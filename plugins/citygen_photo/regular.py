@@ -19,6 +19,7 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,9 +114,12 @@ def _with_missing_rows(rows: list[Span], pitch: float) -> list[Span]:
     return out
 
 
-def regular_facade(prob: np.ndarray, period: float | None = None) -> RegularFacade:
+def regular_facade(prob: np.ndarray, period: float | None = None,
+                   door: Callable[[float], Box | None] | None = None) -> RegularFacade:
     """The structure of a facade from its label probabilities ``prob`` (h, w, 12); ``period``: the floor period
-    (working pixels) by mutual information, used where the rows of windows alone cannot tell the pitch."""
+    (working pixels) by mutual information, used where the rows of windows alone cannot tell the pitch; ``door``:
+    the entrance door of a ground floor starting at a given line (working pixels), found by other means, taken
+    before the door probability's."""
     h, w, _ = prob.shape
     window = prob[..., WINDOW] + prob[..., BLIND]  # (a window behind closed blinds is a window of the layout)
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
@@ -151,7 +155,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None) -> RegularFaca
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
     if ground_top is not None:
-        elements += _ground(prob, ground_top)
+        elements += _ground(prob, ground_top, door(ground_top) if door else None)
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
 
@@ -191,14 +195,13 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
     return (x0, y0, x1, y1) if x1 - x0 >= 1 and y1 - y0 >= 1 else None
 
 
-def _ground(prob: np.ndarray, top: float) -> list[tuple[Box, str]]:
+def _ground(prob: np.ndarray, top: float, door: Box | None = None) -> list[tuple[Box, str]]:
     """Shops and the entrance door of the ground floor (``top``..h), each on its own columns, standing on the
-    ground; the door (the most probable door column) cuts the shop it falls in."""
+    ground; the door (``door``, else the most probable door column) cuts the shop it falls in."""
     h, w, _ = prob.shape
     band = prob[round(top):]
     out: list[tuple[Box, str]] = []
-    door = None
-    door_cols = runs(band[..., DOOR].mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
+    door_cols = [] if door else runs(band[..., DOOR].mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
     if door_cols:
         c, d = max(door_cols, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1])), DOOR].sum())
         rows = runs(band[:, int(c):int(np.ceil(d)), DOOR].mean(axis=1), share=0.5)
