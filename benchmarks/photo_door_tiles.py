@@ -18,10 +18,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import citygen_inverse.photo as photo
+import citygen_photo.photo as photo
 from citygen.layout import Region
-from citygen_inverse.photo import analyse, load_photo
-from citygen_inverse.photo_score import cmp_boxes, facade_box
+from citygen_photo.photo import analyse, load_photo
+from citygen_photo.score import cmp_boxes, facade_box
 
 DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
 

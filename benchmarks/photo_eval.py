@@ -21,16 +21,19 @@ from pathlib import Path
 import numpy as np
 
 from citygen.errors import CitygenError
-from citygen_inverse.photo import analyse, load_photo
+from citygen_inverse.cmp import import_cmp
+from citygen_inverse.extract import extract_grammar
+from citygen_photo.learned import analyse_learned
+from citygen_photo.photo import PARSERS, analyse, load_photo
 from citygen_inverse.cmp import count_groups
-from citygen_inverse.photo_score import cmp_boxes, facade_box, layout_boxes, matches
+from citygen_photo.score import cmp_boxes, facade_box, layout_boxes, matches
 
 #: Development photos (cmp_b0001-0020): tune only on these; cmp_b0021-0040 are held out.
 DEV = range(1, 21)
 DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
-def evaluate(jpg: Path) -> dict:
+def evaluate(jpg: Path, parser: str = "learned") -> dict:
     from PIL import Image
     with Image.open(jpg) as image:
         size = image.size
@@ -43,7 +46,8 @@ def evaluate(jpg: Path) -> dict:
            "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref), "door_ref": len(doors)}
     start = time.process_time()
     try:
-        result = analyse(load_photo(jpg, crop), str(jpg), meta={"source": jpg.name})
+        run = analyse_learned if parser == "learned" else analyse
+        result = run(load_photo(jpg, crop), str(jpg), meta={"source": jpg.name})
     except CitygenError as exc:
         return {**row, "error": exc.message, "cpu": time.process_time() - start}
     pred = result.boxes("window")
@@ -54,7 +58,32 @@ def evaluate(jpg: Path) -> dict:
             "tiles": len(result.tile_lines) - 1, "pred": len(pred),
             "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred),
             "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start,
-            "size": (crop[2] - crop[0], crop[3] - crop[1])}
+            "size": (crop[2] - crop[0], crop[3] - crop[1]), **grammar_costs(jpg, result.layout),
+            **window_pixels(jpg, crop, result.layout)}
+
+
+def window_pixels(jpg: Path, crop: tuple[int, int, int, int], layout) -> dict:
+    """Pixel counts of the layout's window terminals against the label map's window pixels in the crop."""
+    from PIL import Image
+    with Image.open(jpg.with_suffix(".png")) as image:
+        truth = np.asarray(image)[crop[1]:crop[3], crop[0]:crop[2]] == 3  # CMP label 3: window
+    mine = np.zeros_like(truth)
+    s = layout.meta["metres_per_pixel"]
+    H = truth.shape[0]
+    for r in layout.leaves:
+        if r.label == "window":
+            mine[max(round(H - (r.y + r.h) / s), 0):round(H - r.y / s), round(r.x / s):round((r.x + r.w) / s)] = True
+    return {"px_tp": int((mine & truth).sum()), "px_pred": int(mine.sum()), "px_ref": int(truth.sum())}
+
+
+def grammar_costs(jpg: Path, layout) -> dict:
+    """wu2014 greedy grammar costs of the photo's layout and of its annotation at the same width."""
+    try:
+        annotated = import_cmp(jpg.with_suffix(".xml"), width=layout.width)
+    except CitygenError:
+        return {}
+    return {"cost": extract_grammar(layout, method="greedy").cost,
+            "cost_ref": extract_grammar(annotated, method="greedy").cost}
 
 
 def rows_in_floors(floor_lines: list[float], ref: list[tuple[float, ...]]) -> int:
@@ -77,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("data", nargs="?", default=str(DEFAULT))
     parser.add_argument("--first", type=int, default=1)
     parser.add_argument("--last", type=int, default=40)
+    parser.add_argument("--parser", choices=PARSERS, default="learned",
+                        help="learned (default): the trained parser; contrast: mueller2007's contrast test")
     args = parser.parse_args(argv)
     data = Path(args.data)
     photos = [data / f"cmp_b{i:04d}.jpg" for i in range(args.first, args.last + 1)]
@@ -89,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{'tp':>4} {'prec':>5} {'rec':>5} {'lay':>4} {'ltp':>4} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
     rows = []
     for jpg in photos:
-        r = evaluate(jpg)
+        r = evaluate(jpg, args.parser)
         rows.append(r)
         if "error" in r:
             print(f"{r['photo']:10} {'':>9} {r['rows']:4d} {'-':>6} {r['cols']:4d} {'-':>5} {r['ref']:4d} "
@@ -139,6 +170,13 @@ def summary(name: str, rows: list[dict]) -> None:
           f"({dtp}/{dref}); photos with more detected than annotated doors "
           f"{sum(r['door_pred'] > r['door_ref'] for r in ok)}")
     print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
+    ptp, ppred, pref = (sum(r.get(k, 0) for r in ok) for k in ("px_tp", "px_pred", "px_ref"))
+    print(f"window pixels of the layout: precision {ptp / max(ppred, 1):.3f}, recall {ptp / max(pref, 1):.3f}")
+    costed = [r for r in ok if "cost" in r]
+    if costed:
+        ratio = np.array([r["cost"] / max(r["cost_ref"], 1e-9) for r in costed])
+        print(f"greedy grammar cost, photo layout / annotation: median {np.median(ratio):.2f}, mean "
+              f"{ratio.mean():.2f}, within 1.3x on {int((ratio <= 1.3).sum())}/{len(costed)} photos")
     return 0
 
 

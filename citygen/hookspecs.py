@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from citygen.registry import (
         Command,
         FootprintImporter,
+        LayoutSource,
         RoofBuilder,
         RulesetKind,
     )
@@ -44,6 +45,12 @@ def citygen_roof_builders() -> list[RoofBuilder]:
 @hookspec
 def citygen_ruleset_kinds() -> list[RulesetKind]:
     """Register facade ruleset kinds (split grammar, layer stack, relayout model, ...)."""
+
+
+@hookspec
+def citygen_layout_sources() -> list[LayoutSource]:
+    """Register layout sources: ``citygen layout NAME ...`` sub-commands that make a FacadeLayout from something
+    else (an annotation, a photo)."""
 
 
 @hookspec

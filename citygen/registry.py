@@ -111,6 +111,21 @@ class Command(ABC):
         """Execute; return the process exit status."""
 
 
+class LayoutSource(ABC):
+    """A ``citygen layout NAME`` sub-command contributed by a plugin: something that becomes a FacadeLayout."""
+
+    name: str
+    help: str = ""
+
+    @abstractmethod
+    def configure(self, parser: argparse.ArgumentParser) -> None:
+        """Add the sub-command's arguments."""
+
+    @abstractmethod
+    def run(self, args: argparse.Namespace) -> int:
+        """Execute; return the process exit status."""
+
+
 @dataclass(frozen=True)
 class Origin:
     """Where a registered object came from."""
@@ -127,6 +142,7 @@ class Registry:
     importers: dict[str, FootprintImporter] = field(default_factory=dict)
     roof_builders: dict[str, RoofBuilder] = field(default_factory=dict)
     commands: dict[str, Command] = field(default_factory=dict)
+    layout_sources: dict[str, LayoutSource] = field(default_factory=dict)
     origins: dict[tuple[str, str], Origin] = field(default_factory=dict)
     broken: list[tuple[str, str]] = field(default_factory=list)
     #: how it was loaded, so worker processes can load the same registry
@@ -165,7 +181,8 @@ class Registry:
 
 
 _GROUPS = (("citygen_ruleset_kinds", "ruleset_kinds"), ("citygen_footprint_importers", "importers"),
-           ("citygen_roof_builders", "roof_builders"), ("citygen_commands", "commands"))
+           ("citygen_roof_builders", "roof_builders"), ("citygen_commands", "commands"),
+           ("citygen_layout_sources", "layout_sources"))
 
 
 def load_registry(extra_plugins: Iterable[object] = (), entry_points: bool = True) -> Registry:

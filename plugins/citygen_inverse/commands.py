@@ -1,4 +1,5 @@
-"""CLI: ``citygen layout import-cmp|from-photo`` and ``citygen grammar extract|cost``."""
+"""CLI: ``citygen layout import-cmp`` (and the layout sources other plugins register, e.g. ``from-photo``) and
+``citygen grammar extract|cost``."""
 from __future__ import annotations
 
 import argparse
@@ -9,7 +10,7 @@ import tempfile
 from pathlib import Path
 
 from citygen.errors import CitygenError, LayoutError, read_user_text
-from citygen.registry import Command, Registry
+from citygen.registry import Command, Registry, default_registry
 
 
 def write_text(path: str | None, text: str) -> None:
@@ -51,7 +52,7 @@ def check_degenerate(xml: str) -> None:
 
 class LayoutCommand(Command):
     name = "layout"
-    help = "layout tools: import annotated facades or facade photos as FacadeLayout JSON"
+    help = "layout tools: import annotated facades (and, through plugins, facade photos) as FacadeLayout JSON"
 
     def configure(self, parser: argparse.ArgumentParser) -> None:
         sub = parser.add_subparsers(dest="layout_command", required=True)
@@ -73,19 +74,12 @@ class LayoutCommand(Command):
         cmp.add_argument("--no-element-caps", action="store_true",
                          help="do not cap the tolerances at shares of the median window size")
         cmp.add_argument("-o", "--output", help="output JSON file (default stdout)")
-        photo = sub.add_parser("from-photo", help="rectified facade photo -> layout JSON (mueller2007)")
-        photo.add_argument("photo", help="facade photo (JPEG, PNG, ...), rectified")
-        scale = photo.add_mutually_exclusive_group()
-        scale.add_argument("--width", type=float, help="facade (crop) width in metres")
-        scale.add_argument("--floor-height", type=float, default=3.0,
-                           help="metres per detected floor period (default 3.0)")
-        photo.add_argument("--crop", type=float, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
-                           help="facade box in pixels, y down (default the whole photo)")
-        photo.add_argument("-o", "--output", help="output JSON file (default stdout)")
+        for source in sorted(default_registry().layout_sources.values(), key=lambda source: source.name):
+            source.configure(sub.add_parser(source.name, help=source.help))
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
-        if args.layout_command == "from-photo":
-            return self._from_photo(args)
+        if args.layout_command != "import-cmp":
+            return default_registry().layout_sources[args.layout_command].run(args)
         from citygen_inverse.cmp import ELEMENT_SHARE, import_cmp
         for name in ("snap", "align", "equal_sizes"):
             value = getattr(args, name)
@@ -105,26 +99,6 @@ class LayoutCommand(Command):
         print(f"{args.xml}: {len(layout.terminals())} terminals, {layout.width:.2f} x {layout.height:.2f} m "
               f"({meta['scale_from']}), {meta['pinwheel_blocks']} pinwheel blocks, "
               f"{100 * meta['annotation_agreement']['element_pixels']:.0f} % of the annotated element pixels kept",
-              file=sys.stderr)
-        return 0
-
-    def _from_photo(self, args: argparse.Namespace) -> int:
-        from citygen_inverse.photo import layout_from_photo
-        for name in ("width", "floor_height"):
-            value = getattr(args, name)
-            if value is not None and not 0 < value < float("inf"):
-                return report(LayoutError(f"--{name.replace('_', '-')} must be a finite positive number of metres, "
-                                          f"got {value:g}", where=args.photo))
-        try:
-            result = layout_from_photo(args.photo, width=args.width, floor_height=args.floor_height,
-                                       crop=tuple(args.crop) if args.crop else None)
-        except (CitygenError, OSError) as exc:
-            return report(exc)
-        layout = result.layout
-        write_text(args.output, layout.dumps() + "\n")
-        print(f"{args.photo}: {layout.meta['floors']} floors x {layout.meta['tiles_per_floor']} tiles, "
-              f"{layout.count('window')} windows, {layout.count('door')} doors, {len(layout.terminals())} "
-              f"terminals, {layout.width:.2f} x {layout.height:.2f} m ({layout.meta['scale_from']})",
               file=sys.stderr)
         return 0
 

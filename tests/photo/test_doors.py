@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import citygen_inverse.photo as photo
+import citygen_photo.photo as photo
 from citygen.layout import check_partition
-from citygen_inverse.photo import analyse, load_photo
-from citygen_inverse.photo_doors import ground_columns, mirror_axis, repeats_floor_above, untouched_tiles
-from citygen_inverse.photo_score import cmp_boxes, facade_box, iou, matches
+from citygen_photo.photo import analyse, load_photo
+from citygen_photo.doors import ground_columns, mirror_axis, repeats_floor_above, untouched_tiles
+from citygen_photo.score import cmp_boxes, facade_box, iou, matches
 from tests.photo.synthetic import facade
 
 CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"

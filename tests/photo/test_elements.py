@@ -6,9 +6,9 @@ import pytest
 from PIL import Image
 
 from citygen.geometry.prototypes import ProtoKey
-from citygen_inverse.photo import analyse
-from citygen_inverse.photo_elements import cluster_type, context, library, render
-from citygen_inverse.photo_tiles import EdgeImage, Node, _element_labels, match_elements
+from citygen_photo.photo import analyse
+from citygen_photo.elements import cluster_type, context, library, render
+from citygen_photo.tiles import EdgeImage, Node, _element_labels, match_elements
 from tests.photo.synthetic import facade
 
 LABELS = ("window", "door", "shop", "wall")

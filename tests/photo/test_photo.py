@@ -12,11 +12,11 @@ from citygen.cli import main
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, check_partition
 from citygen_inverse.extract import extract_grammar
-from citygen_inverse.photo import analyse, layout_from_photo
+from citygen_photo.photo import analyse, layout_from_photo
 from citygen_inverse.cmp import count_groups
-from citygen_inverse.photo_score import cmp_boxes, facade_box, matches
-from citygen_inverse.photo_structure import split_lines
-from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
+from citygen_photo.score import cmp_boxes, facade_box, matches
+from citygen_photo.structure import split_lines
+from citygen_photo.symmetry import detect_symmetry, irreducible, quantize, validated_period
 from tests.photo.synthetic import facade
 
 CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
@@ -169,8 +169,9 @@ def test_no_repetition_is_a_clear_error(tmp_path):
     noise = (np.random.default_rng(0).random((200, 200)) * 255).astype(np.uint8)
     path = tmp_path / "noise.png"
     Image.fromarray(noise).save(path)
-    with pytest.raises(LayoutError, match="no repetition of floors"):
-        layout_from_photo(path)
+    for parser in ("learned", "contrast"):
+        with pytest.raises(LayoutError, match="no repetition of floors"):
+            layout_from_photo(path, parser=parser)
 
 
 def test_cli_from_photo(tmp_path, capsys):
@@ -268,7 +269,7 @@ def _leaves(node):
 
 def _railing_group(rows: tuple[int, int], shade: float):
     """Two 60 x 50 tiles, each with a dark 30 x 22 window and a railing of ``shade`` across the whole tile."""
-    from citygen_inverse.photo_tiles import EdgeImage, subdivide_group
+    from citygen_photo.tiles import EdgeImage, subdivide_group
     gray = 0.7 + 0.02 * np.random.default_rng(4).standard_normal((120, 50))
     for top in (0, 60):
         gray[top + 14:top + 44, 14:36] = 0.25
@@ -292,7 +293,7 @@ def test_window_half_hidden_by_a_railing_is_found_whole():
 def _two_groups():
     """Two groups of two tiles whose windows differ by 1-2 px (tops 14 / 16 px below the tile top, left sides 14 /
     13 px from the tile side): the edge image and the groups' tiles."""
-    from citygen_inverse.photo_tiles import EdgeImage
+    from citygen_photo.tiles import EdgeImage
     gray = 0.7 + 0.02 * np.random.default_rng(5).standard_normal((120, 100))
     for top in (0, 60):
         gray[top + 14:top + 44, 14:36] = 0.25
@@ -304,7 +305,7 @@ def test_split_distances_are_synchronised_across_groups():
     """§3.2 global synchronisation: two groups whose windows differ by 1-2 px (imperfect symmetry: tops 14 / 16 px
     below the tile top, left sides 14 / 13 px from the tile side) are split separately, then every split distance
     takes its facade-wide cluster's median, so both groups' windows get the same offsets in their tiles."""
-    from citygen_inverse.photo_tiles import stack_tree, subdivide_groups
+    from citygen_photo.tiles import stack_tree, subdivide_groups
     edges, groups = _two_groups()
     alone = [[n.rects[0] for n in _leaves(stack_tree(edges, g, False)) if n.label == "window"] for g in groups]
     assert alone == [[(14, 44, 14, 36)], [(16, 44, 13, 36)]]
@@ -319,7 +320,7 @@ def test_rebuilt_groups_do_not_change_the_others_split_distances():
     A group flagged ``rebuilt`` is synchronised with all groups, the others only among themselves: the first group
     keeps the windows it has alone (not those synchronised with the second, above), the rebuilt one takes the
     medians of both."""
-    from citygen_inverse.photo_tiles import subdivide_groups
+    from citygen_photo.tiles import subdivide_groups
     edges, groups = _two_groups()
     trees = subdivide_groups(edges, groups, [False, False], rebuilt=[False, True])
     windows = [[n.rects for n in _leaves(t) if n.label == "window"] for t in trees]
@@ -332,7 +333,7 @@ def test_synchronised_split_that_no_longer_fits_is_mapped():
     """Regression: a split moved by synchronisation can leave a child region too small for the child's own split
     (distance 30 in a region now 20 high); ``_resync`` crashed on it (seen with ``SYNC`` = 0.2 on the CMP photos).
     It maps that subtree proportionally, and the leaves still tile the region."""
-    from citygen_inverse.photo_tiles import Node, _resync
+    from citygen_photo.tiles import Node, _resync
     lower = Node(((20, 60, 0, 50),), None, (Node(((20, 30, 0, 50),), "wall"), Node(((30, 60, 0, 50),), "window")),
                  (("B", 30),))
     tree = Node(((0, 60, 0, 50),), None, (Node(((0, 20, 0, 50),), "wall"), lower), (("T", 20),))
@@ -343,7 +344,7 @@ def test_synchronised_split_that_no_longer_fits_is_mapped():
 
 def test_profile_split_finds_two_windows_and_partitions_the_tile():
     """Two windows side by side in one mean tile: two element strips between wall strips, a partition."""
-    from citygen_inverse.photo_tiles import EdgeImage, profile_split, wall_stats
+    from citygen_photo.tiles import EdgeImage, profile_split, wall_stats
     rng = np.random.default_rng(1)
     gray = 0.7 + 0.02 * rng.standard_normal((60, 80))
     gray[12:45, 10:30] = 0.2
@@ -356,7 +357,7 @@ def test_profile_split_finds_two_windows_and_partitions_the_tile():
 
 
 def test_profile_split_none_on_plain_wall():
-    from citygen_inverse.photo_tiles import EdgeImage, profile_split, wall_stats
+    from citygen_photo.tiles import EdgeImage, profile_split, wall_stats
     gray = 0.7 + 0.02 * np.random.default_rng(2).standard_normal((50, 50))
     edges = EdgeImage.of(gray)
     assert profile_split(edges, wall_stats(edges, [(0, 50, 0, 50)])) is None
@@ -381,7 +382,7 @@ def test_misaligned_group_windows_are_found_per_member():
     18): averaging members that are not aligned blurs the mean tile, §3.1 finds no window in it. The edge boxes
     found per member, with the group's size imposed, give every member's window exactly (they replace §3.1's
     windows in ``subdivide_groups`` where those cover less than ``COVER`` of them)."""
-    from citygen_inverse.photo_tiles import EdgeImage, box_split, stack_tree
+    from citygen_photo.tiles import EdgeImage, box_split, stack_tree
     gray, tiles, boxes = _misaligned_group()
     edges = EdgeImage.of(gray)
     mean_windows = [n.rects[0] for n in _leaves(stack_tree(edges, tiles, False)) if n.label == "window"]
@@ -401,7 +402,7 @@ def check_partition_of(tree, tiles) -> bool:
 def test_edge_box_member_off_the_group_size_takes_the_median():
     """A member whose own edge box has another size (a window merged with a dark shutter) takes the group's median
     box relative to its tile (§3.2: the group's common split imposed)."""
-    from citygen_inverse.photo_tiles import EdgeImage, box_split
+    from citygen_photo.tiles import EdgeImage, box_split
     gray, tiles, boxes = _misaligned_group()
     gray[165:195, 40:47] = 0.25  # third member: a shutter beside the window widens its box
     (r0, r1, c0, c1) = box_split(EdgeImage.of(gray), tiles).children[1].children[1].rects[2]
@@ -412,7 +413,7 @@ def test_window_box_refined_at_full_resolution():
     """Regression: boxes scaled up from the ~400 px work image are off by up to a work pixel (2.5 crop px on a
     1000 px CMP crop) plus the work image's blur; each side is moved to the strongest edge of the box's polarity
     at full resolution."""
-    from citygen_inverse.photo import refine_box
+    from citygen_photo.photo import refine_box
     gray = 0.7 + 0.02 * np.random.default_rng(3).standard_normal((300, 300))
     gray[57:139, 103:161] = 0.2
     assert refine_box(gray, (100.5, 60.0, 163.0, 135.5)) == (103.0, 57.0, 161.0, 139.0)

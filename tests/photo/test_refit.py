@@ -4,9 +4,9 @@ from __future__ import annotations
 import pytest
 
 from citygen.layout import FacadeLayout, Region, check_partition
-from citygen_inverse.photo import analyse
-from citygen_inverse.photo_refit import at, carry
-from citygen_inverse.photo_score import layout_boxes
+from citygen_photo.photo import analyse
+from citygen_photo.refit import at, carry
+from citygen_photo.score import layout_boxes
 from tests.photo.synthetic import facade
 
 #: Window edges between work pixels: a 1015 x 1026 crop is reduced 2.57 times (no edge on the work grid).

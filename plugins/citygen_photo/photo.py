@@ -22,7 +22,7 @@ The layout is in metres: ``width`` metres for the crop, else ``floor_height`` me
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -30,13 +30,13 @@ from scipy.ndimage import gaussian_filter
 
 from citygen.errors import LayoutError
 from citygen.layout import FacadeLayout, Region, check_partition
-from citygen_inverse.photo_doors import (axis_door, door_tile, ground_columns, mirror_axis, repeats_floor_above,
+from citygen_photo.doors import (axis_door, door_tile, ground_columns, mirror_axis, repeats_floor_above,
                                          untouched_tiles)
-from citygen_inverse.photo_elements import library
-from citygen_inverse.photo_refit import carry
-from citygen_inverse.photo_structure import GAP_TOLERANCE, edge_functions, interest, split_lines
-from citygen_inverse.photo_symmetry import detect_symmetry, irreducible, quantize, validated_period
-from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
+from citygen_photo.elements import library
+from citygen_photo.refit import carry
+from citygen_photo.structure import GAP_TOLERANCE, edge_functions, interest, split_lines
+from citygen_photo.symmetry import detect_symmetry, irreducible, quantize, validated_period
+from citygen_photo.tiles import TAU_SIZE, EdgeImage, Node, subdivide_groups
 
 #: Longest side (pixels) of the image the split lines and tiles are found in, and of the one for MI.
 WORK = 400
@@ -77,6 +77,7 @@ class PhotoAnalysis:
     elements: tuple[tuple[Box, str], ...]
     floor_period: float
     tile_period: float
+    probabilities: np.ndarray | None = field(default=None, compare=False, repr=False)  # (learned parser)
 
     def boxes(self, label: str = "window") -> list[Box]:
         return [b for b, lab in self.elements if lab == label]
@@ -383,9 +384,18 @@ def _layout(floors: np.ndarray, columns: list[np.ndarray], regular: np.ndarray, 
     return FacadeLayout(root.w, root.h, root), elements, paths
 
 
+#: How ``layout_from_photo`` finds elements: ``learned`` (the trained parser, :mod:`citygen_photo.learned`) or
+#: ``contrast`` (this module's intensity contrast test and element library, mueller2007 as published).
+PARSERS = ("learned", "contrast")
+
+
 def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,
-                      crop: tuple[float, float, float, float] | None = None) -> PhotoAnalysis:
-    """Read ``path`` and analyse it (see the module docstring)."""
+                      crop: tuple[float, float, float, float] | None = None, parser: str = "learned"
+                      ) -> PhotoAnalysis:
+    """Read ``path`` and analyse it with ``parser`` (one of :data:`PARSERS`)."""
     rgb = load_photo(path, crop)
     meta = {"source": Path(path).name, "image_crop": list(crop) if crop else None}
+    if parser == "learned":
+        from citygen_photo.learned import analyse_learned
+        return analyse_learned(rgb, str(path), width=width, floor_height=floor_height, meta=meta)
     return analyse(rgb, str(path), width=width, floor_height=floor_height, meta=meta)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citygen_inverse.photo_elements import cluster_type
-from citygen_inverse.photo_tiles import TAU_SIZE, EdgeImage, Node
+from citygen_photo.elements import cluster_type
+from citygen_photo.tiles import TAU_SIZE, EdgeImage, Node
 
 #: Half-widths searched around the mirror axis: each side may move this many working pixels off the symmetric
 #: position.

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from citygen_inverse.photo_elements import cluster_type
+from citygen_photo.elements import cluster_type
 
 #: §3.1 edge relevance factor (the paper uses 4 on its images; JPEG street photos need less).
 TAU_EDGE = 2.5

@@ -24,7 +24,7 @@ from PIL import Image
 
 from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.materials import look
-from citygen_inverse.photo_symmetry import BINS, mutual_information, quantize
+from citygen_photo.symmetry import BINS, mutual_information, quantize
 
 #: Wall context rendered (and compared) on each side of an element, as a fraction of its width / height.
 MARGIN = 0.25

@@ -1,0 +1,52 @@
+"""Per-pixel features of a facade photo for the learned facade parser (:mod:`citygen_photo.parser`).
+
+The photo (RGB in 0..1, already cropped to the facade) is reduced to ``WORK`` pixels on its longest side; every
+pixel gets ``FEATURES`` numbers: its colour, luminance normalised by the photo's own statistics (lighting
+invariance), local means, contrasts and gradient energies at three scales, its position in the facade, and the
+profile of its row and column (windows repeat in rows and columns: the profiles carry that context to each
+pixel). All filters are separable box and Sobel filters (scipy.ndimage), O(pixels).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import sobel, uniform_filter, zoom
+
+#: Longest side (pixels) the features are computed at.
+WORK = 192
+#: Box filter sizes (working pixels) of the local statistics.
+SCALES = (3, 9, 27)
+FEATURES = 30
+
+
+def working_image(rgb: np.ndarray, work: int = WORK) -> np.ndarray:
+    """``rgb`` (H, W, 3) in 0..1 resampled (linear) so its longest side is ``work`` pixels."""
+    h, w = rgb.shape[:2]
+    f = work / max(h, w)
+    shape = (max(8, round(h * f)), max(8, round(w * f)))
+    return np.clip(zoom(rgb, (shape[0] / h, shape[1] / w, 1), order=1), 0.0, 1.0)
+
+
+def pixel_features(rgb: np.ndarray) -> np.ndarray:
+    """``(H, W, FEATURES)`` float32 features of a working image ``rgb`` (H, W, 3) in 0..1."""
+    h, w = rgb.shape[:2]
+    lum = rgb @ np.array([0.299, 0.587, 0.114])
+    z = (lum - lum.mean()) / (lum.std() + 1e-6)
+    chroma = rgb.max(axis=2) - rgb.min(axis=2)
+    gx, gy = np.abs(sobel(z, axis=1)), np.abs(sobel(z, axis=0))
+    planes = [*(rgb[..., c] - rgb[..., c].mean() for c in range(3)), z, chroma, gx, gy]
+    for s in SCALES:
+        mean = uniform_filter(z, s, mode="reflect")
+        var = uniform_filter(z * z, s, mode="reflect") - mean * mean
+        planes += [mean, np.sqrt(np.clip(var, 0, None)), uniform_filter(gx, s, mode="reflect"),
+                   uniform_filter(gy, s, mode="reflect"), z - mean]
+    rows, cols = np.mgrid[0:h, 0:w]
+    yy, xx = rows / max(h - 1, 1), cols / max(w - 1, 1)
+    planes += [yy, xx, np.minimum(xx, 1 - xx)]
+    planes += [np.broadcast_to(z.mean(axis=1, keepdims=True), (h, w)),
+               np.broadcast_to(gy.mean(axis=1, keepdims=True), (h, w)),
+               np.broadcast_to(z.mean(axis=0, keepdims=True), (h, w)),
+               np.broadcast_to(gx.mean(axis=0, keepdims=True), (h, w)),
+               z - np.broadcast_to(np.median(z, axis=1, keepdims=True), (h, w))]
+    out = np.stack(planes, axis=-1).astype(np.float32)
+    assert out.shape[-1] == FEATURES
+    return out

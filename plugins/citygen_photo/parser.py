@@ -1,0 +1,119 @@
+"""The learned facade parser: per-pixel probabilities of the 12 CMP labels for a facade photo.
+
+Two stages (auto-context): stage 1 is a small multilayer perceptron on :func:`citygen_photo.features.pixel_features`;
+stage 2 another one on the same features plus stage 1's probabilities averaged over a neighbourhood and profiled
+along the pixel's row and column, so a pixel learns from the labels around it (a window pane between window
+frames, a door below a window column). Weights ship in ``model/facade_parser.npz`` (trained by
+:mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
+is numpy only and nothing is downloaded.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.ndimage import uniform_filter, zoom
+
+from citygen.errors import LayoutError
+from citygen_photo.features import pixel_features, working_image
+from citygen_photo.labels import CMP_LABELS
+
+MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
+#: Neighbourhood (working pixels) over which stage 1's probabilities are averaged for stage 2.
+CONTEXT = 15
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One perceptron: feature standardisation and (weights, bias) per layer; ReLU between, softmax at the end."""
+
+    mean: np.ndarray
+    std: np.ndarray
+    layers: tuple[tuple[np.ndarray, np.ndarray], ...]
+
+    def arrays(self, prefix: str) -> dict[str, np.ndarray]:
+        out = {f"{prefix}_mean": self.mean, f"{prefix}_std": self.std}
+        for k, (w, b) in enumerate(self.layers):
+            out[f"{prefix}_w{k}"], out[f"{prefix}_b{k}"] = w, b
+        return out
+
+    @classmethod
+    def from_arrays(cls, data, prefix: str) -> Stage:
+        count = sum(1 for key in data if key.startswith(f"{prefix}_w"))
+        return cls(data[f"{prefix}_mean"], data[f"{prefix}_std"],
+                   tuple((data[f"{prefix}_w{k}"], data[f"{prefix}_b{k}"]) for k in range(count)))
+
+
+def predict_stage(stage: Stage, features: np.ndarray) -> np.ndarray:
+    """Label probabilities ``(..., 12)`` for ``features`` ``(..., F)``."""
+    shape = features.shape[:-1]
+    x = (features.reshape(-1, features.shape[-1]) - stage.mean) / stage.std
+    for k, (w, b) in enumerate(stage.layers):
+        x = x @ w + b
+        if k < len(stage.layers) - 1:
+            np.maximum(x, 0, out=x)
+    x -= x.max(axis=1, keepdims=True)
+    np.exp(x, out=x)
+    x /= x.sum(axis=1, keepdims=True)
+    return x.reshape(*shape, len(CMP_LABELS))
+
+
+def context_features(prob: np.ndarray) -> np.ndarray:
+    """Stage 2's extra features ``(H, W, 36)``: the probabilities averaged over ``CONTEXT`` pixels, and their
+    means along the pixel's row and column."""
+    h, w, n = prob.shape
+    local = uniform_filter(prob, size=(CONTEXT, CONTEXT, 1), mode="nearest")
+    rows = np.broadcast_to(prob.mean(axis=1, keepdims=True), (h, w, n))
+    cols = np.broadcast_to(prob.mean(axis=0, keepdims=True), (h, w, n))
+    return np.concatenate([local, rows, cols], axis=-1).astype(np.float32)
+
+
+@dataclass(frozen=True)
+class FacadeParser:
+    """The two trained stages."""
+
+    stage1: Stage
+    stage2: Stage
+    prior: np.ndarray  # label share in the photos / share in the training sample (see citygen_photo.train)
+
+    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+        """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size
+        (longest side :data:`citygen_photo.features.WORK`)."""
+        features = pixel_features(working_image(rgb))
+        first = predict_stage(self.stage1, features)
+        second = predict_stage(self.stage2, np.concatenate([features, context_features(first)], axis=-1))
+        second *= self.prior
+        return second / second.sum(axis=-1, keepdims=True)
+
+
+@functools.lru_cache(maxsize=4)
+def load_parser(path: Path = MODEL_PATH) -> FacadeParser:
+    """The parser whose weights are in ``path`` (the shipped model by default)."""
+    try:
+        with np.load(path) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (OSError, ValueError) as exc:
+        raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
+                          hint="reinstall citygen, or train a model with python -m citygen_photo.train") from None
+    return FacadeParser(Stage.from_arrays(arrays, "s1"), Stage.from_arrays(arrays, "s2"), arrays["prior"])
+
+
+def upsampled(prob: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``prob`` (h, w, n) resampled (linear) to ``shape`` pixels."""
+    return zoom(prob, (shape[0] / prob.shape[0], shape[1] / prob.shape[1], 1), order=1)
+
+
+def load_labels(jpg: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A CMP photo cropped to its annotated facade box (RGB in 0..1) and its label map (ids 1..12) of the same
+    crop."""
+    from PIL import Image
+
+    from citygen_photo.photo import load_photo
+    from citygen_photo.score import cmp_boxes, facade_box
+    with Image.open(jpg.with_suffix(".png")) as image:
+        labels = np.asarray(image)
+    boxes = cmp_boxes(jpg.with_suffix(".xml"), (labels.shape[1], labels.shape[0]))
+    x0, y0, x1, y1 = (round(v) for v in facade_box(boxes))
+    return load_photo(jpg, (x0, y0, x1, y1)), labels[y0:y1, x0:x1]

@@ -1,0 +1,271 @@
+"""A regular facade layout from the learned parser's label probabilities (mueller2007 §2-§3 on label maps).
+
+The parser (:mod:`citygen_photo.parser`) says, per pixel, how likely each CMP label is; this module finds the
+structure mueller2007 looks for -- floors, tiles, and one subdivision shared by similar tiles -- in those
+probabilities instead of in raw intensities, and writes it as a FacadeLayout:
+
+1. **Floors** (§2.2-2.4): the rows of windows are the runs of the window probability's row profile; floor lines
+   lie in the gaps between them. A gap much longer than the others' pitch holds floors whose windows the parser
+   missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
+   floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
+   few. A band below the lowest row at least half a floor tall is the ground floor.
+2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
+   upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
+   voted per tile (the mean probability in its window box).
+3. **Synchronised sizes** (§3.2, wu2014 §3.3): windows share their row's height and their column's width; rows
+   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size.
+4. **Ground floor**: shops and the entrance door from their own probabilities and their own columns (the upper
+   floors' tile lines do not cut a shop window); the door stands on the ground.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from citygen.layout import FacadeLayout, Region
+from citygen_photo.labels import CMP_LABELS
+
+WINDOW, DOOR, SHOP, BLIND = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind"))
+#: A row or column belongs to a run of windows where its profile exceeds this share of the profile's high value.
+RUN_SHARE = 0.4
+#: Rows (columns) of windows whose height (width) is within this share of the median take the median.
+SAME_SIZE = 0.25
+#: A tile holds a window when the mean window (or blind) probability in its box reaches this.
+VOTE = 0.25
+#: A window's sides lie where its row's (column's) window probability reaches this share of its peak.
+TIGHT = 0.5
+#: A gap between rows of windows this many pitches long holds more floors.
+MISSING_ROW = 1.6
+#: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
+GROUND_SHARE = 0.5
+
+Span = tuple[float, float]
+Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in working pixels, y down
+
+
+@dataclass(frozen=True)
+class RegularFacade:
+    """Structure in working pixels (y down): floor lines top to bottom, the upper floors' tile lines, element
+    boxes with labels, the floor pitch and tile pitch (0 when unknown)."""
+
+    floor_lines: tuple[float, ...]
+    tile_lines: tuple[float, ...]
+    elements: tuple[tuple[Box, str], ...]
+    pitch: float
+    tile_pitch: float
+    ground: bool
+
+
+def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2) -> list[Span]:
+    """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least 0.08), at least
+    ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
+    high = float(np.percentile(profile, 95)) if profile.size else 0.0
+    above = profile > max(share * high, 0.08)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], above.astype(np.int8), [0]])))
+    spans = [(float(a), float(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= least]
+    if len(spans) < 2:
+        return spans
+    joined = [spans[0]]
+    close = 0.25 * float(np.median([b - a for a, b in spans]))
+    for a, b in spans[1:]:
+        if a - joined[-1][1] < close:
+            joined[-1] = (joined[-1][0], b)
+        else:
+            joined.append((a, b))
+    return joined
+
+
+def synchronised(spans: list[Span]) -> list[Span]:
+    """Spans within ``SAME_SIZE`` of the median length resized to it about their centres."""
+    if not spans:
+        return spans
+    median = float(np.median([b - a for a, b in spans]))
+    out = []
+    for a, b in spans:
+        if abs((b - a) - median) <= SAME_SIZE * median:
+            c = (a + b) / 2
+            a, b = c - median / 2, c + median / 2
+        out.append((a, b))
+    return out
+
+
+def _pitch(rows: list[Span], period: float | None) -> float:
+    """The floor pitch: the median distance between row centres, else the mutual-information period."""
+    if len(rows) >= 3 or (len(rows) == 2 and not period):
+        return float(np.median(np.diff([(a + b) / 2 for a, b in rows])))
+    return float(period or 0.0)
+
+
+def _with_missing_rows(rows: list[Span], pitch: float) -> list[Span]:
+    """Rows with the ones the parser missed put back: a gap of ``k`` pitches between two rows holds ``k - 1``."""
+    if pitch <= 0 or len(rows) < 2:
+        return rows
+    out = [rows[0]]
+    for a, b in rows[1:]:
+        pa, pb = out[-1]
+        k = round(((a + b) / 2 - (pa + pb) / 2) / pitch)
+        if ((a + b) / 2 - (pa + pb) / 2) >= MISSING_ROW * pitch and k >= 2:
+            step = ((a + b) / 2 - (pa + pb) / 2) / k
+            out += [(pa + i * step, pb + i * step) for i in range(1, k)]
+        out.append((a, b))
+    return out
+
+
+def regular_facade(prob: np.ndarray, period: float | None = None,
+                   door: Callable[[float], Box | None] | None = None) -> RegularFacade:
+    """The structure of a facade from its label probabilities ``prob`` (h, w, 12); ``period``: the floor period
+    (working pixels) by mutual information, used where the rows of windows alone cannot tell the pitch; ``door``:
+    the entrance door of a ground floor starting at a given line (working pixels), found by other means, taken
+    before the door probability's."""
+    h, w, _ = prob.shape
+    window = prob[..., WINDOW] + prob[..., BLIND]  # (a window behind closed blinds is a window of the layout)
+    rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
+    pitch = _pitch(rows, period)
+    rows = synchronised(_with_missing_rows(rows, pitch))
+    lines = [0.0]
+    for (_, b), (a, _) in zip(rows, rows[1:]):
+        lines.append((b + a) / 2)
+    ground_top = None
+    if rows:
+        gap = float(np.median([a - b for (_, b), (a, _) in zip(rows, rows[1:])])) if len(rows) > 1 else 0.1 * h
+        below = rows[-1][1] + max(gap, 0.0) / 2
+        if pitch and h - below >= GROUND_SHARE * pitch:
+            ground_top = below
+            lines.append(below)
+    lines.append(float(h))
+    lines = _monotonic(lines, h)
+    upper = window[: round(ground_top) if ground_top else h]
+    inside = np.zeros(upper.shape[0], dtype=bool)
+    for a, b in rows:
+        inside[max(int(a), 0):min(int(np.ceil(b)), upper.shape[0])] = True
+    columns = runs(gaussian_filter1d(upper[inside].mean(axis=0), 1.0), least=max(2, round(0.01 * w))) \
+        if inside.any() else []
+    glass = prob[..., WINDOW]  # (sides from the glass alone: open shutters beside a window are not the window)
+    rows = [_tightened(glass, row, columns, 0) for row in rows]  # each row's height from its windows' pixels
+    columns = synchronised([_tightened(glass[:upper.shape[0]], column, rows, 1) for column in columns])
+    rows = synchronised(rows)
+    tiles = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
+    elements: list[tuple[Box, str]] = []
+    for a, b in rows:
+        for c, d in columns:
+            box = _clip((c, a, d, b), w, h)
+            if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
+                elements.append((box, "window"))
+    if ground_top is not None:
+        elements += _ground(prob, ground_top, door(ground_top) if door else None)
+    tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
+    return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
+
+
+def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) -> Span:
+    """A row (``axis`` 0) or column (1) of windows narrowed to where the window probability, averaged over the
+    ``across`` columns (rows) of windows, reaches ``TIGHT`` of its peak: every tile of the row votes on the
+    windows' common height (mueller2007 §3.2), so a sill or a blind reaching into one tile does not stretch it."""
+    if not across:
+        return span
+    n = window.shape[axis]
+    mask = np.zeros(window.shape[1 - axis], dtype=bool)
+    for a, b in across:
+        mask[max(int(a), 0):min(int(np.ceil(b)), mask.size)] = True
+    pad = 0.25 * (span[1] - span[0])
+    lo, hi = max(int(span[0] - pad), 0), min(int(np.ceil(span[1] + pad)), n)
+    block = window[lo:hi][:, mask] if axis == 0 else window[:, lo:hi][mask]
+    profile = block.mean(axis=1 - axis) if block.size else np.zeros(0)
+    if profile.size == 0 or profile.max() < 0.1:
+        return span
+    above = np.flatnonzero(profile >= TIGHT * profile.max())
+    return (float(lo + above[0]), float(lo + above[-1] + 1))
+
+
+def _monotonic(lines: list[float], h: int, least: float = 2.0) -> list[float]:
+    """Floor lines from 0 to ``h`` at least ``least`` pixels apart (rows that synchronisation made overlap, or a
+    ground floor line above the last row, drop the line that comes too close)."""
+    out = [0.0]
+    for y in sorted(lines[1:-1]):
+        if y - out[-1] >= least and h - y >= least:
+            out.append(y)
+    return [*out, float(h)]
+
+
+def _clip(box: Box, w: int, h: int) -> Box | None:
+    x0, y0, x1, y1 = max(box[0], 0.0), max(box[1], 0.0), min(box[2], float(w)), min(box[3], float(h))
+    return (x0, y0, x1, y1) if x1 - x0 >= 1 and y1 - y0 >= 1 else None
+
+
+def _ground(prob: np.ndarray, top: float, door: Box | None = None) -> list[tuple[Box, str]]:
+    """Shops and the entrance door of the ground floor (``top``..h), each on its own columns, standing on the
+    ground; the door (``door``, else the most probable door column) cuts the shop it falls in."""
+    h, w, _ = prob.shape
+    band = prob[round(top):]
+    out: list[tuple[Box, str]] = []
+    door_cols = [] if door else runs(band[..., DOOR].mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
+    if door_cols:
+        c, d = max(door_cols, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1])), DOOR].sum())
+        rows = runs(band[:, int(c):int(np.ceil(d)), DOOR].mean(axis=1), share=0.5)
+        if rows and band[:, int(c):int(np.ceil(d)), DOOR].mean() >= 0.15:
+            door = _clip((c, top + rows[0][0], d, float(h)), w, h)
+    for c, d in runs(band[..., SHOP].mean(axis=0), share=0.5, least=max(2, round(0.03 * w))):
+        rows = runs(band[:, int(c):int(np.ceil(d)), SHOP].mean(axis=1), share=0.5)
+        if not rows:
+            continue
+        pieces = [(c, d)] if door is None or door[2] <= c or door[0] >= d else \
+            [(c, door[0]), (door[2], d)]
+        for a, b in pieces:
+            box = _clip((a, top + rows[0][0], b, float(h)), w, h)
+            if box and box[2] - box[0] >= 0.02 * w:
+                out.append((box, "shop"))
+    if door is not None:
+        out.append((door, "door"))
+    return out
+
+
+def facade_layout(facade: RegularFacade, h: int, w: int, scale: float, meta: dict) -> FacadeLayout:
+    """The partition of the ``w x h`` working-pixel facade (``scale`` metres per working pixel): floors bottom to
+    top, each split into columns at its elements' sides, each column into wall / element / wall."""
+    def metres_y(y: float) -> float:
+        return (h - y) * scale
+    lines = facade.floor_lines
+    per_floor: list[list[tuple[Box, str]]] = [[] for _ in lines[1:]]
+    for (x0, y0, x1, y1), label in facade.elements:  # each element in the floor of its centre, clipped to it
+        k = min(max(int(np.searchsorted(lines, (y0 + y1) / 2)) - 1, 0), len(per_floor) - 1)
+        y0, y1 = max(y0, lines[k]), min(y1, lines[k + 1])
+        if y1 - y0 >= 1:
+            per_floor[k].append(((x0, y0, x1, y1), label))
+    floors = []
+    for k, boxes in enumerate(per_floor):
+        ground = facade.ground and k == len(per_floor) - 1
+        name = "Ground" if ground else "Top" if k == 0 else "Floor"
+        floors.append(_floor(name, sorted(boxes), metres_y(lines[k + 1]), metres_y(lines[k]), w, h, scale))
+    root = Region(0.0, 0.0, w * scale, h * scale, "Facade", children=tuple(reversed(floors)))
+    return FacadeLayout(w * scale, h * scale, root, meta)
+
+
+def _floor(name: str, boxes: list[tuple[Box, str]], y0: float, y1: float, w: int, h: int, scale: float) -> Region:
+    """One floor ``y0..y1`` (metres, y up) split at its elements' sides; each element column split into wall
+    below, the element, wall above (elements in working pixels of a ``w x h`` facade, y down)."""
+    cuts: list[tuple[float, float, tuple[float, float, str] | None]] = []
+    x = 0.0
+    for (bx0, by0, bx1, by1), label in boxes:
+        bx0 = max(bx0, x)  # (overlapping boxes of one floor: the later one starts where the earlier ends)
+        if bx1 - bx0 < 1:
+            continue
+        if bx0 > x:
+            cuts.append((x, bx0, None))
+        cuts.append((bx0, bx1, ((h - by1) * scale, (h - by0) * scale, label)))
+        x = bx1
+    if x < w:
+        cuts.append((x, float(w), None))
+    columns = []
+    for a, b, element in cuts:
+        xa, wd = a * scale, (b - a) * scale
+        if element is None:
+            columns.append(Region(xa, y0, wd, y1 - y0, "Wall", "wall"))
+            continue
+        ey0, ey1, label = max(element[0], y0), min(element[1], y1), element[2]
+        parts = [(y0, ey0, "Wall", "wall"), (ey0, ey1, label.capitalize(), label), (ey1, y1, "Wall", "wall")]
+        columns.append(Region(xa, y0, wd, y1 - y0, f"{label.capitalize()}Tile", children=tuple(
+            Region(xa, a0, wd, a1 - a0, sym, lab) for a0, a1, sym, lab in parts if a1 - a0 > 1e-9)))
+    return Region(0.0, y0, w * scale, y1 - y0, name, children=tuple(columns))

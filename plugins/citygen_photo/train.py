@@ -1,0 +1,111 @@
+"""Train the learned facade parser on CMP photos: ``python -m citygen_photo.train [DATA] [-o MODEL.npz]``.
+
+Needs scikit-learn (``pip install -e '.[photo-train]'``); the shipped model (``model/facade_parser.npz``) was made
+by this script with its defaults, so the result is reproducible from the seed on the same photos. Photos
+cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation (``benchmarks/photo_eval.py``) and never seen here.
+
+Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`),
+and ``--samples`` pixels are drawn per photo (rare labels drawn more often). Stage 1 is a multilayer perceptron on
+the pixel features; stage 2 (auto-context) another one on the same features plus stage 1's label probabilities
+smoothed over the neighbourhood and profiled along rows and columns. Both are exported as plain weight arrays,
+with the ratio of each label's share of the photos to its share of the drawn pixels (``prior``), by which inference
+turns stage 2's output back into probabilities under the photos' own label frequencies; inference
+(:mod:`citygen_photo.parser`) needs numpy only.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from citygen_photo.features import pixel_features, working_image
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.parser import MODEL_PATH, Stage, context_features, load_labels, predict_stage
+from citygen_photo.photo import load_photo
+
+TRAIN = range(61, 301)
+DEFAULT_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
+
+
+def facade_examples(data: Path, numbers: range) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(features, labels) at working size for every photo of ``numbers`` in ``data`` (missing ones skipped)."""
+    out = []
+    for n in numbers:
+        jpg = data / f"cmp_b{n:04d}.jpg"
+        if not jpg.exists():
+            continue
+        rgb, labels = load_labels(jpg)
+        work = working_image(rgb)
+        lab = _resized_labels(labels, work.shape[:2])
+        out.append((work, lab))
+    return out
+
+
+def _resized_labels(labels: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    rows = np.minimum((np.arange(shape[0]) + 0.5) * labels.shape[0] / shape[0], labels.shape[0] - 1).astype(int)
+    cols = np.minimum((np.arange(shape[1]) + 0.5) * labels.shape[1] / shape[1], labels.shape[1] - 1).astype(int)
+    return labels[np.ix_(rows, cols)]
+
+
+def sample(lab: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Flat indices of ``count`` pixels, each label's weight the square root of its share (rare labels more)."""
+    flat = lab.ravel()
+    share = np.bincount(flat, minlength=len(CMP_LABELS)) / flat.size
+    weight = np.where(share > 0, 1 / np.sqrt(np.maximum(share, 1e-9)), 0)[flat]
+    return rng.choice(flat.size, size=min(count, flat.size), replace=False, p=weight / weight.sum())
+
+
+def fit(x: np.ndarray, y: np.ndarray, hidden: tuple[int, ...], seed: int) -> Stage:
+    from sklearn.neural_network import MLPClassifier
+    mean, std = x.mean(axis=0), x.std(axis=0) + 1e-6
+    mlp = MLPClassifier(hidden_layer_sizes=hidden, alpha=1e-4, batch_size=512, learning_rate_init=2e-3,
+                        max_iter=40, early_stopping=True, n_iter_no_change=4, random_state=seed)
+    mlp.fit((x - mean) / std, y)
+    full_w, full_b = mlp.coefs_[-1], mlp.intercepts_[-1]
+    last_w = np.zeros((full_w.shape[0], len(CMP_LABELS)), dtype=np.float32)
+    last_b = np.full(len(CMP_LABELS), -30.0, dtype=np.float32)  # labels never seen stay improbable
+    last_w[:, mlp.classes_] = full_w
+    last_b[mlp.classes_] = full_b
+    layers = [(w.astype(np.float32), b.astype(np.float32)) for w, b in zip(mlp.coefs_[:-1], mlp.intercepts_[:-1])]
+    return Stage(mean.astype(np.float32), std.astype(np.float32), (*layers, (last_w, last_b)))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA)
+    parser.add_argument("-o", "--output", type=Path, default=MODEL_PATH)
+    parser.add_argument("--samples", type=int, default=1500, help="pixels drawn per photo")
+    parser.add_argument("--seed", type=int, default=7)
+    args = parser.parse_args(argv)
+    t0 = time.process_time()
+    rng = np.random.default_rng(args.seed)
+    photos = facade_examples(args.data, TRAIN)
+    if not photos:
+        print(f"no CMP photos cmp_b0061-0300 in {args.data}", file=sys.stderr)
+        return 2
+    feats = [pixel_features(work) for work, _ in photos]
+    picks = [sample(lab, args.samples, rng) for _, lab in photos]
+    y = np.concatenate([lab.ravel()[p] for (_, lab), p in zip(photos, picks)]) - 1
+    x1 = np.concatenate([f.reshape(-1, f.shape[-1])[p] for f, p in zip(feats, picks)])
+    stage1 = fit(x1, y, (64, 64), args.seed)
+    print(f"stage 1: {len(photos)} photos, {len(y)} pixels, {time.process_time() - t0:.0f} s cpu", file=sys.stderr)
+    x2 = np.concatenate([np.concatenate([f, context_features(predict_stage(stage1, f))], axis=-1)
+                         .reshape(-1, f.shape[-1] + 3 * len(CMP_LABELS))[p] for f, p in zip(feats, picks)])
+    stage2 = fit(x2, y, (64, 64), args.seed + 1)
+    print(f"stage 2: {time.process_time() - t0:.0f} s cpu", file=sys.stderr)
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    counts = sum(np.bincount(lab.ravel() - 1, minlength=len(CMP_LABELS)) for _, lab in photos)
+    drawn = np.bincount(y, minlength=len(CMP_LABELS))
+    prior = (counts / counts.sum()) / np.maximum(drawn / drawn.sum(), 1e-9)  # undoes the sampling's label weights
+    arrays = {**stage1.arrays("s1"), **stage2.arrays("s2"), "prior": prior.astype(np.float32)}
+    with open(args.output, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+    print(f"wrote {args.output} ({args.output.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,101 @@
+"""The learned facade parser and the regular structure found in its probabilities (citygen_photo.regular,
+.learned): synthetic probability maps with known floors, tiles, shops and a door; the shipped model on a synthetic
+photo; the CLI's --labels and --png pictures."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from citygen.layout import check_partition
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.regular import DOOR, SHOP, WINDOW, facade_layout, regular_facade
+from tests.photo.synthetic import facade
+
+
+def probabilities(floors: int = 4, cols: int = 5, floor_h: int = 30, tile_w: int = 24, win=(14, 10),
+                  ground_h: int = 0, shop: bool = False, miss: tuple[tuple[int, int], ...] = (),
+                  jitter: float = 0.0, seed: int = 0) -> np.ndarray:
+    """Label probabilities of a regular facade: windows ``win`` (h, w) in a grid, wall elsewhere; a ground floor
+    with a shop front and a door; ``miss`` windows the parser 'missed'; window sizes jittered by ``jitter``."""
+    rng = np.random.default_rng(seed)
+    h, w = floors * floor_h + ground_h, cols * tile_w
+    prob = np.zeros((h, w, len(CMP_LABELS)))
+    prob[..., CMP_LABELS.index("facade")] = 1.0
+    for i in range(floors):
+        for j in range(cols):
+            if (i, j) in miss:
+                continue
+            dh, dw = (rng.integers(-1, 2, size=2) * jitter).astype(int)
+            r0, c0 = i * floor_h + 8, j * tile_w + 7
+            prob[r0:r0 + win[0] + dh, c0:c0 + win[1] + dw] = np.eye(len(CMP_LABELS))[WINDOW]
+    if ground_h:
+        top = floors * floor_h
+        if shop:
+            prob[top + 6:, 4:40] = np.eye(len(CMP_LABELS))[SHOP]
+        prob[top + 4:, 50:60] = np.eye(len(CMP_LABELS))[DOOR]
+    return prob
+
+
+def test_floors_tiles_and_one_window_size():
+    facade_ = regular_facade(probabilities(jitter=1.0))
+    assert len(facade_.floor_lines) - 1 == 4 and len(facade_.tile_lines) - 1 == 5
+    windows = [b for b, label in facade_.elements if label == "window"]
+    assert len(windows) == 20
+    sizes = {(round(b[2] - b[0], 6), round(b[3] - b[1], 6)) for b in windows}
+    assert len(sizes) == 1  # synchronised: one window size for the whole regular facade
+    assert facade_.pitch == pytest.approx(30, abs=1)
+
+
+def test_a_missed_window_is_voted_out_and_a_missed_row_put_back():
+    facade_ = regular_facade(probabilities(floors=5, miss=((2, 0), (2, 1), (2, 2), (2, 3), (2, 4), (0, 3))))
+    assert len(facade_.floor_lines) - 1 == 5  # the third floor's whole row was missed: the pitch puts its floor back
+    # tiles vote on what the parser saw: the missed row's tiles and the one missed window stay wall
+    assert sum(label == "window" for _, label in facade_.elements) == 25 - 5 - 1
+
+
+def test_ground_floor_with_shop_and_door_keeps_its_own_columns():
+    prob = probabilities(ground_h=40, shop=True)
+    facade_ = regular_facade(prob)
+    assert facade_.ground
+    labels = [label for _, label in facade_.elements]
+    assert labels.count("door") == 1 and labels.count("shop") == 1
+    door = next(b for b, label in facade_.elements if label == "door")
+    assert door[3] == prob.shape[0]  # the door stands on the ground
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == []
+    ground = layout.root.children[0]
+    assert ground.symbol == "Ground" and {r.label for r in ground.terminals()} == {"wall", "shop", "door"}
+
+
+def test_layout_partitions_in_metres():
+    prob = probabilities()
+    facade_ = regular_facade(prob)
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {"source": "synthetic"})
+    assert check_partition(layout) == []
+    assert layout.width == pytest.approx(12.0) and layout.height == pytest.approx(12.0)
+    assert layout.count("window") == 20
+
+
+def test_the_shipped_parser_finds_windows_on_a_synthetic_photo():
+    from citygen_photo.learned import analyse_learned
+    rgb, boxes, _ = facade(floors=5, cols=6)
+    result = analyse_learned(rgb, "synthetic", floor_height=3.0)
+    assert check_partition(result.layout) == []
+    assert result.probabilities.shape[-1] == len(CMP_LABELS)
+    assert len(result.floor_lines) - 1 == 5
+    assert result.layout.count("window") >= 20
+
+
+def test_cli_writes_the_label_map_and_the_overlay(tmp_path, capsys):
+    from PIL import Image
+
+    from citygen.cli import main
+    rgb, _, _ = facade(floors=4, cols=5)
+    photo = tmp_path / "f.png"
+    Image.fromarray(np.round(rgb * 255).astype(np.uint8)).save(photo)
+    out, labels, overlay = tmp_path / "f.json", tmp_path / "pics" / "labels.png", tmp_path / "pics" / "over.png"
+    assert main(["layout", "from-photo", str(photo), "-o", str(out), "--labels", str(labels),
+                 "--png", str(overlay)]) == 0
+    with Image.open(labels) as a, Image.open(overlay) as b:
+        assert a.size == b.size == (rgb.shape[1], rgb.shape[0])
+    assert "windows" in capsys.readouterr().err
