@@ -16,8 +16,12 @@ from typing import Any
 
 from citygen.errors import SceneError, SourceLocation, read_user_text
 from citygen.request import MIN_STOREY
+from citygen.usd.materials import Material, parse_materials, read_materials, sidecar
 
 UP_AXES = ("Z", "Y")
+#: ``[output] lod``: ``variants`` (a variant set ``LOD``: ``LOD0`` facades, ``LOD1`` mass and roof), ``purpose``
+#: (both at once, as a render/proxy pair) or ``none``; ``true``/``false`` (the old switch) mean variants/none.
+LOD_MODES = ("variants", "purpose", "none")
 INSTANCING = ("modules", "elements")
 FACE_SCOPES = ("all", "street", "courtyard")
 
@@ -88,8 +92,9 @@ class Output:
     instancing: str = "modules"
     tile_layers: bool = False
     uvs: bool = False
-    lod: bool = False
+    lod: str = "variants"
     ground: bool = False
+    keep_tags: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -105,6 +110,7 @@ class Scene:
     assignments: tuple[Assignment, ...]
     output: Output
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    materials: Mapping[str, Material] = field(default_factory=dict)
 
 
 def _line_of(text: str, key: str, start: int = 0) -> int | None:
@@ -193,9 +199,10 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
     r = _Reader(path, text, roof_shapes, kinds)
-    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
+    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output", "materials"})
     if unknown:
-        r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",
+        r.fail(f"unknown table [{unknown[0]}]",
+               hint="valid tables: scene, footprints, defaults, assign, output, materials",
                line=_line_of(text, unknown[0]) or 1)
     meta = r.table(data, "scene", {"name", "seed", "description"})
     seed = meta.get("seed", 0)
@@ -213,23 +220,53 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     defaults = Defaults(**numbers, roof_shape=shape)
     r.pitch(defaults.roof_pitch, _line_of(text, "roof_pitch", at))
     out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers", "uvs", "lod",
-                                     "ground"})
+                                     "ground", "keep_tags"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
-    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "lod", "ground")}
+    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "ground")}
     for key, value in flags.items():
         if not isinstance(value, bool):
             r.fail(f"{key} must be true or false, got {value!r}", key)
+    lod = out.get("lod", "variants")
+    lod = {True: "variants", False: "none"}.get(lod, lod) if isinstance(lod, bool) else lod
+    if lod not in LOD_MODES:
+        r.fail(f"lod must be one of {', '.join(LOD_MODES)}, got {out.get('lod')!r}", "lod",
+               hint="variants: a variant set LOD (LOD0 facades, LOD1 mass); purpose: a render/proxy pair")
+    keep = out.get("keep_tags", [])
+    if not isinstance(keep, list) or not all(isinstance(k, str) and k for k in keep):
+        r.fail(f"keep_tags must be a list of tag names or patterns, got {keep!r}", "keep_tags",
+               hint='e.g. keep_tags = ["name", "addr:*"]')
     output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, **flags)
+                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, lod=lod,
+                    keep_tags=tuple(keep), **flags)
+    assignments = _assignments(r, data.get("assign", []))
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
-                 assignments=_assignments(r, data.get("assign", [])), output=output,
-                 metadata={"description": meta.get("description", "")})
+                 assignments=assignments, output=output, metadata={"description": meta.get("description", "")},
+                 materials=_materials(r, data.get("materials", {}), assignments))
+
+
+def _materials(r: _Reader, table: Any, assignments: tuple[Assignment, ...]) -> dict[str, Material]:
+    """The materials rulesets (their ``<stem>.materials.toml`` sidecars) and the scene's ``[materials]`` define;
+    the scene's win over a ruleset's of the same name, both over the built-ins."""
+    if not isinstance(table, Mapping):
+        r.fail("[materials] must be a table of material tables", "materials")
+    found: dict[str, Material] = {}
+    for a in assignments:
+        for ruleset in a.rulesets + ((a.fallback,) if a.fallback else ()):
+            if _is_file(side := sidecar(ruleset)):
+                found.update(read_materials(side))
+    for name, spec in table.items():
+        try:
+            found.update(parse_materials({name: spec}, str(r.path), r.path.parent))
+        except SceneError as exc:
+            header = re.search(rf"^\s*\[materials\.\"?{re.escape(str(name))}\"?\]", r.text, re.M)
+            r.fail(exc.message, line=r.text.count("\n", 0, header.start()) + 1 if header else None, hint=exc.hint)
+    return found
 
 
 def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:

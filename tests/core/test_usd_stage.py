@@ -7,8 +7,9 @@ from pxr import Kind, Usd, UsdGeom, UsdSemantics
 from citygen.cli import main
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
+from citygen.errors import SceneError
 from citygen.usd.validate import validate_stage
-from tests.usd_util import buildings, element_labels
+from tests.usd_util import buildings, element_labels, world_points
 
 
 def generate(scene_path, registry, out, **kw):
@@ -174,24 +175,49 @@ def test_no_uvs_unless_asked(small_scene, test_registry, tmp_path):
 
 
 def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small_scene, test_registry, tmp_path):
+    """On by default, named as importers read them (Unreal: a set ``LOD`` of ``LOD0``, ``LOD1``, ...)."""
+    report = generate(small_scene, test_registry, tmp_path / "lod.usda")
+    with_output(small_scene, 'lod = "none"')
     plain = generate(small_scene, test_registry, tmp_path / "plain.usda")
-    with_output(small_scene, 'lod = true')
-    report = generate(small_scene, test_registry, None)
     assert errors(report.stats.path) == []
     stage, before = Usd.Stage.Open(str(report.stats.path)), Usd.Stage.Open(str(plain.stats.path))
     detailed = sorted(str(p.GetPath()) for p in stage.Traverse())
-    assert detailed == sorted(str(p.GetPath()) for p in before.Traverse())  # "full" composes as without variants
+    assert detailed == sorted(str(p.GetPath()) for p in before.Traverse())  # LOD0 composes as without variants
     for prim in buildings(stage):
-        lods = prim.GetVariantSets().GetVariantSet("lod")
-        assert lods.GetVariantNames() == ["full", "mass"] and lods.GetVariantSelection() == "full"
+        lods = prim.GetVariantSets().GetVariantSet("LOD")
+        assert lods.GetVariantNames() == ["LOD0", "LOD1"] and lods.GetVariantSelection() == "LOD0"
         faces = len(UsdGeom.Mesh(prim.GetChild("Roof")).GetFaceVertexCountsAttr().Get()) > 0
         assert faces and prim.GetChild("Facade") and not prim.GetChild("Walls")
-        lods.SetVariantSelection("mass")
+        lods.SetVariantSelection("LOD1")
         walls = UsdGeom.Mesh(prim.GetChild("Walls"))
         assert walls and prim.GetChild("Roof") and not prim.GetChild("Facade") and not prim.GetChild("Elements")
         z = np.array(walls.GetPointsAttr().Get())[:, 2]
         height = prim.GetAttribute("citygen:height").Get()
         assert z.max() - z.min() == pytest.approx(height, abs=1e-3)
+
+
+@pytest.mark.parametrize("option, mode", [("lod = true", "variants"), ("lod = false", "none")])
+def test_the_old_lod_switch_still_reads(small_scene, option, mode):
+    with_output(small_scene, option)
+    assert load_scene(small_scene).output.lod == mode
+
+
+def test_lod_as_a_render_proxy_pair(small_scene, test_registry, tmp_path):
+    with_output(small_scene, 'lod = "purpose"')
+    report = generate(small_scene, test_registry, None)
+    assert errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    for prim in buildings(stage):
+        assert not prim.GetVariantSets().HasVariantSet("LOD")
+        render, proxy = prim.GetChild("Render"), prim.GetChild("Proxy")
+        assert UsdGeom.Imageable(render).ComputePurpose() == UsdGeom.Tokens.render and render.GetChild("Facade")
+        assert UsdGeom.Imageable(proxy).ComputePurpose() == UsdGeom.Tokens.proxy and proxy.GetChild("Walls")
+
+
+def test_a_bad_lod_mode_is_a_clear_error(small_scene):
+    with_output(small_scene, 'lod = "full"')
+    with pytest.raises(SceneError, match="lod must be one of variants, purpose, none, got 'full'"):
+        load_scene(small_scene)
 
 
 def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
@@ -203,8 +229,7 @@ def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
     points = np.array(ground.GetPointsAttr().Get())
     feet = np.array([[p.GetAttribute("citygen:base").Get()] for p in buildings(stage)])
     assert len(points) == 4 and np.all(points[:, 2] == feet.min())
-    roofs = np.concatenate([np.array(UsdGeom.Mesh(p.GetChild("Roof")).GetPointsAttr().Get())
-                            for p in buildings(stage)])
+    roofs = np.concatenate([world_points(p.GetChild("Roof")) for p in buildings(stage)])
     assert np.all(points[:, :2].min(axis=0) < roofs[:, :2].min(axis=0) - 19)  # 20 m beyond every building
     assert np.all(points[:, :2].max(axis=0) > roofs[:, :2].max(axis=0) + 19)
     labels = UsdSemantics.LabelsAPI(ground.GetPrim(), "class").GetLabelsAttr().Get()
