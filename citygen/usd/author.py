@@ -26,7 +26,7 @@ def look_name(name: str) -> str:
 
 
 def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
-    return Vt.Vec3fArray([Gf.Vec3f(*map(float, bound[0])), Gf.Vec3f(*map(float, bound[1]))])
+    return Vt.Vec3fArray.FromNumpy(np.asarray(bound, dtype=np.float32))
 
 
 class Author:
