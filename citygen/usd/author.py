@@ -139,7 +139,7 @@ class Author:
     def _texture(self, mat: Sdf.PrimSpec, shader: Sdf.PrimSpec, look: Material) -> None:
         reader = self.prim(mat, "ST", "Shader")
         self.attr(reader, "info:id", T.Token, "UsdPrimvarReader_float2", uniform=True)
-        self.attr(reader, "inputs:varname", T.Token, "st")
+        self.attr(reader, "inputs:varname", T.String, "st")
         Sdf.AttributeSpec(reader, "outputs:result", T.Float2)
         scale = self.prim(mat, "Tiling", "Shader")
         self.attr(scale, "info:id", T.Token, "UsdTransform2d", uniform=True)

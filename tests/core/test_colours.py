@@ -78,3 +78,24 @@ def test_a_bad_sidecar_names_its_file(tmp_path):
     (tmp_path / "x.materials.toml").write_text('[tin]\ncolour = 3\n')
     with pytest.raises(SceneError, match="x.materials.toml.*'tin'"):
         read_materials(tmp_path / "x.materials.toml")
+
+
+def test_a_textured_material_gets_uvs_on_its_meshes_only(small_scene, test_registry, tmp_path):
+    from PIL import Image
+    from pxr import UsdGeom
+
+    (tmp_path / "tex").mkdir()
+    Image.new("RGB", (4, 4), (120, 60, 40)).save(tmp_path / "tex" / "tiles.png")
+    small_scene.write_text(small_scene.read_text() + '\n[materials.roof_dark]\ncolour = "#404045"\n'
+                           'texture = "tex/tiles.png"\ntexture_size = [0.5, 0.25]\n')
+    report = generate_city(load_scene(small_scene), registry=test_registry, out=tmp_path / "out" / "c.usda")
+    stage = Usd.Stage.Open(str(report.stats.path))
+    from citygen.usd.validate import validate_stage
+    assert [f for f in validate_stage(stage) if f.severity == "error"] == []
+    for b in buildings(stage):
+        assert UsdGeom.PrimvarsAPI(b.GetChild("Roof")).GetPrimvar("st").IsDefined()
+        assert not any(UsdGeom.PrimvarsAPI(m).GetPrimvar("st").IsDefined() for m in b.GetChild("Facade").GetChildren())
+    mat, _ = UsdShade.MaterialBindingAPI(buildings(stage)[0].GetChild("Roof")).ComputeBoundMaterial()
+    texture = UsdShade.Shader(mat.GetPrim().GetChild("Texture"))
+    assert texture.GetInput("file").Get().path == "../tex/tiles.png"  # relative to the stage: it moves with it
+    assert tuple(UsdShade.Shader(mat.GetPrim().GetChild("Tiling")).GetInput("scale").Get()) == (2.0, 4.0)

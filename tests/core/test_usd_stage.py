@@ -3,7 +3,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from pxr import Kind, Usd, UsdGeom, UsdSemantics, UsdShade
+from pxr import Kind, Sdf, Usd, UsdGeom, UsdSemantics, UsdShade
 
 from citygen.cli import main
 from citygen.pipeline import generate_city
@@ -327,3 +327,15 @@ def test_openings_honour_their_material(small_scene, test_registry, tmp_path):
                   if p.GetName().startswith("window_"))
     mat, _ = UsdShade.MaterialBindingAPI(window.GetChild("frame")).ComputeBoundMaterial()
     assert mat.GetPrim().GetName() == "metal"
+
+
+def test_validate_names_a_finding_on_a_property_instead_of_crashing():
+    """Was: AttributeError on 'NoneType'.identifier when a validator reported a property site."""
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetDefaultPrim(stage.DefinePrim("/M", "Material"))
+    reader = UsdShade.Shader.Define(stage, "/M/ST")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.GetPrim().CreateAttribute("inputs:varname", Sdf.ValueTypeNames.Token).Set("st")
+    found = [f for f in validate_stage(stage) if f.where == "/M/ST.inputs:varname"]
+    assert found and "Expected 'string'" in found[0].message
