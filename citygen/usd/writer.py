@@ -89,6 +89,12 @@ def tile_name(tile: tuple[int, int]) -> str:
     return f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
 
 
+def attribute_name(key: str) -> str:
+    """``citygen:<key>``, each ``:``-separated part of ``key`` a valid identifier (a kept tag ``ref:bag-id``
+    becomes ``citygen:tag:ref:bag_id``)."""
+    return ":".join(["citygen", *(Tf.MakeValidIdentifier(part) for part in key.split(":"))])
+
+
 def variation(name: str) -> float:
     """A building's stable value in [0, 1) for shader variation (``primvars:citygen:variation``)."""
     return int.from_bytes(hashlib.blake2b(name.encode("utf-8"), digest_size=4).digest(), "big") / 2 ** 32
@@ -409,7 +415,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
-        author.attr(prim, f"citygen:{key}", vtype, v, custom=True)
+        author.attr(prim, attribute_name(key), vtype, v, custom=True)
     tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(record.name))
     tint.SetInfo("interpolation", "constant")
     walls = geo.walls if writer.lod != "none" else None

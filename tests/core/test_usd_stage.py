@@ -339,3 +339,18 @@ def test_validate_names_a_finding_on_a_property_instead_of_crashing():
     reader.GetPrim().CreateAttribute("inputs:varname", Sdf.ValueTypeNames.Token).Set("st")
     found = [f for f in validate_stage(stage) if f.where == "/M/ST.inputs:varname"]
     assert found and "Expected 'string'" in found[0].message
+
+
+def test_kept_tags_with_any_characters_become_valid_attribute_names(small_scene, test_registry, tmp_path):
+    city = small_scene.parent / "city.local.json"
+    features = json.loads(city.read_text())
+    features[2]["tags"] = {**features[2]["tags"], "ref:bag-id": "0363", "addr:street": "Oude Delft", "3dr:type": 1}
+    city.write_text(json.dumps(features))
+    with_output(small_scene, 'keep_tags = ["ref:*", "addr:*", "3dr:*"]')
+    report = generate(small_scene, test_registry, None)
+    assert report.written == 3 and errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    house = stage.GetPrimAtPath("/World/Tile_0_0/way_3")
+    assert house.GetAttribute("citygen:tag:ref:bag_id").Get() == "0363"
+    assert house.GetAttribute("citygen:tag:addr:street").Get() == "Oude Delft"
+    assert house.GetAttribute("citygen:tag:_dr:type").Get() == 1
