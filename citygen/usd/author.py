@@ -76,10 +76,10 @@ class Author:
 
     def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, looks: Sdf.Path | None, mat: str | None,
              label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
-             offset: np.ndarray | None = None) -> Sdf.PrimSpec | None:
-        """A Mesh prim (none for an empty mesh) bound to ``looks/<mat>``; ``normals``: its :func:`face_normals`
-        when already computed in a batch with other meshes; ``offset`` is subtracted from its points (the
-        building's pivot)."""
+             offset: np.ndarray | None = None) -> np.ndarray | None:
+        """A Mesh prim bound to ``looks/<mat>``, none for an empty mesh; returns its bound (its ``extent``).
+        ``normals``: its :func:`face_normals` when already computed in a batch with other meshes; ``offset`` is
+        subtracted from its points (the building's pivot)."""
         if not len(mesh.counts):
             return None
         prim = self.prim(parent, name, "Mesh")
@@ -88,7 +88,8 @@ class Author:
         self.attr(prim, "points", T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
         self.attr(prim, "faceVertexCounts", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)))
         self.attr(prim, "faceVertexIndices", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)))
-        self.attr(prim, "extent", T.Float3Array, bound_value(np.array([pts.min(axis=0), pts.max(axis=0)])))
+        bound = np.array([pts.min(axis=0), pts.max(axis=0)])
+        self.attr(prim, "extent", T.Float3Array, bound_value(bound))
         self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
         values, index = normals or face_normals([mesh])[0]
         spec = self.attr(prim, "primvars:normals", T.Normal3fArray, Vt.Vec3fArray.FromNumpy(values))
@@ -107,7 +108,7 @@ class Author:
             self.attr(prim, "semantics:labels:class", T.TokenArray, Vt.TokenArray([label]), uniform=True)
         if schemas:
             self.api(prim, *schemas)
-        return prim
+        return bound
 
     def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:
         """``parent/Looks``: one Material per name referencing the layer's ``/Materials`` definition, so the

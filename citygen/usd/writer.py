@@ -46,6 +46,9 @@ from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
+#: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
+#: packs to the same bytes.
+PACKED_MTIME = 946684800
 LOD_SET, LOD_FULL, LOD_MASS = "LOD", "LOD0", "LOD1"
 
 
@@ -137,7 +140,7 @@ class _Pending:
     label: str
     meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
     elements: Instances | None
-    bound: np.ndarray | None
+    elements_bound: np.ndarray | None
 
 
 class StageWriter:
@@ -224,14 +227,15 @@ class StageWriter:
             meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                       for (label, mat), mesh in module.meshes.items()]
             elements = module.elements if len(module.elements.proto_indices) else None
-            inner = [self.prototype(k, modules) for k in elements.protos] if elements is not None else []
-            bound = union([*(points_bound(m.points) for *_, m in meshes),
-                           self._instances_bound(elements) if inner else None])
+            for k in elements.protos if elements is not None else ():
+                self.prototype(k, modules)
+            placed = self._instances_bound(elements) if elements is not None else None
+            bound = union([*(points_bound(m.points) for *_, m in meshes), placed])
         else:
             parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
             meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
-            elements, bound = None, union(points_bound(m.points) for *_, m in meshes)
-        self.pending.append(_Pending(path, key.label, meshes, elements, bound))
+            elements, placed, bound = None, None, union(points_bound(m.points) for *_, m in meshes)
+        self.pending.append(_Pending(path, key.label, meshes, elements, placed))
         self.prototypes[key], self.bounds[key] = path, bound
         return path
 
@@ -258,7 +262,7 @@ class StageWriter:
                 for name, mat, label, mesh in p.meshes:
                     author.mesh(proto, name, mesh, looks, mat, label, next(normals))
                 if p.elements is not None:
-                    _instancer(author, proto, p.elements, self.prototypes, self._instances_bound(p.elements))
+                    _instancer(author, proto, p.elements, self.prototypes, p.elements_bound)
         self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
@@ -351,6 +355,9 @@ class StageWriter:
             _model_bound(self.world, bound)
         if self.tiles_dir is not None:
             self._publish_tiles()
+            if self.path.suffix.lower() == ".usdz":
+                for tile in self.tiles_dir.iterdir():
+                    os.utime(tile, (PACKED_MTIME, PACKED_MTIME))
         size = _finish(self.layer, self.path)
         if self.tiles_dir is not None:
             if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
@@ -436,19 +443,22 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
         body, mass = author.prim(prim, "Render", "Scope"), author.prim(prim, "Proxy", "Scope")
         author.attr(body, "purpose", T.Token, "render", uniform=True)
         author.attr(mass, "purpose", T.Token, "proxy", uniform=True)
-    bounds = [points_bound(m.points) for m in batch]
-    if walls is not None and author.mesh(mass, "Walls", walls, looks, wall, "wall", normals[-1], pivot) is not None:
+    bounds = []  # local
+    if walls is not None:
+        bounds.append(author.mesh(mass, "Walls", walls, looks, wall, "wall", normals[-1], pivot))
         counts["meshes"] += 1
         counts["polygons"] += len(walls.counts)
     if geo.meshes:
         facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
         for ((label, mat), mesh), mesh_normals in zip(geo.meshes.items(), normals):
-            counts["meshes"] += author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, looks, mat, label,
-                                            mesh_normals, pivot) is not None
+            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, looks, mat, label,
+                                      mesh_normals, pivot))
+            counts["meshes"] += bounds[-1] is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        author.mesh(prim, "Roof", geo.roof, looks, geo.roof_material, "roof", normals[len(geo.meshes)], pivot)
+        bounds.append(author.mesh(prim, "Roof", geo.roof, looks, geo.roof_material, "roof",
+                                  normals[len(geo.meshes)], pivot))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances
@@ -457,15 +467,13 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
             writer.prototype(key, geo.modules)
         local = Instances(inst.protos, inst.proto_indices, np.asarray(inst.positions, dtype=float) - pivot,
                           inst.orientations, inst.scales)
-        bound = writer._instances_bound(local)
-        _instancer(author, body, local, writer.prototypes, bound)
-        bounds.append(None if bound is None else bound + pivot)
+        bounds.append(writer._instances_bound(local))
+        _instancer(author, body, local, writer.prototypes, bounds[-1])
         counts["instances"] += len(inst.proto_indices)
     counts["buildings"] += 1
     building = union(bounds)
-    local_bound = None if building is None else building - pivot
-    _model_bound(prim, local_bound)
-    return local_bound
+    _model_bound(prim, building)
+    return building
 
 
 def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes: Mapping[Any, Sdf.Path],
@@ -500,6 +508,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
         if suffix == ".usdz":
             inner = tmp.with_suffix(".usdc")
             _export(layer, inner)
+            os.utime(inner, (PACKED_MTIME, PACKED_MTIME))
             try:
                 if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp), f"{path.stem}.usdc"):
                     raise ExportError("usdz packaging failed", where=str(path))
