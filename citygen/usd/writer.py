@@ -40,7 +40,7 @@ from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
-from citygen.usd.author import T, Author, bound_value, look_name
+from citygen.usd.author import T, Author, bound_value
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -182,7 +182,6 @@ class StageWriter:
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
-            self.looks: Sdf.Path | None = None
             self.materials_root: Sdf.PrimSpec | None = None
             self.protos_root: Sdf.PrimSpec | None = None
 
