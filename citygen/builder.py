@@ -8,8 +8,9 @@ dask executor one per worker thread. Any error while building one building becom
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,8 @@ from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.roof import rectangle_like, roof_notes
 from citygen.scene import Assignment, Scene
-from citygen.usd.materials import WALL_PALETTE, colour_material
+from citygen.geometry.building import BUILDING_RENDER, LABEL_MATERIAL
+from citygen.usd.materials import WALL_PALETTE, colour_material, resolve
 from citygen.usd.writer import BuildingRecord
 
 
@@ -71,6 +73,7 @@ class Builder:
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
         self.roofs = self.registry.roof_builders
+        self.undefined: dict[tuple[Path, str], bool] = {}  # (ruleset, material name) -> reported yet
         clear_module_cache()
 
     def ruleset(self, assignment: Assignment, path: Path):
@@ -112,9 +115,11 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                dressed = self._held(kind.id, self._generate(kind, ruleset, requests), requests)
+                dressed = [self._defined(layout, path, warnings)
+                           for layout in self._held(kind.id, self._generate(kind, ruleset, requests), requests)]
                 if assignment.fallback is not None:
-                    dressed = self._fall_back(assignment.fallback, requests, dressed, used, warnings)
+                    dressed = [self._defined(layout, assignment.fallback, warnings)
+                               for layout in self._fall_back(assignment.fallback, requests, dressed, used, warnings)]
                 tally.update(face_tally(dressed))
                 outside: list[tuple[FacadeRequest, str]] = []
                 for request, layout in zip(requests, dressed):
@@ -126,9 +131,9 @@ class Builder:
                     warnings.append(_outside_range(footprint.id, kind.id, outside))
             wall, roof_material = self._materials(footprint)
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof = self._roof(footprint, mass, plan.party_faces, warnings)
+            roof, roof_shape = self._roof(footprint, mass, plan.party_faces, warnings)
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules",
-                                      roof_material=roof_material, walls=self.scene.output.lod)
+                                      roof_material=roof_material, walls=self.scene.output.lod != "none")
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
         except Exception as exc:  # a plugin bug must skip one building, not the city
@@ -138,8 +143,13 @@ class Builder:
                       "roofHeight": mass.roof.height or 0.0, "roofHeightSource": mass.roof_source,
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
                       "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
-                      "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
-        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings),
+                      "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face,
+                      "buildingType": str(footprint.attributes.get("building", "yes")), "roofShape": roof_shape,
+                      "footprintArea": round(float(mass.outline.area), 3),
+                      **kept_tags(footprint.attributes, self.scene.output.keep_tags)}
+        centroid = mass.outline.centroid
+        pivot = (float(centroid.x), float(centroid.y), float(footprint.base - footprint.lift))
+        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes, pivot), None, tuple(warnings),
                                tuple(sorted(tally.items())))
 
     def _materials(self, footprint: Footprint) -> tuple[str, str]:
@@ -152,11 +162,27 @@ class Builder:
             wall = "brick" if attrs.get("building:material") == "brick" else WALL_PALETTE[palette]
         return wall, colour_material(attrs.get("roof:colour")) or "roof_dark"
 
+    def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
+        """``layout`` with every material name no library defines dropped (the region's label default is used),
+        each such name reported once per ruleset with its fallback."""
+        undefined = {r.material for r in layout.leaves if r.material is not None and r.material != BUILDING_RENDER
+                     and resolve(r.material, self.scene.materials) is None}
+        if not undefined:
+            return layout
+        for region in layout.leaves:
+            if region.material in undefined and not self.undefined.get((ruleset, region.material)):
+                self.undefined[ruleset, region.material] = True
+                fallback = LABEL_MATERIAL.get(region.label or "", "the wall material")
+                warnings.append(f"{ruleset.name}: material {region.material!r} is not defined; its {region.label} "
+                                f"regions use {fallback} instead (define it in the scene's [materials] or in "
+                                f"{ruleset.name.split('.')[0]}.materials.toml)")
+        return replace(layout, root=_without(layout.root, undefined))
+
     def _roof(self, footprint: Footprint, mass: Mass, party: tuple[int, ...], warnings: list[str]
-              ) -> MeshData | None:
+              ) -> tuple[MeshData | None, str]:
         """The roof the mass carries (``mass.roof``: shape and height decided with the walls,
-        :mod:`citygen.roofplan`); an unknown shape or a failing builder gives a flat roof (with a warning). The
-        faces the coordinator found to be party walls (``party``) are passed on in the spec."""
+        :mod:`citygen.roofplan`) and the shape built; an unknown shape or a failing builder gives a flat roof (with
+        a warning). The faces the coordinator found to be party walls (``party``) are passed on in the spec."""
         spec = replace(mass.roof, party=party)
         flat = self.roofs.get("flat")
         builder = self.roofs.get(spec.shape, flat)
@@ -169,15 +195,15 @@ class Builder:
                             f"rectangle-like; the ridge follows the straight skeleton")
         top = mass.base + mass.height
         if builder is None or builder is flat:
-            return flat.build(mass.outline, top, spec) if flat else None
+            return (flat.build(mass.outline, top, spec) if flat else None), "flat"
         try:
             with roof_notes() as notes:  # what the builder reports is this building's warning
                 roof = builder.build(mass.outline, top, spec)
             warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
-            return roof
+            return roof, spec.shape
         except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
-            return flat.build(mass.outline, top, spec) if flat else None
+            return (flat.build(mass.outline, top, spec) if flat else None), "flat"
 
     @staticmethod
     def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest]) -> list[FacadeLayout]:
@@ -250,6 +276,21 @@ class Builder:
             warnings.append(f"{where}: {note}")
         warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
         return layout
+
+
+def kept_tags(attributes: Mapping[str, Any], patterns: Sequence[str]) -> dict[str, Any]:
+    """The source tags the scene keeps (``[output] keep_tags``: names or ``fnmatch`` patterns such as ``addr:*``)
+    as ``tag:<name>`` attributes, in name order."""
+    return {f"tag:{key}": value for key, value in sorted(attributes.items())
+            if any(fnmatchcase(key, p) for p in patterns) and isinstance(value, (str, int, float))}
+
+
+def _without(region: Region, names: set[str]) -> Region:
+    """``region`` with the materials ``names`` cleared throughout its tree."""
+    children = tuple(_without(c, names) for c in region.children)
+    if region.material in names or children != region.children:
+        return replace(region, material=None if region.material in names else region.material, children=children)
+    return region
 
 
 def _outside_range(building: str, kind_id: str, faces: list[tuple[FacadeRequest, str]]) -> str:

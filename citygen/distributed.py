@@ -107,7 +107,7 @@ def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
             if writer is None:
                 writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
                                      layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
-                                     lod=job.scene.output.lod)
+                                     lod=job.scene.output.lod, materials=job.scene.materials)
             writer.add(outcome.record)
         if writer is not None:
             stats = writer.close()

@@ -168,7 +168,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         return report
     usd = 0.0
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
-                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod) as writer:
+                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod,
+                     materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
         for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
@@ -212,7 +213,7 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
     """Tiles built and written by dask workers; the root layer listing them (and the ground) written here."""
     t0 = time.perf_counter()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
-                     uvs=scene.output.uvs, lod=scene.output.lod) as writer:
+                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)

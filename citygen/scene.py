@@ -18,8 +18,12 @@ from typing import Any
 from citygen.errors import SceneError, SourceLocation, read_user_text
 from citygen.plausible import PlausibilityRules
 from citygen.request import MIN_STOREY
+from citygen.usd.materials import Material, parse_materials, read_materials, sidecar
 
 UP_AXES = ("Z", "Y")
+#: ``[output] lod``: ``variants`` (a variant set ``LOD``: ``LOD0`` facades, ``LOD1`` mass and roof), ``purpose``
+#: (both at once, as a render/proxy pair) or ``none``; ``true``/``false`` (the old switch) mean variants/none.
+LOD_MODES = ("variants", "purpose", "none")
 INSTANCING = ("modules", "elements")
 FACE_SCOPES = ("all", "street", "courtyard")
 
@@ -90,9 +94,10 @@ class Output:
     instancing: str = "modules"
     tile_layers: bool = False
     uvs: bool = False
-    lod: bool = False
+    lod: str = "variants"
     ground: bool = False
     masses: bool = False
+    keep_tags: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -109,6 +114,7 @@ class Scene:
     output: Output
     metadata: Mapping[str, Any] = field(default_factory=dict)
     plausibility: PlausibilityRules = field(default_factory=PlausibilityRules)
+    materials: Mapping[str, Material] = field(default_factory=dict)
 
 
 def _line_of(text: str, key: str, start: int = 0) -> int | None:
@@ -197,10 +203,11 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
     r = _Reader(path, text, roof_shapes, kinds)
-    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output", "plausibility"})
+    unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output", "materials",
+                                  "plausibility"})
     if unknown:
         r.fail(f"unknown table [{unknown[0]}]",
-               hint="valid tables: scene, footprints, defaults, assign, output, plausibility",
+               hint="valid tables: scene, footprints, defaults, assign, output, materials, plausibility",
                line=_line_of(text, unknown[0]) or 1)
     meta = r.table(data, "scene", {"name", "seed", "description"})
     seed = meta.get("seed", 0)
@@ -218,23 +225,34 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     defaults = Defaults(**numbers, roof_shape=shape)
     r.pitch(defaults.roof_pitch, _line_of(text, "roof_pitch", at))
     out = r.table(data, "output", {"path", "up_axis", "tile_size", "instancing", "tile_layers", "uvs", "lod",
-                                     "ground", "masses"})
+                                     "ground", "keep_tags", "masses"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
         r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
-    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "lod", "ground", "masses")}
+    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "ground", "masses")}
     for key, value in flags.items():
         if not isinstance(value, bool):
             r.fail(f"{key} must be true or false, got {value!r}", key)
+    lod = out.get("lod", "variants")
+    lod = {True: "variants", False: "none"}.get(lod, lod) if isinstance(lod, bool) else lod
+    if lod not in LOD_MODES:
+        r.fail(f"lod must be one of {', '.join(LOD_MODES)}, got {out.get('lod')!r}", "lod",
+               hint="variants: a variant set LOD (LOD0 facades, LOD1 mass); purpose: a render/proxy pair")
+    keep = out.get("keep_tags", [])
+    if not isinstance(keep, list) or not all(isinstance(k, str) and k for k in keep):
+        r.fail(f"keep_tags must be a list of tag names or patterns, got {keep!r}", "keep_tags",
+               hint='e.g. keep_tags = ["name", "addr:*"]')
     output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, **flags)
+                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, lod=lod,
+                    keep_tags=tuple(keep), **flags)
+    assignments = _assignments(r, data.get("assign", []))
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
                  footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
-                 assignments=_assignments(r, data.get("assign", [])), output=output,
-                 metadata={"description": meta.get("description", "")}, plausibility=_plausibility(r, data))
+                 assignments=assignments, output=output, metadata={"description": meta.get("description", "")},
+                 materials=_materials(r, data.get("materials", {}), assignments), plausibility=_plausibility(r, data))
 
 
 def _plausibility(r: _Reader, data: Mapping[str, Any]) -> PlausibilityRules:

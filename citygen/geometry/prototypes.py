@@ -7,11 +7,13 @@ frames keep their real thickness.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from citygen.geometry.quads import box_quads
+from citygen.usd.materials import Material, material
 
 QUANTUM = 0.1
 FRAME = 0.07
@@ -66,8 +68,9 @@ def _shift(quads: np.ndarray, dz: float) -> np.ndarray:
     return out
 
 
-def build_prototype(key: ProtoKey) -> list[Part]:
-    """Mesh parts of the prototype ``key`` (quads in the prototype frame)."""
+def build_prototype(key: ProtoKey, library: Mapping[str, Material] | None = None) -> list[Part]:
+    """Mesh parts of the prototype ``key`` (quads in the prototype frame). An opening's material is its frame's (a
+    door's: its leaf's), or its panes' when it is see-through (``glass``), the frame then keeping ``frame``."""
     w, h, d = key.size
     full = np.array([[0.0, 0.0, w, h]])
     if key.label in OPENINGS:
@@ -75,10 +78,12 @@ def build_prototype(key: ProtoKey) -> list[Part]:
         reveal = Part("reveal", "reveal", box_quads(full, np.array([d]), front=False))
         frame_rects = _bars(w, h, t, mullion=key.label == "window" and w > 1.3,
                             transom=key.label in ("window", "shop") and h > 1.9)
-        frame = Part("frame", "frame", _shift(box_quads(frame_rects, np.full(len(frame_rects), 0.06)), d))
+        glazed = material(key.material, library).opacity < 1.0
+        frame_material = "frame" if glazed or key.label == "door" else key.material
+        pane_material = key.material if glazed or key.label == "door" else "glass"
+        frame = Part("frame", frame_material, _shift(box_quads(frame_rects, np.full(len(frame_rects), 0.06)), d))
         inner = np.array([[t, t, w - t, h - t]]) if key.label != "door" else np.array([[t, 0.0, w - t, h - t]])
-        leaf = "door_leaf" if key.label == "door" else "glass"
-        pane = Part(leaf, leaf if key.label == "door" else "glass",
+        pane = Part("door_leaf" if key.label == "door" else "glass", pane_material,
                     _shift(box_quads(inner, np.array([0.03]), sides=False), d))
         return [reveal, frame, pane]
     if key.label == "balcony":

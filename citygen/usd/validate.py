@@ -34,8 +34,7 @@ def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
         kind = error.GetType()
         severity = {UsdValidation.ValidationErrorType.Error: "error",
                     UsdValidation.ValidationErrorType.Warn: "warning"}.get(kind, "info")
-        sites = ", ".join(str(s.GetPrim().GetPath()) if s.IsPrim() else str(s.GetLayer().identifier)
-                          for s in error.GetSites()) or "stage"
+        sites = ", ".join(map(_site, error.GetSites())) or "stage"
         findings.append(Finding(severity, sites, f"{error.GetValidator().GetMetadata().name}: {error.GetMessage()}"))
     for prim in stage.Traverse(Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)):
         if prim.IsA(UsdGeom.Mesh):
@@ -46,6 +45,16 @@ def validate_stage(stage_or_path: Usd.Stage | str | Path) -> list[Finding]:
             if not ok:
                 findings.append(Finding("error", str(prim.GetPath()), f"mesh topology: {reason}"))
     return findings
+
+
+def _site(site: UsdValidation.ValidationErrorSite) -> str:
+    """Where a finding is: a prim or property path, else its layer (a site may be a property only)."""
+    if site.IsPrim():
+        return str(site.GetPrim().GetPath())
+    if site.IsProperty():
+        return str(site.GetProperty().GetPath())
+    layer = site.GetLayer()
+    return str(layer.identifier) if layer else "stage"
 
 
 def _usd_reason(exc: Exception) -> str:

@@ -2,27 +2,34 @@
 
 Layout of the stage::
 
-    /World                     Xform, kind=assembly (defaultPrim; rotated for upAxis Y)
-      Looks/<material>         Material + UsdPreviewSurface
-      Tile_<i>_<j>             Xform, kind=group
-        <building>             Xform, kind=component, citygen:* attributes
-          Facade/<label>_<mat> Mesh per label and material, UsdSemantics label
-          Roof                 Mesh
-          Elements             PointInstancer; Prototypes/<pN> reference /Prototypes/<name>
-    /Prototypes                class: one prototype per element kind and quantised size
+    /World                      Xform, kind=assembly (defaultPrim; rotated for upAxis Y), extentsHint
+      Looks/ground, Ground      the ground quad (``[output] ground``)
+      Tile_<i>_<j>              Xform, kind=group, extentsHint (with tile layers: a payload of the tile's layer)
+        <building>              Xform, kind=component, translated to its pivot (footprint centroid, ground),
+                                assetInfo, extentsHint, custom citygen:* attributes, primvars:citygen:variation
+          Looks/<material>      Material referencing /Materials/<material>: bindings resolve inside the building
+          Roof                  Mesh
+          variant set LOD       LOD0: Facade/<label>_<mat> meshes and Elements (PointInstancer, with extent)
+                                LOD1: Walls (the mass)       -- or Render/Proxy scopes with lod = "purpose"
+    /Materials                  class: UsdPreviewSurface definitions (linear colours from sRGB, once)
+    /Prototypes                 class: one prototype per element kind / module, each with its own Looks
 
-With tile layers, each ``Tile_<i>_<j>`` lives in its own layer ``<stem>_tiles/Tile_<i>_<j>.usdc`` (a sublayer of
-the root, with the prototypes first used in that tile), written as soon as the tile is complete, so memory stays
-bounded by one tile. Authoring goes through
-the Sdf API in change blocks, which is what keeps a 100k-building city writable.
+A building is an asset: everything it binds and instances is under it or reached through internal references,
+so a reference to it from another stage brings its looks and prototypes along.
+
+With tile layers, each tile is a stage of its own (``<stem>_tiles/Tile_<i>_<j>.usdc``: ``/World`` with the tile,
+``/Materials`` and the ``/Prototypes`` it uses), written as soon as the tile is complete (memory stays bounded by
+one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root, Usd.Stage.LoadNone)`` opens the city
+with its bounds only. The dask executor writes its tiles with the same code, so every tile layer opens alone.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 import tempfile
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -32,23 +39,29 @@ from pxr import Gf, Sdf, Tf, Usd, UsdUtils, Vt
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
 from citygen.geometry.modules import ModuleKey
-from citygen.geometry.prototypes import ProtoKey, build_prototype
-from citygen.usd.materials import look
+from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
+from citygen.usd.author import T, Author, bound_value
+from citygen.usd.bounds import instances_bound, points_bound, union
+from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
-from citygen.usd.uv import planar_st
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
-T = Sdf.ValueTypeNames
+#: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
+#: packs to the same bytes.
+PACKED_MTIME = 946684800
+LOD_SET, LOD_FULL, LOD_MASS = "LOD", "LOD0", "LOD1"
 
 
 @dataclass(frozen=True)
 class BuildingRecord:
-    """A building ready for the stage: its prim name, tile, geometry and ``citygen:`` attributes."""
+    """A building ready for the stage: its prim name, tile, geometry (city coordinates), ``citygen:`` attributes
+    and pivot (the ground centroid of its footprint, where its transform puts its local origin)."""
 
     name: str
     tile: tuple[int, int]
     geometry: BuildingGeometry
     attributes: Mapping[str, Any]
+    pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -61,6 +74,7 @@ class StageStats:
     prototypes: int
     polygons: int
     bytes: int
+    extent: tuple[float, ...] | None = field(default=None)  # the world bound: min x, y, z, max x, y, z
 
 
 def prim_name(raw: str, taken: set[str]) -> str:
@@ -78,82 +92,15 @@ def tile_name(tile: tuple[int, int]) -> str:
     return f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
 
 
-class _Author:
-    """Thin Sdf authoring helpers on one layer. Meshes get indexed face normals (``primvars:normals``, uniform,
-    :mod:`citygen.usd.normals`); ``uvs``: also ``primvars:st`` (:mod:`citygen.usd.uv`)."""
+def attribute_name(key: str) -> str:
+    """``citygen:<key>``, each ``:``-separated part of ``key`` a valid identifier (a kept tag ``ref:bag-id``
+    becomes ``citygen:tag:ref:bag_id``)."""
+    return ":".join(["citygen", *(Tf.MakeValidIdentifier(part) for part in key.split(":"))])
 
-    def __init__(self, layer: Sdf.Layer, uvs: bool = False) -> None:
-        self.layer = layer
-        self.uvs = uvs
-        self.prims = 0
 
-    def prim(self, parent: Sdf.PrimSpec | Sdf.Layer, name: str, type_name: str = "",
-             specifier=Sdf.SpecifierDef) -> Sdf.PrimSpec:
-        self.prims += 1
-        return Sdf.PrimSpec(parent, name, specifier, type_name)
-
-    @staticmethod
-    def attr(prim: Sdf.PrimSpec, name: str, vtype, value, uniform: bool = False) -> None:
-        spec = Sdf.AttributeSpec(prim, name, vtype, Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying)
-        spec.default = value
-
-    @staticmethod
-    def rel(prim: Sdf.PrimSpec, name: str, targets: Iterable[Sdf.Path]) -> None:
-        spec = Sdf.RelationshipSpec(prim, name)
-        for t in targets:
-            spec.targetPathList.explicitItems.append(t)
-
-    @staticmethod
-    def api(prim: Sdf.PrimSpec, *schemas: str) -> None:
-        prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
-
-    def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, material: Sdf.Path | None,
-             label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None) -> Sdf.PrimSpec | None:
-        """A Mesh prim (none for an empty mesh); ``normals``: its :func:`face_normals` when already computed in a
-        batch with other meshes."""
-        if not len(mesh.counts):
-            return None
-        prim = self.prim(parent, name, "Mesh")
-        pts = np.ascontiguousarray(mesh.points, dtype=np.float32)
-        self.attr(prim, "points", T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
-        self.attr(prim, "faceVertexCounts", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)))
-        self.attr(prim, "faceVertexIndices", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)))
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        self.attr(prim, "extent", T.Float3Array, Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
-        self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
-        values, index = normals or face_normals([mesh])[0]
-        spec = Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray, Sdf.VariabilityVarying)
-        spec.default = Vt.Vec3fArray.FromNumpy(values)
-        spec.SetInfo("interpolation", "uniform")
-        self.attr(prim, "primvars:normals:indices", T.IntArray, Vt.IntArray.FromNumpy(index))
-        if self.uvs:
-            st = Sdf.AttributeSpec(prim, "primvars:st", T.TexCoord2fArray, Sdf.VariabilityVarying)
-            st.default = Vt.Vec2fArray.FromNumpy(planar_st(pts, mesh.counts, mesh.indices))
-            st.SetInfo("interpolation", "faceVarying")
-        schemas = []
-        if material is not None:
-            schemas.append("MaterialBindingAPI")
-            self.rel(prim, "material:binding", [material])
-        if label is not None:
-            schemas.append("SemanticsLabelsAPI:class")
-            self.attr(prim, "semantics:labels:class", T.TokenArray, Vt.TokenArray([label]), uniform=True)
-        if schemas:
-            self.api(prim, *schemas)
-        return prim
-
-    def material(self, parent: Sdf.PrimSpec, name: str) -> Sdf.Path:
-        (r, g, b), roughness, metallic, opacity = look(name)
-        mat = self.prim(parent, name, "Material")
-        shader = self.prim(mat, "PreviewSurface", "Shader")
-        self.attr(shader, "info:id", T.Token, "UsdPreviewSurface", uniform=True)
-        self.attr(shader, "inputs:diffuseColor", T.Color3f, Gf.Vec3f(r, g, b))
-        self.attr(shader, "inputs:roughness", T.Float, roughness)
-        self.attr(shader, "inputs:metallic", T.Float, metallic)
-        self.attr(shader, "inputs:opacity", T.Float, opacity)
-        Sdf.AttributeSpec(shader, "outputs:surface", T.Token)
-        out = Sdf.AttributeSpec(mat, "outputs:surface", T.Token)
-        out.connectionPathList.explicitItems.append(shader.path.AppendProperty("outputs:surface"))
-        return mat.path
+def variation(name: str) -> float:
+    """A building's stable value in [0, 1) for shader variation (``primvars:citygen:variation``)."""
+    return int.from_bytes(hashlib.blake2b(name.encode("utf-8"), digest_size=4).digest(), "big") / 2 ** 32
 
 
 def _value(value: Any):
@@ -179,53 +126,64 @@ def _dictionary(data: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
+    """``extentsHint`` (GeomModelAPI) of a model prim: its bound for the default purpose."""
+    if bound is not None:
+        Author.attr(prim, "extentsHint", T.Float3Array, bound_value(bound))
+
+
+@dataclass
+class _Pending:
+    """A prototype whose prim is authored when its layer is finished, with all others in one normals batch."""
+
+    path: Sdf.Path
+    label: str
+    meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
+    elements: Instances | None
+    elements_bound: np.ndarray | None
+
+
 class StageWriter:
     """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
 
-    With ``tile_layers`` every tile is its own layer (``<stem>_tiles/Tile_i_j<suffix>``) holding its buildings and
-    the ``/Prototypes`` first used there; it is exported and dropped from memory as soon as the next tile starts,
-    so memory stays bounded by one tile whatever the city's size. The root layer holds ``/World`` and its materials
-    and lists the tile layers as sublayers: internal references and material bindings compose as in one file (the
-    tile layers are a streaming device, not independently loadable assets). Without it everything goes into the
-    root layer. Nothing at ``path`` changes until :meth:`close` succeeds. With ``uvs`` every mesh gets
-    face-varying ``primvars:st`` in metres (:mod:`citygen.usd.uv`; about doubles the file); with ``lod`` every
-    building a ``lod`` variant set (``full``: facades and elements; ``mass``: plain walls).
+    With ``tile_layers`` every tile is written by a :class:`StageWriter` of its own into ``<stem>_tiles/`` (a
+    complete stage, the same a dask worker writes) and payloaded from the root; without, everything goes into the
+    root layer. Nothing at ``path`` changes until :meth:`close` succeeds. ``uvs``: every mesh gets ``primvars:st``
+    (meshes of textured materials always do); ``lod``: ``variants`` (set ``LOD``), ``purpose`` (render/proxy
+    scopes) or ``none``; ``materials``: the scene's and rulesets' material library.
     """
 
     def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
-                 tile_layers: bool = False, uvs: bool = False, lod: bool = False) -> None:
+                 tile_layers: bool = False, uvs: bool = False, lod: str = "variants",
+                 materials: Mapping[str, Material] | None = None) -> None:
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if suffix not in SUFFIXES:
             raise ExportError(f"unsupported stage extension {self.path.suffix!r}", where=str(self.path),
                               hint=f"use one of {', '.join(SUFFIXES)}")
         self.up_axis = up_axis
+        self.uvs, self.lod, self.library = uvs, lod, dict(materials or {})
+        self.layer_data = dict(layer_data or {})
         self.tile_suffix = ".usdc" if suffix == ".usdz" else suffix
         self.tiles_dir = self.path.with_name(f"{self.path.stem}_tiles") if tile_layers else None
         self.staging: Path | None = None
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
-        self.author = _Author(self.layer, uvs)
-        self.lod = lod
+        self.author = Author(self.layer, uvs, self.library, self.path.parent)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
-        self.materials: dict[str, Sdf.Path] = {}
-        self.material_names: set[str] = set()
+        self.defined: set[str] = set()  # materials under /Materials
         self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
-        self.sublayers: list[str] = []
-        self.tile: tuple[tuple[int, int], Sdf.Layer | None, Sdf.PrimSpec] | None = None
+        self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
+        self.pending: list[_Pending] = []
+        self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
+        self.tile_bound: np.ndarray | None = None
+        self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
+        self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
         with Sdf.ChangeBlock():
-            self.layer.defaultPrim = "World"
-            self.layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-            self.layer.pseudoRoot.SetInfo("upAxis", up_axis)
-            self.layer.customLayerData = {"citygen": _dictionary(layer_data or {})}
-            self.world = self.author.prim(self.layer, "World", "Xform")
-            self.world.SetInfo("kind", "assembly")
-            if up_axis == "Y":
-                self.author.attr(self.world, "xformOp:rotateX", T.Float, -90.0)
-                self.author.attr(self.world, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:rotateX"]),
-                                 uniform=True)
-            self.looks = self.author.prim(self.world, "Looks", "Scope")
-        self.protos_root: Sdf.PrimSpec | None = None
+            self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
+            self.world = _world(self.author, self.layer, up_axis)
+            self.materials_root: Sdf.PrimSpec | None = None
+            self.protos_root: Sdf.PrimSpec | None = None
 
     def __enter__(self) -> StageWriter:
         return self
@@ -235,81 +193,124 @@ class StageWriter:
         if exc_type is not None and self.staging is not None and self.staging != self.tiles_dir:
             shutil.rmtree(self.staging, ignore_errors=True)
 
-    def material(self, name: str) -> Sdf.Path:
-        if name not in self.materials:
-            with Sdf.ChangeBlock():
-                self.materials[name] = self.author.material(self.looks, prim_name(name, self.material_names))
-        return self.materials[name]
+    def define(self, names: Iterable[str]) -> None:
+        """``/Materials/<name>`` of each name not yet defined in this layer."""
+        for name in names:
+            if name not in self.defined:
+                if self.materials_root is None:
+                    self.materials_root = self.author.prim(self.layer, "Materials", "Scope", Sdf.SpecifierClass)
+                self.author.material(self.materials_root, name)
+                self.defined.add(name)
 
     def ground(self, x0: float, y0: float, x1: float, y1: float, z: float) -> None:
         """``/World/Ground``: one flat quad (material and semantic label ``ground``) under the city at height ``z``."""
         quad = MeshData(np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=np.float32),
                         np.array([4], dtype=np.int32), np.arange(4, dtype=np.int32))
         with Sdf.ChangeBlock():
-            self.author.mesh(self.world, "Ground", quad, self.material("ground"), "ground")
+            self.define(["ground"])
+            looks = self.author.looks(self.world, ["ground"])
+            self.author.mesh(self.world, "Ground", quad, looks, "ground", "ground")
+        self.world_bounds.append(points_bound(quad.points))
         self.counts["meshes"] += 1
         self.counts["polygons"] += 1
 
     def prototype(self, key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
-        """The ``/Prototypes`` prim of an element kind or module, authored on first use."""
+        """The ``/Prototypes`` path of an element kind or module in this layer; its geometry is prepared (and its
+        bound known) at once, its prim authored with the layer's other new prototypes in :meth:`_author_pending`."""
         if key in self.prototypes:
             return self.prototypes[key]
-        author = self.author
-        if self.protos_root is None:
-            layer = self.layer if self.tile is None or self.tile[1] is None else self.tile[1]
-            self.protos_root = author.prim(layer, "Prototypes", "", Sdf.SpecifierClass)
-        proto = author.prim(self.protos_root, Tf.MakeValidIdentifier(key.name), "Xform")
-        author.api(proto, "SemanticsLabelsAPI:class")
-        author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([key.label]), uniform=True)
+        path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
         if isinstance(key, ModuleKey):
             module = modules[key]
             names: set[str] = set()
-            for ((label, mat), mesh), normals in zip(module.meshes.items(), face_normals(module.meshes.values())):
-                author.mesh(proto, prim_name(f"{label}_{mat}", names), mesh, self.material(mat), label, normals)
-            if len(module.elements.proto_indices):
-                _instancer(author, proto, module.elements, lambda k: self.prototype(k, modules))
+            meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
+                      for (label, mat), mesh in module.meshes.items()]
+            elements = module.elements if len(module.elements.proto_indices) else None
+            for k in elements.protos if elements is not None else ():
+                self.prototype(k, modules)
+            placed = self._instances_bound(elements) if elements is not None else None
+            bound = union([*(points_bound(m.points) for *_, m in meshes), placed])
         else:
-            parts = [(part, MeshData.from_quads(part.quads)) for part in build_prototype(key) if len(part.quads)]
-            for (part, mesh), normals in zip(parts, face_normals([mesh for _, mesh in parts])):
-                author.mesh(proto, part.name, mesh, self.material(part.material), None, normals)
-        self.prototypes[key] = proto.path
-        return proto.path
+            parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
+            meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
+            elements, placed, bound = None, None, union(points_bound(m.points) for *_, m in meshes)
+        self.pending.append(_Pending(path, key.label, meshes, elements, placed))
+        self.prototypes[key], self.bounds[key] = path, bound
+        return path
+
+    def _instances_bound(self, inst: Instances) -> np.ndarray | None:
+        return instances_bound([self.bounds[k] for k in inst.protos], inst.proto_indices, inst.positions,
+                               inst.orientations, inst.scales)
+
+    def _author_pending(self) -> None:
+        """Author the prototypes prepared since the last call, their face normals in one batch."""
+        if not self.pending:
+            return
+        author = self.author
+        if self.protos_root is None:
+            self.protos_root = author.prim(self.layer, "Prototypes", "", Sdf.SpecifierClass)
+        normals = iter(face_normals([m for p in self.pending for *_, m in p.meshes]))
+        with Sdf.ChangeBlock():
+            for p in self.pending:
+                proto = author.prim(self.protos_root, p.path.name, "Xform")
+                author.api(proto, "SemanticsLabelsAPI:class")
+                author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([p.label]), uniform=True)
+                used = sorted({mat for _, mat, _, _ in p.meshes})
+                self.define(used)
+                looks = author.looks(proto, used) if used else None
+                for name, mat, label, mesh in p.meshes:
+                    author.mesh(proto, name, mesh, looks, mat, label, next(normals))
+                if p.elements is not None:
+                    _instancer(author, proto, p.elements, self.prototypes, p.elements_bound)
+        self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
         """Author one building; records must come grouped by tile (a tile cannot be reopened)."""
+        target = self._tile(record.tile)
+        if isinstance(target, StageWriter):
+            target.add(record)
+            return
         with Sdf.ChangeBlock():
-            _write_building(self.author, self._tile_prim(record.tile), record, self.material, self.prototype,
-                            self.counts, self.lod)
+            bound = _write_building(self, target, record)
+        if bound is not None:
+            self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
 
-    def _tile_prim(self, tile: tuple[int, int]) -> Sdf.PrimSpec:
+    def _tile(self, tile: tuple[int, int]) -> Sdf.PrimSpec | StageWriter:
+        """The open tile's prim (or, with tile layers, its writer), opening ``tile`` after closing the last."""
         if self.tile is not None and self.tile[0] == tile:
-            return self.tile[2]
+            return self.tile[1]
         if tile in self.seen_tiles:
             raise ExportError(f"tile {tile} was already written", where=str(self.path),
                               hint="add buildings sorted by tile")
         self._flush_tile()
         self.seen_tiles.add(tile)
         name = tile_name(tile)
-        if self.tiles_dir is None:
-            layer, parent = None, self.world
-        else:
-            layer = Sdf.Layer.CreateAnonymous(self.tile_suffix)
-            layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
-            layer.pseudoRoot.SetInfo("upAxis", self.up_axis)
-            parent = Sdf.PrimSpec(layer, "World", Sdf.SpecifierOver)
-        prim = self.author.prim(parent, name, "Xform")
+        if self.tiles_dir is not None:
+            sub = StageWriter(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
+                              layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
+                              materials=self.library)
+            self.tile = (tile, sub)
+            return sub
+        prim = self.author.prim(self.world, name, "Xform")
         prim.SetInfo("kind", "group")
-        self.tile = (tile, layer, prim)
+        self.author.api(prim, "GeomModelAPI")
+        self.tile = (tile, prim)
         return prim
 
     def _flush_tile(self) -> None:
-        """Export the open tile layer into the staging folder and let it go."""
-        if self.tile is None or self.tile[1] is None:
+        """Finish the open tile: its bound, or with tile layers, write its layer and payload it."""
+        if self.tile is None:
             return
-        name = self.tile[2].name + self.tile_suffix
-        _export(self.tile[1], self.staging_folder() / name)
-        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
-        self.tile, self.protos_root = None, None
+        (_, target), self.tile = self.tile, None
+        if isinstance(target, StageWriter):
+            stats = target.close()
+            self.add_tile_layer(stats.path.name, stats, target.prototypes)
+            return
+        self._author_pending()
+        with Sdf.ChangeBlock():
+            _model_bound(target, self.tile_bound)
+        self.world_bounds.append(self.tile_bound)
+        self.tile_bound = None
 
     def staging_folder(self) -> Path:
         """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes it."""
@@ -321,34 +322,52 @@ class StageWriter:
         return self.staging
 
     def add_tile_layer(self, name: str, stats: StageStats, prototypes: Iterable[ProtoKey | ModuleKey]) -> None:
-        """List a tile layer that another process wrote into :meth:`staging_folder` as file ``name`` (a complete
-        stage of its own, see :mod:`citygen.distributed`); tiles come in tile order, like :meth:`add`."""
-        self._flush_tile()
+        """Payload a tile layer written into :meth:`staging_folder` as file ``name`` (a complete stage of its own,
+        by a tile's writer here or on a dask worker, see :mod:`citygen.distributed`); tiles come in tile order."""
+        if self.tile is not None and isinstance(self.tile[1], Sdf.PrimSpec):
+            self._flush_tile()
         if not (self.staging_folder() / name).is_file():
             raise ExportError(f"tile layer {name} is missing from the staging folder", where=str(self.staging),
                               hint="the output folder must be shared with every worker, at the same path")
-        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
+        assert self.tiles_dir is not None
+        tile = Path(name).stem
+        with Sdf.ChangeBlock():
+            prim = self.author.prim(self.world, tile, "Xform")
+            prim.SetInfo("kind", "group")
+            self.author.api(prim, "GeomModelAPI")
+            prim.payloadList.prependedItems.append(
+                Sdf.Payload(f"./{self.tiles_dir.name}/{name}", Sdf.Path("/World").AppendChild(tile)))
+            bound = None if stats.extent is None else np.reshape(stats.extent, (2, 3))
+            _model_bound(prim, bound)
+        self.world_bounds.append(bound)
         self.author.prims += stats.prims
         for key in ("buildings", "meshes", "instances", "polygons"):
             self.counts[key] += getattr(stats, key)
-        for key in prototypes:
-            self.prototypes.setdefault(key, Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name)))
+        self.tile_prototypes.update(prototypes)
 
     def close(self) -> StageStats:
         """Write the last tile, the tile folder and the root layer; return the stage's figures."""
         self._flush_tile()
+        self._author_pending()
+        bound = union(self.world_bounds)
+        with Sdf.ChangeBlock():
+            _model_bound(self.world, bound)
         if self.tiles_dir is not None:
-            self.layer.subLayerPaths = self.sublayers
             self._publish_tiles()
+            if self.path.suffix.lower() == ".usdz":
+                for tile in self.tiles_dir.iterdir():
+                    os.utime(tile, (PACKED_MTIME, PACKED_MTIME))
         size = _finish(self.layer, self.path)
         if self.tiles_dir is not None:
             if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
                 shutil.rmtree(self.tiles_dir)
             else:
                 size += sum(f.stat().st_size for f in self.tiles_dir.iterdir())
+        extent = None if bound is None else tuple(float(v) for v in bound.reshape(-1))
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
-                          prototypes=len(self.prototypes), polygons=self.counts["polygons"], bytes=size)
+                          prototypes=len(self.prototypes) + len(self.tile_prototypes), polygons=self.counts["polygons"],
+                          bytes=size, extent=extent)
 
     def _publish_tiles(self) -> None:
         """Move the staged tile folder into place (replacing an old one)."""
@@ -374,66 +393,111 @@ def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axi
         return writer.close()
 
 
-def _write_building(author: _Author, parent: Sdf.PrimSpec, record: BuildingRecord, material, prototype,
-                    counts: dict[str, int], lod: bool = False) -> None:
-    """One building prim; with ``lod`` its facades and elements are the ``full`` variant of a ``lod`` variant set
-    whose ``mass`` variant is the plain walls (the roof is shared by both)."""
-    geo = record.geometry
+def _world(author: Author, layer: Sdf.Layer, up_axis: str) -> Sdf.PrimSpec:
+    """Stage metadata and ``/World`` (the default prim), the same in a root and in a tile layer."""
+    layer.defaultPrim = "World"
+    layer.pseudoRoot.SetInfo("metersPerUnit", 1.0)
+    layer.pseudoRoot.SetInfo("upAxis", up_axis)
+    world = author.prim(layer, "World", "Xform")
+    world.SetInfo("kind", "assembly")
+    author.api(world, "GeomModelAPI")
+    if up_axis == "Y":
+        author.attr(world, "xformOp:rotateX", T.Float, -90.0)
+        author.attr(world, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:rotateX"]), uniform=True)
+    return world
+
+
+def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord) -> np.ndarray | None:
+    """One building prim at its pivot, its geometry in local coordinates; returns its local bound. Its level of
+    detail follows ``writer.lod``: the facades and elements (``LOD0``) and the plain walls of its mass (``LOD1``)
+    as variants or as a render/proxy pair; the roof is shared by both."""
+    author, counts, geo = writer.author, writer.counts, record.geometry
+    pivot = np.asarray(record.pivot, dtype=float)
     prim = author.prim(parent, record.name, "Xform")
     prim.SetInfo("kind", "component")
+    prim.SetInfo("assetInfo", {"name": record.name})
+    author.api(prim, "GeomModelAPI")
+    author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*map(float, pivot)))
+    author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
-        author.attr(prim, f"citygen:{key}", vtype, v)
-    body = prim
-    walls = geo.walls if lod else None
+        author.attr(prim, attribute_name(key), vtype, v, custom=True)
+    tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(record.name))
+    tint.SetInfo("interpolation", "constant")
+    walls = geo.walls if writer.lod != "none" else None
+    wall = next((mat for label, mat in geo.meshes if label == "wall"), "concrete")
+    used = sorted({mat for _, mat in geo.meshes} | ({geo.roof_material} if geo.roof is not None else set())
+                  | ({wall} if walls is not None else set()))
+    writer.define(used)
+    looks = author.looks(prim, used)
     batch = [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
     normals = face_normals(batch)  # one batch per building, in this order
-    if lod:
-        lods = Sdf.VariantSetSpec(prim, "lod")
-        body, mass = Sdf.VariantSpec(lods, "full").primSpec, Sdf.VariantSpec(lods, "mass").primSpec
-        prim.variantSetNameList.prependedItems.append("lod")
-        prim.variantSelections["lod"] = "full"
-        wall = next((mat for label, mat in geo.meshes if label == "wall"), "concrete")
-        if walls is not None and author.mesh(mass, "Walls", walls, material(wall), "wall", normals[-1]) is not None:
-            counts["meshes"] += 1
-            counts["polygons"] += len(walls.counts)
+    body = mass = prim
+    if walls is not None and writer.lod == "variants":
+        lods = Sdf.VariantSetSpec(prim, LOD_SET)
+        body, mass = Sdf.VariantSpec(lods, LOD_FULL).primSpec, Sdf.VariantSpec(lods, LOD_MASS).primSpec
+        prim.variantSetNameList.prependedItems.append(LOD_SET)
+        prim.variantSelections[LOD_SET] = LOD_FULL
+    elif walls is not None:
+        body, mass = author.prim(prim, "Render", "Scope"), author.prim(prim, "Proxy", "Scope")
+        author.attr(body, "purpose", T.Token, "render", uniform=True)
+        author.attr(mass, "purpose", T.Token, "proxy", uniform=True)
+    bounds = []  # local
+    if walls is not None:
+        bounds.append(author.mesh(mass, "Walls", walls, looks, wall, "wall", normals[-1], pivot))
+        counts["meshes"] += 1
+        counts["polygons"] += len(walls.counts)
     if geo.meshes:
         facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
         for ((label, mat), mesh), mesh_normals in zip(geo.meshes.items(), normals):
-            counts["meshes"] += author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, material(mat),
-                                            label, mesh_normals) is not None
+            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, looks, mat, label,
+                                      mesh_normals, pivot))
+            counts["meshes"] += bounds[-1] is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        author.mesh(prim, "Roof", geo.roof, material(geo.roof_material), "roof", normals[len(geo.meshes)])
+        bounds.append(author.mesh(prim, "Roof", geo.roof, looks, geo.roof_material, "roof",
+                                  normals[len(geo.meshes)], pivot))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = geo.instances
     if len(inst.proto_indices):
-        _instancer(author, body, inst, lambda key: prototype(key, geo.modules))
+        for key in inst.protos:
+            writer.prototype(key, geo.modules)
+        local = Instances(inst.protos, inst.proto_indices, np.asarray(inst.positions, dtype=float) - pivot,
+                          inst.orientations, inst.scales)
+        bounds.append(writer._instances_bound(local))
+        _instancer(author, body, local, writer.prototypes, bounds[-1])
         counts["instances"] += len(inst.proto_indices)
     counts["buildings"] += 1
+    building = union(bounds)
+    _model_bound(prim, building)
+    return building
 
 
-def _instancer(author: _Author, parent: Sdf.PrimSpec, inst: Instances, prototype) -> None:
+def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes: Mapping[Any, Sdf.Path],
+               bound: np.ndarray | None) -> None:
     """A PointInstancer ``Elements`` under ``parent`` whose prototypes reference the shared ``/Prototypes``."""
     pi = author.prim(parent, "Elements", "PointInstancer")
     holder = author.prim(pi, "Prototypes", "Scope")
     targets = []
     for k, key in enumerate(inst.protos):
         ref = author.prim(holder, f"p{k}", "Xform")
-        ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototype(key)))
+        ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototypes[key]))
         ref.SetInfo("instanceable", True)  # one shared prototype per element kind: DCCs load it once
-        targets.append(ref.path.StripAllVariantSelections())  # (inside a lod variant: a composed path)
+        targets.append(ref.path.StripAllVariantSelections())  # (inside a LOD variant: a composed path)
     author.rel(pi, "prototypes", targets)
     author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
-    author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(inst.positions.astype(np.float32)))
+    author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(np.asarray(inst.positions, np.float32)))
     author.attr(pi, "orientations", T.QuathArray, Vt.QuathArray.FromNumpy(inst.orientations.astype(np.float16)))
     author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
+    if bound is not None:
+        author.attr(pi, "extent", T.Float3Array, bound_value(bound))
 
 
 def _finish(layer: Sdf.Layer, path: Path) -> int:
-    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size."""
+    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size. A
+    ``.usdz``'s root layer is named after it (``city.usdz`` holds ``city.usdc``)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     suffix = path.suffix.lower()
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
@@ -443,8 +507,9 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
         if suffix == ".usdz":
             inner = tmp.with_suffix(".usdc")
             _export(layer, inner)
+            os.utime(inner, (PACKED_MTIME, PACKED_MTIME))
             try:
-                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp)):
+                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp), f"{path.stem}.usdc"):
                     raise ExportError("usdz packaging failed", where=str(path))
             finally:
                 inner.unlink(missing_ok=True)

@@ -23,7 +23,7 @@ import numpy as np
 from PIL import Image
 
 from citygen.geometry.prototypes import ProtoKey, build_prototype
-from citygen.usd.materials import look
+from citygen.usd.materials import material as find_material
 from citygen_photo.symmetry import BINS, mutual_information, quantize
 
 #: Wall context rendered (and compared) on each side of an element, as a fraction of its width / height.
@@ -62,7 +62,7 @@ class Element:
 
 
 def _luminance(material: str) -> float:
-    r, g, b = look(material)[0]
+    r, g, b = find_material(material).colour  # display colour: an image as a photo shows it
     return 0.299 * r + 0.587 * g + 0.114 * b
 
 

@@ -19,7 +19,8 @@ from citygen.request import FacadeRequest
 
 
 class GridKind(RulesetKind):
-    """Per floor: corner strips, then windows of ``window`` m in bays of ``bay`` m; a door on the entrance face."""
+    """Per floor: corner strips, then windows of ``window`` m in bays of ``bay`` m; a door on the entrance face;
+    openings of the optional ``material``."""
 
     id = "testgrid"
     suffixes = (".testgrid",)
@@ -44,7 +45,8 @@ class GridKind(RulesetKind):
                 cells += [Region(x, y0, (bw - ww) / 2, h, "Wall", "wall"),
                           Region(x + (bw + ww) / 2, y0, (bw - ww) / 2, h, "Wall", "wall"),
                           Region(x + (bw - ww) / 2, y0, ww, wy, "Wall", "wall"),
-                          Region(x + (bw - ww) / 2, y0 + wy, ww, wh, "Opening", label, depth=-0.2),
+                          Region(x + (bw - ww) / 2, y0 + wy, ww, wh, "Opening", label, depth=-0.2,
+                                 material=ruleset.get("material")),
                           Region(x + (bw - ww) / 2, y0 + wy + wh, ww, h - wy - wh, "Wall", "wall")]
             floors.append(Region(0, y0, request.width, h, "Floor", children=tuple(c for c in cells if c.w > 0 and c.h > 0)))
         return FacadeLayout(request.width, request.height, Region(0, 0, request.width, request.height, "Facade",

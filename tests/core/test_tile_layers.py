@@ -1,11 +1,12 @@
-"""Tile layers: each tile streamed into its own sublayer of the root stage (`[output] tile_layers = true`)."""
+"""Tile layers: each tile streamed into a stage of its own, payloaded by the root (`[output] tile_layers = true`)."""
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from pxr import Sdf, Usd
+from pxr import Sdf, Usd, UsdGeom
 
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances
@@ -13,7 +14,7 @@ from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
 from citygen.usd.writer import BuildingRecord, StageWriter
-from tests.usd_util import buildings
+from tests.usd_util import assert_resolves, buildings
 
 
 def _scene(small_scene: Path, output: str) -> Path:
@@ -35,15 +36,46 @@ def test_tile_layers_compose_to_the_single_file_stage(small_scene, test_registry
     root = tiled.stats.path
     tiles = sorted(p.name for p in (root.parent / "small_tiles").iterdir())
     assert tiles == ["Tile_0_0.usda", "Tile_0_2.usda", "Tile_1_0.usda"]
-    assert Sdf.Layer.FindOrOpen(str(root)).subLayerPaths == [f"small_tiles/{t}" for t in tiles]
+    layer = Sdf.Layer.FindOrOpen(str(root))
+    world = layer.GetPrimAtPath("/World")
+    assert [(p.name, [(str(a.assetPath), str(a.primPath)) for a in p.payloadList.prependedItems])
+            for p in world.nameChildren] == [(t[:-5], [(f"./small_tiles/{t}", f"/World/{t[:-5]}")]) for t in tiles]
     assert _composed(root) == _composed(single.stats.path)
     assert (tiled.stats.buildings, tiled.stats.instances, tiled.stats.polygons) == \
         (single.stats.buildings, single.stats.instances, single.stats.polygons)
     assert [f for f in validate_stage(root) if f.severity == "error"] == []
-    # a tile layer holds only its own buildings, under an `over` of /World
+    # a tile layer holds only its own buildings
     layer = Sdf.Layer.FindOrOpen(str(root.parent / "small_tiles" / "Tile_1_0.usda"))
-    assert layer.GetPrimAtPath("/World").specifier == Sdf.SpecifierOver
     assert [p.name for p in layer.GetPrimAtPath("/World/Tile_1_0").nameChildren] == ["way_2"]
+
+
+@pytest.mark.parametrize("executor", ["local", "dask"])
+def test_every_tile_layer_opens_alone_whichever_executor_wrote_it(small_scene, test_registry, executor):
+    """One contract (was: local tile layers had no defaultPrim and referenced prototypes of other tiles)."""
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry, executor=executor, jobs=1)
+    tiles = sorted((Path(scene.output.path).parent / "small_tiles").iterdir())
+    assert len(tiles) == 3
+    for tile in tiles:
+        stage = Usd.Stage.Open(str(tile))
+        assert stage.GetDefaultPrim().GetPath() == "/World" and stage.GetMetadata("metersPerUnit") == 1.0
+        assert [f for f in validate_stage(stage) if f.severity == "error"] == [], tile.name
+        assert_resolves(stage)
+
+
+def test_load_none_opens_the_city_with_bounds_only(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n'))
+    report = generate_city(scene, registry=test_registry)
+    loaded = Usd.Stage.Open(str(report.stats.path))
+    unloaded = Usd.Stage.Open(str(report.stats.path), Usd.Stage.LoadNone)
+    assert buildings(unloaded) == [] and len(buildings(loaded)) == 3
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_], useExtentsHint=True)
+    full = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_])
+    hinted = cache.ComputeWorldBound(unloaded.GetPseudoRoot()).ComputeAlignedRange()
+    computed = full.ComputeWorldBound(loaded.GetPseudoRoot()).ComputeAlignedRange()
+    assert np.allclose(hinted.GetMin(), computed.GetMin(), atol=1e-3)
+    assert np.allclose(hinted.GetMax(), computed.GetMax(), atol=1e-3)
+    assert np.allclose(np.reshape(report.stats.extent, (2, 3)), [computed.GetMin(), computed.GetMax()], atol=1e-3)
 
 
 def test_tile_layers_are_byte_identical_across_runs_and_job_counts(small_scene, test_registry):
@@ -104,3 +136,11 @@ def test_a_tile_cannot_be_reopened(tmp_path):
     writer.add(_record("b", (1, 0)))
     with pytest.raises(ExportError, match="tile \\(0, 0\\) was already written"):
         writer.add(_record("c", (0, 0)))
+
+
+def test_usdz_with_tile_layers_is_byte_reproducible(small_scene, test_registry):
+    """Was: the zip recorded each packed file's modification time, so two runs differed."""
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdz"\ntile_size = 20\ntile_layers = true\n'))
+    first = generate_city(scene, registry=test_registry).stats.path.read_bytes()
+    time.sleep(2.1)  # (the zip records file times in 2 s steps)
+    assert generate_city(scene, registry=test_registry).stats.path.read_bytes() == first

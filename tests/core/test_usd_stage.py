@@ -1,14 +1,17 @@
 import json
+import time
+import zipfile
 
 import numpy as np
 import pytest
-from pxr import Kind, Usd, UsdGeom, UsdSemantics
+from pxr import Kind, Sdf, Usd, UsdGeom, UsdSemantics, UsdShade
 
 from citygen.cli import main
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
+from citygen.errors import SceneError
 from citygen.usd.validate import validate_stage
-from tests.usd_util import buildings, element_labels
+from tests.usd_util import assert_resolves, buildings, element_labels, world_points
 
 
 def generate(scene_path, registry, out, **kw):
@@ -174,24 +177,49 @@ def test_no_uvs_unless_asked(small_scene, test_registry, tmp_path):
 
 
 def test_lod_variants_switch_each_building_between_facades_and_plain_walls(small_scene, test_registry, tmp_path):
+    """On by default, named as importers read them (Unreal: a set ``LOD`` of ``LOD0``, ``LOD1``, ...)."""
+    report = generate(small_scene, test_registry, tmp_path / "lod.usda")
+    with_output(small_scene, 'lod = "none"')
     plain = generate(small_scene, test_registry, tmp_path / "plain.usda")
-    with_output(small_scene, 'lod = true')
-    report = generate(small_scene, test_registry, None)
     assert errors(report.stats.path) == []
     stage, before = Usd.Stage.Open(str(report.stats.path)), Usd.Stage.Open(str(plain.stats.path))
     detailed = sorted(str(p.GetPath()) for p in stage.Traverse())
-    assert detailed == sorted(str(p.GetPath()) for p in before.Traverse())  # "full" composes as without variants
+    assert detailed == sorted(str(p.GetPath()) for p in before.Traverse())  # LOD0 composes as without variants
     for prim in buildings(stage):
-        lods = prim.GetVariantSets().GetVariantSet("lod")
-        assert lods.GetVariantNames() == ["full", "mass"] and lods.GetVariantSelection() == "full"
+        lods = prim.GetVariantSets().GetVariantSet("LOD")
+        assert lods.GetVariantNames() == ["LOD0", "LOD1"] and lods.GetVariantSelection() == "LOD0"
         faces = len(UsdGeom.Mesh(prim.GetChild("Roof")).GetFaceVertexCountsAttr().Get()) > 0
         assert faces and prim.GetChild("Facade") and not prim.GetChild("Walls")
-        lods.SetVariantSelection("mass")
+        lods.SetVariantSelection("LOD1")
         walls = UsdGeom.Mesh(prim.GetChild("Walls"))
         assert walls and prim.GetChild("Roof") and not prim.GetChild("Facade") and not prim.GetChild("Elements")
         z = np.array(walls.GetPointsAttr().Get())[:, 2]
         height = prim.GetAttribute("citygen:height").Get()
         assert z.max() - z.min() == pytest.approx(height, abs=1e-3)
+
+
+@pytest.mark.parametrize("option, mode", [("lod = true", "variants"), ("lod = false", "none")])
+def test_the_old_lod_switch_still_reads(small_scene, option, mode):
+    with_output(small_scene, option)
+    assert load_scene(small_scene).output.lod == mode
+
+
+def test_lod_as_a_render_proxy_pair(small_scene, test_registry, tmp_path):
+    with_output(small_scene, 'lod = "purpose"')
+    report = generate(small_scene, test_registry, None)
+    assert errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    for prim in buildings(stage):
+        assert not prim.GetVariantSets().HasVariantSet("LOD")
+        render, proxy = prim.GetChild("Render"), prim.GetChild("Proxy")
+        assert UsdGeom.Imageable(render).ComputePurpose() == UsdGeom.Tokens.render and render.GetChild("Facade")
+        assert UsdGeom.Imageable(proxy).ComputePurpose() == UsdGeom.Tokens.proxy and proxy.GetChild("Walls")
+
+
+def test_a_bad_lod_mode_is_a_clear_error(small_scene):
+    with_output(small_scene, 'lod = "full"')
+    with pytest.raises(SceneError, match="lod must be one of variants, purpose, none, got 'full'"):
+        load_scene(small_scene)
 
 
 def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
@@ -203,9 +231,128 @@ def test_ground_quad_under_the_city(small_scene, test_registry, tmp_path):
     points = np.array(ground.GetPointsAttr().Get())
     feet = np.array([[p.GetAttribute("citygen:base").Get()] for p in buildings(stage)])
     assert len(points) == 4 and np.all(points[:, 2] == feet.min())
-    roofs = np.concatenate([np.array(UsdGeom.Mesh(p.GetChild("Roof")).GetPointsAttr().Get())
-                            for p in buildings(stage)])
+    roofs = np.concatenate([world_points(p.GetChild("Roof")) for p in buildings(stage)])
     assert np.all(points[:, :2].min(axis=0) < roofs[:, :2].min(axis=0) - 19)  # 20 m beyond every building
     assert np.all(points[:, :2].max(axis=0) > roofs[:, :2].max(axis=0) + 19)
     labels = UsdSemantics.LabelsAPI(ground.GetPrim(), "class").GetLabelsAttr().Get()
     assert list(labels) == ["ground"]
+
+
+def test_a_building_referenced_alone_keeps_its_looks_and_instances_at_its_pivot(small_scene, test_registry, tmp_path):
+    """Was: bindings to /World/Looks were lost in a reference, and every building sat at the city origin."""
+    report = generate(small_scene, test_registry, tmp_path / "city.usdc")
+    city = Usd.Stage.Open(str(report.stats.path))
+    source = next(b for b in buildings(city) if b.GetName() == "way_2")
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    placed = stage.DefinePrim("/Shot/House", "Xform")
+    stage.SetDefaultPrim(stage.GetPrimAtPath("/Shot"))
+    placed.GetReferences().AddReference(str(report.stats.path), source.GetPath())
+    assert_resolves(stage, "/Shot/House")
+    assert errors(stage) == []
+    assert placed.GetAttribute("citygen:sourceId").Get() == "way/2"
+    pivot = placed.GetAttribute("xformOp:translate").Get()
+    assert tuple(pivot) == pytest.approx((35.0, 15.0, 0.0))  # the footprint's centroid (courtyard: symmetric)
+    local = np.array(UsdGeom.Mesh(placed.GetChild("Roof")).GetPointsAttr().Get())
+    assert np.allclose(local[:, :2].mean(axis=0), 0.0, atol=8.0) and local[:, 2].min() >= 0.0
+    assert np.allclose(world_points(placed.GetChild("Roof")), world_points(source.GetChild("Roof")), atol=1e-4)
+
+
+def test_buildings_are_components_with_metadata_dccs_keep(small_scene, test_registry, tmp_path):
+    with_output(small_scene, 'keep_tags = ["build*"]')
+    report = generate(small_scene, test_registry, None)
+    stage = Usd.Stage.Open(str(report.stats.path))
+    values = set()
+    for b in buildings(stage):
+        attrs = [a for a in b.GetAttributes() if a.GetName().startswith("citygen:")]
+        assert attrs and all(a.IsCustom() for a in attrs)  # Blender's importer drops non-custom attributes
+        for name in ("buildingType", "roofShape", "footprintArea"):
+            assert b.GetAttribute(f"citygen:{name}").HasAuthoredValue(), name
+        assert Usd.ModelAPI(b).GetAssetInfo()["name"] == b.GetName()
+        primvar = UsdGeom.PrimvarsAPI(b).GetPrimvar("citygen:variation")
+        assert primvar.GetInterpolation() == UsdGeom.Tokens.constant and 0 <= primvar.Get() < 1
+        values.add(primvar.Get())
+    assert len(values) == 3
+    house = stage.GetPrimAtPath("/World/Tile_0_0/way_3")
+    assert house.GetAttribute("citygen:tag:building").Get() == "house"
+    assert house.GetAttribute("citygen:buildingType").Get() == "house"
+    assert house.GetAttribute("citygen:footprintArea").Get() == pytest.approx(160.0, abs=1.0)
+
+
+def test_every_model_has_extents_hint_and_every_instancer_an_extent(small_scene, test_registry, tmp_path):
+    report = generate(small_scene, test_registry, tmp_path / "city.usdc")
+    stage = Usd.Stage.Open(str(report.stats.path))
+    hinted = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_], useExtentsHint=True)
+    models = [p for p in stage.Traverse() if Usd.ModelAPI(p).IsModel()]
+    assert len(models) == 1 + 1 + 3  # world, tile, buildings
+    for prim in models:
+        assert UsdGeom.ModelAPI(prim).GetExtentsHintAttr().HasAuthoredValue(), prim.GetPath()
+        computed = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_])
+        a, b = hinted.ComputeWorldBound(prim).ComputeAlignedRange(), computed.ComputeWorldBound(prim).ComputeAlignedRange()
+        assert np.allclose(a.GetMin(), b.GetMin(), atol=1e-3) and np.allclose(a.GetMax(), b.GetMax(), atol=1e-3)
+    instancers = [p for root in [stage.GetPseudoRoot(), *stage.GetPrototypes()] for p in Usd.PrimRange(root)
+                  if p.IsA(UsdGeom.PointInstancer)]  # (not through instance proxies: USD's extent fails there)
+    assert len(instancers) > 3
+    for prim in instancers:
+        authored = np.array(UsdGeom.PointInstancer(prim).GetExtentAttr().Get())
+        exact = np.array(UsdGeom.PointInstancer(prim).ComputeExtentAtTime(Usd.TimeCode.Default(),
+                                                                           Usd.TimeCode.Default()))
+        assert np.allclose(authored, exact, atol=2e-3), prim.GetPath()
+
+
+def test_usdz_is_byte_reproducible_and_its_root_layer_named_after_it(small_scene, test_registry, tmp_path):
+    """Was: a random hidden root layer name (.delft.fykqxyis.usdc) inside, different bytes every run."""
+    a, b = tmp_path / "a" / "delft.usdz", tmp_path / "b" / "delft.usdz"
+    generate(small_scene, test_registry, a)
+    time.sleep(2.1)  # (the zip records file times in 2 s steps)
+    generate(small_scene, test_registry, b)
+    assert a.read_bytes() == b.read_bytes()
+    assert zipfile.ZipFile(a).namelist()[0] == "delft.usdc"
+
+
+def test_an_undefined_material_warns_naming_the_ruleset_and_falls_back(small_scene, test_registry, tmp_path):
+    (tmp_path / "bays.testgrid").write_text(json.dumps({"bay": 3.0, "window": 1.3, "material": "unobtainium"}))
+    report = generate(small_scene, test_registry, tmp_path / "city.usda")
+    found = [w for w in report.warnings if "unobtainium" in w]
+    assert len(found) == 1 and "bays.testgrid" in found[0] and "frame_white" in found[0]
+    stage = Usd.Stage.Open(str(report.stats.path))
+    assert not [p for p in stage.Traverse(Usd.PrimAllPrimsPredicate) if "unobtainium" in p.GetName()]
+
+
+def test_openings_honour_their_material(small_scene, test_registry, tmp_path):
+    """Was: window, door and shop frames always 'frame', whatever the ruleset said."""
+    (tmp_path / "bays.testgrid").write_text(json.dumps({"bay": 3.0, "window": 1.3, "material": "metal"}))
+    report = generate(small_scene, test_registry, tmp_path / "city.usda")
+    stage = Usd.Stage.Open(str(report.stats.path))
+    window = next(p for p in stage.GetPrimAtPath("/Prototypes").GetAllChildren()
+                  if p.GetName().startswith("window_"))
+    mat, _ = UsdShade.MaterialBindingAPI(window.GetChild("frame")).ComputeBoundMaterial()
+    assert mat.GetPrim().GetName() == "metal"
+
+
+def test_validate_names_a_finding_on_a_property_instead_of_crashing():
+    """Was: AttributeError on 'NoneType'.identifier when a validator reported a property site."""
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetDefaultPrim(stage.DefinePrim("/M", "Material"))
+    reader = UsdShade.Shader.Define(stage, "/M/ST")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.GetPrim().CreateAttribute("inputs:varname", Sdf.ValueTypeNames.Token).Set("st")
+    found = [f for f in validate_stage(stage) if f.where == "/M/ST.inputs:varname"]
+    assert found and "Expected 'string'" in found[0].message
+
+
+def test_kept_tags_with_any_characters_become_valid_attribute_names(small_scene, test_registry, tmp_path):
+    city = small_scene.parent / "city.local.json"
+    features = json.loads(city.read_text())
+    features[2]["tags"] = {**features[2]["tags"], "ref:bag-id": "0363", "addr:street": "Oude Delft", "3dr:type": 1}
+    city.write_text(json.dumps(features))
+    with_output(small_scene, 'keep_tags = ["ref:*", "addr:*", "3dr:*"]')
+    report = generate(small_scene, test_registry, None)
+    assert report.written == 3 and errors(report.stats.path) == []
+    stage = Usd.Stage.Open(str(report.stats.path))
+    house = stage.GetPrimAtPath("/World/Tile_0_0/way_3")
+    assert house.GetAttribute("citygen:tag:ref:bag_id").Get() == "0363"
+    assert house.GetAttribute("citygen:tag:addr:street").Get() == "Oude Delft"
+    assert house.GetAttribute("citygen:tag:_dr:type").Get() == 1

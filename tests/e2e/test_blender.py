@@ -30,8 +30,9 @@ print("BUILDINGS", len(buildings), "MESHES", len(meshes), "INSTANCERS",
 """
 
 
-@pytest.mark.parametrize("tile_layers, uvs, lod", [(False, False, False), (True, False, False), (False, True, False),
-                                                   (True, False, True)], ids=["one-layer", "tile-layers", "uvs", "lod"])
+@pytest.mark.parametrize("tile_layers, uvs, lod", [(False, False, "none"), (True, False, "none"), (False, True, "none"),
+                                                   (True, False, "variants")],
+                         ids=["one-layer", "tile-layers", "uvs", "lod"])
 def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs, lod):
     out = tmp_path / "delft.usdc"
     scene = load_scene(REPO / "scenes" / "delft.toml")
@@ -48,3 +49,39 @@ def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs, lod):
     assert int(fields[3]) > 0 and int(fields[5]) > 0
     assert int(fields[7]) == (int(fields[3]) if uvs else 0)  # Blender reads primvars:st as the UV map "st"
     assert int(fields[9]) == int(fields[3])  # and our face normals (without them it shades every crease smooth)
+
+
+PROPERTIES = """
+import sys, bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+assert bpy.ops.wm.usd_import(filepath=sys.argv[1]) == {"FINISHED"}
+objects = bpy.data.objects
+print("HEIGHTS", sum(1 for o in objects if "citygen:height" in o.keys()),
+      "WALLS", sum(1 for o in objects if o.name.startswith("Walls")),
+      "FACADES", sum(1 for o in objects if o.name.startswith("Facade")))
+"""
+
+
+def test_blender_keeps_citygen_attributes_as_properties_and_switches_lod(tmp_path):
+    """Was: citygen:* were not authored custom, so Blender dropped them all; the LOD variant an importer reads is
+    the selected one, so a layer over the city selecting LOD1 imports the mass walls instead of the facades."""
+    from pxr import Sdf, Usd
+
+    out = tmp_path / "delft.usdc"
+    report = generate_city(load_scene(REPO / "scenes" / "delft.toml"), out=out)
+    stage = Usd.Stage.Open(str(out))
+    shot = Sdf.Layer.CreateNew(str(tmp_path / "mass.usda"))
+    shot.subLayerPaths.append("./delft.usdc")
+    for prim in stage.Traverse():
+        if prim.GetVariantSets().HasVariantSet("LOD"):
+            Sdf.CreatePrimInLayer(shot, prim.GetPath()).variantSelections["LOD"] = "LOD1"
+    shot.Save()
+
+    def imported(path: Path) -> list[int]:
+        result = subprocess.run([sys.executable, "-c", PROPERTIES, str(path)], capture_output=True, text=True,
+                                timeout=600)
+        assert result.returncode == 0, result.stderr[-2000:]
+        return [int(v) for v in next(l for l in result.stdout.splitlines() if l.startswith("HEIGHTS")).split()[1::2]]
+
+    assert imported(out) == [report.written, 0, report.written]
+    assert imported(tmp_path / "mass.usda") == [report.written, report.written, 0]

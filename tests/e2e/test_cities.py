@@ -5,13 +5,13 @@ import json
 from pathlib import Path
 
 import pytest
-from pxr import Usd
+from pxr import Usd, UsdGeom
 
 from citygen.cli import main
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
-from tests.usd_util import buildings, element_labels
+from tests.usd_util import assert_resolves, buildings, element_labels
 
 REPO = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.slow
@@ -89,6 +89,21 @@ def test_helsinki_narrow_relayout_faces_get_the_fallback_grammar(helsinki):
     stage = Usd.Stage.Open(str(out))
     rulesets = [p.GetAttribute("citygen:ruleset").Get() for p in buildings(stage)]
     assert len([r for r in rulesets if "split:house.grammar (fallback on faces" in r]) == 3
+
+
+def test_helsinki_opens_unloaded_and_a_building_is_an_asset(helsinki):
+    """The demo payloads its tiles: LoadNone opens no building but the world bound from extentsHint; Stockmann
+    referenced alone into a new stage keeps every look and instance."""
+    _, out = helsinki
+    unloaded = Usd.Stage.Open(str(out), Usd.Stage.LoadNone)
+    assert buildings(unloaded) == []
+    size = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_], useExtentsHint=True) \
+        .ComputeWorldBound(unloaded.GetPseudoRoot()).ComputeAlignedRange().GetSize()
+    assert 900 < size[0] < 1500 and 20 < size[2] < 120
+    source = next(p for p in buildings(Usd.Stage.Open(str(out))) if p.GetName() == "way_122595241")
+    stage = Usd.Stage.CreateInMemory()
+    stage.DefinePrim("/Stockmann", "Xform").GetReferences().AddReference(str(out), source.GetPath())
+    assert_resolves(stage, "/Stockmann")
 
 
 def test_delft_cityjson_scene(tmp_path):

@@ -188,7 +188,7 @@ def test_a_scene_reads_an_osm_file_and_writes_a_valid_stage(tmp_path):
              for p in stage.Traverse() if p.HasAttribute("citygen:sourceId")}
     assert bases == {"way/101": 0.0, "way/102": pytest.approx(12.0)}
     # colour tags: the low part takes the outline's white walls and has its own roof colour; the tower is brown
-    looks = {p.GetName() for p in stage.GetPrimAtPath("/World/Looks").GetChildren()}
+    looks = {p.GetName() for p in stage.GetPrimAtPath("/Materials").GetAllChildren()}
     assert {"colour_ffffff", "colour_a52a2a", "colour_b4c9b3"} <= looks
     assert not any(name.startswith("plaster_") for name in looks)  # no palette wall where the data has a colour
     parts = {p.GetAttribute("citygen:sourceId").Get(): p for p in stage.Traverse()

@@ -1,0 +1,160 @@
+"""Thin Sdf authoring helpers on one layer: prims, attributes, meshes with face normals and UVs, and materials.
+
+Authoring goes through the Sdf API in change blocks (no composed stage while writing), which is what keeps a
+100k-building city writable.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+import numpy as np
+from pxr import Gf, Sdf, Tf, Vt
+
+from citygen.geometry.building import MeshData
+from citygen.usd.materials import Material, material
+from citygen.usd.normals import face_normals
+from citygen.usd.uv import planar_st
+
+T = Sdf.ValueTypeNames
+
+
+def look_name(name: str) -> str:
+    """The prim name of a material name (a scene may name one ``brick-red``)."""
+    return Tf.MakeValidIdentifier(name)
+
+
+def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
+    return Vt.Vec3fArray.FromNumpy(np.asarray(bound, dtype=np.float32))
+
+
+class Author:
+    """Authoring on one layer. Meshes get indexed face normals (``primvars:normals``, uniform,
+    :mod:`citygen.usd.normals`) and, with ``uvs`` or where their material has a texture, face-varying
+    ``primvars:st`` in metres (:mod:`citygen.usd.uv`). ``library``: the scene's and rulesets' materials;
+    ``layer_dir``: the folder the layer is published to (texture paths are written relative to it)."""
+
+    def __init__(self, layer: Sdf.Layer, uvs: bool = False, library: Mapping[str, Material] | None = None,
+                 layer_dir: Path | None = None) -> None:
+        self.layer = layer
+        self.uvs = uvs
+        self.library = library or {}
+        self.layer_dir = layer_dir
+        self.prims = 0
+
+    def prim(self, parent: Sdf.PrimSpec | Sdf.Layer, name: str, type_name: str = "",
+             specifier=Sdf.SpecifierDef) -> Sdf.PrimSpec:
+        self.prims += 1
+        return Sdf.PrimSpec(parent, name, specifier, type_name)
+
+    @staticmethod
+    def attr(prim: Sdf.PrimSpec, name: str, vtype, value, uniform: bool = False,
+             custom: bool = False) -> Sdf.AttributeSpec:
+        spec = Sdf.AttributeSpec(prim, name, vtype, Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying,
+                                 custom)
+        spec.default = value
+        return spec
+
+    @staticmethod
+    def rel(prim: Sdf.PrimSpec, name: str, targets: Iterable[Sdf.Path]) -> None:
+        spec = Sdf.RelationshipSpec(prim, name)
+        for t in targets:
+            spec.targetPathList.explicitItems.append(t)
+
+    @staticmethod
+    def api(prim: Sdf.PrimSpec, *schemas: str) -> None:
+        prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
+
+    @staticmethod
+    def connect(prim: Sdf.PrimSpec, name: str, vtype, source: Sdf.Path) -> None:
+        spec = Sdf.AttributeSpec(prim, name, vtype)
+        spec.connectionPathList.explicitItems.append(source)
+
+    def textured(self, name: str) -> bool:
+        return material(name, self.library).texture is not None
+
+    def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, looks: Sdf.Path | None, mat: str | None,
+             label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
+             offset: np.ndarray | None = None) -> np.ndarray | None:
+        """A Mesh prim bound to ``looks/<mat>``, none for an empty mesh; returns its bound (its ``extent``).
+        ``normals``: its :func:`face_normals` when already computed in a batch with other meshes; ``offset`` is
+        subtracted from its points (the building's pivot)."""
+        if not len(mesh.counts):
+            return None
+        prim = self.prim(parent, name, "Mesh")
+        pts = mesh.points if offset is None else np.asarray(mesh.points, dtype=float) - offset
+        pts = np.ascontiguousarray(pts, dtype=np.float32)
+        self.attr(prim, "points", T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
+        self.attr(prim, "faceVertexCounts", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)))
+        self.attr(prim, "faceVertexIndices", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)))
+        bound = np.array([pts.min(axis=0), pts.max(axis=0)])
+        self.attr(prim, "extent", T.Float3Array, bound_value(bound))
+        self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
+        values, index = normals or face_normals([mesh])[0]
+        spec = self.attr(prim, "primvars:normals", T.Normal3fArray, Vt.Vec3fArray.FromNumpy(values))
+        spec.SetInfo("interpolation", "uniform")
+        self.attr(prim, "primvars:normals:indices", T.IntArray, Vt.IntArray.FromNumpy(index))
+        if self.uvs or (mat is not None and self.textured(mat)):
+            st = self.attr(prim, "primvars:st", T.TexCoord2fArray,
+                           Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)))
+            st.SetInfo("interpolation", "faceVarying")
+        schemas = []
+        if looks is not None and mat is not None:
+            schemas.append("MaterialBindingAPI")
+            self.rel(prim, "material:binding", [looks.AppendChild(look_name(mat))])
+        if label is not None:
+            schemas.append("SemanticsLabelsAPI:class")
+            self.attr(prim, "semantics:labels:class", T.TokenArray, Vt.TokenArray([label]), uniform=True)
+        if schemas:
+            self.api(prim, *schemas)
+        return bound
+
+    def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:
+        """``parent/Looks``: one Material per name referencing the layer's ``/Materials`` definition, so the
+        bindings of everything under ``parent`` resolve inside it (a reference to ``parent`` brings them along)."""
+        scope = self.prim(parent, "Looks", "Scope")
+        for name in names:
+            look = self.prim(scope, look_name(name), "Material")
+            look.referenceList.prependedItems.append(
+                Sdf.Reference(primPath=Sdf.Path("/Materials").AppendChild(look_name(name))))
+        return scope.path
+
+    def material(self, parent: Sdf.PrimSpec, name: str) -> None:
+        """A ``UsdPreviewSurface`` Material ``parent/name`` of the library material ``name`` (linear colour; a
+        texture through a ``UsdTransform2d`` that scales ``st`` metres to repeats)."""
+        look = material(name, self.library)
+        mat = self.prim(parent, look_name(name), "Material")
+        shader = self.prim(mat, "PreviewSurface", "Shader")
+        self.attr(shader, "info:id", T.Token, "UsdPreviewSurface", uniform=True)
+        if look.texture is None:
+            self.attr(shader, "inputs:diffuseColor", T.Color3f, Gf.Vec3f(*look.linear))
+        else:
+            self._texture(mat, shader, look)
+        self.attr(shader, "inputs:roughness", T.Float, look.roughness)
+        self.attr(shader, "inputs:metallic", T.Float, look.metallic)
+        self.attr(shader, "inputs:opacity", T.Float, look.opacity)
+        Sdf.AttributeSpec(shader, "outputs:surface", T.Token)
+        self.connect(mat, "outputs:surface", T.Token, shader.path.AppendProperty("outputs:surface"))
+
+    def _texture(self, mat: Sdf.PrimSpec, shader: Sdf.PrimSpec, look: Material) -> None:
+        reader = self.prim(mat, "ST", "Shader")
+        self.attr(reader, "info:id", T.Token, "UsdPrimvarReader_float2", uniform=True)
+        self.attr(reader, "inputs:varname", T.String, "st")
+        Sdf.AttributeSpec(reader, "outputs:result", T.Float2)
+        scale = self.prim(mat, "Tiling", "Shader")
+        self.attr(scale, "info:id", T.Token, "UsdTransform2d", uniform=True)
+        self.connect(scale, "inputs:in", T.Float2, reader.path.AppendProperty("outputs:result"))
+        self.attr(scale, "inputs:scale", T.Float2, Gf.Vec2f(1 / look.texture_size[0], 1 / look.texture_size[1]))
+        Sdf.AttributeSpec(scale, "outputs:result", T.Float2)
+        tex = self.prim(mat, "Texture", "Shader")
+        self.attr(tex, "info:id", T.Token, "UsdUVTexture", uniform=True)
+        assert look.texture is not None
+        where = os.path.relpath(look.texture, self.layer_dir) if self.layer_dir else str(look.texture)
+        self.attr(tex, "inputs:file", T.Asset, Sdf.AssetPath(where.replace(os.sep, "/")))
+        self.attr(tex, "inputs:sourceColorSpace", T.Token, "sRGB")
+        self.attr(tex, "inputs:wrapS", T.Token, "repeat")
+        self.attr(tex, "inputs:wrapT", T.Token, "repeat")
+        self.connect(tex, "inputs:st", T.Float2, scale.path.AppendProperty("outputs:result"))
+        Sdf.AttributeSpec(tex, "outputs:rgb", T.Float3)
+        self.connect(shader, "inputs:diffuseColor", T.Color3f, tex.path.AppendProperty("outputs:rgb"))
