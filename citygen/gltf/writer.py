@@ -38,6 +38,8 @@ from citygen.usd.materials import look
 from citygen.usd.writer import BuildingRecord, StageStats
 
 
+#: glTF buffer view targets (vertex data, index data).
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 #: Decimals of node translations in metres (0.01 mm); rotations and scales get two more.
 DECIMALS = 5
 
@@ -156,7 +158,7 @@ class GltfScene:
 
     def _postprocess(self, tree: dict[str, Any]) -> None:
         """Prototype primitives joined into one mesh each; node transforms as translation, rotation and scale
-        (shorter than trimesh's matrices); materials' exact linear colours (trimesh keeps 8 bits)."""
+        (shorter than trimesh's matrices); buffer view targets; materials' exact linear colours (trimesh keeps 8 bits)."""
         tree["asset"]["generator"] = f"citygen {__version__} (trimesh {trimesh.__version__})"
         meshes, renumber, by_name = [], {}, {}
         for k, mesh in enumerate(tree.get("meshes", [])):
@@ -175,6 +177,12 @@ class GltfScene:
             if trs is not None:
                 node.pop("matrix", None)
                 node.update(trs)
+        views = tree.get("bufferViews")  # (a GLB's are in place here; a .gltf's come after)
+        if views:
+            for mesh in meshes:
+                for primitive in mesh["primitives"]:
+                    views[tree["accessors"][primitive["indices"]]["bufferView"]]["target"] = ELEMENT_ARRAY_BUFFER
+                    views[tree["accessors"][primitive["attributes"]["POSITION"]]["bufferView"]]["target"] = ARRAY_BUFFER
         for material in tree.get("materials", []):
             (r, g, b), roughness, metallic, opacity = material_look(material["name"])
             material["pbrMetallicRoughness"] = {"baseColorFactor": [r, g, b, opacity], "metallicFactor": metallic,
