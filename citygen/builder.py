@@ -7,6 +7,7 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -32,11 +33,13 @@ from citygen.usd.writer import BuildingRecord
 
 @dataclass(frozen=True)
 class BuildingOutcome:
-    """A built building's stage record, or why it was skipped; and the warnings met on the way."""
+    """A built building's stage record, or why it was skipped; the warnings met on the way; and, from a builder
+    that keeps them, the facade layout of each dressed face (by face index)."""
 
     record: BuildingRecord | None
     skipped: Skipped | None
     warnings: tuple[str, ...]
+    layouts: Mapping[int, FacadeLayout] | None = None
 
 
 def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
@@ -45,10 +48,11 @@ def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
 
 
 class Builder:
-    """Builds one building at a time; holds the registry and a ruleset cache."""
+    """Builds one building at a time; holds the registry and a ruleset cache. With ``keep_layouts`` its outcomes
+    carry the facade layouts too (an authoring tool shows them; the pipeline never ships them between processes)."""
 
-    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None) -> None:
-        self.scene, self.seed = scene, seed
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None, keep_layouts: bool = False) -> None:
+        self.scene, self.seed, self.keep_layouts = scene, seed, keep_layouts
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
         self.roofs = self.registry.roof_builders
@@ -117,7 +121,8 @@ class Builder:
                       "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
                       "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
                       "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face}
-        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings))
+        return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes), None, tuple(warnings),
+                               layouts if self.keep_layouts else None)
 
     def _materials(self, footprint: Footprint) -> tuple[str, str]:
         """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for

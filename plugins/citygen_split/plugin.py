@@ -9,7 +9,7 @@ from citygen.registry import RulesetKind
 from citygen.request import FacadeRequest
 from citygen_split.ast import Grammar
 from citygen_split.derive import derive, explain
-from citygen_split.parser import load
+from citygen_split.parser import load, parse
 
 
 class SplitGrammarKind(RulesetKind):
@@ -21,6 +21,9 @@ class SplitGrammarKind(RulesetKind):
 
     def load(self, path: Path) -> Grammar:
         return load(path)
+
+    def loads(self, text: str, path: Path) -> Grammar:
+        return parse(text, str(path))
 
     def generate(self, ruleset: Grammar, request: FacadeRequest) -> FacadeLayout:
         return derive(ruleset, request)

@@ -1,0 +1,269 @@
+"""A studio session: one scene, its buildings, and the library calls the studio's API makes (no HTTP here).
+
+Everything goes through the library the command line uses (scene loading, footprint import, masses, the
+:class:`~citygen.builder.Builder`, ruleset kinds, the glTF writer); nothing is implemented a second time. Paths the
+browser names are resolved by :class:`Confinement`: inside the scene's folder, or one of the rulesets the scene
+names, nothing else.
+"""
+from __future__ import annotations
+
+import base64
+import math
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from shapely.geometry import MultiPolygon
+
+from citygen.builder import Builder, assign_attributes
+from citygen.cliargs import MAX_SIDE
+from citygen.errors import CitygenError, SourceLocation
+from citygen.layout import LABELS, FacadeLayout, check_partition
+from citygen.mass import build_mass, neighbour_cover
+from citygen.pipeline import import_footprints
+from citygen.registry import Registry
+from citygen.request import MIN_STOREY, FacadeRequest, check_request
+from citygen.scene import Scene, load_scene
+from citygen.usd.materials import LOOKS
+from citygen.usd.writer import prim_name
+
+#: The largest ruleset text the studio parses or saves (bytes).
+MAX_TEXT = 256 * 1024
+
+
+class StudioError(CitygenError):
+    """A request the studio refuses: ``status`` is the HTTP status it answers with."""
+
+    def __init__(self, message: str, status: int = 400, **kw: Any) -> None:
+        super().__init__(message, **kw)
+        self.status = status
+
+
+def error_data(exc: CitygenError, confinement: Confinement | None = None) -> dict[str, Any]:
+    """An error as JSON data: message, hint, and ``file`` / ``line`` / ``column`` when it names a position."""
+    where = exc.where
+    data: dict[str, Any] = {"message": exc.message, "hint": exc.hint, "kind": type(exc).__name__}
+    if isinstance(where, SourceLocation):
+        data.update(file=confinement.show(where.path) if confinement else where.path, line=where.line,
+                    column=where.column)
+    elif where is not None:
+        data["where"] = confinement.show(str(where)) if confinement else str(where)
+    return data
+
+
+class Confinement:
+    """The files a session may read and write: under ``root``, plus the exact files in ``named``."""
+
+    def __init__(self, root: Path, named: Iterable[Path] = ()) -> None:
+        self.root = root.resolve()
+        self.named = {p.resolve() for p in named}
+
+    def resolve(self, name: str) -> Path:
+        """The file ``name`` (relative to the root, as a scene names it) if it is inside the confinement."""
+        if not isinstance(name, str) or not name or "\0" in name or len(name) > 1024 or os.path.isabs(name):
+            raise StudioError(f"{name!r} is not a path relative to the scene folder", 400)
+        path = (self.root / name).resolve()
+        if path in self.named or path.is_relative_to(self.root):
+            return path
+        raise StudioError(f"{name} is outside the scene folder and not a ruleset the scene names", 403,
+                          hint="the studio reads and writes only the scene's folder and its rulesets")
+
+    def show(self, path: str) -> str:
+        """``path`` as the browser names it: relative to the root (``../rulesets/x.grammar`` for a named one)."""
+        try:
+            return os.path.relpath(Path(path).resolve(), self.root)
+        except ValueError:
+            return Path(path).name
+
+
+@dataclass(frozen=True)
+class FaceRequestSize:
+    """A preview's size and floors, checked against the limits of ``citygen facade``."""
+
+    width: float
+    height: float
+    floor_height: float = 3.0
+    ground_height: float | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not 0 < value <= MAX_SIDE:
+                raise StudioError(f"{name} must be more than 0 and at most {MAX_SIDE:g} m, got {value!r}")
+        for name in ("floor_height", "ground_height"):
+            value = getattr(self, name)
+            if value is not None and (not isinstance(value, (int, float)) or not MIN_STOREY <= value <= 100):
+                raise StudioError(f"{name} must be {MIN_STOREY:g} to 100 m, got {value!r}")
+        if not isinstance(self.seed, int) or not 0 <= self.seed < 2**32:
+            raise StudioError(f"seed must be an integer from 0 to 2**32 - 1, got {self.seed!r}")
+
+
+def layout_data(layout: FacadeLayout, floor_lines: Iterable[float] = ()) -> dict[str, Any]:
+    """What the browser draws: the size, floor lines and every terminal region."""
+    leaves = [{"x": r.x, "y": r.y, "w": r.w, "h": r.h, "label": r.label, "symbol": r.symbol, "layer": r.layer,
+               "material": r.material} for r in layout.leaves]
+    return {"width": layout.width, "height": layout.height, "floor_lines": list(floor_lines), "leaves": leaves}
+
+
+class Session:
+    """The scene the studio was opened on (or just a folder of rulesets when there is none)."""
+
+    def __init__(self, registry: Registry, scene_path: Path | None = None, root: Path | None = None) -> None:
+        self.registry = registry
+        self.scene: Scene | None = None
+        self.load_error: dict[str, Any] | None = None
+        self.footprints, self.masses, self.cover, self.names = [], [], [], []
+        folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
+        self.confinement = Confinement(folder)
+        if scene_path is None:
+            return
+        try:
+            self.scene = load_scene(scene_path, registry.roof_builders, registry.ruleset_kinds)
+            named = [p for a in self.scene.assignments for p in (*a.rulesets, *([a.fallback] if a.fallback else []))]
+            self.confinement = Confinement(folder, named)
+            imported = import_footprints(self.scene, registry)
+            for fp in imported.footprints:
+                try:
+                    self.masses.append(build_mass(fp))
+                    self.footprints.append(fp)
+                except CitygenError:
+                    continue  # (generate reports it; the studio shows the buildings it can build)
+            self.cover = neighbour_cover(self.masses)
+            taken: set[str] = set()
+            self.names = [prim_name(fp.id, taken) for fp in self.footprints]
+        except CitygenError as exc:
+            self.scene, self.load_error = None, error_data(exc, self.confinement)
+
+    def info(self) -> dict[str, Any]:
+        """The scene, its rulesets, the ruleset kinds and what an editor completes (materials, labels)."""
+        scene = self.scene
+        return {"scene": scene.name if scene else None, "file": scene.path.name if scene else None,
+                "error": self.load_error, "buildings": len(self.footprints), "rulesets": self.rulesets(),
+                "kinds": [{"id": k.id, "suffixes": list(k.suffixes), "description": k.description}
+                          for k in self.registry.ruleset_kinds.values()],
+                "materials": sorted(LOOKS), "labels": list(LABELS),
+                "floor_height": scene.defaults.floor_height if scene else 3.0}
+
+    def rulesets(self) -> list[str]:
+        """The rulesets the scene names, then the other ruleset files in its folder, as the browser names them."""
+        suffixes = tuple(s for k in self.registry.ruleset_kinds.values() for s in k.suffixes)
+        named = sorted(self.confinement.show(str(p)) for p in self.confinement.named)
+        local = sorted(os.path.relpath(p, self.confinement.root) for p in self.confinement.root.rglob("*")
+                       if p.is_file() and p.name.endswith(suffixes) and not p.name.startswith("."))
+        return list(dict.fromkeys(named + local))
+
+    def buildings(self) -> list[dict[str, Any]]:
+        """Every building: id, outline rings (local metres), attributes, and the rulesets its faces get."""
+        out = []
+        builder = self._builder()
+        for k, (fp, mass) in enumerate(zip(self.footprints, self.masses)):
+            parts = mass.outline.geoms if isinstance(mass.outline, MultiPolygon) else [mass.outline]
+            rings = [[[round(x, 2), round(y, 2)] for x, y in ring.coords] for part in parts
+                     for ring in (part.exterior, *part.interiors)]
+            chosen = {scope: builder.choose(fp, mass, scope) for scope in ("street", "courtyard")}
+            attributes = {key: _plain(v) for key, v in assign_attributes(fp, mass).items()}
+            out.append({"index": k, "id": fp.id, "name": self.names[k], "rings": rings, "attributes": attributes,
+                        "rulesets": {scope: self.confinement.show(str(c[1])) if c else None
+                                     for scope, c in chosen.items()}})
+        return out
+
+    def _builder(self, overrides: Mapping[str, str] | None = None) -> Builder:
+        if self.scene is None:
+            raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
+        builder = Builder(self.scene, self.scene.seed, self.registry, keep_layouts=True)
+        for name, text in (overrides or {}).items():
+            path = self.confinement.resolve(name)
+            kind = self.registry.kind_for_path(path)
+            builder.rulesets[(kind.id, path)] = kind.loads(_text(text), path)
+        return builder
+
+    def build(self, index: int, overrides: Mapping[str, str] | None = None) -> dict[str, Any]:
+        """One building with the scene's rulesets (``overrides``: edited texts by ruleset name): the layout of
+        every dressed face and the building as GLB (base64)."""
+        from citygen.gltf.writer import building_glb
+
+        builder = self._builder(overrides)
+        if not isinstance(index, int) or not 0 <= index < len(self.footprints):
+            raise StudioError(f"no building {index!r} (the scene has {len(self.footprints)})", 404)
+        fp, mass = self.footprints[index], self.masses[index]
+        outcome = builder.build(fp, mass, self.cover[index], self.names[index], (0, 0))
+        if outcome.record is None:
+            return {"id": fp.id, "skipped": outcome.skipped.reason, "warnings": list(outcome.warnings)}
+        faces = [{"index": f.index, "width": f.width, "height": f.height, "courtyard": f.is_courtyard,
+                  "layout": layout_data(outcome.layouts[f.index]) if f.index in outcome.layouts else None}
+                 for f in mass.faces]
+        glb = building_glb(outcome.record)
+        return {"id": fp.id, "skipped": None, "warnings": list(outcome.warnings), "faces": faces,
+                "attributes": {k: _plain(v) for k, v in outcome.record.attributes.items()},
+                "glb": base64.b64encode(glb).decode("ascii")}
+
+    def check(self, name: str, text: str) -> dict[str, Any]:
+        """Parse a ruleset text: ``{"ok": true}`` or its error (file:line:column) as data."""
+        path, text = self.confinement.resolve(name), _text(text)
+        kind = self.registry.kind_for_path(path)
+        try:
+            kind.loads(text, path)
+        except CitygenError as exc:
+            return {"ok": False, "error": error_data(exc, self.confinement)}
+        return {"ok": True, "error": None}
+
+    def preview(self, name: str, text: str, size: FaceRequestSize) -> dict[str, Any]:
+        """One facade of a ruleset text at a size: its layout, the kind's account of it, and any problem; a text
+        that does not parse (or a ruleset that cannot dress the size) gives its error as data."""
+        path, text = self.confinement.resolve(name), _text(text)
+        kind = self.registry.kind_for_path(path)
+        request = FacadeRequest.preview(size.width, size.height, floor_height=size.floor_height,
+                                        ground_height=size.ground_height, seed=size.seed)
+        try:
+            ruleset = kind.loads(text, path)
+            layout = kind.generate(ruleset, request)
+            explain = kind.explain(ruleset, request)
+        except CitygenError as exc:
+            return {"ok": False, "error": error_data(exc, self.confinement), "kind": kind.id}
+        problems = check_partition(layout) + check_request(layout, request)
+        return {"ok": True, "error": None, "kind": kind.id, "layout": layout_data(layout, request.floor_lines),
+                "explain": explain, "problems": [str(p) for p in problems]}
+
+    def read(self, name: str) -> dict[str, Any]:
+        path = self.confinement.resolve(name)
+        if not path.is_file():
+            raise StudioError(f"{name}: no such file", 404)
+        if path.stat().st_size > MAX_TEXT:
+            raise StudioError(f"{name} is larger than {MAX_TEXT // 1024} KiB", 413)
+        return {"name": name, "text": path.read_text(encoding="utf-8"), "kind": self.registry.kind_for_path(path).id}
+
+    def save(self, name: str, text: str) -> dict[str, Any]:
+        """Write a ruleset text (atomically) to a ruleset file inside the confinement; the kind must read it."""
+        path = self.confinement.resolve(name)
+        self.registry.kind_for_path(path)  # refuses suffixes no kind reads
+        if not path.parent.is_dir():
+            raise StudioError(f"{name}: its folder does not exist", 404)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                handle.write(_text(text))
+            os.replace(tmp, path)
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+        return {"name": name, "saved": True}
+
+
+def _text(text: Any) -> str:
+    if not isinstance(text, str):
+        raise StudioError("a ruleset text must be a string")
+    if len(text.encode("utf-8")) > MAX_TEXT:
+        raise StudioError(f"a ruleset text must be at most {MAX_TEXT // 1024} KiB", 413)
+    return text
+
+
+def _plain(value: Any) -> Any:
+    """A JSON-safe attribute value (NaN and infinities as None, numpy scalars as Python ones)."""
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value if isinstance(value, (str, int, float, bool)) or value is None else str(value)
