@@ -263,15 +263,20 @@ async function build(frame = false) {
   }));
   if (faces.some((f) => String(f.index) === previous)) choice.value = previous;
   status(`${result.id}: ${faces.length} dressed faces` + (result.warnings.length ? `, ${result.warnings.length} warnings` : ""));
-  if (frame) showFace();
+  showFace(frame);
 }
 
-function showFace() {
+// The selected face as the building got it (its floors and entrance from the building's coordinator); ``resize``
+// also sets the preview size to the face's, for the stand-alone previews while typing.
+function showFace(resize = true) {
   const face = state.built && state.built.faces.find((f) => String(f.index) === $("face").value);
   if (!face) return;
-  $("width").value = face.width.toFixed(2);
-  $("height").value = face.height.toFixed(2);
+  if (resize) {
+    $("width").value = face.width.toFixed(2);
+    $("height").value = face.height.toFixed(2);
+  }
   drawFacade(face.layout);
+  $("explain").textContent = `face ${face.index} of ${state.built.id} as built`;
 }
 
 async function select(index) {
@@ -298,7 +303,7 @@ async function start() {
   $("ruleset").replaceChildren(...state.info.rulesets.map((name) => new Option(name, name)));
   $("ruleset").addEventListener("change", () => openRuleset($("ruleset").value));
   $("save").addEventListener("click", save);
-  $("face").addEventListener("change", showFace);
+  $("face").addEventListener("change", () => showFace());
   for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
   if (state.info.buildings) {
     state.buildings = (await api("/api/buildings")).buildings;
