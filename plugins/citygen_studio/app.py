@@ -68,6 +68,8 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         route("/api/check", lambda b: session.check(_field(b, "ruleset", str), _field(b, "text", str)), post=True),
         route("/api/preview", lambda b: session.preview(_field(b, "ruleset", str), _field(b, "text", str), _size(b)),
               post=True),
+        route("/api/variations", lambda b: session.variations(_field(b, "ruleset", str), _field(b, "text", str),
+                                                              _size(b), b.get("count", 8)), post=True),
         route("/api/build", lambda b: session.build(_field(b, "index", int), _overrides(b)), post=True),
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]

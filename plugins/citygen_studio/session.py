@@ -32,6 +32,8 @@ from citygen.usd.writer import prim_name
 
 #: The largest ruleset text the studio parses or saves (bytes).
 MAX_TEXT = 256 * 1024
+#: The most seeds one variations request tries.
+MAX_VARIATIONS = 16
 
 
 class StudioError(CitygenError):
@@ -227,6 +229,32 @@ class Session:
         problems = check_partition(layout) + check_request(layout, request)
         return {"ok": True, "error": None, "kind": kind.id, "layout": layout_data(layout, request.floor_lines),
                 "explain": explain, "problems": [str(p) for p in problems]}
+
+    def variations(self, name: str, text: str, size: FaceRequestSize, count: int) -> dict[str, Any]:
+        """The distinct layouts of a ruleset text at a size over the seeds ``size.seed ... + count - 1`` (a relayout
+        model's or SAFE ruleset's variations, a grammar's random choices), each with its seed."""
+        if not isinstance(count, int) or not 1 <= count <= MAX_VARIATIONS:
+            raise StudioError(f"count must be 1 to {MAX_VARIATIONS}, got {count!r}")
+        path, text = self.confinement.resolve(name), _text(text)
+        kind = self.registry.kind_for_path(path)
+        try:
+            ruleset = kind.loads(text, path)
+        except CitygenError as exc:
+            return {"ok": False, "error": error_data(exc, self.confinement), "variations": []}
+        found, seen = [], set()
+        for seed in range(size.seed, size.seed + count):
+            request = FacadeRequest.preview(size.width, size.height, floor_height=size.floor_height,
+                                            ground_height=size.ground_height, seed=seed)
+            try:
+                layout = layout_data(kind.generate(ruleset, request), request.floor_lines)
+            except CitygenError as exc:
+                found.append({"seed": seed, "error": error_data(exc, self.confinement)})
+                continue
+            key = repr(layout["leaves"])
+            if key not in seen:
+                seen.add(key)
+                found.append({"seed": seed, "layout": layout})
+        return {"ok": True, "error": None, "variations": found}
 
     def read(self, name: str) -> dict[str, Any]:
         path = self.confinement.resolve(name)

@@ -83,13 +83,24 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         page.screenshot(path=tmp_path / "2-edited.png")
         assert (np.abs(canvas(page) - before).sum(axis=2) > 30).mean() > 0.05  # the 3D view changed
 
+        # variations: the distinct layouts of the next seeds; picking one previews its seed
+        page.locator("#vary").click()
+        page.wait_for_selector("#variations figure", timeout=30_000)
+        cells = page.locator("#variations figure")
+        assert cells.count() >= 2
+        previews = page.evaluate("window.studio.previews")
+        cells.nth(1).click()
+        page.wait_for_function(f"window.studio.previews > {previews}", timeout=10_000)
+        assert page.locator("#seed").input_value() == cells.nth(1).get_attribute("data-seed")
+        page.screenshot(path=tmp_path / "3-variation.png")
+
         # a syntax error typed at the end: a marker on its line, the message names file:line:column
         page.locator(".CodeMirror").click()
         page.keyboard.press("Control+End")
         page.keyboard.type("\nBroken --> split(")
         page.wait_for_selector(".CodeMirror-lint-marker-error", timeout=10_000)
         assert page.locator("#error").inner_text().startswith("house.grammar:")
-        page.screenshot(path=tmp_path / "3-error.png")
+        page.screenshot(path=tmp_path / "4-error.png")
         assert (scene.parent / "house.grammar").read_text() == (Path(__file__).parents[2] / "rulesets" /
                                                                 "house.grammar").read_text()  # nothing saved
         assert errors == []

@@ -93,6 +93,19 @@ def test_preview_of_a_ruleset_text(client, scene):
     assert preview["explain"]
 
 
+def test_variations_of_a_relayout_model_are_distinct_layouts(client, scene):
+    for name in ("cmp_b0035.relayout", "cmp_b0035.layout.json"):
+        shutil.copy(REPO / "rulesets" / name, scene.parent / name)
+    text = (scene.parent / "cmp_b0035.relayout").read_text()
+    body = {"ruleset": "cmp_b0035.relayout", "text": text, "width": 14, "height": 12, "floor_height": 3, "count": 4}
+    result = client.post("/api/variations", json=body).json()
+    layouts = [v["layout"] for v in result["variations"]]
+    assert result["ok"] and 1 < len(layouts) <= 4
+    assert len({json.dumps(layout["leaves"]) for layout in layouts}) == len(layouts)
+    assert [v["seed"] for v in result["variations"]] == sorted(v["seed"] for v in result["variations"])
+    assert client.post("/api/variations", json={**body, "count": 1000}).status_code == 400
+
+
 def test_malformed_ruleset_is_an_error_with_its_position(client):
     body = {"ruleset": "house.grammar", "text": "Facade --> split(y) { 1: Floor\n", "width": 10, "height": 9}
     preview = client.post("/api/preview", json=body)

@@ -120,8 +120,7 @@ function showGlb(base64, frame) {
 
 // ---- facade drawing --------------------------------------------------------------------------------------------
 
-function drawFacade(layout) {
-  const svg = $("facade");
+function drawFacade(layout, svg = $("facade")) {
   svg.replaceChildren();
   if (!layout) return;
   const {width: w, height: h} = layout;
@@ -233,6 +232,35 @@ async function preview() {
   status(`preview ${result.kind}: ${Math.round(performance.now() - started)} ms`);
 }
 
+// The distinct layouts of the edited ruleset over the next seeds (relayout and SAFE variations, a grammar's random
+// choices); clicking one previews its seed.
+async function variations() {
+  const grid = $("variations");
+  grid.replaceChildren();
+  grid.hidden = false;
+  let result;
+  try {
+    result = await api("/api/variations", {ruleset: state.ruleset, text: editor.getValue(), ...size(), count: 8});
+  } catch (error) { $("error").textContent = where(error.data) || error.message; return; }
+  if (result.error) { $("error").textContent = where(result.error); return; }
+  for (const variation of result.variations) {
+    const cell = document.createElement("figure");
+    cell.className = "variation";
+    cell.dataset.seed = variation.seed;
+    const caption = document.createElement("figcaption");
+    caption.textContent = `seed ${variation.seed}` + (variation.error ? ": " + variation.error.message : "");
+    if (variation.layout) drawFacade(variation.layout, element("svg", {}, cell));
+    cell.appendChild(caption);
+    cell.addEventListener("click", () => {
+      $("seed").value = variation.seed;
+      for (const other of grid.children) other.classList.toggle("picked", other === cell);
+      preview();
+    });
+    grid.appendChild(cell);
+  }
+  status(`${result.variations.length} distinct variations`);
+}
+
 function edited() {
   return Object.fromEntries(Object.entries(state.texts).filter(([name, text]) => text !== state.saved[name]));
 }
@@ -304,6 +332,7 @@ async function start() {
   $("ruleset").addEventListener("change", () => openRuleset($("ruleset").value));
   $("save").addEventListener("click", save);
   $("face").addEventListener("change", () => showFace());
+  $("vary").addEventListener("click", variations);
   for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
   if (state.info.buildings) {
     state.buildings = (await api("/api/buildings")).buildings;
