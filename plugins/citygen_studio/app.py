@@ -19,7 +19,7 @@ from starlette.applications import Starlette
 from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
-from starlette.responses import JSONResponse
+from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
@@ -60,6 +60,13 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
             return await run(request, work, post)
         return Route(path, endpoint, methods=["POST"] if post else ["GET"])
 
+    async def output(request: Request) -> Response:
+        try:
+            path = session.output(request.query_params.get("name", ""))
+        except StudioError as exc:
+            return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=exc.status)
+        return FileResponse(path, filename=path.name)
+
     routes = [
         route("/api/scene", lambda q: session.info()),
         route("/api/buildings", lambda q: {"buildings": session.buildings()}),
@@ -70,6 +77,9 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
               post=True),
         route("/api/variations", lambda b: session.variations(_field(b, "ruleset", str), _field(b, "text", str),
                                                               _size(b), b.get("count", 8)), post=True),
+        route("/api/generate", lambda b: session.generate(_field(b, "format", str), b.get("jobs", 1)), post=True),
+        route("/api/generate", lambda q: session.generation_state()),
+        Route("/api/output", output),
         route("/api/build", lambda b: session.build(_field(b, "index", int), _overrides(b)), post=True),
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]

@@ -11,6 +11,7 @@ import base64
 import math
 import os
 import tempfile
+import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +24,7 @@ from citygen.cliargs import MAX_SIDE
 from citygen.errors import CitygenError, SourceLocation
 from citygen.layout import LABELS, FacadeLayout, check_partition
 from citygen.mass import build_mass, neighbour_cover
-from citygen.pipeline import import_footprints
+from citygen.pipeline import generate_city, import_footprints
 from citygen.registry import Registry
 from citygen.request import MIN_STOREY, FacadeRequest, check_request
 from citygen.scene import Scene, load_scene
@@ -111,6 +112,39 @@ def layout_data(layout: FacadeLayout, floor_lines: Iterable[float] = ()) -> dict
     return {"width": layout.width, "height": layout.height, "floor_lines": list(floor_lines), "leaves": leaves}
 
 
+#: Output formats the studio's generate writes (into ``OUTPUT_FOLDER`` under the scene's folder).
+OUTPUT_SUFFIXES = (".usdc", ".usda", ".usdz", ".glb")
+OUTPUT_FOLDER = "studio-out"
+
+
+class Generation:
+    """One run of the whole scene in a background thread, its progress readable while it runs."""
+
+    def __init__(self, scene: Scene, registry: Registry, out: Path, jobs: int) -> None:
+        self.out, self.done, self.total = out, 0, 0
+        self.report: dict[str, Any] | None = None
+        self.error: dict[str, Any] | None = None
+        self.thread = threading.Thread(target=self._run, args=(scene, registry, jobs), daemon=True)
+        self.thread.start()
+
+    def _progress(self, done: int, total: int) -> None:
+        self.done, self.total = done, total
+
+    def _run(self, scene: Scene, registry: Registry, jobs: int) -> None:
+        try:
+            report = generate_city(scene, out=self.out, jobs=jobs, registry=registry, progress=self._progress)
+            self.report = {**report.to_dict(), "summary": report.summary()}
+        except CitygenError as exc:
+            self.error = error_data(exc)
+        except Exception as exc:  # a library bug ends this run, not the studio
+            self.error = {"message": f"internal error {type(exc).__name__}: {exc}"}
+
+    def state(self, root: Path) -> dict[str, Any]:
+        running = self.thread.is_alive()
+        return {"running": running, "done": self.done, "total": self.total, "error": self.error,
+                "report": None if running else self.report, "output": os.path.relpath(self.out, root)}
+
+
 class Session:
     """The scene the studio was opened on (or just a folder of rulesets when there is none)."""
 
@@ -119,6 +153,7 @@ class Session:
         self.scene: Scene | None = None
         self.load_error: dict[str, Any] | None = None
         self.footprints, self.masses, self.cover, self.names = [], [], [], []
+        self.generation: Generation | None = None
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
         if scene_path is None:
@@ -255,6 +290,33 @@ class Session:
                 seen.add(key)
                 found.append({"seed": seed, "layout": layout})
         return {"ok": True, "error": None, "variations": found}
+
+    def generate(self, suffix: str, jobs: int = 1) -> dict[str, Any]:
+        """Start generating the whole scene (its saved rulesets) into ``studio-out/<scene><suffix>`` under the scene's
+        folder; one run at a time. Its progress and report: :meth:`generation_state`."""
+        if self.scene is None:
+            raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
+        if suffix not in OUTPUT_SUFFIXES:
+            raise StudioError(f"format must be one of {', '.join(OUTPUT_SUFFIXES)}, got {suffix!r}")
+        if not isinstance(jobs, int) or not 1 <= jobs <= (os.cpu_count() or 1):
+            raise StudioError(f"jobs must be 1 to {os.cpu_count() or 1}, got {jobs!r}")
+        if self.generation is not None and self.generation.thread.is_alive():
+            raise StudioError("the scene is already being generated", 409, hint="wait for it to finish")
+        out = self.confinement.root / OUTPUT_FOLDER / f"{self.scene.path.stem}{suffix}"
+        self.generation = Generation(self.scene, self.registry, out, jobs)
+        return self.generation_state()
+
+    def generation_state(self) -> dict[str, Any]:
+        if self.generation is None:
+            return {"running": False, "done": 0, "total": 0, "error": None, "report": None, "output": None}
+        return self.generation.state(self.confinement.root)
+
+    def output(self, name: str) -> Path:
+        """A file the studio generated (under ``studio-out``), to download."""
+        path = self.confinement.resolve(name)
+        if path.parent != self.confinement.root / OUTPUT_FOLDER or not path.is_file():
+            raise StudioError(f"{name} is not a generated file", 404)
+        return path
 
     def read(self, name: str) -> dict[str, Any]:
         path = self.confinement.resolve(name)

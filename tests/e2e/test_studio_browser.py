@@ -105,3 +105,20 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
                                                                 "house.grammar").read_text()  # nothing saved
         assert errors == []
         browser.close()
+
+
+def test_generate_the_scene_and_see_the_report(studio, tmp_path):
+    url, scene = studio
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        page.locator("#format").select_option(".glb")
+        page.locator("#generate").click()
+        page.wait_for_selector("#download:not([hidden])", timeout=120_000)
+        assert "written 2 buildings" in page.locator("#report").inner_text()
+        assert page.locator("#download").get_attribute("href").endswith("studio-out%2Fscene.glb")
+        page.screenshot(path=tmp_path / "generated.png")
+        browser.close()
+    assert (scene.parent / "studio-out" / "scene.glb").is_file()

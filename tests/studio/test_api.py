@@ -4,6 +4,7 @@ from __future__ import annotations
 import base64
 import json
 import shutil
+import time
 from pathlib import Path
 
 import pytest
@@ -162,6 +163,23 @@ def test_a_scene_that_fails_to_load_is_reported_as_data(tmp_path):
     assert info["error"]["file"] == "broken.toml" and info["error"]["line"] == 1
     response = client.post("/api/build", json={"index": 0})
     assert response.status_code == 409 and "scene" in response.json()["error"]["message"]
+
+
+def test_generate_runs_the_scene_with_progress_report_and_download(client, scene):
+    started = client.post("/api/generate", json={"format": ".glb"}).json()
+    assert started["output"] == "studio-out/scene.glb"
+    for _ in range(600):
+        state = client.get("/api/generate").json()
+        if not state["running"]:
+            break
+        time.sleep(0.1)
+    assert state["error"] is None and state["done"] == state["total"] == 2
+    assert state["report"]["written"] == 2 and "written 2 buildings" in state["report"]["summary"]
+    download = client.get("/api/output", params={"name": state["output"]})
+    assert download.status_code == 200 and download.content[:4] == b"glTF"
+    assert client.get("/api/output", params={"name": "scene.toml"}).status_code == 404
+    assert client.get("/api/output", params={"name": "../secret.grammar"}).status_code == 403
+    assert client.post("/api/generate", json={"format": ".obj"}).status_code == 400
 
 
 def test_bad_requests_are_errors_as_data(client):

@@ -261,6 +261,40 @@ async function variations() {
   status(`${result.variations.length} distinct variations`);
 }
 
+// ---- generate ------------------------------------------------------------------------------------------------------
+
+// Run the whole scene (its saved rulesets) on the server, follow its progress, then show the report and the file.
+async function generate() {
+  if (Object.keys(edited()).length) {
+    $("report").textContent = "Save the edited rulesets first: the city is generated from the files.";
+    return;
+  }
+  $("generate").disabled = true;
+  $("download").hidden = true;
+  $("progress").hidden = false;
+  try {
+    let run = await api("/api/generate", {format: $("format").value, jobs: 1});
+    while (run.running) {
+      $("progress").max = Math.max(run.total, 1);
+      $("progress").value = run.done;
+      status(`generating: ${run.done} / ${run.total} buildings`);
+      await new Promise((resolve) => setTimeout(resolve, 500));
+      run = await api("/api/generate");
+    }
+    $("progress").value = $("progress").max;
+    if (run.error) throw Object.assign(new Error(run.error.message), {data: run.error});
+    $("report").textContent = run.report.summary;
+    $("download").href = "/api/output?name=" + encodeURIComponent(run.output);
+    $("download").textContent = "download " + run.output;
+    $("download").hidden = false;
+    status(`generated ${run.report.written} buildings`);
+  } catch (error) {
+    $("report").textContent = where(error.data) || error.message;
+  } finally {
+    $("generate").disabled = false;
+  }
+}
+
 function edited() {
   return Object.fromEntries(Object.entries(state.texts).filter(([name, text]) => text !== state.saved[name]));
 }
@@ -333,6 +367,8 @@ async function start() {
   $("save").addEventListener("click", save);
   $("face").addEventListener("change", () => showFace());
   $("vary").addEventListener("click", variations);
+  $("generate").addEventListener("click", generate);
+  $("generate").disabled = !state.info.scene;
   for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
   if (state.info.buildings) {
     state.buildings = (await api("/api/buildings")).buildings;
