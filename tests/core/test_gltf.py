@@ -27,6 +27,12 @@ REPO = Path(__file__).resolve().parents[2]
 HOUSES = [(k, (30.0 * (k % 3), 25.0 * (k // 3), 18.0, 11.0), 4 + k % 2) for k in range(6)]
 
 
+def instance_nodes(doc: dict) -> list[dict]:
+    """Nodes placing a prototype: their mesh is a prototype's (named by its key, no ``building/`` prefix)."""
+    return [n for n in doc["nodes"] if "mesh" in n and "/" not in doc["meshes"][n["mesh"]]["name"]
+            and n["name"] != "Ground"]
+
+
 def glb_json(path: Path) -> dict:
     """The JSON chunk of a GLB file."""
     data = path.read_bytes()
@@ -61,12 +67,13 @@ def test_round_trip_through_trimesh_counts_buildings_instances_and_materials(cit
     # every instance of the stage is one node sharing its prototype's mesh (a mesh of several primitives loads as
     # one geometry per primitive, each under the instance's node)
     doc = glb_json(glb)
-    users = Counter(node["mesh"] for node in doc["nodes"] if "mesh" in node)
-    instanced = sum(n for n in users.values() if n > 1)
+    users = Counter(node["mesh"] for node in instance_nodes(doc))
+    instanced = sum(users.values())
     stage_instances = sum(len(UsdGeom.PointInstancer(p).GetProtoIndicesAttr().Get())
                           for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)
                           and not str(p.GetPath()).startswith("/Prototypes"))
     assert instanced == stage_instances > 20
+    assert max(users.values()) > 10 and len(users) < instanced / 3  # prototypes' meshes are shared
     shared = [g for g, n in Counter(graph[node][1] for node in graph.nodes_geometry).items() if n > 1]
     assert len(shared) >= len([m for m, n in users.items() if n > 1])
     # the same materials, with the stage's linear colours
