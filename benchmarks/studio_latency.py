@@ -16,11 +16,11 @@ import sys
 import time
 from pathlib import Path
 
+from citygen_studio.app import create_app
+from citygen_studio.session import Session
 from starlette.testclient import TestClient
 
 from citygen.registry import default_registry
-from citygen_studio.app import create_app
-from citygen_studio.session import Session
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -78,12 +78,12 @@ def main() -> None:
             session.confinement.named.add(path.resolve())  # (the benchmark previews every shipped ruleset)
         body = {"ruleset": name, "text": path.read_text(), "width": 20, "height": 15, "floor_height": 3.3}
         assert client.post("/api/preview", json=body).json()["ok"], name
-        median, worst = timed(lambda: client.post("/api/preview", json=body), args.repeat)
+        median, worst = timed(lambda body=body: client.post("/api/preview", json=body), args.repeat)
         print(f"{path.name:<40} {median:>10.1f} {worst:>9.1f}")
     print(f"{'build + GLB':<40} {'median ms':>10} {'worst ms':>9} {'GLB kB':>7}")
     for index in range(min(args.buildings, len(session.footprints))):
         size = len(client.post("/api/build", json={"index": index}).json().get("glb", "")) * 3 / 4 / 1000
-        median, worst = timed(lambda: client.post("/api/build", json={"index": index}), max(3, args.repeat // 3))
+        median, worst = timed(lambda index=index: client.post("/api/build", json={"index": index}), max(3, args.repeat // 3))
         print(f"{session.footprints[index].id:<40} {median:>10.1f} {worst:>9.1f} {size:>7.0f}")
     if args.browser:
         print(f"start to first paint: {first_paint(scene):.2f} s")

@@ -37,7 +37,6 @@ from citygen.gltf.meshes import (Y_UP, Y_UP_QUATERNION, Primitive, PrototypeMesh
 from citygen.usd.materials import look
 from citygen.usd.writer import BuildingRecord, StageStats
 
-
 #: glTF buffer view targets (vertex data, index data).
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 #: Decimals of node translations in metres (0.01 mm); rotations and scales get two more.

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from citygen.hookspecs import hookimpl
 from citygen.registry import Command
-
 from citygen_studio.command import StudioCommand
 
 

@@ -15,8 +15,8 @@ import trimesh
 from pxr import Usd, UsdGeom, UsdShade
 
 from citygen.errors import CitygenError
-from citygen.gltf.meshes import Y_UP, Y_UP_QUATERNION, instance_matrices, quaternion_product, triangles
 from citygen.geometry.building import Instances, MeshData
+from citygen.gltf.meshes import Y_UP, Y_UP_QUATERNION, instance_matrices, quaternion_product, triangles
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from tests.mini_scene import generate_mini_scene

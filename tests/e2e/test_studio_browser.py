@@ -28,7 +28,6 @@ FLAGS = ["--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"]
 def studio(tmp_path):
     """The studio on a two-house scene, served on a free loopback port from a thread."""
     import uvicorn
-
     from citygen_studio.app import create_app
     from citygen_studio.command import listen
     from citygen_studio.session import Session
