@@ -17,11 +17,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from shapely.geometry import MultiPolygon
 
 from citygen.builder import Builder, assign_attributes
 from citygen.cliargs import MAX_SIDE
 from citygen.errors import CitygenError, SourceLocation
+from citygen.gltf.meshes import Y_UP, pivot
 from citygen.layout import LABELS, FacadeLayout, check_partition
 from citygen.mass import build_mass, neighbour_cover
 from citygen.pipeline import generate_city, import_footprints
@@ -219,8 +221,9 @@ class Session:
         return builder
 
     def build(self, index: int, overrides: Mapping[str, str] | None = None) -> dict[str, Any]:
-        """One building with the scene's rulesets (``overrides``: edited texts by ruleset name): the layout of
-        every dressed face and the building as GLB (base64)."""
+        """One building with the scene's rulesets (``overrides``: edited texts by ruleset name): every face's
+        frame in the GLB's coordinates (Y-up, origin at the building's pivot) and layout (when dressed), and the
+        building as GLB (base64)."""
         from citygen.gltf.writer import building_glb
 
         builder = self._builder(overrides)
@@ -230,7 +233,14 @@ class Session:
         outcome = builder.build(fp, mass, self.cover[index], self.names[index], (0, 0))
         if outcome.record is None:
             return {"id": fp.id, "skipped": outcome.skipped.reason, "warnings": list(outcome.warnings)}
+        geo = outcome.record.geometry
+        origin = pivot([*geo.meshes.values(), *([geo.roof] if geo.roof is not None else [])],
+                       float(outcome.record.attributes["base"]))
+        turn = Y_UP[:3, :3]  # the GLB's frame: Y-up, origin at the pivot
         faces = [{"index": f.index, "width": f.width, "height": f.height, "courtyard": f.is_courtyard,
+                  "origin": (turn @ (np.asarray(f.origin) - origin)).round(4).tolist(),
+                  "u": (turn @ np.asarray(f.u)).round(6).tolist(),
+                  "normal": (turn @ np.asarray(f.normal)).round(6).tolist(),
                   "layout": layout_data(outcome.layouts[f.index]) if f.index in outcome.layouts else None}
                  for f in mass.faces]
         glb = building_glb(outcome.record)

@@ -68,6 +68,8 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         assert (np.abs(before - background).sum(axis=2) > 30).mean() > 0.05  # the building covers the view
         assert page.locator("#ruleset").input_value() == "house.grammar"
         assert page.locator("#facade rect[data-label=window]").count() > 0
+        page.locator("#view3d canvas").click()  # the middle of the view: a face of the building
+        page.wait_for_function("document.getElementById('status').textContent.endsWith('picked')", timeout=10_000)
 
         # an edit: every window becomes a shop front (the SVG preview follows), the walls brick (the 3D view does)
         previews, builds = page.evaluate("[window.studio.previews, window.studio.builds]")

@@ -7,6 +7,7 @@ import shutil
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 from starlette.testclient import TestClient
@@ -72,6 +73,13 @@ def test_build_gives_face_layouts_and_a_glb_of_the_building(client):
     assert len(dressed) == 4 and any(r["label"] == "window" for r in dressed[0]["layout"]["leaves"])
     glb = trimesh.load(trimesh.util.wrap_as_stream(base64.b64decode(built["glb"])), file_type="glb", force="scene")
     assert len(glb.graph.nodes_geometry) > 10
+    # face frames in the GLB's coordinates: Y-up, on the ground, the building's walls around its pivot
+    (x0, y0, z0), (x1, y1, z1) = glb.bounds
+    for face in built["faces"]:
+        assert face["origin"][1] == pytest.approx(0.0) and face["u"][1] == face["normal"][1] == 0
+        end = np.add(face["origin"], np.multiply(face["u"], face["width"]))
+        for x, _, z in (face["origin"], end):
+            assert x0 - 0.01 <= x <= x1 + 0.01 and z0 - 0.01 <= z <= z1 + 0.01
 
 
 def test_build_with_an_edited_ruleset_uses_the_edit(client, scene):

@@ -91,6 +91,11 @@ function setUpView() {
   view.camera = new THREE.PerspectiveCamera(40, 1, 0.1, 5000);
   view.camera.position.set(30, 25, 40);
   view.controls = new OrbitControls(view.camera, view.renderer.domElement);
+  let down = null;
+  view.renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
+  view.renderer.domElement.addEventListener("pointerup", (e) => {
+    if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) pickFace(e);
+  });
   const resize = () => {
     const {clientWidth: w, clientHeight: h} = host;
     view.renderer.setSize(w, h, false);
@@ -100,6 +105,33 @@ function setUpView() {
   new ResizeObserver(resize).observe(host);
   resize();
   view.renderer.setAnimationLoop(() => { view.controls.update(); view.renderer.render(view.scene, view.camera); });
+}
+
+// A click (not a drag) on the building picks the dressed face under the pointer: the face whose rectangle holds the
+// hit point, nearest along its normal (reveals and balconies stand off the wall plane).
+function pickFace(event) {
+  if (!view.model || !state.built || !state.built.faces) return;
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
+    -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  const raycaster = new THREE.Raycaster();
+  raycaster.setFromCamera(pointer, view.camera);
+  const hit = raycaster.intersectObject(view.model, true)[0];
+  if (!hit) return;
+  let best = null, bestDistance = 1.5;
+  for (const face of state.built.faces) {
+    if (!face.layout) continue;
+    const d = hit.point.clone().sub(new THREE.Vector3(...face.origin));
+    const x = d.dot(new THREE.Vector3(...face.u)), off = Math.abs(d.dot(new THREE.Vector3(...face.normal)));
+    if (x >= -0.05 && x <= face.width + 0.05 && d.y >= -0.05 && d.y <= face.height + 0.05 && off < bestDistance) {
+      best = face;
+      bestDistance = off;
+    }
+  }
+  if (!best) return;
+  $("face").value = String(best.index);
+  showFace();
+  status(`face ${best.index} picked`);
 }
 
 function showGlb(base64, frame) {
