@@ -1,8 +1,8 @@
 """The studio's web application (Starlette): a JSON API over a :class:`~citygen_studio.session.Session` and the
 browser app's static files.
 
-Every request is bounded: bodies to :data:`MAX_BODY` bytes, work to :data:`TIME_LIMIT` seconds on a small pool of
-threads (a request past its time gets a 504; its thread finishes on its own, bounded by the solvers' budgets).
+Every request is bounded: bodies to :data:`MAX_BODY` bytes, work (and the wait for a scene still loading) to
+:data:`TIME_LIMIT` seconds on a small pool of threads (a request past its time gets a 504; its thread finishes on its own, bounded by the solvers' budgets).
 POSTs must be JSON from the studio's own page (a page of another site cannot send them), and the Host must be the
 loopback, so neither another site nor a DNS-rebinding page can drive the studio.
 """
@@ -42,7 +42,8 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         try:
             body = await _json_body(request) if post else dict(request.query_params)
             with anyio.fail_after(time_limit):
-                result = await anyio.to_thread.run_sync(work, body, abandon_on_cancel=True, limiter=limiter)
+                result = await anyio.to_thread.run_sync(_when_loaded, session, work, body, abandon_on_cancel=True,
+                                                        limiter=limiter)
         except StudioError as exc:
             return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=exc.status)
         except CitygenError as exc:
@@ -84,6 +85,12 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]
     return Starlette(routes=routes, middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=LOOPBACK)])
+
+
+def _when_loaded(session: Session, work: Callable[[dict[str, Any]], Any], body: dict[str, Any]) -> Any:
+    """``work`` once the session's scene is loaded (a studio started in the background answers when it is)."""
+    session.loaded.wait()
+    return work(body)
 
 
 async def _json_body(request: Request) -> dict[str, Any]:

@@ -44,10 +44,7 @@ class StudioCommand(Command):
             return 2
         from citygen_studio.session import Session
 
-        session = Session(registry, Path(args.scene) if args.scene else None)
-        if session.load_error:
-            print(f"warning: the scene did not load: {session.load_error['message']} (the studio shows it)",
-                  file=sys.stderr)
+        session = Session(registry, Path(args.scene) if args.scene else None, background=True)
         try:
             sock = listen(args.port)
         except OSError as exc:

@@ -148,9 +148,11 @@ class Generation:
 
 
 class Session:
-    """The scene the studio was opened on (or just a folder of rulesets when there is none)."""
+    """The scene the studio was opened on (or just a folder of rulesets when there is none). With ``background``
+    the scene loads in a thread; ``loaded`` is set when it is done (the app waits for it before any request)."""
 
-    def __init__(self, registry: Registry, scene_path: Path | None = None, root: Path | None = None) -> None:
+    def __init__(self, registry: Registry, scene_path: Path | None = None, root: Path | None = None,
+                 background: bool = False) -> None:
         self.registry = registry
         self.scene: Scene | None = None
         self.load_error: dict[str, Any] | None = None
@@ -158,12 +160,21 @@ class Session:
         self.generation: Generation | None = None
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
-        if scene_path is None:
-            return
+        self.loaded = threading.Event()
+        if background:  # the page paints while the footprints and masses are built; requests wait for them
+            threading.Thread(target=self._load, args=(scene_path,), daemon=True).start()
+        else:
+            self._load(scene_path)
+
+    def _load(self, scene_path: Path | None) -> None:
+        """The scene, the rulesets it names (into the confinement), its footprints, masses and neighbour cover."""
         try:
+            if scene_path is None:
+                return
+            registry = self.registry
             self.scene = load_scene(scene_path, registry.roof_builders, registry.ruleset_kinds)
             named = [p for a in self.scene.assignments for p in (*a.rulesets, *([a.fallback] if a.fallback else []))]
-            self.confinement = Confinement(folder, named)
+            self.confinement = Confinement(self.confinement.root, named)
             imported = import_footprints(self.scene, registry)
             for fp in imported.footprints:
                 try:
@@ -176,6 +187,8 @@ class Session:
             self.names = [prim_name(fp.id, taken) for fp in self.footprints]
         except CitygenError as exc:
             self.scene, self.load_error = None, error_data(exc, self.confinement)
+        finally:
+            self.loaded.set()
 
     def info(self) -> dict[str, Any]:
         """The scene, its rulesets, the ruleset kinds and what an editor completes (materials, labels)."""

@@ -164,6 +164,13 @@ def test_unknown_ruleset_kind_is_an_error(client):
     assert response.status_code == 400 and ".txt" in json.dumps(response.json()["error"])
 
 
+def test_a_scene_loading_in_the_background_is_waited_for(scene):
+    session = Session(default_registry(), scene, background=True)
+    client = TestClient(create_app(session), base_url=URL)
+    assert client.get("/api/scene").json()["buildings"] == 2 and session.loaded.is_set()
+    assert client.get("/api/ruleset", params={"name": "../shared/apartment.grammar"}).status_code == 200
+
+
 def test_a_scene_that_fails_to_load_is_reported_as_data(tmp_path):
     (tmp_path / "broken.toml").write_text("[scene\nseed = 1\n")
     client = TestClient(create_app(Session(default_registry(), tmp_path / "broken.toml")), base_url=URL)
