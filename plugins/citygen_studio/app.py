@@ -8,6 +8,8 @@ loopback, so neither another site nor a DNS-rebinding page can drive the studio.
 """
 from __future__ import annotations
 
+import base64
+import binascii
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -24,6 +26,7 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from citygen.errors import CitygenError
+from citygen_studio.inverse import MAX_UPLOAD, extract, import_layout
 from citygen_studio.session import FaceRequestSize, Session, StudioError, error_data
 
 #: The largest request body (bytes): a ruleset text and a few numbers.
@@ -38,9 +41,9 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
     """The studio application over ``session``."""
     limiter = anyio.CapacityLimiter(2)
 
-    async def run(request: Request, work: Callable[[dict[str, Any]], Any], post: bool) -> JSONResponse:
+    async def run(request: Request, work: Callable[[dict[str, Any]], Any], post: bool, limit: int) -> JSONResponse:
         try:
-            body = await _json_body(request) if post else dict(request.query_params)
+            body = await _json_body(request, limit) if post else dict(request.query_params)
             with anyio.fail_after(time_limit):
                 result = await anyio.to_thread.run_sync(_when_loaded, session, work, body, abandon_on_cancel=True,
                                                         limiter=limiter)
@@ -56,9 +59,9 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
                                 status_code=500)
         return JSONResponse(result)
 
-    def route(path: str, work: Callable[[dict[str, Any]], Any], post: bool = False) -> Route:
+    def route(path: str, work: Callable[[dict[str, Any]], Any], post: bool = False, limit: int = MAX_BODY) -> Route:
         async def endpoint(request: Request) -> JSONResponse:
-            return await run(request, work, post)
+            return await run(request, work, post, limit)
         return Route(path, endpoint, methods=["POST"] if post else ["GET"])
 
     async def output(request: Request) -> Response:
@@ -81,6 +84,11 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         route("/api/generate", lambda b: session.generate(_field(b, "format", str), b.get("jobs", 1)), post=True),
         route("/api/generate", lambda q: session.generation_state()),
         Route("/api/output", output),
+        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b), b.get("width"),
+                                                     b.get("floor_height", 3.0)),
+              post=True, limit=MAX_UPLOAD * 4 // 3 + 4096),  # (base64)
+        route("/api/extract", lambda b: extract(b.get("layout"), b.get("method", "adp"), b.get("iterations", 2000),
+                                                b.get("seed", 0)), post=True, limit=4 * MAX_BODY),
         route("/api/build", lambda b: session.build(_field(b, "index", int), _overrides(b)), post=True),
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]
@@ -93,20 +101,20 @@ def _when_loaded(session: Session, work: Callable[[dict[str, Any]], Any], body: 
     return work(body)
 
 
-async def _json_body(request: Request) -> dict[str, Any]:
-    """The request's JSON object: same-origin, ``application/json``, at most :data:`MAX_BODY` bytes."""
+async def _json_body(request: Request, limit: int) -> dict[str, Any]:
+    """The request's JSON object: same-origin, ``application/json``, at most ``limit`` bytes."""
     origin = request.headers.get("origin")
     if origin is not None and origin.split("://", 1)[-1] != request.headers.get("host"):
         raise StudioError(f"requests from {origin} are not accepted", 403, hint="use the studio's own page")
     if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
         raise StudioError("the body must be JSON (content-type: application/json)", 415)
-    if int(request.headers.get("content-length") or 0) > MAX_BODY:
-        raise StudioError(f"the body is larger than {MAX_BODY // 1024} KiB", 413)
+    if int(request.headers.get("content-length") or 0) > limit:
+        raise StudioError(f"the body is larger than {limit // 1024} KiB", 413)
     chunks, size = [], 0
     async for chunk in request.stream():
         size += len(chunk)
-        if size > MAX_BODY:
-            raise StudioError(f"the body is larger than {MAX_BODY // 1024} KiB", 413)
+        if size > limit:
+            raise StudioError(f"the body is larger than {limit // 1024} KiB", 413)
         chunks.append(chunk)
     try:
         body = json.loads(b"".join(chunks) or b"{}")
@@ -130,6 +138,13 @@ def _size(body: dict[str, Any]) -> FaceRequestSize:
     return FaceRequestSize(width=body.get("width"), height=body.get("height"),
                            floor_height=body.get("floor_height", 3.0), ground_height=body.get("ground_height"),
                            seed=body.get("seed", 0))
+
+
+def _base64(body: dict[str, Any]) -> bytes:
+    try:
+        return base64.b64decode(_field(body, "data", str), validate=True)
+    except binascii.Error:
+        raise StudioError("data must be the file's bytes in base64") from None
 
 
 def _overrides(body: dict[str, Any]) -> dict[str, str]:

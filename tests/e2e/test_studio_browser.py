@@ -108,6 +108,30 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         browser.close()
 
 
+def test_extract_a_grammar_from_a_dropped_layout(studio, tmp_path):
+    url, _ = studio
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        page.locator("#inverse-panel summary").click()
+        page.locator("#drop").set_input_files(str(Path(__file__).parents[2] / "rulesets" / "cmp_b0035.layout.json"))
+        page.wait_for_selector("#facade rect[data-label=door]", timeout=30_000)
+        page.locator("#method").select_option("greedy")
+        previews = page.evaluate("window.studio.previews")
+        page.locator("#extract").click()
+        page.wait_for_function("document.getElementById('ruleset').value === 'cmp_b0035.layout.extracted.grammar'",
+                               timeout=60_000)
+        page.wait_for_function(f"window.studio.previews > {previews}", timeout=30_000)
+        assert page.locator("#facade").get_attribute("data-ok") == "true"
+        assert "size-independent" in page.locator(".CodeMirror").inner_text()  # the grammar for any face
+        assert "Facade" in page.locator("#explain").inner_text() and "rules" in page.locator("#import-summary").inner_text()
+        assert not page.locator("#save").is_disabled()  # not saved yet
+        page.screenshot(path=tmp_path / "extracted.png")
+        browser.close()
+
+
 def test_generate_the_scene_and_see_the_report(studio, tmp_path):
     url, scene = studio
     with sync_api.sync_playwright() as p:

@@ -19,6 +19,7 @@ from tests.mini_scene import rect
 
 REPO = Path(__file__).resolve().parents[2]
 URL = "http://127.0.0.1"
+SHARED = REPO.parent / "shared" / "data" / "cmp_facade" / "base"
 
 
 def make_scene(tmp_path: Path) -> Path:
@@ -195,6 +196,38 @@ def test_generate_runs_the_scene_with_progress_report_and_download(client, scene
     assert client.get("/api/output", params={"name": "scene.toml"}).status_code == 404
     assert client.get("/api/output", params={"name": "../secret.grammar"}).status_code == 403
     assert client.post("/api/generate", json={"format": ".obj"}).status_code == 400
+
+
+def test_a_dropped_layout_gives_a_grammar_that_parses(client):
+    data = base64.b64encode((REPO / "rulesets" / "cmp_b0035.layout.json").read_bytes()).decode()
+    imported = client.post("/api/import", json={"name": "cmp_b0035.layout.json", "data": data}).json()
+    assert imported["drawing"]["leaves"] and imported["summary"].startswith("cmp_b0035.layout.json:")
+    grammar = client.post("/api/extract", json={"layout": imported["layout"], "method": "greedy",
+                                                "iterations": 1}).json()
+    assert grammar["rules"] > 0
+    for text in (grammar["text"], grammar["size_independent"]):
+        assert client.post("/api/check", json={"ruleset": "new.grammar", "text": text}).json()["ok"]
+    body = {"ruleset": "new.grammar", "text": grammar["size_independent"], "width": 20, "height": 15}
+    assert client.post("/api/preview", json=body).json()["ok"]
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.jpg").is_file(), reason="needs the shared CMP facade photos")
+def test_a_dropped_photo_becomes_a_layout(client):
+    data = base64.b64encode((SHARED / "cmp_b0001.jpg").read_bytes()).decode()
+    imported = client.post("/api/import", json={"name": "cmp_b0001.jpg", "data": data, "width": 12}).json()
+    assert imported["drawing"]["width"] == pytest.approx(12)
+    assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
+
+
+def test_bad_drops_are_errors_naming_the_file(client):
+    bad = base64.b64encode(b"not an image").decode()
+    response = client.post("/api/import", json={"name": "facade.jpg", "data": bad})
+    assert response.status_code == 400 and response.json()["error"]["message"].startswith("facade.jpg: ")
+    assert client.post("/api/import", json={"name": "facade.jpg", "data": "%%%"}).status_code == 400
+    response = client.post("/api/import", json={"name": "broken.json", "data": base64.b64encode(b"{").decode()})
+    assert response.status_code == 400 and "broken.json" in json.dumps(response.json()["error"])
+    assert client.post("/api/extract", json={"layout": {}, "method": "magic", "iterations": 1}).status_code == 400
+    assert client.post("/api/extract", json={"layout": {}, "method": "adp", "iterations": 10**6}).status_code == 400
 
 
 def test_bad_requests_are_errors_as_data(client):

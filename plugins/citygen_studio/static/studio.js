@@ -293,6 +293,65 @@ async function variations() {
   status(`${result.variations.length} distinct variations`);
 }
 
+// ---- inverse tools -------------------------------------------------------------------------------------------
+
+function base64Of(file) {
+  return new Promise((resolve, reject) => {
+    const reader = new FileReader();
+    reader.onload = () => resolve(String(reader.result).split(",", 2)[1] || "");
+    reader.onerror = () => reject(reader.error);
+    reader.readAsDataURL(file);
+  });
+}
+
+// A dropped photo or layout JSON becomes a layout (drawn in the facade view), ready for grammar extraction.
+async function importFile(file) {
+  $("import-summary").textContent = `reading ${file.name} ...`;
+  try {
+    const width = Number($("photo-width").value) || null;
+    const result = await api("/api/import", {name: file.name, data: await base64Of(file), width,
+      floor_height: Number($("floor").value)});
+    state.imported = {name: file.name, layout: result.layout};
+    drawFacade(result.drawing);
+    $("import-summary").textContent = result.summary;
+    $("extract").disabled = false;
+  } catch (error) { $("import-summary").textContent = where(error.data) || error.message; }
+}
+
+// The imported layout's grammar (wu2014; the size-independent one, for any face) opened in the editor, unsaved.
+async function extractGrammar() {
+  if (!state.imported) return;
+  $("extract").disabled = true;
+  $("import-summary").textContent = "extracting ...";
+  try {
+    const result = await api("/api/extract", {layout: state.imported.layout, method: $("method").value,
+      iterations: Number($("iterations").value)});
+    const name = state.imported.name.replace(/\.[^.]*$/, "") + ".extracted.grammar";
+    state.texts[name] = result.size_independent || result.text;
+    state.saved[name] = null;
+    if (![...$("ruleset").options].some((o) => o.value === name)) $("ruleset").add(new Option(name, name));
+    await openRuleset(name);
+    $("import-summary").textContent = `${name}: cost ${result.cost.toFixed(2)}, ${result.rules} rules, ` +
+      `${result.seconds.toFixed(2)} s (not saved yet)`;
+  } catch (error) {
+    $("import-summary").textContent = where(error.data) || error.message;
+  } finally { $("extract").disabled = false; }
+}
+
+function setUpInverse() {
+  const panel = $("inverse-panel");
+  $("drop").addEventListener("change", () => { if ($("drop").files[0]) importFile($("drop").files[0]); });
+  $("extract").addEventListener("click", extractGrammar);
+  panel.addEventListener("dragover", (e) => { e.preventDefault(); panel.classList.add("dragging"); });
+  panel.addEventListener("dragleave", () => panel.classList.remove("dragging"));
+  panel.addEventListener("drop", (e) => {
+    e.preventDefault();
+    panel.classList.remove("dragging");
+    panel.open = true;
+    if (e.dataTransfer.files[0]) importFile(e.dataTransfer.files[0]);
+  });
+}
+
 // ---- generate ------------------------------------------------------------------------------------------------------
 
 // Run the whole scene (its saved rulesets) on the server, follow its progress, then show the report and the file.
@@ -400,6 +459,7 @@ async function start() {
   $("face").addEventListener("change", () => showFace());
   $("vary").addEventListener("click", variations);
   $("generate").addEventListener("click", generate);
+  setUpInverse();
   $("generate").disabled = !state.info.scene;
   for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
   if (state.info.buildings) {
