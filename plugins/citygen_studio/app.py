@@ -27,7 +27,8 @@ from starlette.staticfiles import StaticFiles
 
 from citygen.errors import CitygenError
 from citygen_studio.inverse import MAX_UPLOAD, extract, import_layout
-from citygen_studio.session import FaceRequestSize, Session, StudioError, error_data
+from citygen_studio.confinement import StudioError, error_data
+from citygen_studio.session import FaceRequestSize, Session
 
 #: The largest request body (bytes): a ruleset text and a few numbers.
 MAX_BODY = 512 * 1024

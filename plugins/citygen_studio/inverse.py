@@ -8,7 +8,8 @@ from typing import Any
 
 from citygen.errors import CitygenError, LayoutError
 from citygen.layout import FacadeLayout, check_partition
-from citygen_studio.session import StudioError, layout_data
+from citygen_studio.confinement import StudioError
+from citygen_studio.session import layout_data
 
 #: The largest dropped file (bytes).
 MAX_UPLOAD = 8 * 1024 * 1024

@@ -22,66 +22,23 @@ from shapely.geometry import MultiPolygon
 
 from citygen.builder import Builder, assign_attributes
 from citygen.cliargs import MAX_SIDE
-from citygen.errors import CitygenError, SourceLocation
+from citygen.errors import CitygenError
 from citygen.gltf.meshes import Y_UP, pivot
 from citygen.layout import LABELS, FacadeLayout, check_partition
 from citygen.mass import build_mass, neighbour_cover
-from citygen.pipeline import generate_city, import_footprints
+from citygen.pipeline import import_footprints
 from citygen.registry import Registry
 from citygen.request import MIN_STOREY, FacadeRequest, check_request
 from citygen.scene import Scene, load_scene
 from citygen.usd.materials import LOOKS
 from citygen.usd.writer import prim_name
+from citygen_studio.confinement import Confinement, StudioError, error_data
+from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
 
 #: The largest ruleset text the studio parses or saves (bytes).
 MAX_TEXT = 256 * 1024
 #: The most seeds one variations request tries.
 MAX_VARIATIONS = 16
-
-
-class StudioError(CitygenError):
-    """A request the studio refuses: ``status`` is the HTTP status it answers with."""
-
-    def __init__(self, message: str, status: int = 400, **kw: Any) -> None:
-        super().__init__(message, **kw)
-        self.status = status
-
-
-def error_data(exc: CitygenError, confinement: Confinement | None = None) -> dict[str, Any]:
-    """An error as JSON data: message, hint, and ``file`` / ``line`` / ``column`` when it names a position."""
-    where = exc.where
-    data: dict[str, Any] = {"message": exc.message, "hint": exc.hint, "kind": type(exc).__name__}
-    if isinstance(where, SourceLocation):
-        data.update(file=confinement.show(where.path) if confinement else where.path, line=where.line,
-                    column=where.column)
-    elif where is not None:
-        data["where"] = confinement.show(str(where)) if confinement else str(where)
-    return data
-
-
-class Confinement:
-    """The files a session may read and write: under ``root``, plus the exact files in ``named``."""
-
-    def __init__(self, root: Path, named: Iterable[Path] = ()) -> None:
-        self.root = root.resolve()
-        self.named = {p.resolve() for p in named}
-
-    def resolve(self, name: str) -> Path:
-        """The file ``name`` (relative to the root, as a scene names it) if it is inside the confinement."""
-        if not isinstance(name, str) or not name or "\0" in name or len(name) > 1024 or os.path.isabs(name):
-            raise StudioError(f"{name!r} is not a path relative to the scene folder", 400)
-        path = (self.root / name).resolve()
-        if path in self.named or path.is_relative_to(self.root):
-            return path
-        raise StudioError(f"{name} is outside the scene folder and not a ruleset the scene names", 403,
-                          hint="the studio reads and writes only the scene's folder and its rulesets")
-
-    def show(self, path: str) -> str:
-        """``path`` as the browser names it: relative to the root (``../rulesets/x.grammar`` for a named one)."""
-        try:
-            return os.path.relpath(Path(path).resolve(), self.root)
-        except ValueError:
-            return Path(path).name
 
 
 @dataclass(frozen=True)
@@ -112,39 +69,6 @@ def layout_data(layout: FacadeLayout, floor_lines: Iterable[float] = ()) -> dict
     leaves = [{"x": r.x, "y": r.y, "w": r.w, "h": r.h, "label": r.label, "symbol": r.symbol, "layer": r.layer,
                "material": r.material} for r in layout.leaves]
     return {"width": layout.width, "height": layout.height, "floor_lines": list(floor_lines), "leaves": leaves}
-
-
-#: Output formats the studio's generate writes (into ``OUTPUT_FOLDER`` under the scene's folder).
-OUTPUT_SUFFIXES = (".usdc", ".usda", ".usdz", ".glb")
-OUTPUT_FOLDER = "studio-out"
-
-
-class Generation:
-    """One run of the whole scene in a background thread, its progress readable while it runs."""
-
-    def __init__(self, scene: Scene, registry: Registry, out: Path, jobs: int) -> None:
-        self.out, self.done, self.total = out, 0, 0
-        self.report: dict[str, Any] | None = None
-        self.error: dict[str, Any] | None = None
-        self.thread = threading.Thread(target=self._run, args=(scene, registry, jobs), daemon=True)
-        self.thread.start()
-
-    def _progress(self, done: int, total: int) -> None:
-        self.done, self.total = done, total
-
-    def _run(self, scene: Scene, registry: Registry, jobs: int) -> None:
-        try:
-            report = generate_city(scene, out=self.out, jobs=jobs, registry=registry, progress=self._progress)
-            self.report = {**report.to_dict(), "summary": report.summary()}
-        except CitygenError as exc:
-            self.error = error_data(exc)
-        except Exception as exc:  # a library bug ends this run, not the studio
-            self.error = {"message": f"internal error {type(exc).__name__}: {exc}"}
-
-    def state(self, root: Path) -> dict[str, Any]:
-        running = self.thread.is_alive()
-        return {"running": running, "done": self.done, "total": self.total, "error": self.error,
-                "report": None if running else self.report, "output": os.path.relpath(self.out, root)}
 
 
 class Session:

@@ -6,8 +6,8 @@
     "entrance", "street", "courtyard", "width", "height", "face_width", "face_height", "floor", "floor_count", "levels"];
   const keywords = {
     "citygen-grammar": ["split", "repeat", "repeatABA", "symsplit", "grid", "floors", "terminal", "rows", "cols"],
-    "citygen-layers": ["canvas", "tolerance", "symbol", "layer", "pattern", "counter", "opaque", "transparent", "mask",
-      "horizontal", "vertical"],
+    "citygen-layers": ["canvas", "tolerance", "symbol", "layer", "pattern", "counter", "shape", "floors", "opaque",
+      "transparent", "mask", "attached", "unoccludable", "visible", "xgroup", "ygroup", "prealign"],
     "citygen-relayout": ["model", "layout", "freq", "seq", "repeat", "shuffle", "replicate", "instances", "symmetric",
       "mirror", "align", "samesize", "budget", "within"],
     "citygen-safe": ["safe", "layout", "grid", "active", "across", "rows", "cols", "axis", "budget", "symmetry"],
