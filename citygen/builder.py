@@ -37,12 +37,14 @@ from citygen.usd.writer import BuildingRecord
 
 @dataclass(frozen=True)
 class BuildingOutcome:
-    """A built building's stage record, or why it was skipped; and the warnings met on the way."""
+    """A built building's stage record, or why it was skipped; the warnings met on the way; and, from a builder
+    that keeps them, the facade layout of each dressed face (by face index)."""
 
     record: BuildingRecord | None
     skipped: Skipped | None
     warnings: tuple[str, ...]
     faces: tuple[tuple[str, int], ...] = ()  # (:func:`face_tally`)
+    layouts: Mapping[int, FacadeLayout] | None = None
 
 
 def face_tally(layouts: Sequence[FacadeLayout]) -> Counter[str]:
@@ -66,10 +68,11 @@ def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
 
 
 class Builder:
-    """Builds one building at a time; holds the registry and a ruleset cache."""
+    """Builds one building at a time; holds the registry and a ruleset cache. With ``keep_layouts`` its outcomes
+    carry the facade layouts too (an authoring tool shows them; the pipeline never ships them between processes)."""
 
-    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None) -> None:
-        self.scene, self.seed = scene, seed
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None, keep_layouts: bool = False) -> None:
+        self.scene, self.seed, self.keep_layouts = scene, seed, keep_layouts
         self.registry = registry or default_registry()
         self.rulesets: dict[tuple[str, Path], Any] = {}
         self.roofs = self.registry.roof_builders
@@ -150,7 +153,7 @@ class Builder:
         centroid = mass.outline.centroid
         pivot = (float(centroid.x), float(centroid.y), float(footprint.base - footprint.lift))
         return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes, pivot), None, tuple(warnings),
-                               tuple(sorted(tally.items())))
+                               tuple(sorted(tally.items())), layouts if self.keep_layouts else None)
 
     def _materials(self, footprint: Footprint) -> tuple[str, str]:
         """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for

@@ -120,7 +120,8 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     g = sub.add_parser("generate", help="generate a scene's city and write its USD stage")
     g.add_argument("scene", help="scene TOML file")
-    g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
+    g.add_argument("-o", "--output",
+                   help="output path: a USD stage (.usda/.usdc/.usdz) or glTF (.glb/.gltf); default from the scene")
     g.add_argument("--seed", type=whole(0), help="override the scene seed (an integer >= 0)")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
     g.add_argument("--masses", action="store_true",

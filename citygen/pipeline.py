@@ -26,6 +26,7 @@ from citygen.builder import Builder, BuildingOutcome
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, ImportResult, Skipped
+from citygen.gltf import GLTF_SUFFIXES
 from citygen.mass import Mass, neighbour_cover
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.roofplan import plan_mass
@@ -123,6 +124,10 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     registry = registry or default_registry()
     seed = scene.seed if seed is None else seed
     out = out or scene.output.path
+    gltf = Path(out).suffix.lower() in GLTF_SUFFIXES
+    if gltf and executor == "dask":
+        raise CitygenError(f"the dask executor writes USD tile layers, not glTF ({Path(out).name})",
+                           hint="use the local executor for .glb/.gltf, or write .usdc")
     report = Report()
     t0 = time.perf_counter()
     imported = import_footprints(scene, registry)
@@ -160,6 +165,10 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     t2 = time.perf_counter()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
+    if gltf:
+        ignored = [key for key in ("tile_layers", "uvs", "lod") if getattr(scene.output, key)]
+        if ignored:
+            report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
     if executor == "dask":
         _generate_on_dask(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs, scheduler, report,
                           progress, ground)
@@ -167,9 +176,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                           "total": time.perf_counter() - t0}
         return report
     usd = 0.0
-    with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
-                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod,
-                     materials=scene.materials) as writer:
+    with _writer(out, scene, layer_data) as writer:
         if ground:
             writer.ground(*ground)
         for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
@@ -187,6 +194,16 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
                       "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
     return report
+
+
+def _writer(out: Path, scene: Scene, layer_data: dict[str, Any]):
+    """The writer ``out``'s suffix asks for: glTF (trimesh imported only then) or a USD stage."""
+    if Path(out).suffix.lower() in GLTF_SUFFIXES:
+        from citygen.gltf.writer import GltfWriter
+        return GltfWriter(out, layer_data=layer_data, materials=scene.materials)
+    return StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
+                       tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod,
+                       materials=scene.materials)
 
 
 def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportResult:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 from citygen import hookspecs
-from citygen.errors import PluginError
+from citygen.errors import PluginError, RulesetError
 from citygen.roof import inscribed_radius
 
 if TYPE_CHECKING:
@@ -43,6 +43,12 @@ class RulesetKind(ABC):
     @abstractmethod
     def load(self, path: Path) -> Any:
         """Parse a ruleset file into an immutable ruleset object; errors name file:line:column."""
+
+    def loads(self, text: str, path: Path) -> Any:
+        """Parse ruleset ``text`` as if it were the file at ``path`` (errors name ``path``, references resolve
+        beside it): what an editor previews before the file is saved. Kinds that cannot say so."""
+        raise RulesetError(f"the {self.id} ruleset kind parses files only, not edited text", where=str(path),
+                           hint="save the file, then preview it")
 
     @abstractmethod
     def generate(self, ruleset: Any, request: FacadeRequest) -> FacadeLayout:

@@ -16,7 +16,7 @@ from citygen_layers.candidates import Candidate
 from citygen_layers.compose import compose, conform, look
 from citygen_layers.explain import explain_text
 from citygen_layers.model import Pattern, Ruleset
-from citygen_layers.parser import _symbols_of, load
+from citygen_layers.parser import _symbols_of, load, parse
 from citygen_layers.solver import DirectionSolution, axis_solutions
 from citygen_layers.words import Letter, pattern_counters
 
@@ -148,6 +148,9 @@ class LayersKind(RulesetKind):
 
     def load(self, path: Path) -> Ruleset:
         return load(path)
+
+    def loads(self, text: str, path: Path) -> Ruleset:
+        return parse(text, str(path))
 
     def generate(self, ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
         return generate(ruleset, request)

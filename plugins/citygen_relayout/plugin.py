@@ -17,7 +17,7 @@ from citygen_relayout import building
 from citygen_relayout.api import variations
 from citygen_relayout.listing import symbol_lines
 from citygen_relayout.model import Model
-from citygen_relayout.parser import load_model
+from citygen_relayout.parser import load_model, parse_model
 
 
 class RelayoutKind(RulesetKind):
@@ -27,6 +27,9 @@ class RelayoutKind(RulesetKind):
 
     def load(self, path: Path) -> Model:
         return load_model(path)
+
+    def loads(self, text: str, path: Path) -> Model:
+        return parse_model(text, str(path), base=path.parent)
 
     def generate(self, ruleset: Model, request: FacadeRequest) -> FacadeLayout:
         return building.generate_face(ruleset, request)

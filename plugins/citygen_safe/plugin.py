@@ -14,7 +14,7 @@ from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
 from citygen_safe.edit import Variation
 from citygen_safe.generate import Edit, edit
-from citygen_safe.ruleset import SafeRuleset, load_ruleset
+from citygen_safe.ruleset import SafeRuleset, load_ruleset, parse_ruleset
 
 
 class SafeKind(RulesetKind):
@@ -24,6 +24,9 @@ class SafeKind(RulesetKind):
 
     def load(self, path: Path) -> SafeRuleset:
         return load_ruleset(path)
+
+    def loads(self, text: str, path: Path) -> SafeRuleset:
+        return parse_ruleset(text, str(path), base=path.parent)
 
     def generate(self, ruleset: SafeRuleset, request: FacadeRequest) -> FacadeLayout:
         return edit(ruleset, request).layout

@@ -10,7 +10,7 @@ from citygen.request import FacadeRequest
 from citygen_split.alternatives import derive_plausible
 from citygen_split.ast import Grammar
 from citygen_split.derive import explain
-from citygen_split.parser import load
+from citygen_split.parser import load, parse
 
 
 class SplitGrammarKind(RulesetKind):
@@ -22,6 +22,9 @@ class SplitGrammarKind(RulesetKind):
 
     def load(self, path: Path) -> Grammar:
         return load(path)
+
+    def loads(self, text: str, path: Path) -> Grammar:
+        return parse(text, str(path))
 
     def generate(self, ruleset: Grammar, request: FacadeRequest) -> FacadeLayout:
         """The grammar's first plausible derivation, else a plain wall with findings

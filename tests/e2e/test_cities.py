@@ -167,3 +167,18 @@ def test_helsinki_from_the_osm_file(tmp_path):
     assert len(lifted) == 82  # Simple 3D Buildings parts standing on others: no door in mid-air
     assert all(p.GetAttribute("citygen:entranceFace").Get() == -1 for p in lifted)
     assert all(element_labels(stage, p.GetChild("Elements")).count("door") == 0 for p in lifted)
+
+
+def test_helsinki_as_glb(tmp_path):
+    """The demo as glTF: a node with extras per written building, one node per instance sharing its prototype's mesh."""
+    from tests.core.test_gltf import glb_json, instance_nodes
+
+    out = tmp_path / "helsinki.glb"
+    report = generate_city(load_scene(REPO / "scenes" / "helsinki.toml"), out=out, jobs=2)
+    doc = glb_json(out)
+    houses = [n for n in doc["nodes"] if "citygen:sourceId" in n.get("extras", {})]
+    assert len(houses) == report.written >= 478
+    instances = instance_nodes(doc)
+    assert len(instances) == report.stats.instances > 90_000
+    assert len({n["mesh"] for n in instances}) == report.stats.prototypes
+    assert report.stats.bytes == out.stat().st_size < 100e6

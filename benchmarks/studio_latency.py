@@ -1,0 +1,102 @@
+"""The studio's keystroke-to-redraw budget: facade preview round trips, one building's build + GLB, start to first
+paint.
+
+Run: ``python benchmarks/studio_latency.py [SCENE] [--repeat N] [--browser]``. Prints the median and worst
+milliseconds of ``POST /api/preview`` for every shipped ruleset at 20 x 15 m and of ``POST /api/build`` (layouts +
+GLB) for the scene's first buildings, through Starlette's test client (HTTP handling in process, no network); with
+``--browser``, also the time from starting ``citygen studio`` to the page's first drawn map in headless Chromium.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from citygen_studio.app import create_app
+from citygen_studio.session import Session
+from starlette.testclient import TestClient
+
+from citygen.registry import default_registry
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def timed(call, repeat: int) -> tuple[float, float]:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        call()
+        times.append(1000 * (time.perf_counter() - t0))
+    return statistics.median(times), max(times)
+
+
+def first_paint(scene: Path) -> tuple[float, float]:
+    """Seconds from starting ``citygen studio`` to the page's first paint, and to the map drawn, in headless
+    Chromium."""
+    from playwright.sync_api import sync_playwright
+
+    t0 = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "citygen.cli", "studio", str(scene), "--no-browser"],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        url = re.search(r"http://\S+", proc.stdout.readline()).group(0)
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path="/usr/bin/chromium",
+                                        args=["--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
+            page = browser.new_page()
+            page.goto(url, wait_until="commit")
+            page.wait_for_function("performance.getEntriesByName('first-paint').length > 0", timeout=60_000)
+            painted = time.perf_counter() - t0
+            page.wait_for_selector("#map path", timeout=60_000)
+            mapped = time.perf_counter() - t0
+            browser.close()
+        return painted, mapped
+    finally:
+        proc.terminate()
+        proc.wait()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scene", nargs="?", default=str(REPO / "scenes" / "helsinki.toml"))
+    parser.add_argument("--repeat", type=int, default=9)
+    parser.add_argument("--buildings", type=int, default=5)
+    parser.add_argument("--browser", action="store_true", help="also measure start to first paint in Chromium")
+    parser.add_argument("--paint-only", action="store_true", help="only measure start to first paint")
+    args = parser.parse_args()
+    scene = Path(args.scene).resolve()
+    if args.paint_only:
+        painted, mapped = first_paint(scene)
+        print(f"start to first paint: {painted:.2f} s, to the map drawn: {mapped:.2f} s")
+        return
+    t0 = time.perf_counter()
+    session = Session(default_registry(), scene)
+    print(f"scene loaded in {time.perf_counter() - t0:.2f} s ({len(session.footprints)} buildings)")
+    client = TestClient(create_app(session), base_url="http://127.0.0.1")
+    print(f"{'preview 20 x 15 m':<40} {'median ms':>10} {'worst ms':>9}")
+    for path in sorted((REPO / "rulesets").iterdir()):
+        if not any(path.name.endswith(s) for k in session.registry.ruleset_kinds.values() for s in k.suffixes):
+            continue
+        name = session.confinement.show(str(path))
+        if not session.confinement.named or path.resolve() not in session.confinement.named:
+            session.confinement.named.add(path.resolve())  # (the benchmark previews every shipped ruleset)
+        body = {"ruleset": name, "text": path.read_text(), "width": 20, "height": 15, "floor_height": 3.3}
+        assert client.post("/api/preview", json=body).json()["ok"], name
+        median, worst = timed(lambda body=body: client.post("/api/preview", json=body), args.repeat)
+        print(f"{path.name:<40} {median:>10.1f} {worst:>9.1f}")
+    print(f"{'build + GLB':<40} {'median ms':>10} {'worst ms':>9} {'GLB kB':>7}")
+    for index in range(min(args.buildings, len(session.footprints))):
+        size = len(client.post("/api/build", json={"index": index}).json().get("glb", "")) * 3 / 4 / 1000
+        median, worst = timed(lambda index=index: client.post("/api/build", json={"index": index}), max(3, args.repeat // 3))
+        print(f"{session.footprints[index].id:<40} {median:>10.1f} {worst:>9.1f} {size:>7.0f}")
+    if args.browser:
+        painted, mapped = first_paint(scene)
+        print(f"start to first paint: {painted:.2f} s, to the map drawn: {mapped:.2f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,474 @@
+// citygen studio: the map of the scene's footprints, the selected building in 3D (its GLB), a ruleset editor
+// and a live 2D preview of the facade while typing. Everything is computed by the server's JSON API.
+import * as THREE from "three";
+import {GLTFLoader} from "./vendor/three/examples/jsm/loaders/GLTFLoader.js";
+import {OrbitControls} from "./vendor/three/examples/jsm/controls/OrbitControls.js";
+
+const $ = (id) => document.getElementById(id);
+const SVG = "http://www.w3.org/2000/svg";
+// label colours of `citygen facade --png` (citygen/preview.py)
+const LABEL_COLOURS = {wall: "#decdaa", window: "#466ea0", door: "#784628", balcony: "#5a5a64", sill: "#f0f0eb",
+  cornice: "#fafaf5", pillar: "#beb4a0", shop: "#28466e", blind: "#3c7846", deco: "#e6dcc8", molding: "#f5f0e1",
+  ledge: "#c8c3b9", roof: "#505055", frame: "#8a8f96", glass: "#6f93b8"};
+const MODES = {split: "citygen-grammar", layers: "citygen-layers", relayout: "citygen-relayout", safe: "citygen-safe"};
+const PREVIEW_DELAY = 250, BUILD_DELAY = 700;
+
+const state = {info: null, buildings: [], selected: null, built: null, ruleset: null, texts: {}, saved: {},
+  annotations: [], previews: 0, builds: 0};
+window.studio = state;  // (for the end-to-end tests and the curious)
+
+async function api(path, body) {
+  const options = body === undefined ? {} :
+    {method: "POST", headers: {"content-type": "application/json"}, body: JSON.stringify(body)};
+  const response = await fetch(path, options);
+  const data = await response.json();
+  if (!response.ok) {
+    const error = new Error(data.error ? data.error.message : response.statusText);
+    error.data = data.error;
+    throw error;
+  }
+  return data;
+}
+
+function status(text) { $("status").textContent = text; }
+
+function where(error) {
+  if (!error) return "";
+  const place = error.file ? [error.file, error.line, error.column].filter((v) => v != null).join(":") + ": " : "";
+  return place + error.message + (error.hint ? " -- " + error.hint : "");
+}
+
+function colourOf(text) {
+  let h = 0;
+  for (const c of text || "") h = (h * 31 + c.charCodeAt(0)) >>> 0;
+  return text ? `hsl(${h % 360}, 45%, 62%)` : "#cccccc";
+}
+
+function element(name, attributes, parent) {
+  const node = document.createElementNS(SVG, name);
+  for (const [key, value] of Object.entries(attributes)) node.setAttribute(key, value);
+  if (parent) parent.appendChild(node);
+  return node;
+}
+
+// ---- map -------------------------------------------------------------------------------------------------------
+
+function drawMap() {
+  const map = $("map");
+  map.replaceChildren();
+  const points = state.buildings.flatMap((b) => b.rings.flat());
+  if (!points.length) return;
+  const xs = points.map((p) => p[0]), ys = points.map((p) => p[1]);
+  const x0 = Math.min(...xs), x1 = Math.max(...xs), y0 = Math.min(...ys), y1 = Math.max(...ys);
+  const pad = 0.03 * Math.max(x1 - x0, y1 - y0, 1);
+  map.setAttribute("viewBox", `${x0 - pad} ${-y1 - pad} ${x1 - x0 + 2 * pad} ${y1 - y0 + 2 * pad}`);
+  for (const building of state.buildings) {
+    const d = building.rings.map((ring) => "M" + ring.map((p) => `${p[0]},${-p[1]}`).join("L") + "Z").join("");
+    const ruleset = building.rulesets.street;
+    const path = element("path", {d, fill: colourOf(ruleset), "data-index": building.index}, map);
+    const title = element("title", {}, path);
+    title.textContent = `${building.id}\nruleset: ${ruleset || "none"}\n` + Object.entries(building.attributes)
+      .map(([k, v]) => `${k}: ${v}`).join("\n");
+    path.addEventListener("click", () => select(building.index));
+  }
+}
+
+// ---- 3D view ---------------------------------------------------------------------------------------------------
+
+const view = {renderer: null, scene: null, camera: null, controls: null, model: null};
+
+function setUpView() {
+  const host = $("view3d");
+  view.renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
+  view.renderer.setPixelRatio(window.devicePixelRatio);
+  host.appendChild(view.renderer.domElement);
+  view.scene = new THREE.Scene();
+  view.scene.background = new THREE.Color(0xdde3ea);
+  view.scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8d80, 2.2));
+  const sun = new THREE.DirectionalLight(0xffffff, 2.0);
+  sun.position.set(40, 80, 30);
+  view.scene.add(sun);
+  view.camera = new THREE.PerspectiveCamera(40, 1, 0.1, 5000);
+  view.camera.position.set(30, 25, 40);
+  view.controls = new OrbitControls(view.camera, view.renderer.domElement);
+  let down = null;
+  view.renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
+  view.renderer.domElement.addEventListener("pointerup", (e) => {
+    if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) pickFace(e);
+  });
+  const resize = () => {
+    const {clientWidth: w, clientHeight: h} = host;
+    view.renderer.setSize(w, h, false);
+    view.camera.aspect = w / Math.max(h, 1);
+    view.camera.updateProjectionMatrix();
+  };
+  new ResizeObserver(resize).observe(host);
+  resize();
+  view.renderer.setAnimationLoop(() => { view.controls.update(); view.renderer.render(view.scene, view.camera); });
+}
+
+// A click (not a drag) on the building picks the dressed face under the pointer: the face whose rectangle holds the
+// hit point, nearest along its normal (reveals and balconies stand off the wall plane).
+function pickFace(event) {
+  if (!view.model || !state.built || !state.built.faces) return;
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
+    -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  const raycaster = new THREE.Raycaster();
+  raycaster.setFromCamera(pointer, view.camera);
+  const hit = raycaster.intersectObject(view.model, true)[0];
+  if (!hit) return;
+  let best = null, bestDistance = 1.5;
+  for (const face of state.built.faces) {
+    if (!face.layout) continue;
+    const d = hit.point.clone().sub(new THREE.Vector3(...face.origin));
+    const x = d.dot(new THREE.Vector3(...face.u)), off = Math.abs(d.dot(new THREE.Vector3(...face.normal)));
+    if (x >= -0.05 && x <= face.width + 0.05 && d.y >= -0.05 && d.y <= face.height + 0.05 && off < bestDistance) {
+      best = face;
+      bestDistance = off;
+    }
+  }
+  if (!best) return;
+  $("face").value = String(best.index);
+  showFace();
+  status(`face ${best.index} picked`);
+}
+
+function showGlb(base64, frame) {
+  const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
+  new GLTFLoader().parse(bytes.buffer, "", (gltf) => {
+    if (view.model) view.scene.remove(view.model);
+    view.model = gltf.scene;
+    view.scene.add(view.model);
+    if (frame) {
+      const box = new THREE.Box3().setFromObject(view.model);
+      const centre = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3()).length();
+      view.controls.target.copy(centre);
+      view.camera.position.copy(centre).add(new THREE.Vector3(0.6, 0.45, 0.8).multiplyScalar(size));
+    }
+    $("view3d").dataset.meshes = String(gltf.scene.getObjectsByProperty("isMesh", true).length);
+  }, (error) => status("cannot show the building: " + error));
+}
+
+// ---- facade drawing --------------------------------------------------------------------------------------------
+
+function drawFacade(layout, svg = $("facade")) {
+  svg.replaceChildren();
+  if (!layout) return;
+  const {width: w, height: h} = layout;
+  svg.setAttribute("viewBox", `-0.2 -0.2 ${w + 0.4} ${h + 0.4}`);
+  const layers = [];
+  for (const r of layout.leaves) if (!layers.includes(r.layer)) layers.push(r.layer);
+  for (const layer of layers) {  // back to front, as `citygen facade --png`
+    for (const r of layout.leaves) {
+      if (r.layer !== layer || r.label == null || r.w <= 0 || r.h <= 0) continue;
+      const rect = element("rect", {x: r.x, y: h - r.y - r.h, width: r.w, height: r.h,
+        fill: LABEL_COLOURS[r.label] || colourOf(r.label), "data-label": r.label}, svg);
+      element("title", {}, rect).textContent = `${r.label} (${r.symbol})` + (r.material ? ` ${r.material}` : "") +
+        ` ${r.w.toFixed(2)} x ${r.h.toFixed(2)} m`;
+    }
+  }
+  for (const y of layout.floor_lines.slice(1, -1)) element("line", {class: "floor", x1: 0, x2: w, y1: h - y, y2: h - y}, svg);
+}
+
+// ---- editor ----------------------------------------------------------------------------------------------------
+
+let editor = null;
+
+function modeFor(name) {
+  const kind = state.info.kinds.find((k) => k.suffixes.some((s) => name.endsWith(s)));
+  return kind ? MODES[kind.id] || null : null;
+}
+
+function completions(cm) {
+  const cursor = cm.getCursor(), line = cm.getLine(cursor.line);
+  let start = cursor.ch;
+  while (start > 0 && /\w/.test(line[start - 1])) start--;
+  const prefix = line.slice(start, cursor.ch);
+  const symbols = cm.getValue().match(/\b[A-Z]\w*/g) || [];
+  const words = [...new Set([...symbols, ...state.info.labels, ...state.info.materials])].sort();
+  return {list: words.filter((w) => w.startsWith(prefix) && w !== prefix),
+    from: CodeMirror.Pos(cursor.line, start), to: CodeMirror.Pos(cursor.line, cursor.ch)};
+}
+
+function setUpEditor() {
+  editor = CodeMirror.fromTextArea($("editor"), {
+    lineNumbers: true, gutters: ["CodeMirror-lint-markers", "CodeMirror-linenumbers"],
+    lint: {getAnnotations: () => state.annotations, lintOnChange: false},
+    extraKeys: {"Ctrl-Space": "autocomplete"}, hintOptions: {hint: completions, completeSingle: false},
+  });
+  editor.on("change", () => {
+    if (!state.ruleset) return;
+    state.texts[state.ruleset] = editor.getValue();
+    $("save").disabled = state.texts[state.ruleset] === state.saved[state.ruleset];
+    schedule("preview", preview, PREVIEW_DELAY);
+    if (state.selected != null) schedule("build", build, BUILD_DELAY);
+  });
+}
+
+async function openRuleset(name) {
+  if (!name) return;
+  if (!(name in state.texts)) {
+    const data = await api("/api/ruleset?name=" + encodeURIComponent(name));
+    state.texts[name] = state.saved[name] = data.text;
+  }
+  state.ruleset = name;
+  $("ruleset").value = name;
+  editor.setOption("mode", modeFor(name));
+  editor.setValue(state.texts[name]);
+  $("save").disabled = state.texts[name] === state.saved[name];
+}
+
+async function save() {
+  const name = state.ruleset, text = state.texts[name];
+  try {
+    await api("/api/ruleset", {name, text});
+    state.saved[name] = text;
+    $("save").disabled = true;
+    status(`saved ${name}`);
+  } catch (error) { $("error").textContent = where(error.data) || error.message; }
+}
+
+// ---- live loop -------------------------------------------------------------------------------------------------
+
+const timers = {};
+function schedule(key, fn, delay) { clearTimeout(timers[key]); timers[key] = setTimeout(fn, delay); }
+
+function size() {
+  const number = (id) => Number($(id).value);
+  return {width: number("width"), height: number("height"), floor_height: number("floor"), seed: number("seed")};
+}
+
+async function preview() {
+  if (!state.ruleset) return;
+  const started = performance.now();
+  let result;
+  try {
+    result = await api("/api/preview", {ruleset: state.ruleset, text: editor.getValue(), ...size()});
+  } catch (error) {
+    $("error").textContent = where(error.data) || error.message;
+    return;
+  }
+  state.previews++;
+  const error = result.error;
+  state.annotations = error && error.line ? [{severity: "error", message: where(error),
+    from: CodeMirror.Pos(error.line - 1, Math.max(0, (error.column || 1) - 1)),
+    to: CodeMirror.Pos(error.line - 1, (error.column || 1))}] : [];
+  editor.performLint();
+  $("error").textContent = error ? where(error) : result.problems.join("\n");
+  if (!error) {
+    drawFacade(result.layout);
+    $("explain").textContent = result.explain;
+  }
+  $("facade").dataset.ok = String(!error);
+  status(`preview ${result.kind}: ${Math.round(performance.now() - started)} ms`);
+}
+
+// The distinct layouts of the edited ruleset over the next seeds (relayout and SAFE variations, a grammar's random
+// choices); clicking one previews its seed.
+async function variations() {
+  const grid = $("variations");
+  grid.replaceChildren();
+  grid.hidden = false;
+  let result;
+  try {
+    result = await api("/api/variations", {ruleset: state.ruleset, text: editor.getValue(), ...size(), count: 8});
+  } catch (error) { $("error").textContent = where(error.data) || error.message; return; }
+  if (result.error) { $("error").textContent = where(result.error); return; }
+  for (const variation of result.variations) {
+    const cell = document.createElement("figure");
+    cell.className = "variation";
+    cell.dataset.seed = variation.seed;
+    const caption = document.createElement("figcaption");
+    caption.textContent = `seed ${variation.seed}` + (variation.error ? ": " + variation.error.message : "");
+    if (variation.layout) drawFacade(variation.layout, element("svg", {}, cell));
+    cell.appendChild(caption);
+    cell.addEventListener("click", () => {
+      $("seed").value = variation.seed;
+      for (const other of grid.children) other.classList.toggle("picked", other === cell);
+      preview();
+    });
+    grid.appendChild(cell);
+  }
+  status(`${result.variations.length} distinct variations`);
+}
+
+// ---- inverse tools -------------------------------------------------------------------------------------------
+
+function base64Of(file) {
+  return new Promise((resolve, reject) => {
+    const reader = new FileReader();
+    reader.onload = () => resolve(String(reader.result).split(",", 2)[1] || "");
+    reader.onerror = () => reject(reader.error);
+    reader.readAsDataURL(file);
+  });
+}
+
+// A dropped photo or layout JSON becomes a layout (drawn in the facade view), ready for grammar extraction.
+async function importFile(file) {
+  $("import-summary").textContent = `reading ${file.name} ...`;
+  try {
+    const width = Number($("photo-width").value) || null;
+    const result = await api("/api/import", {name: file.name, data: await base64Of(file), width,
+      floor_height: Number($("floor").value)});
+    state.imported = {name: file.name, layout: result.layout};
+    drawFacade(result.drawing);
+    $("import-summary").textContent = result.summary;
+    $("extract").disabled = false;
+  } catch (error) { $("import-summary").textContent = where(error.data) || error.message; }
+}
+
+// The imported layout's grammar (wu2014; the size-independent one, for any face) opened in the editor, unsaved.
+async function extractGrammar() {
+  if (!state.imported) return;
+  $("extract").disabled = true;
+  $("import-summary").textContent = "extracting ...";
+  try {
+    const result = await api("/api/extract", {layout: state.imported.layout, method: $("method").value,
+      iterations: Number($("iterations").value)});
+    const name = state.imported.name.replace(/\.[^.]*$/, "") + ".extracted.grammar";
+    state.texts[name] = result.size_independent || result.text;
+    state.saved[name] = null;
+    if (![...$("ruleset").options].some((o) => o.value === name)) $("ruleset").add(new Option(name, name));
+    await openRuleset(name);
+    $("import-summary").textContent = `${name}: cost ${result.cost.toFixed(2)}, ${result.rules} rules, ` +
+      `${result.seconds.toFixed(2)} s (not saved yet)`;
+  } catch (error) {
+    $("import-summary").textContent = where(error.data) || error.message;
+  } finally { $("extract").disabled = false; }
+}
+
+function setUpInverse() {
+  const panel = $("inverse-panel");
+  $("drop").addEventListener("change", () => { if ($("drop").files[0]) importFile($("drop").files[0]); });
+  $("extract").addEventListener("click", extractGrammar);
+  panel.addEventListener("dragover", (e) => { e.preventDefault(); panel.classList.add("dragging"); });
+  panel.addEventListener("dragleave", () => panel.classList.remove("dragging"));
+  panel.addEventListener("drop", (e) => {
+    e.preventDefault();
+    panel.classList.remove("dragging");
+    panel.open = true;
+    if (e.dataTransfer.files[0]) importFile(e.dataTransfer.files[0]);
+  });
+}
+
+// ---- generate ------------------------------------------------------------------------------------------------------
+
+// Run the whole scene (its saved rulesets) on the server, follow its progress, then show the report and the file.
+async function generate() {
+  if (Object.keys(edited()).length) {
+    $("report").textContent = "Save the edited rulesets first: the city is generated from the files.";
+    return;
+  }
+  $("generate").disabled = true;
+  $("download").hidden = true;
+  $("progress").hidden = false;
+  try {
+    let run = await api("/api/generate", {format: $("format").value, jobs: 1});
+    while (run.running) {
+      $("progress").max = Math.max(run.total, 1);
+      $("progress").value = run.done;
+      status(`generating: ${run.done} / ${run.total} buildings`);
+      await new Promise((resolve) => setTimeout(resolve, 500));
+      run = await api("/api/generate");
+    }
+    $("progress").value = $("progress").max;
+    if (run.error) throw Object.assign(new Error(run.error.message), {data: run.error});
+    $("report").textContent = run.report.summary;
+    $("download").href = "/api/output?name=" + encodeURIComponent(run.output);
+    $("download").textContent = "download " + run.output;
+    $("download").hidden = false;
+    status(`generated ${run.report.written} buildings`);
+  } catch (error) {
+    $("report").textContent = where(error.data) || error.message;
+  } finally {
+    $("generate").disabled = false;
+  }
+}
+
+function edited() {
+  return Object.fromEntries(Object.entries(state.texts).filter(([name, text]) => text !== state.saved[name]));
+}
+
+async function build(frame = false) {
+  const index = state.selected;
+  status("building " + state.buildings[index].id + " ...");
+  let result;
+  try {
+    result = await api("/api/build", {index, rulesets: edited()});
+  } catch (error) {
+    $("error").textContent = where(error.data) || error.message;
+    status("build failed");
+    return;
+  }
+  if (index !== state.selected) return;
+  state.built = result;
+  state.builds++;
+  if (result.skipped) { status(`${result.id} skipped: ${result.skipped}`); return; }
+  showGlb(result.glb, frame);
+  const faces = result.faces.filter((f) => f.layout);
+  const choice = $("face"), previous = choice.value;
+  choice.replaceChildren(...faces.map((f) => {
+    const option = document.createElement("option");
+    option.value = f.index;
+    option.textContent = `face ${f.index}${f.courtyard ? " (courtyard)" : ""}: ${f.width.toFixed(1)} x ${f.height.toFixed(1)} m`;
+    return option;
+  }));
+  if (faces.some((f) => String(f.index) === previous)) choice.value = previous;
+  status(`${result.id}: ${faces.length} dressed faces` + (result.warnings.length ? `, ${result.warnings.length} warnings` : ""));
+  showFace(frame);
+}
+
+// The selected face as the building got it (its floors and entrance from the building's coordinator); ``resize``
+// also sets the preview size to the face's, for the stand-alone previews while typing.
+function showFace(resize = true) {
+  const face = state.built && state.built.faces.find((f) => String(f.index) === $("face").value);
+  if (!face) return;
+  if (resize) {
+    $("width").value = face.width.toFixed(2);
+    $("height").value = face.height.toFixed(2);
+  }
+  drawFacade(face.layout);
+  $("explain").textContent = `face ${face.index} of ${state.built.id} as built`;
+}
+
+async function select(index) {
+  state.selected = index;
+  const building = state.buildings[index];
+  for (const path of $("map").querySelectorAll("path")) path.classList.toggle("selected", path.dataset.index === String(index));
+  $("building-title").textContent = building.id;
+  $("building-info").textContent = `${building.id}\nstreet: ${building.rulesets.street || "none"}\ncourtyard: ` +
+    `${building.rulesets.courtyard || "none"}\n` + Object.entries(building.attributes).map(([k, v]) => `${k}: ${v}`).join("\n");
+  if (building.rulesets.street && building.rulesets.street !== state.ruleset) await openRuleset(building.rulesets.street);
+  await build(true);
+}
+
+async function start() {
+  setUpView();
+  state.info = await api("/api/scene");
+  setUpEditor();
+  $("scene-name").textContent = state.info.scene ? `${state.info.scene} (${state.info.file})` : "no scene";
+  if (state.info.error) {
+    $("banner").hidden = false;
+    $("banner").textContent = "The scene did not load: " + where(state.info.error);
+  }
+  $("floor").value = state.info.floor_height;
+  $("ruleset").replaceChildren(...state.info.rulesets.map((name) => new Option(name, name)));
+  $("ruleset").addEventListener("change", () => openRuleset($("ruleset").value));
+  $("save").addEventListener("click", save);
+  $("face").addEventListener("change", () => showFace());
+  $("vary").addEventListener("click", variations);
+  $("generate").addEventListener("click", generate);
+  setUpInverse();
+  $("generate").disabled = !state.info.scene;
+  for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
+  if (state.info.buildings) {
+    state.buildings = (await api("/api/buildings")).buildings;
+    drawMap();
+  }
+  if (state.info.rulesets.length) await openRuleset(state.info.rulesets[0]);
+  status("ready");
+  document.body.dataset.ready = "true";
+}
+
+start().catch((error) => { $("banner").hidden = false; $("banner").textContent = error.message; });
