@@ -16,7 +16,7 @@ from shapely.geometry import MultiPolygon
 
 from citygen.coordinator import face_bins, plan_building
 from citygen.entrance import enforce_entrance
-from citygen.errors import CitygenError
+from citygen.errors import CitygenError, SceneError, SourceLocation
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
@@ -44,13 +44,40 @@ def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
     return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
 
 
-class Builder:
-    """Builds one building at a time; holds the registry and a ruleset cache."""
+def load_rulesets(scene: Scene, registry: Registry | None = None) -> dict[tuple[str, Path], Any]:
+    """Every ruleset the scene's ``[[assign]]`` rules name, and their fallbacks, loaded by its kind (keyed by kind
+    id and path), so a ruleset that does not load stops the run before any building is generated: a
+    :class:`SceneError` at the rule's line whose message carries the ruleset's own error (file:line:column)."""
+    registry = registry or default_registry()
+    loaded: dict[tuple[str, Path], Any] = {}
+    for number, assignment in enumerate(scene.assignments, 1):
+        named = [(p, assignment.kind) for p in assignment.rulesets]
+        named += [(assignment.fallback, None)] if assignment.fallback is not None else []
+        for path, kind_id in named:
+            where = SourceLocation(str(scene.path), assignment.line)
+            try:
+                kind = registry.ruleset_kind(kind_id) if kind_id else registry.kind_for_path(path)
+                if (kind.id, path) not in loaded:
+                    loaded[kind.id, path] = kind.load(path)
+            except CitygenError as exc:
+                raise SceneError(f"[[assign]] #{number}: ruleset {path.name} does not load: {exc}",
+                                 where=where) from exc
+            except Exception as exc:  # a ruleset kind's bug: the run cannot use this ruleset either
+                raise SceneError(f"[[assign]] #{number}: ruleset {path.name} does not load: internal error "
+                                 f"{type(exc).__name__}: {exc}", where=where, plugin=kind.id,
+                                 hint="this is a bug in the ruleset kind; please report it with the ruleset") from exc
+    return loaded
 
-    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None) -> None:
+
+class Builder:
+    """Builds one building at a time; holds the registry and a ruleset cache (``rulesets``: already loaded ones,
+    from :func:`load_rulesets`)."""
+
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None,
+                 rulesets: dict[tuple[str, Path], Any] | None = None) -> None:
         self.scene, self.seed = scene, seed
         self.registry = registry or default_registry()
-        self.rulesets: dict[tuple[str, Path], Any] = {}
+        self.rulesets: dict[tuple[str, Path], Any] = dict(rulesets or {})
         self.roofs = self.registry.roof_builders
         clear_module_cache()
 
@@ -92,7 +119,7 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                dressed = self._generate(kind, ruleset, requests)
+                dressed = self._generate(kind, ruleset, requests, any_error=assignment.fallback is not None)
                 if assignment.fallback is not None:
                     dressed = self._fall_back(assignment.fallback, requests, dressed, used)
                 outside: list[tuple[FacadeRequest, str]] = []
@@ -163,21 +190,26 @@ class Builder:
             return flat.build(mass.outline, top, spec) if flat else None
 
     @staticmethod
-    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest]) -> list[FacadeLayout]:
+    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
+                  any_error: bool = False) -> list[FacadeLayout]:
         """Layouts for a building's faces; if the kind fails on the building, face by face, so one face it cannot
-        dress becomes a plain wall (``meta["fallback"]``: reported later) instead of costing the building."""
+        dress becomes a plain wall (``meta["fallback"]``: reported later, or dressed by the rule's fallback)
+        instead of costing the building. A CitygenError fails one face; with ``any_error`` (the rule has a
+        fallback) so does any other exception, else that is a bug that skips the building."""
+        caught = Exception if any_error else CitygenError
         try:
             return kind.generate_building(ruleset, requests)
-        except CitygenError:
+        except caught:
             pass
         layouts = []
         for request in requests:
             try:
                 layouts.append(kind.generate(ruleset, request))
-            except CitygenError as exc:
+            except caught as exc:
+                reason = str(exc) if isinstance(exc, CitygenError) else f"internal error {type(exc).__name__}: {exc}"
                 layouts.append(FacadeLayout(request.width, request.height,
                                             Region(0.0, 0.0, request.width, request.height, "Wall", "wall"),
-                                            meta={"fallback": f"the ruleset failed: {exc}"}))
+                                            meta={"fallback": f"the ruleset failed: {reason}"}))
         return layouts
 
     def _fall_back(self, path: Path, requests: list[FacadeRequest], layouts: list[FacadeLayout],
@@ -193,7 +225,7 @@ class Builder:
         for k in plain:
             try:
                 layout = kind.generate(ruleset, requests[k])
-            except CitygenError:
+            except Exception:  # the face stays plain, with the assigned ruleset's warning
                 continue
             if not layout.meta.get("fallback"):
                 out[k] = replace(layout, meta={**layout.meta, "fell_back_from": layouts[k].meta["fallback"]})

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from citygen.builder import Builder, BuildingOutcome
+from citygen.builder import Builder, BuildingOutcome, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, ImportResult, Skipped
@@ -108,6 +108,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     out = out or scene.output.path
     report = Report()
     t0 = time.perf_counter()
+    rulesets = load_rulesets(scene, registry)  # a ruleset that does not load stops the run before any building
     imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
@@ -151,7 +152,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                      tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod) as writer:
         if ground:
             writer.ground(*ground)
-        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
+        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress, rulesets):
             report.warnings += outcome.warnings
             if outcome.record is None:
                 report.skipped.append(outcome.skipped)
@@ -208,12 +209,14 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
 
 
 def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
-         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None) -> Iterator[BuildingOutcome]:
+         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None,
+         rulesets: dict[tuple[str, Path], Any]) -> Iterator[BuildingOutcome]:
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
-    buildings never pile up in memory faster than the stage writer consumes them."""
+    buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
+    already loaded (worker processes load their own)."""
     total = len(work)
     if jobs <= 1 or total < 2 * jobs:
-        builder = Builder(scene, seed, registry)
+        builder = Builder(scene, seed, registry, rulesets)
         for k, item in enumerate(work):
             yield builder.build(*item)
             if progress:
