@@ -12,6 +12,7 @@ from citygen.cliargs import add_size_arguments, whole
 from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import check_partition
+from citygen.outpaths import check_writable, write_text
 from citygen.pipeline import generate_city, terminal_progress
 from citygen.registry import Registry, default_registry
 from citygen.request import FacadeRequest, check_request
@@ -24,12 +25,14 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
     if args.scheduler and args.executor != "dask":
         raise CitygenError("--scheduler needs --executor dask", hint="add --executor dask")
+    if args.report:
+        check_writable(args.report, "report")
     report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=jobs,
                            registry=registry, progress=None if args.quiet else terminal_progress,
                            executor=args.executor, scheduler=args.scheduler)
     print(report.summary())
     if args.report:
-        Path(args.report).write_text(json.dumps(report.to_dict(), indent=1) + "\n")
+        write_text(args.report, json.dumps(report.to_dict(), indent=1) + "\n", "report")
         print(f"report: {args.report}")
     return 1 if args.strict and report.skipped else 0
 

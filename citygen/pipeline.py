@@ -23,12 +23,13 @@ import numpy as np
 
 from citygen.builder import Builder, BuildingOutcome, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
-from citygen.errors import CitygenError
+from citygen.errors import CitygenError, ExportError
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.mass import Mass, build_mass, neighbour_cover
+from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.scene import Scene
-from citygen.usd.writer import StageStats, StageWriter, prim_name
+from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
 GROUND_MARGIN = 20.0
@@ -106,6 +107,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     registry = registry or default_registry()
     seed = scene.seed if seed is None else seed
     out = out or scene.output.path
+    check_stage_path(Path(out))
     report = Report()
     t0 = time.perf_counter()
     rulesets = load_rulesets(scene, registry)  # a ruleset that does not load stops the run before any building
@@ -166,6 +168,15 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
                       "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
     return report
+
+
+def check_stage_path(out: Path) -> None:
+    """Raise :class:`ExportError` before generating when no stage can be written at ``out`` (its extension, a
+    folder in the way, a folder that refuses files)."""
+    if out.suffix.lower() not in SUFFIXES:
+        raise ExportError(f"unsupported stage extension {out.suffix!r}", where=str(out),
+                          hint=f"use one of {', '.join(SUFFIXES)}")
+    check_writable(out, "stage")
 
 
 def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportResult:

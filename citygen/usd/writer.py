@@ -19,6 +19,7 @@ the Sdf API in change blocks, which is what keeps a 100k-building city writable.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -433,10 +434,15 @@ def _instancer(author: _Author, parent: Sdf.PrimSpec, inst: Instances, prototype
 
 
 def _finish(layer: Sdf.Layer, path: Path) -> int:
-    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size. On any
+    failure (an :class:`ExportError`) the file at ``path`` is unchanged and the temporary one removed."""
     suffix = path.suffix.lower()
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -452,6 +458,11 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
             _export(layer, tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a stage is an ordinary file
         os.replace(tmp, path)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
+    except ExportError as exc:  # named by the stage's path, not the temporary file's
+        raise ExportError(exc.message, where=str(path), hint=exc.hint) from None
     finally:
         tmp.unlink(missing_ok=True)
     return path.stat().st_size
@@ -464,8 +475,26 @@ def _umask() -> int:
 
 
 def _export(layer: Sdf.Layer, target: Path) -> None:
-    if not layer.Export(str(target)):
-        raise ExportError("USD export failed", where=str(target), hint="check free disk space and permissions")
+    """``layer.Export`` whose failures (False, a ``Tf.ErrorException`` such as a full disk, an OSError) are one
+    :class:`ExportError` naming the file and USD's first reason."""
+    try:
+        if layer.Export(str(target)):
+            return
+        reason = ""
+    except Tf.ErrorException as exc:
+        reason = _usd_reason(exc)
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+    raise ExportError(f"USD export failed{': ' + reason if reason else ''}", where=str(target),
+                      hint="check free disk space and permissions")
+
+
+def _usd_reason(exc: Tf.ErrorException) -> str:
+    """The commentary of the first error inside a ``Tf.ErrorException`` (its text lists every error, with C++
+    function names and source lines)."""
+    text = "\n".join(str(a) for a in exc.args) or str(exc)
+    match = re.search(r" : '([^\n]*)'", text)
+    return match[1] if match else text.strip().splitlines()[0] if text.strip() else ""
 
 
 def open_stage(path: str | Path) -> Usd.Stage:

@@ -3,26 +3,21 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 from citygen.errors import CitygenError, LayoutError, read_user_text
+from citygen.outpaths import write_text as write_output
 from citygen.registry import Command, Registry
 
 
 def write_text(path: str | None, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename (stdout when ``path`` is None or -)."""
+    """Write ``text`` to ``path`` atomically with ordinary permissions (:func:`citygen.outpaths.write_text`;
+    stdout when ``path`` is None or -)."""
     if path in (None, "-"):
         sys.stdout.write(text)
         return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)  # (as ``citygen generate`` does for its stage)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
-    with os.fdopen(fd, "w") as handle:
-        handle.write(text)
-    os.replace(tmp, target)
+    write_output(path, text, "output")
 
 
 def report(exc: Exception) -> int:
