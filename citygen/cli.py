@@ -2,9 +2,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 from citygen import __version__
@@ -139,7 +143,31 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived: unwinds like Ctrl-C's KeyboardInterrupt, so temporary files and workers are cleaned up."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """While the command runs, SIGTERM raises :class:`Terminated` (in the main thread only: elsewhere it cannot)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command. Exit status: 0 done; 1 done, but something is wrong with the result (``generate
+    --strict`` with skipped buildings, ``validate`` errors, ``facade`` constraint problems); 2 an error, one
+    ``citygen: error:`` line (bad input, an output that cannot be written); 130 Ctrl-C; 143 SIGTERM."""
     try:
         registry = default_registry()
     except CitygenError as exc:
@@ -147,12 +175,19 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     args = build_parser(registry).parse_args(argv)
     try:
-        return int(args.run(args, registry) or 0)
+        with _sigterm_unwinds():
+            return int(args.run(args, registry) or 0)
     except CitygenError as exc:
         print(f"citygen: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         return 0
+    except KeyboardInterrupt:
+        print("citygen: interrupted", file=sys.stderr)
+        return 130
+    except Terminated:
+        print("citygen: terminated (SIGTERM)", file=sys.stderr)
+        return 143
 
 
 if __name__ == "__main__":

@@ -7,8 +7,10 @@ cluster instead (:mod:`citygen.distributed`).
 """
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
+import os
 import pickle
 import sys
 import time
@@ -25,6 +27,7 @@ from citygen.builder import Builder, BuildingOutcome, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError, ExportError
 from citygen.footprints import Footprint, ImportResult, Skipped
+from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
@@ -71,8 +74,9 @@ _Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: Builder | None = None
 
 
-def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None) -> None:
+def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None, parent: int) -> None:
     global _WORKER
+    tie_to_parent(parent)
     _WORKER = Builder(scene, seed, None if plugins is None else load_registry(*plugins))
 
 
@@ -150,11 +154,15 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                           "total": time.perf_counter() - t0}
         return report
     usd = 0.0
-    with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
-                     tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod) as writer:
+    with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
+        writer = stack.enter_context(StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
+                                                 tile_layers=scene.output.tile_layers, uvs=scene.output.uvs,
+                                                 lod=scene.output.lod))
         if ground:
             writer.ground(*ground)
-        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress, rulesets):
+        outcomes = stack.enter_context(contextlib.closing(_run(work, scene, seed, jobs, registry, plugins, progress,
+                                                                rulesets)))
+        for outcome in outcomes:
             report.warnings += outcome.warnings
             if outcome.record is None:
                 report.skipped.append(outcome.skipped)
@@ -236,7 +244,8 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     size = max(1, min(16, total // (8 * jobs)))
     chunks = iter([work[i:i + size] for i in range(0, total, size)])
     done = 0
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins)) as pool:
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins, os.getpid()))
+    try:
         pending = deque(pool.submit(_work, c) for c in itertools.islice(chunks, 4 * jobs))
         while pending:
             outcomes = pending.popleft().result()
@@ -248,6 +257,10 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
                 yield outcome
                 if progress:
                     progress(done, total)
+    except BaseException:  # an error, Ctrl-C, SIGTERM, or the consumer closing early: the workers end now
+        stop_workers(pool)
+        raise
+    pool.shutdown()
 
 
 def terminal_progress(done: int, total: int) -> None:
