@@ -137,7 +137,7 @@ class Builder:
                                       roof_material=roof_material, walls=self.scene.output.lod)
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
-        except Exception as exc:  # a plugin bug must skip one building, not the city
+        except (Exception, SystemExit) as exc:  # a plugin bug (or exit) must skip one building, not the city
             reason = f"internal error {type(exc).__name__}: {exc}"
             return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
         attributes = {"sourceId": footprint.id, "height": float(footprint.height),
@@ -185,7 +185,7 @@ class Builder:
                 roof = builder.build(mass.outline, top, spec)
             warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
             return roof
-        except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
+        except (Exception, SystemExit) as exc:  # degenerate outline or a builder bug: a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
             return flat.build(mass.outline, top, spec) if flat else None
 

@@ -69,6 +69,8 @@ def _cmd_plugins(args: argparse.Namespace, registry: Registry) -> int:
             print(f"  {key:<14}{extra:<22} {desc}  [{origin.plugin} from {origin.distribution}]")
     for name, problem in registry.broken:
         print(f"broken plugin {name}: {problem}")
+    for warning in registry.warnings:
+        print(f"warning: {warning}")
     return 0
 
 
@@ -174,6 +176,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"citygen: {exc}", file=sys.stderr)
         return 2
     args = build_parser(registry).parse_args(argv)
+    if args.run is not _cmd_plugins:  # (which lists them on stdout)
+        for name, problem in registry.broken:
+            print(f"citygen: warning: broken plugin {name} not loaded: {problem}", file=sys.stderr)
+        for warning in registry.warnings:
+            print(f"citygen: warning: {warning}", file=sys.stderr)
     try:
         with _sigterm_unwinds():
             return int(args.run(args, registry) or 0)

@@ -80,3 +80,21 @@ def test_without_a_fallback_a_ruleset_bug_still_skips_its_building_as_an_interna
     report = generate_city(load_scene(small_scene), registry=test_registry)
     assert report.written == 0
     assert all(s.reason.startswith("internal error ZeroDivisionError") for s in report.skipped if s.id != "way/bad")
+
+
+def test_a_ruleset_kind_calling_sys_exit_skips_its_building_not_the_run(small_scene, test_registry, monkeypatch):
+    """Was: a plugin raising SystemExit ended the whole run silently."""
+    import sys
+
+    from tests.core.fakes import GridKind
+    original = GridKind.generate
+
+    def exits(self, ruleset, request):
+        if request.context.building_id == "way/2":
+            sys.exit(4)
+        return original(self, ruleset, request)
+
+    monkeypatch.setattr(GridKind, "generate", exits)
+    report = generate_city(load_scene(small_scene), registry=test_registry)
+    assert report.written == 2
+    assert ("way/2", "internal error SystemExit: 4") in [(s.id, s.reason) for s in report.skipped]
