@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from citygen import __version__
-from citygen.cliargs import add_size_arguments, whole
+from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import check_partition
@@ -107,7 +107,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g = sub.add_parser("generate", help="generate a scene's city and write its USD stage")
     g.add_argument("scene", help="scene TOML file")
     g.add_argument("-o", "--output", help="stage path (.usda/.usdc/.usdz); default from the scene")
-    g.add_argument("--seed", type=whole(0), help="override the scene seed (an integer >= 0)")
+    g.add_argument("--seed", type=seed, help="override the scene seed (an integer from 0 to 2**31 - 1)")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
     g.add_argument("--jobs", type=whole(0), default=0,
                    help="worker processes (default 0: one per CPU core); the output does not depend on it")
@@ -135,7 +135,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     f.add_argument("--json", action="store_true", help="print the FacadeLayout JSON")
     f.add_argument("--png", help="write a PNG drawing of the layout")
     f.add_argument("--explain", action="store_true", help="print how the layout was derived")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--seed", type=seed, default=0, help="random seed (0 to 2**31 - 1; default 0)")
     f.add_argument("--no-entrance", action="store_true", help="preview a face without the building's door")
     f.set_defaults(run=_cmd_facade)
     for name, command in sorted(registry.commands.items()):

@@ -31,6 +31,7 @@ from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
+from citygen.rng import MAX_SEED
 from citygen.scene import Scene
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
@@ -110,6 +111,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         raise CitygenError(f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
     registry = registry or default_registry()
     seed = scene.seed if seed is None else seed
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise CitygenError(f"seed must be an integer from 0 to {MAX_SEED} (2**31 - 1), got {seed!r}")
     out = out or scene.output.path
     check_stage_path(Path(out))
     report = Report()

@@ -16,6 +16,7 @@ from typing import Any
 
 from citygen.errors import SceneError, SourceLocation, read_user_text
 from citygen.request import MIN_STOREY
+from citygen.rng import MAX_SEED
 
 UP_AXES = ("Z", "Y")
 INSTANCING = ("modules", "elements")
@@ -199,8 +200,8 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
                line=_line_of(text, unknown[0]) or 1)
     meta = r.table(data, "scene", {"name", "seed", "description"})
     seed = meta.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        r.fail(f"seed must be a non-negative integer, got {seed!r}", "seed")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        r.fail(f"seed must be an integer from 0 to {MAX_SEED} (2**31 - 1), got {seed!r}", "seed")
     fp = data.get("footprints")
     if not isinstance(fp, Mapping) or "path" not in fp:
         r.fail("[footprints] with a path is required", hint='e.g. [footprints] path = "data/city.geojson"', line=1)

@@ -6,6 +6,7 @@ import math
 import sys
 from pathlib import Path
 
+from citygen.cliargs import seed
 from citygen.errors import CitygenError, LayoutError, read_user_text
 from citygen.outpaths import write_text as write_output
 from citygen.registry import Command, Registry
@@ -156,7 +157,7 @@ class GrammarCommand(Command):
                               "over the same candidate rules as an integer program (HiGHS), with a lower bound")
         ext.add_argument("--iterations", type=int, default=2000,
                          help="grammars built by is / adp / exact, at least 1 (default 2000; greedy builds one)")
-        ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp / exact (default 0)")
+        ext.add_argument("--seed", type=seed, default=0, help="random seed of is / adp / exact (default 0)")
         ext.add_argument("--time-limit", type=float, default=None,
                          help="seconds after which is / adp stop iterating and exact's integer program stops "
                               "(default: none; exact's program stops after 20 s)")
