@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from citygen.errors import SceneError, SourceLocation, read_user_text
+from citygen.nesting import MAX_NESTING, depth_of
 from citygen.request import MIN_STOREY
 from citygen.rng import MAX_SEED
 
@@ -189,11 +190,20 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     text = read_user_text(path, SceneError, "scene")
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise SceneError(f"arrays or tables nested more than {MAX_NESTING} levels deep", where=str(path),
+                         hint="a scene needs a few levels at most") from None
     except tomllib.TOMLDecodeError as exc:
         match = re.search(r"line (\d+), column (\d+)", str(exc))
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
     r = _Reader(path, text, roof_shapes, kinds)
+    for key, value in data.items():
+        if depth_of(value) > MAX_NESTING:
+            header = re.search(rf"^[ \t]*\[+[ \t]*\"?{re.escape(key)}\b", text, re.M)
+            r.fail(f"[{key}] nests arrays or tables more than {MAX_NESTING} levels deep",
+                   hint="a scene needs a few levels at most",
+                   line=text.count("\n", 0, header.start()) + 1 if header else _line_of(text, key))
     unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output"})
     if unknown:
         r.fail(f"unknown table [{unknown[0]}]", hint="valid tables: scene, footprints, defaults, assign, output",

@@ -88,3 +88,13 @@ def test_mutated_shipped_scenes_raise_only_citygen_errors(scratch, path, seed):
         load_scene(target)
     except CitygenError:
         pass
+
+
+@pytest.mark.parametrize(("nesting", "message"), [
+    (40, r"scene.toml:1: \[footprints\] nests arrays or tables more than 32 levels deep"),
+    (5000, r"scene.toml: arrays or tables nested more than 32 levels deep")])
+def test_deeply_nested_scene_values_are_a_scene_error(tmp_path, nesting, message):
+    """Was: RecursionError from tomllib (about 1000 levels), or from code walking the parsed values."""
+    (tmp_path / "scene.toml").write_text(f'[footprints]\npath = "a.geojson"\nx = {"[" * nesting}{"]" * nesting}\n')
+    with pytest.raises(SceneError, match=message):
+        load_scene(tmp_path / "scene.toml")
