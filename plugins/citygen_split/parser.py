@@ -365,9 +365,9 @@ class _Parser:
     def product(self) -> Expr:
         left = self.unary()
         while self.tok.kind == "OP" and self.tok.text in ("*", "/"):
-            op = self.tok.text
+            op, where = self.tok.text, self.loc()
             self.pos += 1
-            left = Binary(op, left, self.unary())
+            left = Binary(op, left, self.unary(), loc=where)
         return left
 
     def unary(self) -> Expr:

@@ -39,3 +39,10 @@ def test_deeply_nested_conditions_are_a_parse_error(condition, column):
 
 def test_conditions_nested_32_deep_still_parse():
     grammar("Facade --> case " + "(" * 31 + "width < 3" + ")" * 31 + ": Wall\n           else: Wall\n")
+
+
+def test_a_division_by_zero_in_a_condition_names_file_line_and_column():
+    """Was: the error named the rule but no file:line."""
+    with pytest.raises(RulesetError, match="division by zero in a condition of rule X") as info:
+        derive(grammar("X --> case 1 / (width - width) > 0: A\n      else: B\n"), request(12, 9))
+    assert str(info.value.where) == "test.grammar:1:14"
