@@ -24,7 +24,7 @@ from citygen.mass import Mass
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import rectangle_like, roof_notes, roof_spec
+from citygen.roof import ROOF_BUDGET, rectangle_like, roof_budget, roof_notes, roof_spec
 from citygen.scene import Assignment, Scene
 from citygen.usd.materials import WALL_PALETTE, colour_material
 from citygen.usd.writer import BuildingRecord
@@ -181,7 +181,7 @@ class Builder:
         if builder is None or builder is flat:
             return flat.build(mass.outline, top, spec) if flat else None
         try:
-            with roof_notes() as notes:  # what the builder reports is this building's warning
+            with roof_notes() as notes, roof_budget(ROOF_BUDGET):  # what the builder reports: the building's warning
                 roof = builder.build(mass.outline, top, spec)
             warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
             return roof
