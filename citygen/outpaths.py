@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from citygen.errors import ExportError
+from citygen.usd.publish import temp_prefix
 
 
 def check_writable(path: str | Path, what: str) -> None:
@@ -28,7 +29,7 @@ def check_writable(path: str | Path, what: str) -> None:
     if not _is(folder, Path.is_dir):
         raise ExportError(f"cannot write the {what}: {folder} is not a folder", where=str(path))
     try:
-        fd, probe = tempfile.mkstemp(prefix=".citygen-probe.", dir=folder)
+        fd, probe = tempfile.mkstemp(prefix=temp_prefix("probe"), dir=folder)
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
@@ -56,7 +57,7 @@ def write_file(path: str | Path, write: Callable[[BinaryIO], object], what: str)
         if _is(path, Path.is_dir):
             raise IsADirectoryError(21, "the path is a folder")
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, name = tempfile.mkstemp(prefix=temp_prefix(path.name), suffix=".tmp", dir=path.parent)
         tmp = Path(name)
         with os.fdopen(fd, "wb") as f:
             write(f)

@@ -11,9 +11,10 @@ Layout of the stage::
           Elements             PointInstancer; Prototypes/<pN> reference /Prototypes/<name>
     /Prototypes                class: one prototype per element kind and quantised size
 
-With tile layers, each ``Tile_<i>_<j>`` lives in its own layer ``<stem>_tiles/Tile_<i>_<j>.usdc`` (a sublayer of
-the root, with the prototypes first used in that tile), written as soon as the tile is complete, so memory stays
-bounded by one tile. Authoring goes through
+With tile layers, each ``Tile_<i>_<j>`` lives in its own layer ``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc`` (a
+sublayer of the root, with the prototypes first used in that tile; the digest of its bytes names it so a run never
+overwrites a tile the current root lists, :mod:`citygen.usd.publish`), written as soon as the tile is complete, so
+memory stays bounded by one tile. Authoring goes through
 the Sdf API in change blocks, which is what keeps a 100k-building city writable.
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ import os
 import re
 import shutil
 import tempfile
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +38,7 @@ from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.materials import look
 from citygen.usd.normals import face_normals
+from citygen.usd.publish import publish_tile, remove_stale_temporaries, remove_unlisted_tiles, temp_prefix
 from citygen.usd.uv import planar_st
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
@@ -183,7 +186,7 @@ def _dictionary(data: Mapping[str, Any]) -> dict[str, Any]:
 class StageWriter:
     """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
 
-    With ``tile_layers`` every tile is its own layer (``<stem>_tiles/Tile_i_j<suffix>``) holding its buildings and
+    With ``tile_layers`` every tile is its own layer (``<stem>_tiles/Tile_i_j.<digest><suffix>``) holding its buildings and
     the ``/Prototypes`` first used there; it is exported and dropped from memory as soon as the next tile starts,
     so memory stays bounded by one tile whatever the city's size. The root layer holds ``/World`` and its materials
     and lists the tile layers as sublayers: internal references and material bindings compose as in one file (the
@@ -204,6 +207,8 @@ class StageWriter:
         self.tile_suffix = ".usdc" if suffix == ".usdz" else suffix
         self.tiles_dir = self.path.with_name(f"{self.path.stem}_tiles") if tile_layers else None
         self.staging: Path | None = None
+        self.started = time.time()  # (tiles older than this that the new root does not list are removed)
+        remove_stale_temporaries(self.path.parent)
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
         self.author = _Author(self.layer, uvs)
         self.lod = lod
@@ -233,7 +238,7 @@ class StageWriter:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         """On an error, remove the staged tile layers (the files at ``path`` were never touched)."""
-        if exc_type is not None and self.staging is not None and self.staging != self.tiles_dir:
+        if exc_type is not None and self.staging is not None:
             shutil.rmtree(self.staging, ignore_errors=True)
 
     def material(self, name: str) -> Sdf.Path:
@@ -309,16 +314,23 @@ class StageWriter:
             return
         name = self.tile[2].name + self.tile_suffix
         _export(self.tile[1], self.staging_folder() / name)
-        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
+        self.sublayers.append(name)
         self.tile, self.protos_root = None, None
 
     def staging_folder(self) -> Path:
-        """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes it."""
+        """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes them
+        (named by :func:`~citygen.usd.publish.temp_prefix`, so a later run removes it if this one is killed)."""
         if self.tiles_dir is None:
             raise ExportError("this stage has no tile layers", where=str(self.path), hint="pass tile_layers=True")
         if self.staging is None:
-            self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
-            self.staging = Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
+            try:
+                self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
+                self.staging = Path(tempfile.mkdtemp(prefix=temp_prefix(self.tiles_dir.name),
+                                                     dir=self.tiles_dir.parent))
+                os.chmod(self.staging, 0o777 & ~_umask())  # (shared with dask workers)
+            except OSError as exc:
+                raise ExportError(f"cannot write the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
+                                  hint="check free disk space and permissions") from None
         return self.staging
 
     def add_tile_layer(self, name: str, stats: StageStats, prototypes: Iterable[ProtoKey | ModuleKey]) -> None:
@@ -328,7 +340,7 @@ class StageWriter:
         if not (self.staging_folder() / name).is_file():
             raise ExportError(f"tile layer {name} is missing from the staging folder", where=str(self.staging),
                               hint="the output folder must be shared with every worker, at the same path")
-        self.sublayers.append(f"{self.tiles_dir.name}/{name}")
+        self.sublayers.append(name)
         self.author.prims += stats.prims
         for key in ("buildings", "meshes", "instances", "polygons"):
             self.counts[key] += getattr(stats, key)
@@ -336,34 +348,38 @@ class StageWriter:
             self.prototypes.setdefault(key, Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name)))
 
     def close(self) -> StageStats:
-        """Write the last tile, the tile folder and the root layer; return the stage's figures."""
+        """Write the last tile, publish the tiles under their content names, switch the root to them (one
+        rename), then remove the tiles no root lists any more (:mod:`citygen.usd.publish`); return the figures."""
         self._flush_tile()
+        names: list[str] = []
         if self.tiles_dir is not None:
-            self.layer.subLayerPaths = self.sublayers
-            self._publish_tiles()
+            names = self._publish_tiles()
+            self.layer.subLayerPaths = [f"{self.tiles_dir.name}/{name}" for name in names]
         size = _finish(self.layer, self.path)
         if self.tiles_dir is not None:
             if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
                 shutil.rmtree(self.tiles_dir)
             else:
-                size += sum(f.stat().st_size for f in self.tiles_dir.iterdir())
+                size += sum((self.tiles_dir / name).stat().st_size for name in names)
+                remove_unlisted_tiles(self.tiles_dir, names, self.started)
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
                           prototypes=len(self.prototypes), polygons=self.counts["polygons"], bytes=size)
 
-    def _publish_tiles(self) -> None:
-        """Move the staged tile folder into place (replacing an old one)."""
+    def _publish_tiles(self) -> list[str]:
+        """Move the staged tiles into the tile folder under their content names (none the current root lists is
+        touched); return those names, in tile order."""
         assert self.tiles_dir is not None
-        staging = self.staging or Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
-        self.staging = staging
-        os.chmod(staging, 0o777 & ~_umask())
-        if self.tiles_dir.exists():
-            old = self.tiles_dir.with_name(f".{self.tiles_dir.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(self.tiles_dir, old)
-            shutil.rmtree(old, ignore_errors=True)
-        os.replace(staging, self.tiles_dir)
-        self.staging = self.tiles_dir
+        try:
+            self.tiles_dir.mkdir(parents=True, exist_ok=True)
+            names = [publish_tile(self.staging / name, self.tiles_dir) for name in self.sublayers]
+        except OSError as exc:
+            raise ExportError(f"cannot publish the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
+                              hint="check free disk space and permissions") from None
+        if self.staging is not None:
+            shutil.rmtree(self.staging, ignore_errors=True)
+            self.staging = None
+        return names
 
 
 def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axis: str = "Z",
@@ -439,7 +455,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
     suffix = path.suffix.lower()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
+        fd, tmp_name = tempfile.mkstemp(prefix=temp_prefix(path.stem), suffix=suffix, dir=path.parent)
     except OSError as exc:
         raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
                           hint="check free disk space and permissions") from None
