@@ -7,6 +7,8 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
+import difflib
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -67,6 +69,45 @@ def load_rulesets(scene: Scene, registry: Registry | None = None) -> dict[tuple[
                                  f"{type(exc).__name__}: {exc}", where=where, plugin=kind.id,
                                  hint="this is a bug in the ruleset kind; please report it with the ruleset") from exc
     return loaded
+
+
+def condition_warnings(scene: Scene, footprints: Sequence[Footprint], masses: Sequence[Mass]) -> list[str]:
+    """What is wrong with the scene's ``when`` tests against these footprints, as warnings: an attribute no
+    footprint has (a misspelling, with the nearest names), and text compared with an attribute that is a number
+    on every footprint that has it (never equal)."""
+    if not footprints:
+        return []
+    seen: dict[str, list[Any]] = {}
+    for footprint, mass in zip(footprints, masses):
+        for key, value in assign_attributes(footprint, mass).items():
+            if value is not None:
+                seen.setdefault(key, []).append(value)
+    found = []
+    for number, assignment in enumerate(scene.assignments, 1):
+        where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
+        for condition in assignment.conditions:
+            values = seen.get(condition.key)
+            if values is None:
+                near = difflib.get_close_matches(condition.key, list(seen), n=3)
+                found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
+                             + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
+            elif condition.op == "in" and all(_is_number(v) for v in values) and not any(
+                    _is_number(v) or _numeric_text(v) for v in condition.values):
+                found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
+                             f"{condition.key}, a number on every footprint: it never matches")
+    return found
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _numeric_text(value: Any) -> bool:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 class Builder:

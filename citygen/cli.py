@@ -38,7 +38,12 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     if args.report:
         write_text(args.report, json.dumps(report.to_dict(), indent=1) + "\n", "report")
         print(f"report: {args.report}")
-    return 1 if args.strict and report.skipped else 0
+    problems = [f"{len(report.skipped)} buildings skipped"] if report.skipped else []
+    problems += ["no building written"] if not report.written else []
+    if args.strict and problems:
+        print(f"citygen: --strict: {' and '.join(problems)} (exit status 1)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _cmd_validate(args: argparse.Namespace, registry: Registry) -> int:

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from citygen.builder import Builder, BuildingOutcome, load_rulesets
+from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
 from citygen.errors import CitygenError, ExportError
 from citygen.footprints import Footprint, ImportResult, Skipped
@@ -121,6 +121,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
+    if not imported.footprints:
+        report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
     t1 = time.perf_counter()
     footprints, masses = [], []
     for fp in imported.footprints:
@@ -132,6 +134,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         except Exception as exc:  # a bug skips one building, not the city, and says it is one
             report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
                                           fp.source))
+    report.warnings += condition_warnings(scene, footprints, masses)
     cover = neighbour_cover(masses)
     ground = _ground(masses) if scene.output.ground and masses else None
     taken: set[str] = set()
