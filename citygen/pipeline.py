@@ -12,6 +12,7 @@ import itertools
 import math
 import os
 import pickle
+import re
 import sys
 import time
 from collections import deque
@@ -25,14 +26,14 @@ import numpy as np
 
 from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
-from citygen.errors import CitygenError, ExportError
+from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.mass import Mass, build_mass, neighbour_cover
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
-from citygen.scene import Scene
+from citygen.scene import Scene, key_line
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
@@ -199,7 +200,15 @@ def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportR
     options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
                **scene.footprint_options}
     importer = (registry or default_registry()).importer_for(scene.footprints, options.pop("format", None))
-    return importer.read(scene.footprints, options)
+    try:
+        return importer.read(scene.footprints, options)
+    except SceneError as exc:  # an option the importer refuses: at its line in the scene's [footprints]
+        key = next((k for k in scene.footprint_options if re.search(rf"\b{re.escape(k)}\b", exc.message)), None)
+        line = key_line(scene, "footprints", key) if key else None
+        if line is None:
+            raise
+        raise SceneError(exc.message, where=SourceLocation(str(scene.path), line), plugin=exc.plugin,
+                         hint=exc.hint) from None
 
 
 def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:

@@ -114,6 +114,16 @@ def _line_of(text: str, key: str, start: int = 0) -> int | None:
     return text.count("\n", 0, match.start()) + 1 if match else None
 
 
+def key_line(scene: Scene, table: str, key: str) -> int | None:
+    """The line of ``key`` in ``[table]`` of the scene's file (None when it cannot be found)."""
+    try:
+        text = scene.path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    header = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", text, re.M)
+    return _line_of(text, key, header.end()) if header else None
+
+
 class _Reader:
     """Checks one table of the scene, reporting problems with file:line."""
 

@@ -48,3 +48,15 @@ def test_strict_says_how_many_buildings_were_skipped(tmp_path, capsys):
     (tmp_path / "city.geojson").write_text(json.dumps(data))
     assert main(["generate", str(scene), "-q", "--strict"]) == 1
     assert capsys.readouterr().err == "citygen: --strict: 1 buildings skipped (exit status 1)\n"
+
+
+def test_an_importer_option_error_names_the_scene_file_and_line(tmp_path):
+    """Was: ``[footprints]: [footprints] min_area = -1 is invalid``, with no file or line."""
+    import pytest
+
+    from citygen.errors import SceneError
+    scene = write_scene(tmp_path, buildings=1)
+    scene.write_text(scene.read_text().replace('path = "city.geojson"\n', 'path = "city.geojson"\nmin_area = -1\n'))
+    with pytest.raises(SceneError) as info:
+        generate_city(load_scene(scene))
+    assert str(info.value).startswith(f"{scene}:4: [footprints] min_area = -1 is invalid")
