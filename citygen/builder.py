@@ -7,6 +7,7 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
+import difflib
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -19,16 +20,16 @@ from shapely.geometry import MultiPolygon
 
 from citygen.coordinator import face_bins, plan_building
 from citygen.entrance import enforce_entrance
-from citygen.errors import CitygenError
+from citygen.errors import CitygenError, SceneError, SourceLocation
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
-from citygen.layout import FacadeLayout, check_partition, hidden_behind
+from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
 from citygen.mass import Mass
 from citygen.plausible import check_plausible, plain_wall, summary
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import rectangle_like, roof_notes
+from citygen.roof import ROOF_BUDGET, rectangle_like, roof_budget, roof_notes
 from citygen.scene import Assignment, Scene
 from citygen.geometry.building import BUILDING_RENDER, LABEL_MATERIAL
 from citygen.usd.materials import WALL_PALETTE, colour_material, resolve
@@ -67,14 +68,80 @@ def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
     return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
 
 
-class Builder:
-    """Builds one building at a time; holds the registry and a ruleset cache. With ``keep_layouts`` its outcomes
-    carry the facade layouts too (an authoring tool shows them; the pipeline never ships them between processes)."""
+def load_rulesets(scene: Scene, registry: Registry | None = None) -> dict[tuple[str, Path], Any]:
+    """Every ruleset the scene's ``[[assign]]`` rules name, and their fallbacks, loaded by its kind (keyed by kind
+    id and path), so a ruleset that does not load stops the run before any building is generated: a
+    :class:`SceneError` at the rule's line whose message carries the ruleset's own error (file:line:column)."""
+    registry = registry or default_registry()
+    loaded: dict[tuple[str, Path], Any] = {}
+    for number, assignment in enumerate(scene.assignments, 1):
+        named = [(p, assignment.kind) for p in assignment.rulesets]
+        named += [(assignment.fallback, None)] if assignment.fallback is not None else []
+        for path, kind_id in named:
+            where = SourceLocation(str(scene.path), assignment.line)
+            try:
+                kind = registry.ruleset_kind(kind_id) if kind_id else registry.kind_for_path(path)
+                if (kind.id, path) not in loaded:
+                    loaded[kind.id, path] = kind.load(path)
+            except CitygenError as exc:
+                raise SceneError(f"[[assign]] #{number}: ruleset {path.name} does not load: {exc}",
+                                 where=where) from exc
+            except Exception as exc:  # a ruleset kind's bug: the run cannot use this ruleset either
+                raise SceneError(f"[[assign]] #{number}: ruleset {path.name} does not load: internal error "
+                                 f"{type(exc).__name__}: {exc}", where=where, plugin=kind.id,
+                                 hint="this is a bug in the ruleset kind; please report it with the ruleset") from exc
+    return loaded
 
-    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None, keep_layouts: bool = False) -> None:
+
+def condition_warnings(scene: Scene, footprints: Sequence[Footprint], masses: Sequence[Mass]) -> list[str]:
+    """What is wrong with the scene's ``when`` tests against these footprints, as warnings: an attribute no
+    footprint has (a misspelling, with the nearest names), and text compared with an attribute that is a number
+    on every footprint that has it (never equal)."""
+    if not footprints:
+        return []
+    seen: dict[str, list[Any]] = {}
+    for footprint, mass in zip(footprints, masses):
+        for key, value in assign_attributes(footprint, mass).items():
+            if value is not None:
+                seen.setdefault(key, []).append(value)
+    found = []
+    for number, assignment in enumerate(scene.assignments, 1):
+        where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
+        for condition in assignment.conditions:
+            values = seen.get(condition.key)
+            if values is None:
+                near = difflib.get_close_matches(condition.key, list(seen), n=3)
+                found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
+                             + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
+            elif condition.op == "in" and all(_is_number(v) for v in values) and not any(
+                    _is_number(v) or _numeric_text(v) for v in condition.values):
+                found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
+                             f"{condition.key}, a number on every footprint: it never matches")
+    return found
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _numeric_text(value: Any) -> bool:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+class Builder:
+    """Builds one building at a time; holds the registry and a ruleset cache (``rulesets``: already loaded ones,
+    from :func:`load_rulesets`). With ``keep_layouts`` its outcomes carry the facade layouts too (an authoring tool
+    shows them; the pipeline never ships them between processes)."""
+
+    def __init__(self, scene: Scene, seed: int, registry: Registry | None = None,
+                 rulesets: dict[tuple[str, Path], Any] | None = None, keep_layouts: bool = False) -> None:
         self.scene, self.seed, self.keep_layouts = scene, seed, keep_layouts
         self.registry = registry or default_registry()
-        self.rulesets: dict[tuple[str, Path], Any] = {}
+        self.rulesets: dict[tuple[str, Path], Any] = dict(rulesets or {})
         self.roofs = self.registry.roof_builders
         self.undefined: dict[tuple[Path, str], bool] = {}  # (ruleset, material name) -> reported yet
         clear_module_cache()
@@ -118,8 +185,8 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                dressed = [self._defined(layout, path, warnings)
-                           for layout in self._held(kind.id, self._generate(kind, ruleset, requests), requests)]
+                generated = self._generate(kind, ruleset, requests, any_error=assignment.fallback is not None)
+                dressed = [self._defined(layout, path, warnings) for layout in self._held(kind.id, generated, requests)]
                 if assignment.fallback is not None:
                     dressed = [self._defined(layout, assignment.fallback, warnings)
                                for layout in self._fall_back(assignment.fallback, requests, dressed, used, warnings)]
@@ -139,7 +206,7 @@ class Builder:
                                       roof_material=roof_material, walls=self.scene.output.lod != "none")
         except CitygenError as exc:
             return BuildingOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings))
-        except Exception as exc:  # a plugin bug must skip one building, not the city
+        except (Exception, SystemExit) as exc:  # a plugin bug (or exit) must skip one building, not the city
             reason = f"internal error {type(exc).__name__}: {exc}"
             return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
         attributes = {"sourceId": footprint.id, "height": mass.top - mass.base, "wallHeight": mass.height,
@@ -200,28 +267,33 @@ class Builder:
         if builder is None or builder is flat:
             return (flat.build(mass.outline, top, spec) if flat else None), "flat"
         try:
-            with roof_notes() as notes:  # what the builder reports is this building's warning
+            with roof_notes() as notes, roof_budget(ROOF_BUDGET):  # what the builder reports: the building's warning
                 roof = builder.build(mass.outline, top, spec)
             warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
             return roof, spec.shape
-        except Exception as exc:  # degenerate outline or a builder bug: keep the building, with a flat roof
+        except (Exception, SystemExit) as exc:  # degenerate outline or a builder bug: a flat roof
             warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
             return (flat.build(mass.outline, top, spec) if flat else None), "flat"
 
     @staticmethod
-    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest]) -> list[FacadeLayout]:
+    def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
+                  any_error: bool = False) -> list[FacadeLayout]:
         """Layouts for a building's faces; if the kind fails on the building, face by face, so one face it cannot
-        dress becomes a plain wall (``meta["fallback"]``: reported later) instead of costing the building."""
+        dress becomes a plain wall (``meta["fallback"]``: reported later, or dressed by the rule's fallback)
+        instead of costing the building. A CitygenError fails one face; with ``any_error`` (the rule has a
+        fallback) so does any other exception, else that is a bug that skips the building."""
+        caught = Exception if any_error else CitygenError
         try:
             return kind.generate_building(ruleset, requests)
-        except CitygenError:
+        except caught:
             pass
         layouts = []
         for request in requests:
             try:
                 layouts.append(kind.generate(ruleset, request))
-            except CitygenError as exc:
-                layouts.append(plain_wall(request, f"the ruleset failed: {exc}"))
+            except caught as exc:
+                reason = str(exc) if isinstance(exc, CitygenError) else f"internal error {type(exc).__name__}: {exc}"
+                layouts.append(plain_wall(request, f"the ruleset failed: {reason}"))
         return layouts
 
     def _held(self, kind_id: str, layouts: list[FacadeLayout], requests: list[FacadeRequest]) -> list[FacadeLayout]:
@@ -251,7 +323,7 @@ class Builder:
         for k in plain:
             try:
                 layout = self._held(kind.id, [kind.generate(ruleset, requests[k])], [requests[k]])[0]
-            except CitygenError:
+            except Exception:  # the face stays plain, with the assigned ruleset's warning
                 continue
             if not layout.meta.get("fallback"):
                 out[k] = replace(layout, meta={**layout.meta, "fell_back_from": layouts[k].meta["fallback"],

@@ -2,17 +2,22 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 
 from citygen import __version__
-from citygen.cliargs import add_size_arguments, whole
+from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.distributed import EXECUTORS
 from citygen.errors import CitygenError
 from citygen.layout import FacadeLayout, check_partition
+from citygen.outpaths import check_writable, write_text
 from citygen.plausible import DEFAULT_RULES, PlausibilityRules, check_plausible
 from citygen.pipeline import generate_city, terminal_progress
 from citygen.registry import Registry, default_registry
@@ -28,14 +33,21 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
     if args.scheduler and args.executor != "dask":
         raise CitygenError("--scheduler needs --executor dask", hint="add --executor dask")
+    if args.report:
+        check_writable(args.report, "report")
     report = generate_city(scene, seed=args.seed, out=Path(args.output) if args.output else None, jobs=jobs,
                            registry=registry, progress=None if args.quiet else terminal_progress,
                            executor=args.executor, scheduler=args.scheduler)
     print(report.summary())
     if args.report:
-        Path(args.report).write_text(json.dumps(report.to_dict(), indent=1) + "\n")
+        write_text(args.report, json.dumps(report.to_dict(), indent=1) + "\n", "report")
         print(f"report: {args.report}")
-    return 1 if args.strict and report.skipped else 0
+    problems = [f"{len(report.skipped)} buildings skipped"] if report.skipped else []
+    problems += ["no building written"] if not report.written else []
+    if args.strict and problems:
+        print(f"citygen: --strict: {' and '.join(problems)} (exit status 1)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _cmd_validate(args: argparse.Namespace, registry: Registry) -> int:
@@ -56,7 +68,8 @@ def _cmd_plugins(args: argparse.Namespace, registry: Registry) -> int:
     tables = (("ruleset kinds", registry.ruleset_kinds, "ruleset_kinds"),
               ("footprint importers", registry.importers, "importers"),
               ("roof builders", registry.roof_builders, "roof_builders"),
-              ("commands", registry.commands, "commands"))
+              ("commands", registry.commands, "commands"),
+              ("layout sources", registry.layout_sources, "layout_sources"))
     for title, table, attr in tables:
         print(f"{title}:")
         for key, item in sorted(table.items()):
@@ -66,6 +79,8 @@ def _cmd_plugins(args: argparse.Namespace, registry: Registry) -> int:
             print(f"  {key:<14}{extra:<22} {desc}  [{origin.plugin} from {origin.distribution}]")
     for name, problem in registry.broken:
         print(f"broken plugin {name}: {problem}")
+    for warning in registry.warnings:
+        print(f"warning: {warning}")
     return 0
 
 
@@ -122,7 +137,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     g.add_argument("scene", help="scene TOML file")
     g.add_argument("-o", "--output",
                    help="output path: a USD stage (.usda/.usdc/.usdz) or glTF (.glb/.gltf); default from the scene")
-    g.add_argument("--seed", type=whole(0), help="override the scene seed (an integer >= 0)")
+    g.add_argument("--seed", type=seed, help="override the scene seed (an integer from 0 to 2**31 - 1)")
     g.add_argument("--strict", action="store_true", help="exit non-zero when any building is skipped")
     g.add_argument("--masses", action="store_true",
                    help="masses only (LOD1: extruded walls and roofs, no facades), as [output] masses = true")
@@ -152,7 +167,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     f.add_argument("--json", action="store_true", help="print the FacadeLayout JSON")
     f.add_argument("--png", help="write a PNG drawing of the layout")
     f.add_argument("--explain", action="store_true", help="print how the layout was derived")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--seed", type=seed, default=0, help="random seed (0 to 2**31 - 1; default 0)")
     f.add_argument("--no-entrance", action="store_true", help="preview a face without the building's door")
     f.set_defaults(run=_cmd_facade)
     for name, command in sorted(registry.commands.items()):
@@ -162,20 +177,56 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived: unwinds like Ctrl-C's KeyboardInterrupt, so temporary files and workers are cleaned up."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """While the command runs, SIGTERM raises :class:`Terminated` (in the main thread only: elsewhere it cannot)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command. Exit status: 0 done; 1 done, but something is wrong with the result (``generate
+    --strict`` with skipped buildings, ``validate`` errors); 2 an error, one ``citygen: error:`` line (bad input,
+    an output that cannot be written); 3-5 ``facade``'s outcomes (:data:`FACADE_EXIT`); 130 Ctrl-C; 143 SIGTERM."""
     try:
         registry = default_registry()
     except CitygenError as exc:
         print(f"citygen: {exc}", file=sys.stderr)
         return 2
     args = build_parser(registry).parse_args(argv)
+    if args.run is not _cmd_plugins:  # (which lists them on stdout)
+        for name, problem in registry.broken:
+            print(f"citygen: warning: broken plugin {name} not loaded: {problem}", file=sys.stderr)
+        for warning in registry.warnings:
+            print(f"citygen: warning: {warning}", file=sys.stderr)
     try:
-        return int(args.run(args, registry) or 0)
+        with _sigterm_unwinds():
+            return int(args.run(args, registry) or 0)
     except CitygenError as exc:
         print(f"citygen: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         return 0
+    except KeyboardInterrupt:
+        print("citygen: interrupted", file=sys.stderr)
+        return 130
+    except Terminated:
+        print("citygen: terminated (SIGTERM)", file=sys.stderr)
+        return 143
 
 
 if __name__ == "__main__":

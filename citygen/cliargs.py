@@ -6,6 +6,7 @@ import argparse
 import math
 
 from citygen.request import MIN_STOREY
+from citygen.rng import MAX_SEED
 
 #: The largest facade side (metres) of the one-facade preview commands.
 MAX_SIDE = 1000.0
@@ -41,6 +42,14 @@ def whole(least: int):
             raise argparse.ArgumentTypeError(f"must be at least {least}, got {value}")
         return value
     return parse
+
+
+def seed(text: str) -> int:
+    """A seed: an integer from 0 to :data:`citygen.rng.MAX_SEED`."""
+    value = whole(0)(text)
+    if value > MAX_SEED:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_SEED} (2**31 - 1), got {value}")
+    return value
 
 
 def _float(text: str, what: str) -> float:

@@ -7,10 +7,13 @@ cluster instead (:mod:`citygen.distributed`).
 """
 from __future__ import annotations
 
+import contextlib
 import itertools
 from collections import Counter
 import math
+import os
 import pickle
+import re
 import sys
 import time
 from collections import deque
@@ -22,16 +25,19 @@ from typing import Any
 
 import numpy as np
 
-from citygen.builder import Builder, BuildingOutcome
+from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
 from citygen.distributed import EXECUTORS, TileJob, run_tiles
-from citygen.errors import CitygenError
+from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
+from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.mass import Mass, neighbour_cover
+from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
+from citygen.rng import MAX_SEED
 from citygen.roofplan import plan_mass
-from citygen.scene import Scene
-from citygen.usd.writer import StageStats, StageWriter, prim_name
+from citygen.scene import Scene, key_line
+from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
 GROUND_MARGIN = 20.0
@@ -88,8 +94,9 @@ _Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: Builder | None = None
 
 
-def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None) -> None:
+def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None, parent: int) -> None:
     global _WORKER
+    tie_to_parent(parent)
     _WORKER = Builder(scene, seed, None if plugins is None else load_registry(*plugins))
 
 
@@ -123,16 +130,23 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         raise CitygenError(f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
     registry = registry or default_registry()
     seed = scene.seed if seed is None else seed
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise CitygenError(f"seed must be an integer from 0 to {MAX_SEED} (2**31 - 1), got {seed!r}")
     out = out or scene.output.path
     gltf = Path(out).suffix.lower() in GLTF_SUFFIXES
     if gltf and executor == "dask":
         raise CitygenError(f"the dask executor writes USD tile layers, not glTF ({Path(out).name})",
                            hint="use the local executor for .glb/.gltf, or write .usdc")
+    check_stage_path(Path(out))
     report = Report()
     t0 = time.perf_counter()
+    # a ruleset that does not load stops the run before any building (masses only: none is used)
+    rulesets = {} if scene.output.masses else load_rulesets(scene, registry)
     imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
+    if not imported.footprints:
+        report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
     t1 = time.perf_counter()
     footprints, masses = [], []
     roofs = registry.roof_builders
@@ -147,6 +161,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         except Exception as exc:  # a bug skips one building, not the city, and says it is one
             report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
                                           fp.source))
+    report.warnings += condition_warnings(scene, footprints, masses)
     cover = neighbour_cover(masses)
     ground = _ground(masses) if scene.output.ground and masses else None
     taken: set[str] = set()
@@ -176,10 +191,13 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                           "total": time.perf_counter() - t0}
         return report
     usd = 0.0
-    with _writer(out, scene, layer_data) as writer:
+    with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
+        writer = stack.enter_context(_writer(out, scene, layer_data))
         if ground:
             writer.ground(*ground)
-        for outcome in _run(work, scene, seed, jobs, registry, plugins, progress):
+        outcomes = stack.enter_context(contextlib.closing(_run(work, scene, seed, jobs, registry, plugins, progress,
+                                                                rulesets)))
+        for outcome in outcomes:
             report.warnings += outcome.warnings
             report.faces.update(dict(outcome.faces))
             if outcome.record is None:
@@ -206,13 +224,30 @@ def _writer(out: Path, scene: Scene, layer_data: dict[str, Any]):
                        materials=scene.materials)
 
 
+def check_stage_path(out: Path) -> None:
+    """Raise :class:`ExportError` before generating when no stage can be written at ``out`` (its extension, a
+    folder in the way, a folder that refuses files)."""
+    if out.suffix.lower() not in SUFFIXES + GLTF_SUFFIXES:
+        raise ExportError(f"unsupported output extension {out.suffix!r}", where=str(out),
+                          hint=f"use one of {', '.join(SUFFIXES + GLTF_SUFFIXES)}")
+    check_writable(out, "stage")
+
+
 def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportResult:
     """The scene's footprint file through its importer (``format`` or the file's suffix), the scene's
     ``[defaults]`` heights and ``[footprints]`` keys as its options: what :func:`generate_city` builds."""
     options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
                **scene.footprint_options}
     importer = (registry or default_registry()).importer_for(scene.footprints, options.pop("format", None))
-    return importer.read(scene.footprints, options)
+    try:
+        return importer.read(scene.footprints, options)
+    except SceneError as exc:  # an option the importer refuses: at its line in the scene's [footprints]
+        key = next((k for k in scene.footprint_options if re.search(rf"\b{re.escape(k)}\b", exc.message)), None)
+        line = key_line(scene, "footprints", key) if key else None
+        if line is None:
+            raise
+        raise SceneError(exc.message, where=SourceLocation(str(scene.path), line), plugin=exc.plugin,
+                         hint=exc.hint) from None
 
 
 def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
@@ -248,12 +283,14 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
 
 
 def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
-         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None) -> Iterator[BuildingOutcome]:
+         plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None,
+         rulesets: dict[tuple[str, Path], Any]) -> Iterator[BuildingOutcome]:
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
-    buildings never pile up in memory faster than the stage writer consumes them."""
+    buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
+    already loaded (worker processes load their own)."""
     total = len(work)
     if jobs <= 1 or total < 2 * jobs:
-        builder = Builder(scene, seed, registry)
+        builder = Builder(scene, seed, registry, rulesets)
         for k, item in enumerate(work):
             yield builder.build(*item)
             if progress:
@@ -262,7 +299,8 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     size = max(1, min(16, total // (8 * jobs)))
     chunks = iter([work[i:i + size] for i in range(0, total, size)])
     done = 0
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins)) as pool:
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(scene, seed, plugins, os.getpid()))
+    try:
         pending = deque(pool.submit(_work, c) for c in itertools.islice(chunks, 4 * jobs))
         while pending:
             outcomes = pending.popleft().result()
@@ -274,6 +312,10 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
                 yield outcome
                 if progress:
                     progress(done, total)
+    except BaseException:  # an error, Ctrl-C, SIGTERM, or the consumer closing early: the workers end now
+        stop_workers(pool)
+        raise
+    pool.shutdown()
 
 
 def terminal_progress(done: int, total: int) -> None:

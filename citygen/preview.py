@@ -13,6 +13,7 @@ from pathlib import Path
 from PIL import Image, ImageDraw
 
 from citygen.layout import FacadeLayout, Region
+from citygen.outpaths import write_png
 
 COLOURS = {"wall": (222, 205, 170), "window": (70, 110, 160), "door": (120, 70, 40), "balcony": (90, 90, 100),
            "sill": (240, 240, 235), "cornice": (250, 250, 245), "pillar": (190, 180, 160), "shop": (40, 70, 110),
@@ -60,7 +61,7 @@ def draw_layout(layout: FacadeLayout, px_per_m: float = 40.0, margin: int = 10,
 
 def save_png(layout: FacadeLayout, path: str | Path, **kw) -> Path:
     path = Path(path)
-    draw_layout(layout, **kw).save(path)
+    write_png(draw_layout(layout, **kw), path)
     return path
 
 
@@ -92,6 +93,6 @@ def write_layouts(layouts: Sequence[FacadeLayout], as_json: bool, png: Path | No
     if png is None or not layouts:
         return False
     px_per_m = 320 / max(max(lay.width, lay.height) for lay in layouts)
-    contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]).save(png)
+    write_png(contact_sheet([draw_layout(lay, px_per_m=px_per_m) for lay in layouts]), png)
     print(f"wrote {png} ({len(layouts)} variations)")
     return True

@@ -151,6 +151,10 @@ class Registry:
     layout_sources: dict[str, LayoutSource] = field(default_factory=dict)
     origins: dict[tuple[str, str], Origin] = field(default_factory=dict)
     broken: list[tuple[str, str]] = field(default_factory=list)
+    #: file suffix -> the id of the ruleset kind / importer that reads it (see :func:`load_registry`)
+    suffix_owners: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: problems worth a warning that do not make a plugin broken (a suffix claimed twice)
+    warnings: list[str] = field(default_factory=list)
     #: how it was loaded, so worker processes can load the same registry
     extra_plugins: tuple[object, ...] = ()
     entry_points: bool = True
@@ -164,7 +168,10 @@ class Registry:
 
     def kind_for_path(self, path: Path) -> RulesetKind:
         suffix = path.suffix.lower()
-        for kind in self.ruleset_kinds.values():
+        owner = self.suffix_owners.get("ruleset_kinds", {}).get(suffix)
+        if owner is not None:
+            return self.ruleset_kinds[owner]
+        for kind in self.ruleset_kinds.values():  # (a registry built by hand has no suffix table)
             if suffix in kind.suffixes:
                 return kind
         known = sorted(s for k in self.ruleset_kinds.values() for s in k.suffixes)
@@ -178,17 +185,23 @@ class Registry:
                                   hint=f"known formats: {', '.join(sorted(self.importers))}")
             return self.importers[fmt]
         name = path.name.lower()
+        owners = self.suffix_owners.get("importers")
         matches = [(len(s), importer.id) for importer in self.importers.values() for s in importer.suffixes
-                   if name.endswith(s)]
+                   if name.endswith(s.lower()) and (owners is None or owners.get(s.lower()) == importer.id)]
         if matches:  # the most specific suffix wins: ".city.json" before ".json"
             return self.importers[max(matches)[1]]
         raise PluginError("no footprint importer for this file type", where=str(path),
                           hint=f"set format = one of {', '.join(sorted(self.importers))} in the scene")
 
 
-_GROUPS = (("citygen_ruleset_kinds", "ruleset_kinds"), ("citygen_footprint_importers", "importers"),
-           ("citygen_roof_builders", "roof_builders"), ("citygen_commands", "commands"),
-           ("citygen_layout_sources", "layout_sources"))
+_GROUPS = (("citygen_ruleset_kinds", "ruleset_kinds", RulesetKind), ("citygen_footprint_importers", "importers",
+                                                                      FootprintImporter),
+           ("citygen_roof_builders", "roof_builders", RoofBuilder), ("citygen_commands", "commands", Command),
+           ("citygen_layout_sources", "layout_sources", LayoutSource))
+#: The distribution whose plugins keep their file suffixes when another plugin claims one too.
+SHIPPED = "citygen"
+#: Interfaces whose objects are named by ``name`` (CLI words), not ``id``.
+NAMED = (Command, LayoutSource)
 
 
 def load_registry(extra_plugins: Iterable[object] = (), entry_points: bool = True) -> Registry:
@@ -203,7 +216,7 @@ def load_registry(extra_plugins: Iterable[object] = (), entry_points: bool = Tru
             dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist else "?"
             try:
                 pm.register(ep.load(), name=ep.name)
-            except Exception as exc:  # a third-party plugin may fail in any way; report it, keep going
+            except (Exception, SystemExit) as exc:  # a third-party plugin may fail in any way; report it, keep going
                 registry.broken.append((ep.name, f"{type(exc).__name__}: {exc}"))
                 continue
             dists[ep.name] = dist
@@ -211,24 +224,79 @@ def load_registry(extra_plugins: Iterable[object] = (), entry_points: bool = Tru
         name = getattr(plugin, "__name__", type(plugin).__name__)
         pm.register(plugin, name=name)
         dists[name] = "(registered in-process)"
-    for hook_name, attr in _GROUPS:
+    for hook_name, attr, interface in _GROUPS:
         table = getattr(registry, attr)
         hook = getattr(pm.hook, hook_name)
         for impl in hook.get_hookimpls():
             try:
-                items = impl.function() or []
-            except Exception as exc:
+                items = impl.function()
+            except (Exception, SystemExit) as exc:
                 registry.broken.append((impl.plugin_name, f"{hook_name} failed: {type(exc).__name__}: {exc}"))
                 continue
-            for item in items:
-                item_id = getattr(item, "id", None) or getattr(item, "name")
+            problem = _malformed(items, interface)
+            if problem:
+                registry.broken.append((impl.plugin_name, f"{hook_name} returned {problem}; nothing of it is "
+                                                          f"registered"))
+                continue
+            for item in items or ():
+                item_id = getattr(item, "name" if interface in NAMED else "id")
                 if item_id in table:
                     other = registry.origins[(attr, item_id)].plugin
                     raise PluginError(f"duplicate {attr[:-1].replace('_', ' ')} id {item_id!r}",
                                       plugin=impl.plugin_name, hint=f"also registered by plugin {other}")
                 table[item_id] = item
                 registry.origins[(attr, item_id)] = Origin(impl.plugin_name, dists.get(impl.plugin_name, "?"))
+    for attr, what in (("ruleset_kinds", "ruleset kind"), ("importers", "footprint importer")):
+        registry.suffix_owners[attr] = _suffix_owners(registry, attr, what)
     return registry
+
+
+def _malformed(items: object, interface: type) -> str | None:
+    """What is wrong with a hook's result (None when it is a list of ``interface`` objects, or None): each item
+    needs a non-empty string ``id`` (``name`` for commands), string ``suffixes`` where it has them, and every
+    abstract method of ``interface``."""
+    if items is None:
+        return None
+    if not isinstance(items, (list, tuple)):
+        return f"{type(items).__name__}, not a list"
+    key = "name" if interface in NAMED else "id"
+    for k, item in enumerate(items):
+        ident = getattr(item, key, None)
+        missing = sorted(m for m in interface.__abstractmethods__ if not callable(getattr(item, m, None)))
+        suffixes = getattr(item, "suffixes", ())
+        if not isinstance(ident, str) or not ident:
+            return f"item {k} ({type(item).__name__}) without a string {key!r}"
+        if missing:
+            return f"{ident!r} without method(s) {', '.join(missing)} of a {interface.__name__}"
+        if not isinstance(suffixes, (list, tuple)) or not all(isinstance(x, str) and x for x in suffixes):
+            return f"{ident!r} whose suffixes are not a list of strings"
+    return None
+
+
+def _suffix_owners(registry: Registry, attr: str, what: str) -> dict[str, str]:
+    """Which ``attr`` item reads each file suffix. A suffix claimed twice stays with the shipped plugins' item
+    (distribution ``citygen``), else with the first by plugin name and id; the other claim is a warning naming
+    both, and its item is still used where a scene names it (``kind = ...`` / ``format = ...``)."""
+    table = getattr(registry, attr)
+
+    def rank(item_id: str) -> tuple[bool, str, str]:
+        origin = registry.origins[(attr, item_id)]
+        return origin.distribution.split(" ")[0] != SHIPPED, origin.plugin, item_id
+
+    owners: dict[str, str] = {}
+    for item_id in sorted(table, key=rank):
+        for suffix in table[item_id].suffixes:
+            suffix = suffix.lower()
+            if suffix not in owners:
+                owners[suffix] = item_id
+                continue
+            first = owners[suffix]
+            option = "kind" if attr == "ruleset_kinds" else "format"
+            registry.warnings.append(
+                f"{what} {item_id!r} (plugin {registry.origins[(attr, item_id)].plugin}) also claims {suffix}, "
+                f"which stays with {what} {first!r} (plugin {registry.origins[(attr, first)].plugin}); "
+                f"set {option} = \"{item_id}\" in a scene to use it")
+    return owners
 
 
 _DEFAULT: Registry | None = None

@@ -10,6 +10,10 @@ import hashlib
 import numpy as np
 
 
+#: The largest seed (scene ``seed``, ``--seed``): the stage stores it as ``citygen:seed``, a 32-bit int.
+MAX_SEED = 2**31 - 1
+
+
 def seed_words(*ids: str | int) -> list[int]:
     """Stable 32-bit entropy words for a sequence of ids."""
     digest = hashlib.blake2b("\x1f".join(map(str, ids)).encode("utf-8"), digest_size=16).digest()

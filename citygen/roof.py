@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import re
 import threading
+import time
 import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -55,6 +56,34 @@ def roof_notes() -> Iterator[list[str]]:
         yield items
     finally:
         _NOTES.items = outer
+
+
+#: Seconds one roof may take; past it the pipeline builds that roof flat, with a warning.
+ROOF_BUDGET = 5.0
+
+
+class RoofBudgetExceeded(Exception):
+    """A roof builder ran past the time budget of :func:`roof_budget` (raised by :func:`check_budget`)."""
+
+
+@contextmanager
+def roof_budget(seconds: float) -> Iterator[None]:
+    """Builders running in this block (this thread) get ``seconds`` of wall time: :func:`check_budget` raises
+    :class:`RoofBudgetExceeded` after that."""
+    outer = getattr(_NOTES, "deadline", None)
+    _NOTES.deadline = (time.perf_counter() + seconds, seconds)
+    try:
+        yield
+    finally:
+        _NOTES.deadline = outer
+
+
+def check_budget() -> None:
+    """Raise :class:`RoofBudgetExceeded` when the enclosing :func:`roof_budget` has run out. Builders call it in
+    their long loops (the straight skeleton: once per wavefront event); outside a budget it does nothing."""
+    deadline = getattr(_NOTES, "deadline", None)
+    if deadline is not None and time.perf_counter() > deadline[0]:
+        raise RoofBudgetExceeded(f"over the roof time budget of {deadline[1]:g} s")
 
 
 def note(message: str) -> None:

@@ -16,8 +16,10 @@ from pathlib import Path
 from typing import Any
 
 from citygen.errors import SceneError, SourceLocation, read_user_text
+from citygen.nesting import MAX_NESTING, depth_of
 from citygen.plausible import PlausibilityRules
 from citygen.request import MIN_STOREY
+from citygen.rng import MAX_SEED
 from citygen.usd.materials import Material, parse_materials, read_materials, sidecar
 
 UP_AXES = ("Z", "Y")
@@ -122,6 +124,16 @@ def _line_of(text: str, key: str, start: int = 0) -> int | None:
     return text.count("\n", 0, match.start()) + 1 if match else None
 
 
+def key_line(scene: Scene, table: str, key: str) -> int | None:
+    """The line of ``key`` in ``[table]`` of the scene's file (None when it cannot be found)."""
+    try:
+        text = scene.path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    header = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", text, re.M)
+    return _line_of(text, key, header.end()) if header else None
+
+
 class _Reader:
     """Checks one table of the scene, reporting problems with file:line."""
 
@@ -129,9 +141,13 @@ class _Reader:
                  kinds: Mapping[str, Any] | None = None) -> None:
         self.path, self.text, self.roof_shapes, self.kinds = path, text, roof_shapes, kinds
 
-    def fail(self, message: str, key: str | None = None, hint: str | None = None, line: int | None = None) -> None:
+    def fail(self, message: str, key: str | None = None, hint: str | None = None, line: int | None = None,
+             table: str | None = None) -> None:
+        """Raise a SceneError at ``line``, else at ``key``'s line (within ``[table]`` when given: the same key may
+        be in several tables)."""
         if line is None and key is not None:
-            line = _line_of(self.text, key)
+            header = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", self.text, re.M) if table else None
+            line = _line_of(self.text, key, header.end() if header else 0) or _line_of(self.text, key)
         raise SceneError(message, where=SourceLocation(str(self.path), line), hint=hint)
 
     def table(self, data: Mapping[str, Any], name: str, allowed: set[str]) -> Mapping[str, Any]:
@@ -140,16 +156,18 @@ class _Reader:
             self.fail(f"[{name}] must be a table", name)
         unknown = sorted(set(value) - allowed)
         if unknown:
-            self.fail(f"unknown key {unknown[0]!r} in [{name}]", unknown[0], hint=f"valid keys: {', '.join(sorted(allowed))}")
+            self.fail(f"unknown key {unknown[0]!r} in [{name}]", unknown[0], hint=f"valid keys: {', '.join(sorted(allowed))}",
+                      table=name)
         return value
 
-    def number(self, table: Mapping[str, Any], key: str, default: float, least: float = 0.0) -> float:
+    def number(self, table: Mapping[str, Any], key: str, default: float, least: float = 0.0,
+               section: str | None = None) -> float:
         """A finite number above 0 (at least ``least`` when that is more)."""
         value = table.get(key, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
                 or value <= 0 or value < least:
             what = f"a finite number of at least {least:g}" if least > 0 else "a finite positive number"
-            self.fail(f"{key} must be {what}, got {value!r}", key)
+            self.fail(f"{key} must be {what}, got {value!r}", key, table=section)
         return float(value)
 
     def roof_shape(self, value: Any, line: int | None) -> str:
@@ -182,9 +200,9 @@ class _Reader:
             self.fail(f"roof_pitch must be a number of degrees between 0 and 90, got {value!r}", line=line)
         return float(value)
 
-    def path_of(self, value: Any, key: str) -> Path:
+    def path_of(self, value: Any, key: str, section: str | None = None) -> Path:
         if not isinstance(value, str) or not value:
-            self.fail(f"{key} must be a path string, got {value!r}", key)
+            self.fail(f"{key} must be a path string, got {value!r}", key, table=section)
         return (self.path.parent / value).resolve()
 
 
@@ -198,11 +216,20 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     text = read_user_text(path, SceneError, "scene")
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise SceneError(f"arrays or tables nested more than {MAX_NESTING} levels deep", where=str(path),
+                         hint="a scene needs a few levels at most") from None
     except tomllib.TOMLDecodeError as exc:
         match = re.search(r"line (\d+), column (\d+)", str(exc))
         loc = SourceLocation(str(path), int(match[1]), int(match[2])) if match else SourceLocation(str(path))
         raise SceneError(f"not valid TOML: {str(exc).split(' (at')[0]}", where=loc) from exc
     r = _Reader(path, text, roof_shapes, kinds)
+    for key, value in data.items():
+        if depth_of(value) > MAX_NESTING:
+            header = re.search(rf"^[ \t]*\[+[ \t]*\"?{re.escape(key)}\b", text, re.M)
+            r.fail(f"[{key}] nests arrays or tables more than {MAX_NESTING} levels deep",
+                   hint="a scene needs a few levels at most",
+                   line=text.count("\n", 0, header.start()) + 1 if header else _line_of(text, key))
     unknown = sorted(set(data) - {"scene", "footprints", "defaults", "assign", "output", "materials",
                                   "plausibility"})
     if unknown:
@@ -211,14 +238,15 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
                line=_line_of(text, unknown[0]) or 1)
     meta = r.table(data, "scene", {"name", "seed", "description"})
     seed = meta.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        r.fail(f"seed must be a non-negative integer, got {seed!r}", "seed")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        r.fail(f"seed must be an integer from 0 to {MAX_SEED} (2**31 - 1), got {seed!r}", "seed", table="scene")
     fp = data.get("footprints")
     if not isinstance(fp, Mapping) or "path" not in fp:
         r.fail("[footprints] with a path is required", hint='e.g. [footprints] path = "data/city.geojson"', line=1)
     fp_options = {k: v for k, v in fp.items() if k != "path"}
     d = r.table(data, "defaults", {f for f in Defaults.__dataclass_fields__})
-    numbers = {k: r.number(d, k, getattr(Defaults, k), least=MIN_STOREY if k.endswith("floor_height") else 0.0)
+    numbers = {k: r.number(d, k, getattr(Defaults, k), least=MIN_STOREY if k.endswith("floor_height") else 0.0,
+                           section="defaults")
                for k in Defaults.__dataclass_fields__ if k != "roof_shape"}
     at = max(text.find("[defaults]"), 0)
     shape = r.roof_shape(d["roof_shape"], _line_of(text, "roof_shape", at)) if "roof_shape" in d else "flat"
@@ -228,29 +256,30 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
                                      "ground", "keep_tags", "masses"})
     up_axis = str(out.get("up_axis", "Z")).upper()
     if up_axis not in UP_AXES:
-        r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis")
+        r.fail(f"up_axis must be one of {', '.join(UP_AXES)}, got {out.get('up_axis')!r}", "up_axis", table="output")
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
-        r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing")
+        r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing", table="output")
     flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "ground", "masses")}
     for key, value in flags.items():
         if not isinstance(value, bool):
-            r.fail(f"{key} must be true or false, got {value!r}", key)
+            r.fail(f"{key} must be true or false, got {value!r}", key, table="output")
     lod = out.get("lod", "variants")
     lod = {True: "variants", False: "none"}.get(lod, lod) if isinstance(lod, bool) else lod
     if lod not in LOD_MODES:
-        r.fail(f"lod must be one of {', '.join(LOD_MODES)}, got {out.get('lod')!r}", "lod",
+        r.fail(f"lod must be one of {', '.join(LOD_MODES)}, got {out.get('lod')!r}", "lod", table="output",
                hint="variants: a variant set LOD (LOD0 facades, LOD1 mass); purpose: a render/proxy pair")
     keep = out.get("keep_tags", [])
     if not isinstance(keep, list) or not all(isinstance(k, str) and k for k in keep):
-        r.fail(f"keep_tags must be a list of tag names or patterns, got {keep!r}", "keep_tags",
+        r.fail(f"keep_tags must be a list of tag names or patterns, got {keep!r}", "keep_tags", table="output",
                hint='e.g. keep_tags = ["name", "addr:*"]')
-    output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path"), up_axis=up_axis,
-                    tile_size=r.number(out, "tile_size", 250.0), instancing=instancing, lod=lod,
+    output = Output(path=r.path_of(out.get("path", f"{path.stem}.usdc"), "path", "output"), up_axis=up_axis,
+                    tile_size=r.number(out, "tile_size", 250.0, section="output"), instancing=instancing, lod=lod,
                     keep_tags=tuple(keep), **flags)
     assignments = _assignments(r, data.get("assign", []))
     return Scene(path=path.resolve(), name=str(meta.get("name", path.stem)), seed=seed,
-                 footprints=r.path_of(fp["path"], "path"), footprint_options=fp_options, defaults=defaults,
+                 footprints=r.path_of(fp["path"], "path", "footprints"), footprint_options=fp_options,
+                 defaults=defaults,
                  assignments=assignments, output=output, metadata={"description": meta.get("description", "")},
                  materials=_materials(r, data.get("materials", {}), assignments), plausibility=_plausibility(r, data))
 

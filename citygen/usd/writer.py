@@ -17,17 +17,21 @@ Layout of the stage::
 A building is an asset: everything it binds and instances is under it or reached through internal references,
 so a reference to it from another stage brings its looks and prototypes along.
 
-With tile layers, each tile is a stage of its own (``<stem>_tiles/Tile_<i>_<j>.usdc``: ``/World`` with the tile,
-``/Materials`` and the ``/Prototypes`` it uses), written as soon as the tile is complete (memory stays bounded by
-one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root, Usd.Stage.LoadNone)`` opens the city
-with its bounds only. The dask executor writes its tiles with the same code, so every tile layer opens alone.
+With tile layers, each tile is a stage of its own (``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc``: ``/World`` with the
+tile, ``/Materials`` and the ``/Prototypes`` it uses), written as soon as the tile is complete (memory stays bounded
+by one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root, Usd.Stage.LoadNone)`` opens the city
+with its bounds only. The dask executor writes its tiles with the same code, so every tile layer opens alone. The
+digest of its bytes names a tile so a run never overwrites a tile the current root payloads
+(:mod:`citygen.usd.publish`).
 """
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import tempfile
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,6 +48,7 @@ from citygen.usd.author import T, Author, bound_value
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
+from citygen.usd.publish import publish_tile, remove_stale_temporaries, remove_unlisted_tiles, temp_prefix
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
 #: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
@@ -146,11 +151,12 @@ class _Pending:
 class StageWriter:
     """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
 
-    With ``tile_layers`` every tile is written by a :class:`StageWriter` of its own into ``<stem>_tiles/`` (a
-    complete stage, the same a dask worker writes) and payloaded from the root; without, everything goes into the
-    root layer. Nothing at ``path`` changes until :meth:`close` succeeds. ``uvs``: every mesh gets ``primvars:st``
-    (meshes of textured materials always do); ``lod``: ``variants`` (set ``LOD``), ``purpose`` (render/proxy
-    scopes) or ``none``; ``materials``: the scene's and rulesets' material library.
+    With ``tile_layers`` every tile is written by a :class:`StageWriter` of its own into a staging folder (a
+    complete stage, the same a dask worker writes), published into ``<stem>_tiles/`` under its content name and
+    payloaded from the root; without, everything goes into the root layer. Nothing at ``path`` changes until
+    :meth:`close` succeeds, and an old root keeps its tiles until the new root replaces it. ``uvs``: every mesh gets
+    ``primvars:st`` (meshes of textured materials always do); ``lod``: ``variants`` (set ``LOD``), ``purpose``
+    (render/proxy scopes) or ``none``; ``materials``: the scene's and rulesets' material library.
     """
 
     def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
@@ -167,6 +173,8 @@ class StageWriter:
         self.tile_suffix = ".usdc" if suffix == ".usdz" else suffix
         self.tiles_dir = self.path.with_name(f"{self.path.stem}_tiles") if tile_layers else None
         self.staging: Path | None = None
+        self.started = time.time()  # (tiles older than this that the new root does not list are removed)
+        remove_stale_temporaries(self.path.parent)
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
         self.author = Author(self.layer, uvs, self.library, self.path.parent)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
@@ -178,6 +186,7 @@ class StageWriter:
         self.tile_bound: np.ndarray | None = None
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
+        self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
@@ -190,7 +199,7 @@ class StageWriter:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         """On an error, remove the staged tile layers (the files at ``path`` were never touched)."""
-        if exc_type is not None and self.staging is not None and self.staging != self.tiles_dir:
+        if exc_type is not None and self.staging is not None:
             shutil.rmtree(self.staging, ignore_errors=True)
 
     def define(self, names: Iterable[str]) -> None:
@@ -313,12 +322,19 @@ class StageWriter:
         self.tile_bound = None
 
     def staging_folder(self) -> Path:
-        """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes it."""
+        """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes them
+        (named by :func:`~citygen.usd.publish.temp_prefix`, so a later run removes it if this one is killed)."""
         if self.tiles_dir is None:
             raise ExportError("this stage has no tile layers", where=str(self.path), hint="pass tile_layers=True")
         if self.staging is None:
-            self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
-            self.staging = Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
+            try:
+                self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
+                self.staging = Path(tempfile.mkdtemp(prefix=temp_prefix(self.tiles_dir.name),
+                                                     dir=self.tiles_dir.parent))
+                os.chmod(self.staging, 0o777 & ~_umask())  # (shared with dask workers)
+            except OSError as exc:
+                raise ExportError(f"cannot write the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
+                                  hint="check free disk space and permissions") from None
         return self.staging
 
     def add_tile_layer(self, name: str, stats: StageStats, prototypes: Iterable[ProtoKey | ModuleKey]) -> None:
@@ -335,53 +351,59 @@ class StageWriter:
             prim = self.author.prim(self.world, tile, "Xform")
             prim.SetInfo("kind", "group")
             self.author.api(prim, "GeomModelAPI")
-            prim.payloadList.prependedItems.append(
-                Sdf.Payload(f"./{self.tiles_dir.name}/{name}", Sdf.Path("/World").AppendChild(tile)))
             bound = None if stats.extent is None else np.reshape(stats.extent, (2, 3))
             _model_bound(prim, bound)
         self.world_bounds.append(bound)
+        self.sublayers.append((prim, name))  # (payloaded once published under its content name, see close)
         self.author.prims += stats.prims
         for key in ("buildings", "meshes", "instances", "polygons"):
             self.counts[key] += getattr(stats, key)
         self.tile_prototypes.update(prototypes)
 
     def close(self) -> StageStats:
-        """Write the last tile, the tile folder and the root layer; return the stage's figures."""
+        """Write the last tile, publish the tiles under their content names, switch the root to them (one
+        rename), then remove the tiles no root lists any more (:mod:`citygen.usd.publish`); return the figures."""
         self._flush_tile()
         self._author_pending()
         bound = union(self.world_bounds)
         with Sdf.ChangeBlock():
             _model_bound(self.world, bound)
         if self.tiles_dir is not None:
-            self._publish_tiles()
+            names = self._publish_tiles()
+            with Sdf.ChangeBlock():
+                for (prim, _), name in zip(self.sublayers, names):
+                    prim.payloadList.prependedItems.append(
+                        Sdf.Payload(f"./{self.tiles_dir.name}/{name}", Sdf.Path("/World").AppendChild(prim.name)))
             if self.path.suffix.lower() == ".usdz":
-                for tile in self.tiles_dir.iterdir():
-                    os.utime(tile, (PACKED_MTIME, PACKED_MTIME))
+                for name in names:
+                    os.utime(self.tiles_dir / name, (PACKED_MTIME, PACKED_MTIME))
         size = _finish(self.layer, self.path)
         if self.tiles_dir is not None:
             if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
                 shutil.rmtree(self.tiles_dir)
             else:
-                size += sum(f.stat().st_size for f in self.tiles_dir.iterdir())
+                size += sum((self.tiles_dir / name).stat().st_size for name in names)
+                remove_unlisted_tiles(self.tiles_dir, names, self.started)
         extent = None if bound is None else tuple(float(v) for v in bound.reshape(-1))
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
                           prototypes=len(self.prototypes) + len(self.tile_prototypes), polygons=self.counts["polygons"],
                           bytes=size, extent=extent)
 
-    def _publish_tiles(self) -> None:
-        """Move the staged tile folder into place (replacing an old one)."""
+    def _publish_tiles(self) -> list[str]:
+        """Move the staged tiles into the tile folder under their content names (none the current root lists is
+        touched); return those names, in tile order."""
         assert self.tiles_dir is not None
-        staging = self.staging or Path(tempfile.mkdtemp(prefix=f".{self.tiles_dir.name}.", dir=self.tiles_dir.parent))
-        self.staging = staging
-        os.chmod(staging, 0o777 & ~_umask())
-        if self.tiles_dir.exists():
-            old = self.tiles_dir.with_name(f".{self.tiles_dir.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(self.tiles_dir, old)
-            shutil.rmtree(old, ignore_errors=True)
-        os.replace(staging, self.tiles_dir)
-        self.staging = self.tiles_dir
+        try:
+            self.tiles_dir.mkdir(parents=True, exist_ok=True)
+            names = [publish_tile(self.staging / name, self.tiles_dir) for _, name in self.sublayers]
+        except OSError as exc:
+            raise ExportError(f"cannot publish the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
+                              hint="check free disk space and permissions") from None
+        if self.staging is not None:
+            shutil.rmtree(self.staging, ignore_errors=True)
+            self.staging = None
+        return names
 
 
 def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axis: str = "Z",
@@ -497,10 +519,15 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
 
 def _finish(layer: Sdf.Layer, path: Path) -> int:
     """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size. A
-    ``.usdz``'s root layer is named after it (``city.usdz`` holds ``city.usdc``)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    ``.usdz``'s root layer is named after it (``city.usdz`` holds ``city.usdc``). On any failure (an
+    :class:`ExportError`) the file at ``path`` is unchanged and the temporary one removed."""
     suffix = path.suffix.lower()
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=temp_prefix(path.stem), suffix=suffix, dir=path.parent)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -517,6 +544,11 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
             _export(layer, tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a stage is an ordinary file
         os.replace(tmp, path)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
+    except ExportError as exc:  # named by the stage's path, not the temporary file's
+        raise ExportError(exc.message, where=str(path), hint=exc.hint) from None
     finally:
         tmp.unlink(missing_ok=True)
     return path.stat().st_size
@@ -529,8 +561,26 @@ def _umask() -> int:
 
 
 def _export(layer: Sdf.Layer, target: Path) -> None:
-    if not layer.Export(str(target)):
-        raise ExportError("USD export failed", where=str(target), hint="check free disk space and permissions")
+    """``layer.Export`` whose failures (False, a ``Tf.ErrorException`` such as a full disk, an OSError) are one
+    :class:`ExportError` naming the file and USD's first reason."""
+    try:
+        if layer.Export(str(target)):
+            return
+        reason = ""
+    except Tf.ErrorException as exc:
+        reason = _usd_reason(exc)
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+    raise ExportError(f"USD export failed{': ' + reason if reason else ''}", where=str(target),
+                      hint="check free disk space and permissions")
+
+
+def _usd_reason(exc: Tf.ErrorException) -> str:
+    """The commentary of the first error inside a ``Tf.ErrorException`` (its text lists every error, with C++
+    function names and source lines)."""
+    text = "\n".join(str(a) for a in exc.args) or str(exc)
+    match = re.search(r" : '([^\n]*)'", text)
+    return match[1] if match else text.strip().splitlines()[0] if text.strip() else ""
 
 
 def open_stage(path: str | Path) -> Usd.Stage:

@@ -21,18 +21,26 @@ OSM_TYPES = ("node", "way", "relation")
 _HSTORE = re.compile(r'"((?:[^"\\]|\\.)*)"\s*=>\s*"((?:[^"\\]|\\.)*)"')
 
 
-def _file_crs(doc: Mapping[str, Any]) -> str | None:
-    """The name in a (pre-RFC 7946) ``"crs": {"type": "name", "properties": {"name": ...}}`` member."""
+def _file_crs(doc: Mapping[str, Any], where: str = "") -> str | None:
+    """The name in a (pre-RFC 7946) ``"crs": {"type": "name", "properties": {"name": ...}}`` member, or a plain
+    ``"crs": "EPSG:3067"`` string; any other crs member is an error (was: ignored, reading the file as lon/lat)."""
     member = doc.get("crs")
+    if member is None:
+        return None
+    if isinstance(member, str) and member.strip():
+        return member.strip()
     if isinstance(member, Mapping) and isinstance(member.get("properties"), Mapping):
         name = member["properties"].get("name")
-        return name if isinstance(name, str) else None
-    return None
+        if isinstance(name, str) and name.strip():
+            return name
+    raise FootprintError(f"the file's crs member {str(member)[:80]!r} is not understood", where=where,
+                         hint='use "crs": {"type": "name", "properties": {"name": "EPSG:nnnn"}}, or set crs = '
+                              '"EPSG:nnnn" in the scene\'s [footprints] table')
 
 
 def choose_crs(doc: Mapping[str, Any], options: ImportOptions, where: str) -> tuple[CRS, list[str]]:
     """The CRS to read ``doc`` in: the ``crs`` option, else the file's crs member, else lon/lat (RFC 7946)."""
-    declared = _file_crs(doc)
+    declared = _file_crs(doc, where)
     if options.crs is None:
         return parse_crs(declared or DEFAULT_CRS, where), []
     crs = parse_crs(options.crs, where)

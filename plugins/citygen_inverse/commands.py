@@ -4,26 +4,22 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 
+from citygen.cliargs import seed
 from citygen.errors import CitygenError, LayoutError, read_user_text
+from citygen.outpaths import write_text as write_output
 from citygen.registry import Command, Registry, default_registry
 
 
 def write_text(path: str | None, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename (stdout when ``path`` is None or -)."""
+    """Write ``text`` to ``path`` atomically with ordinary permissions (:func:`citygen.outpaths.write_text`;
+    stdout when ``path`` is None or -)."""
     if path in (None, "-"):
         sys.stdout.write(text)
         return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)  # (as ``citygen generate`` does for its stage)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
-    with os.fdopen(fd, "w") as handle:
-        handle.write(text)
-    os.replace(tmp, target)
+    write_output(path, text, "output")
 
 
 def report(exc: Exception) -> int:
@@ -135,7 +131,7 @@ class GrammarCommand(Command):
                               "over the same candidate rules as an integer program (HiGHS), with a lower bound")
         ext.add_argument("--iterations", type=int, default=2000,
                          help="grammars built by is / adp / exact, at least 1 (default 2000; greedy builds one)")
-        ext.add_argument("--seed", type=int, default=0, help="random seed of is / adp / exact (default 0)")
+        ext.add_argument("--seed", type=seed, default=0, help="random seed of is / adp / exact (default 0)")
         ext.add_argument("--time-limit", type=float, default=None,
                          help="seconds after which is / adp stop iterating and exact's integer program stops "
                               "(default: none; exact's program stops after 20 s)")

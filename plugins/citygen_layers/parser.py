@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 from citygen.errors import ParseError, SourceLocation, read_user_text
+from citygen.nesting import Depth
 from citygen_layers.model import (
     Alt, Counter, Layer, Node, Pattern, Rep, Ruleset, Seq, ShapeSpec, SolveOptions, Sym, Symbol,
 )
@@ -22,6 +23,7 @@ class _Lexer:
 
     def __init__(self, text: str, path: str, line: int, offset: int = 0) -> None:
         self.path, self.line = path, line
+        self.depth = Depth()
         self.tokens: list[tuple[str, str, int]] = []
         pos = 0
         while pos < len(text):
@@ -82,7 +84,9 @@ def _power(lexer: _Lexer) -> Node:
     if kind == "ident":
         node: Node = Sym(text, lexer.loc(col))
     elif text == "(":
-        node = parse_pattern(lexer)
+        too_deep = lambda message: ParseError(f"pattern {message}", where=lexer.loc(col))  # noqa: E731
+        with lexer.depth.inside(too_deep):
+            node = parse_pattern(lexer)
         if lexer.take("')'")[1] != ")":
             raise ParseError("expected ')'", where=lexer.loc(col))
     else:

@@ -7,6 +7,7 @@ from pathlib import Path
 from PIL import Image, ImageDraw
 
 from citygen.layout import FacadeLayout
+from citygen.outpaths import write_png
 
 #: RGB per label; other labels are drawn grey.
 COLOURS = {"wall": (214, 200, 178), "window": (92, 146, 196), "door": (120, 72, 40), "balcony": (150, 90, 60),
@@ -42,5 +43,5 @@ def render(layout: FacadeLayout, path: str | Path, scale: float | None = None, c
                         yy = (layout.height - value) * scale
                         draw.line([(0, yy), (size[0], yy)], fill=colour, width=1)
     path = Path(path)
-    image.save(path)
+    write_png(image, path)
     return path

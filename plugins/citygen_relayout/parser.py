@@ -10,6 +10,7 @@ from pathlib import Path
 
 from citygen.errors import LayoutError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout
+from citygen.nesting import Depth
 from citygen_relayout import generators as gen
 from citygen_relayout import inferred
 from citygen_relayout.hierarchy import Segmentation, symbols_from_layout
@@ -73,6 +74,7 @@ class _Builder:
         self.alignments: list[Alignment] = []
         self.samesizes: list[SameSize] = []
         self.segmentation: Segmentation | None = None  # when the segmentation came from a layout JSON
+        self.depth = Depth()
 
     # ---- pass 1: segmentation
     def def_model(self, cur: Cursor) -> None:
@@ -204,10 +206,11 @@ class _Builder:
             return frozenset({END})
         if cur.accept("{"):
             out: set[str] = set()
-            while not cur.accept("}"):
-                if cur.done():
-                    raise cur.error("'}'")
-                out |= self._item(cur, scope)
+            with self.depth.inside(lambda message: ParseError(f"set {message}", where=where)):
+                while not cur.accept("}"):
+                    if cur.done():
+                        raise cur.error("'}'")
+                    out |= self._item(cur, scope)
             return frozenset(out)
         pool = scope if scope is not None else tuple(self.symbols)
         if cur.peek(kind="label"):
@@ -306,8 +309,10 @@ class _Builder:
     def _pattern(self, cur: Cursor, scope: tuple[str, ...], close: str | None) -> gen.Node:
         parts = []
         while not cur.done() and not (close and cur.peek(close)):
+            where = cur.where()
             if cur.accept("("):
-                node = self._pattern(cur, scope, ")")
+                with self.depth.inside(lambda message: ParseError(f"group {message}", where=where)):
+                    node = self._pattern(cur, scope, ")")
             else:
                 node = gen.Node("item", item=self._item(cur, scope))
             for op in "?*+":

@@ -6,7 +6,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from citygen.cliargs import add_size_arguments, seconds, whole
+from citygen.cliargs import add_size_arguments, seconds, seed, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
@@ -62,7 +62,7 @@ class RelayoutCommand(Command):
         parser.add_argument("--symbols", action="store_true",
                             help="list the model's symbols (its segmentation) with labels and sizes, then exit")
         parser.add_argument("--count", type=whole(1), default=1, help="variations (default 1)")
-        parser.add_argument("--seed", type=int, default=0)
+        parser.add_argument("--seed", type=seed, default=0, help="random seed (0 to 2**31 - 1; default 0)")
         parser.add_argument("--budget", type=seconds, default=10.0,
                             help="CPU-time safety limit per variation (s, default 10)")
         add_output_arguments(parser)

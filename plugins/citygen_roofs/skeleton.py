@@ -25,12 +25,23 @@ edge) or raises :class:`SkeletonError` for input it cannot handle; callers fall 
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 from shapely.geometry import Polygon
 from shapely.geometry.polygon import orient
+
+from citygen.roof import check_budget
+
+
+#: Up to this many (reflex vertex, edge) pairs the next split event is found among all pairs; above, among the
+#: pairs close enough to meet before a first guess of the next event (:meth:`_Wavefront._near_pairs`).
+DENSE_PAIRS = 40_000
+#: The nearest edges of each reflex vertex that make that first guess.
+NEAR_EDGES = 8
 
 
 class SkeletonError(ValueError):
@@ -86,6 +97,7 @@ class _Wavefront:
         self.W = weights
         self.nodes: list[tuple[float, float]] = [tuple(p) for p in starts]
         self.times: list[float] = [0.0] * len(starts)
+        self.cells: dict[tuple[int, int], list[int]] = {}  # nodes after time 0 by cell of :meth:`node`'s tolerance
         self.arcs: list[set[tuple[int, int]]] = [set() for _ in starts]
         self.flats: list[tuple[int, ...]] = []
         self.edge_nodes = []
@@ -133,12 +145,16 @@ class _Wavefront:
         """The node at ``p`` and time ``t`` (reusing one within tolerance: simultaneous events meet in one node; a
         standing vertex stays at one place over time, in distinct nodes)."""
         tol = 1e-7 * self.scale
-        for k in range(len(self.nodes) - 1, -1, -1):
+        cx, cy = math.floor(p[0] / tol), math.floor(p[1] / tol)
+        near = [k for dx in (-1, 0, 1) for dy in (-1, 0, 1) for k in self.cells.get((cx + dx, cy + dy), ())]
+        for k in sorted(near, reverse=True):  # (the latest such node, as a scan from the end finds it)
             q = self.nodes[k]
-            if abs(q[0] - p[0]) < tol and abs(q[1] - p[1]) < tol and self.times[k] > 0 and abs(self.times[k] - t) < tol:
+            if abs(q[0] - p[0]) < tol and abs(q[1] - p[1]) < tol and abs(self.times[k] - t) < tol:
                 return k
         self.nodes.append((float(p[0]), float(p[1])))
         self.times.append(float(t))
+        if t > 0:  # (nodes of the outline are never reused)
+            self.cells.setdefault((cx, cy), []).append(len(self.nodes) - 1)
         return len(self.nodes) - 1
 
     def end(self, v: _Vertex, node: int) -> None:
@@ -180,16 +196,28 @@ class _Wavefront:
         reflex = np.flatnonzero(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < -1e-9)
         if not len(reflex):
             return best
-        n_f, c_f = self.N[e_out], self.C[e_out]  # the edge from vertex j to nxt[j]
-        dist = pos[reflex] @ n_f.T - c_f - self.W[e_out] * t
-        rate = vel[reflex] @ n_f.T - self.W[e_out]
-        ok = (rate < -1e-12) & (dist >= -self.eps)
-        ok &= (np.arange(len(verts))[None, :] != reflex[:, None]) & (nxt[None, :] != reflex[:, None])
-        rr, jj = np.nonzero(ok)  # candidate (reflex vertex, edge) pairs: does the vertex land inside the edge?
-        if not len(rr):
-            return best
-        dt = np.maximum(dist[rr, jj], 0.0) / -rate[rr, jj]
-        v = reflex[rr]
+        context = (pos, vel, nxt, e_out, t, where)
+        if len(reflex) * len(verts) <= DENSE_PAIRS:
+            split = self._split_event(np.repeat(reflex, len(verts)), np.tile(np.arange(len(verts)), len(reflex)),
+                                      *context)
+        else:
+            split = self._split_event(*self._near_pairs(reflex, best, *context), *context)
+        if split is not None and (best is None or split[0] < best[0]):
+            best = split
+        return best
+
+    def _split_event(self, pv: np.ndarray, pj: np.ndarray, pos: np.ndarray, vel: np.ndarray, nxt: np.ndarray,
+                     e_out: np.ndarray, t: float, where: list) -> tuple[float, int, tuple] | None:
+        """The earliest split event among the pairs (reflex vertex ``pv``, edge from vertex ``pj`` to its next); of
+        simultaneous ones, that of the lowest vertex, then edge (the first of a dense scan)."""
+        n_f, c_f, w_f = self.N[e_out[pj]], self.C[e_out[pj]], self.W[e_out[pj]]
+        dist = np.einsum("ij,ij->i", pos[pv], n_f) - c_f - w_f * t
+        rate = np.einsum("ij,ij->i", vel[pv], n_f) - w_f
+        ok = np.flatnonzero((rate < -1e-12) & (dist >= -self.eps) & (pj != pv) & (nxt[pj] != pv))
+        if not len(ok):  # candidate (reflex vertex, edge) pairs: does the vertex land inside the edge?
+            return None
+        dt = np.maximum(dist[ok], 0.0) / -rate[ok]
+        v, jj = pv[ok], pj[ok]
         f = self.D[e_out[jj]]
         px = pos[jj] + dt[:, None] * vel[jj]
         along = np.einsum("ij,ij->i", pos[v] + dt[:, None] * vel[v] - px, f)
@@ -202,12 +230,39 @@ class _Wavefront:
             inside &= ~(now & (along <= self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[jj], f) < -1e-12))
             inside &= ~(now & (along >= span - self.eps) & (np.einsum("ij,ij->i", vel[v] - vel[nxt[jj]], f) > 1e-12))
         inside = np.flatnonzero(inside)
-        if len(inside):
-            k = inside[np.argmin(dt[inside])]
-            te = t + float(dt[k])
-            if best is None or te < best[0]:
-                best = (te, 1, (*where[v[k]], *where[jj[k]]))
-        return best
+        if not len(inside):
+            return None
+        first = inside[dt[inside] == dt[inside].min()]  # ties: the first pair of a dense scan
+        k = first[np.lexsort((jj[first], v[first]))[0]]
+        return t + float(dt[k]), 1, (*where[v[k]], *where[jj[k]])
+
+    def _near_pairs(self, reflex: np.ndarray, edge: tuple[float, int, tuple] | None, pos: np.ndarray,
+                    vel: np.ndarray, nxt: np.ndarray, e_out: np.ndarray, t: float, where: list
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """The (reflex vertex, edge) pairs that can meet before the next event, for a big wavefront: a first
+        guess of that event (the earlier of the next edge event and the split events of each reflex vertex with
+        its ``NEAR_EDGES`` nearest edges) bounds how far anything moves before it (``horizon``); a vertex can
+        reach an edge by then only if its distance to the edge's midpoint is at most ``horizon`` times its speed
+        plus ``horizon`` times the faster end's speed plus half the edge (k-d tree on the midpoints)."""
+        mid = (pos + pos[nxt]) / 2
+        tree = cKDTree(mid)
+        k = min(NEAR_EDGES, len(pos))
+        _, near = tree.query(pos[reflex], k=k)
+        guess = self._split_event(np.repeat(reflex, k), np.asarray(near).ravel(), pos, vel, nxt, e_out, t, where)
+        times = [e[0] for e in (edge, guess) if e is not None]
+        if not times:  # nothing to bound the search with: every pair
+            return np.repeat(reflex, len(pos)), np.tile(np.arange(len(pos)), len(reflex))
+        horizon = min(times) - t
+        speed = np.hypot(vel[:, 0], vel[:, 1])
+        reach = horizon * np.maximum(speed, speed[nxt]) + np.hypot(*(pos[nxt] - pos).T) / 2 + 4 * self.eps
+        cut = min(float(reach.max()), 4 * float(np.median(reach)))  # edges reaching further: every reflex vertex
+        far = np.flatnonzero(reach > cut)
+        found = tree.query_ball_point(pos[reflex], horizon * speed[reflex] + cut)
+        counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+        pv = np.concatenate([np.repeat(reflex, len(far)), np.repeat(reflex, counts)]).astype(np.int64)
+        pj = np.concatenate([np.tile(far, len(reflex)),
+                             np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))])
+        return pv, pj  # (a pair may come twice: harmless)
 
     def edge_event(self, t: float, r: int, i: int) -> None:
         ring = self.rings[r]
@@ -293,9 +348,10 @@ class _Wavefront:
         changed = True
         while changed:
             changed = False
+            roomy = self.roomy(t)
             for r, ring in enumerate(self.rings):
                 plateau = len(ring) > 2 and self.stopped(r, t)
-                if len(ring) <= 2 or plateau or self.collapsed(ring, t):
+                if len(ring) <= 2 or plateau or (not roomy[r] and self.collapsed(ring, t)):
                     nodes = self.finish(ring, t, snap=not plateau)
                     flat = [n for k, n in enumerate(nodes) if n != nodes[k - 1]]
                     inner = self.enclosed(r, t) if plateau else []
@@ -328,6 +384,22 @@ class _Wavefront:
         """The rings inside ring ``r``."""
         outline = self.positions(self.rings[r], t)
         return [s for s, other in enumerate(self.rings) if s != r and _contains(outline, other[0].at(t))]
+
+    def roomy(self, t: float) -> np.ndarray:
+        """Per ring, whether its area at ``t`` is clearly (twice) above what :meth:`collapsed` calls none: one
+        vectorised shoelace over every ring, so only the few small rings get the exact test."""
+        sizes = np.array([len(ring) for ring in self.rings])
+        if not len(sizes) or sizes.min() == 0:
+            return np.zeros(len(sizes), dtype=bool)
+        verts = [v for ring in self.rings for v in ring]
+        p0, t0 = np.array([v.p0 for v in verts]), np.array([v.t0 for v in verts])
+        pos = p0 + (t - t0)[:, None] * np.array([v.vel for v in verts])
+        first = np.cumsum(sizes) - sizes
+        start = np.repeat(first, sizes)
+        nxt = start + (np.arange(len(verts)) - start + 1) % np.repeat(sizes, sizes)
+        rel = pos - pos[start]
+        cross = rel[:, 0] * rel[nxt, 1] - rel[nxt, 0] * rel[:, 1]
+        return np.abs(0.5 * np.add.reduceat(cross, first)) >= 2e-9 * self.scale ** 2
 
     def collapsed(self, ring: list[_Vertex], t: float) -> bool:
         """No area left and thin: a strip collapsing along its length. A ring small all round (area not tiny
@@ -577,6 +649,7 @@ def straight_skeleton(polygon: Polygon, max_events: int | None = None,
     for _ in range(limit):
         if not wf.rings:
             break
+        check_budget()
         event = wf.next_event(t)
         if event is None:
             raise SkeletonError(f"wavefront stuck at time {t:.3f} with {sum(map(len, wf.rings))} vertices")

@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from citygen.cliargs import add_size_arguments, whole
+from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
 from citygen.layout import FacadeLayout
@@ -61,7 +61,7 @@ class EditCommand(Command):
         parser.add_argument("ruleset", type=Path, help="a .safe ruleset file")
         add_size_arguments(parser, floor_height=3.0)
         parser.add_argument("--count", type=whole(1), default=4, help="K, the number of variations (default 4)")
-        parser.add_argument("--seed", type=int, default=0)
+        parser.add_argument("--seed", type=seed, default=0, help="random seed (0 to 2**31 - 1; default 0)")
         parser.add_argument("--no-entrance", action="store_true", help="the face carries no door")
         add_output_arguments(parser)
 

@@ -65,6 +65,7 @@ class Binary:
     op: str
     left: Expr
     right: Expr
+    loc: SourceLocation | None = field(default=None, compare=False, repr=False)  # of the operator
 
 
 Expr = Union[Const, Var, Attr, Unary, Binary]

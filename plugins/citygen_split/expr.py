@@ -37,7 +37,8 @@ def evaluate(expr: Expr, env: Mapping[str, Any], attributes: Mapping[str, Any], 
         if expr.op in _ARITH:
             a, b = _number(left, rule), _number(right, rule)
             if expr.op == "/" and b == 0:
-                raise RulesetError(f"division by zero in a condition of rule {rule}", plugin="split")
+                raise RulesetError(f"division by zero in a condition of rule {rule}", where=expr.loc, plugin="split",
+                                   hint="guard the division, e.g. 'face_width > 0 and 1 / face_width < 0.5'")
             return _ARITH[expr.op](a, b)
         return _compare(expr.op, left, right)
     raise TypeError(f"not an expression: {expr!r}")

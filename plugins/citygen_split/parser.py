@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from citygen.errors import ParseError, SourceLocation, read_user_text
+from citygen.nesting import Depth
 from citygen_split.ast import (
     Attr, Binary, Body, Case, Choice, Const, Expr, Floors, FloorItem, Grammar, Grid, Item, Rename, Repeat,
     RepeatABA, Rule, SimpleBody, Size, Split, SymSplit, Terminal, Unary, Var, successors,
@@ -38,6 +39,7 @@ class _Parser:
         self.tokens = tokenize(text, source)
         self.pos = 0
         self.grid_uses: list[tuple[str, SourceLocation]] = []
+        self.depth = Depth()
 
     # ---- token helpers --------------------------------------------------------------------------------------
     @property
@@ -336,8 +338,10 @@ class _Parser:
         return left
 
     def neg(self) -> Expr:
-        if self.accept("NAME", "not"):
-            return Unary("not", self.neg())
+        if self.at("NAME", "not"):
+            with self.depth.inside(self._too_deep()):
+                self.pos += 1
+                return Unary("not", self.neg())
         return self.compare()
 
     def compare(self) -> Expr:
@@ -361,15 +365,22 @@ class _Parser:
     def product(self) -> Expr:
         left = self.unary()
         while self.tok.kind == "OP" and self.tok.text in ("*", "/"):
-            op = self.tok.text
+            op, where = self.tok.text, self.loc()
             self.pos += 1
-            left = Binary(op, left, self.unary())
+            left = Binary(op, left, self.unary(), loc=where)
         return left
 
     def unary(self) -> Expr:
-        if self.accept("OP", "-"):
-            return Unary("-", self.unary())
+        if self.at("OP", "-"):
+            with self.depth.inside(self._too_deep()):
+                self.pos += 1
+                return Unary("-", self.unary())
         return self.atom()
+
+    def _too_deep(self):
+        """The error of an expression nested too deeply, at the current token."""
+        tok = self.tok
+        return lambda message: self.fail(f"expression {message}", tok, hint="simplify the condition")
 
     def atom(self) -> Expr:
         tok = self.tok
@@ -379,10 +390,12 @@ class _Parser:
         if tok.kind == "STR":
             self.pos += 1
             return Const(tok.text)
-        if self.accept("OP", "("):
-            inner = self.expr()
-            self.op(")")
-            return inner
+        if self.at("OP", "("):
+            with self.depth.inside(self._too_deep()):
+                self.pos += 1
+                inner = self.expr()
+                self.op(")")
+                return inner
         if tok.kind == "NAME":
             self.pos += 1
             if tok.text in ("true", "false"):

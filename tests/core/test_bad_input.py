@@ -88,3 +88,25 @@ def test_mutated_shipped_scenes_raise_only_citygen_errors(scratch, path, seed):
         load_scene(target)
     except CitygenError:
         pass
+
+
+@pytest.mark.parametrize(("nesting", "message"), [
+    (40, r"scene.toml:1: \[footprints\] nests arrays or tables more than 32 levels deep"),
+    (5000, r"scene.toml: arrays or tables nested more than 32 levels deep")])
+def test_deeply_nested_scene_values_are_a_scene_error(tmp_path, nesting, message):
+    """Was: RecursionError from tomllib (about 1000 levels), or from code walking the parsed values."""
+    (tmp_path / "scene.toml").write_text(f'[footprints]\npath = "a.geojson"\nx = {"[" * nesting}{"]" * nesting}\n')
+    with pytest.raises(SceneError, match=message):
+        load_scene(tmp_path / "scene.toml")
+
+
+@pytest.mark.parametrize(("text", "line"), [
+    ('[footprints]\npath = "a.geojson"\n[output]\npath = 3\n', 4),
+    ('[footprints]\npath = "a.geojson"\nfloor_height = 3\n[defaults]\nfloor_height = -1\n', 5),
+    ('[footprints]\npath = "a.geojson"\nuvs = 1\n[output]\nuvs = 2\n', 5)])
+def test_an_error_about_a_key_in_two_tables_names_the_right_line(tmp_path, text, line):
+    """Was: the first line with the key anywhere in the file (here in [footprints])."""
+    (tmp_path / "scene.toml").write_text(text + '[[assign]]\nruleset = "x.grammar"\n')
+    with pytest.raises(SceneError) as info:
+        load_scene(tmp_path / "scene.toml")
+    assert str(info.value).startswith(f"{tmp_path / 'scene.toml'}:{line}: ")

@@ -66,8 +66,32 @@ def test_preview_requests_refuse_non_finite_sizes(kwargs):
     (["relayout", str(RULESETS / "townhouse.relayout"), "--size", "12", "9", "--budget", "-1"], "--budget"),
     (["generate", "scene.toml", "--jobs", "-1"], "--jobs"),
     (["generate", "scene.toml", "--seed", "-5"], "--seed"),
+    (["generate", "scene.toml", "--seed", str(2**31)], "--seed"),
+    (["facade", str(RULESETS / "house.grammar"), "--size", "12", "9", "--seed", "-1"], "--seed"),
+    (["relayout", str(RULESETS / "townhouse.relayout"), "--size", "12", "9", "--seed", str(2**40)], "--seed"),
+    (["edit", str(RULESETS / "cmp_b0035.safe"), "--size", "12", "9", "--seed", "-1"], "--seed"),
+    (["grammar", "extract", "layout.json", "--seed", "-1"], "--seed"),
 ])
 def test_counts_budgets_jobs_and_seeds_out_of_range_are_refused(capsys, argv, option):
     """Regressions: ``--count 0`` silently made one variation, ``--budget nan`` / ``-1`` and ``--jobs -1`` were
     taken as given, and ``generate --seed -5`` overrode a scene seed that the scene file may not set below 0."""
     _refused(capsys, argv, option)
+
+
+def test_seeds_from_2_to_the_31_are_refused_up_front(tmp_path):
+    """Was: a seed >= 2**31 passed the checks and crashed writing ``citygen:seed`` (a 32-bit int) after the whole
+    run; ``facade --seed -1`` was accepted while ``generate`` refused it. The largest seed works end to end."""
+    from citygen.errors import CitygenError, SceneError
+    from citygen.pipeline import generate_city
+    from citygen.scene import load_scene
+    from tests.core.cli_scene import write_scene
+    scene_path = write_scene(tmp_path, buildings=1)
+    scene = load_scene(scene_path)
+    with pytest.raises(CitygenError, match=r"seed must be an integer from 0 to 2147483647"):
+        generate_city(scene, seed=2**31)
+    scene_path.write_text(scene_path.read_text().replace("seed = 1", f"seed = {2**31}"))
+    with pytest.raises(SceneError, match=r"city.toml:2: seed must be an integer from 0 to 2147483647"):
+        load_scene(scene_path)
+    assert not (tmp_path / "out").exists()
+    report = generate_city(scene, seed=2**31 - 1)
+    assert report.written == 1

@@ -293,3 +293,19 @@ def test_helsinki_parts_standing_above_the_ground_are_lifted(helsinki):
     assert len(lifted) == 11
     assert lifted["way/396370569"] == 16.0 and lifted["relation/1319473"] == 21.0
     assert all(fp.base == fp.lift for fp in helsinki.footprints if fp.id in lifted)  # ground elevation 0 in GeoJSON
+
+
+def test_a_crs_member_given_as_a_plain_string_is_read(tmp_path):
+    """Was: ``"crs": "EPSG:3067"`` was ignored silently and the metres refused as lon/lat out of range."""
+    doc = _collection(_square())
+    doc["crs"] = "EPSG:3067"
+    result = read_footprints(write_json(tmp_path / "tm35.geojson", doc), {})
+    assert result.georef.crs == "EPSG:3067" and len(result.footprints) == 1
+
+
+@pytest.mark.parametrize("member", [3067, ["EPSG:3067"], {"type": "link", "properties": {"href": "x"}}, ""])
+def test_a_crs_member_not_understood_is_an_error(tmp_path, member):
+    doc = _collection(_square())
+    doc["crs"] = member
+    with pytest.raises(FootprintError, match="crs member .* is not understood"):
+        read_footprints(write_json(tmp_path / "odd.geojson", doc), {})

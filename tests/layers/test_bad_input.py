@@ -26,3 +26,11 @@ def test_layer_stack_that_is_not_utf8_is_a_parse_error(tmp_path):
     (tmp_path / "s.layers").write_bytes(HEAD.encode() + b"# caf\xe9\n")  # was: UnicodeDecodeError
     with pytest.raises(ParseError, match=r"s.layers: ruleset is not UTF-8 text \(byte 0xe9 at offset"):
         load(tmp_path / "s.layers")
+
+
+def test_patterns_nested_past_the_bound_are_a_parse_error():
+    """Was: RecursionError at 400 nested groups; 32 levels is the bound."""
+    parse(HEAD + "pattern P = " + "(" * 31 + "A B" + ")" * 31 + "\nlayer l x=P y=P\n")
+    with pytest.raises(ParseError, match="pattern nested more than 32 levels deep") as info:
+        parse(HEAD + "pattern P = " + "(" * 400 + "A B" + ")" * 400 + "\n")
+    assert str(info.value.where) == "<string>:4:45"  # the 33rd "("

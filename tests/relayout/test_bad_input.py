@@ -19,3 +19,20 @@ def test_layout_path_with_a_nul_byte_is_a_parse_error(tmp_path):
     with pytest.raises(ParseError) as info:
         load_model(tmp_path / "m.relayout")
     assert str(info.value.where) == f"{tmp_path / 'm.relayout'}:2:8" and "cannot read layout" in str(info.value)
+
+
+def test_groups_and_sets_nested_past_the_bound_are_a_parse_error(tmp_path):
+    """Was: RecursionError at 2000 nested groups; 32 levels is the bound."""
+    from pathlib import Path
+    model = (Path(__file__).resolve().parents[2] / "rulesets" / "townhouse.relayout").read_text()
+    for line, deep, where in [("repeat Upper : Wall (Bay Wall)+",
+                               "repeat Upper : Wall " + "(" * 2000 + "Bay Wall" + ")" * 2000 + "+", "group"),
+                              ("repeat Ground : Pier ({Shop Entry} Pier)+",
+                               "repeat Ground : Pier (" + "{" * 2000 + "Shop Entry" + "}" * 2000 + " Pier)+", "set")]:
+        assert line in model
+        (tmp_path / "deep.relayout").write_text(model.replace(line, deep))
+        with pytest.raises(ParseError, match=f"{where} nested more than 32 levels deep"):
+            load_model(tmp_path / "deep.relayout")
+    (tmp_path / "ok.relayout").write_text(model.replace("repeat Upper : Wall (Bay Wall)+", "repeat Upper : Wall "
+                                                        + "(" * 31 + "Bay Wall" + ")" * 31 + "+"))
+    load_model(tmp_path / "ok.relayout")

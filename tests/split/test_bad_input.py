@@ -24,3 +24,25 @@ def test_repeat_of_tiles_too_small_to_count_is_a_ruleset_error(body):
         derive(grammar(f"X --> {body}\n"), request(12, 9))
     assert str(info.value.where) == "test.grammar:1:1"
     assert "repeat of rule X" in str(info.value) and "make the repeated sizes larger" in str(info.value)
+
+
+@pytest.mark.parametrize(("condition", "column"), [("(" * 300 + "width" + ")" * 300 + " < 3", 49),
+                                                   ("-" * 1000 + "width < 3", 49),
+                                                   ("not " * 1000 + "width < 3", 145)])
+def test_deeply_nested_conditions_are_a_parse_error(condition, column):
+    """Was: RecursionError (300 nested parentheses, 1000 unary operators); 32 levels is the bound."""
+    err = parse_error(f"Facade --> case {condition}: Wall\n           else: Wall\n"
+                      "Wall --> terminal(wall)\n")
+    assert str(err.where) == f"bad.grammar:1:{column}"
+    assert "expression nested more than 32 levels deep" in str(err)
+
+
+def test_conditions_nested_32_deep_still_parse():
+    grammar("Facade --> case " + "(" * 31 + "width < 3" + ")" * 31 + ": Wall\n           else: Wall\n")
+
+
+def test_a_division_by_zero_in_a_condition_names_file_line_and_column():
+    """Was: the error named the rule but no file:line."""
+    with pytest.raises(RulesetError, match="division by zero in a condition of rule X") as info:
+        derive(grammar("X --> case 1 / (width - width) > 0: A\n      else: B\n"), request(12, 9))
+    assert str(info.value.where) == "test.grammar:1:14"

@@ -1,0 +1,60 @@
+"""Worker processes tied to the process that started them: they die with it, and it can stop them at once.
+
+A worker that outlives its parent (``kill -9`` of ``citygen generate``) holds its memory for nothing, forever. Two
+ties, both set up in the worker by :func:`tie_to_parent`: on Linux the kernel's parent-death signal
+(``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and everywhere a watchdog thread that ends the worker when its parent
+process id changes (the parent died and the worker was re-parented). Workers ignore Ctrl-C: the terminal sends
+SIGINT to the whole process group, and the parent, which handles it, stops them (:func:`stop_workers`), so no
+worker prints a traceback of its own.
+"""
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import os
+import signal
+import sys
+import threading
+from concurrent.futures import ProcessPoolExecutor
+
+#: ``PR_SET_PDEATHSIG`` of ``<linux/prctl.h>``.
+PR_SET_PDEATHSIG = 1
+#: Seconds between the watchdog's looks at the parent process id.
+WATCH_INTERVAL = 0.5
+
+
+def tie_to_parent(parent: int) -> None:
+    """In a worker process started by process ``parent``: die when it does (see the module docstring)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # it died before the tie was made
+        os._exit(1)
+    threading.Thread(target=_watch, args=(parent,), name="citygen-parent-watchdog", daemon=True).start()
+
+
+def _watch(parent: int) -> None:
+    stop = threading.Event()
+    while not stop.wait(WATCH_INTERVAL):
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def stop_workers(pool: ProcessPoolExecutor, grace: float = 2.0) -> None:
+    """End ``pool``'s worker processes now (SIGTERM, then SIGKILL after ``grace`` seconds) and drop its queued
+    work: what an interrupted run does instead of waiting for the chunks in flight."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):
+            process.terminate()
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):
+            process.join(grace)
+            if process.is_alive():
+                process.kill()
+                process.join(grace)
+    pool.shutdown(wait=False, cancel_futures=True)

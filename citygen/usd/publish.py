@@ -1,0 +1,85 @@
+"""Publishing a stage's files so that no moment, crash or ``kill -9`` leaves a root composing the wrong tiles, and
+no temporary file outlives the next run.
+
+*Temporaries* are named ``.<name>.citygen-<pid>-<random><suffix>`` (:func:`temp_prefix`), beside their target: a
+later run removes those whose process is gone (:func:`remove_stale_temporaries`), and never those of a writer
+still running.
+
+*Tile layers* are published under content names, ``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc`` (:func:`publish_tile`):
+a new run's tiles never overwrite a tile the current root lists (equal names mean equal bytes), so the old root
+stays whole until the new root replaces it in one rename; only then are the tiles no root lists any more removed
+(:func:`remove_unlisted_tiles`). Same scene and seed, same tile bytes, same names: the root is byte-identical.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import os
+import re
+import shutil
+from collections.abc import Collection
+from pathlib import Path
+
+_TEMPORARY = re.compile(r"^\..+\.citygen-(\d+)-")
+#: Hex digits of the content digest in a published tile's name.
+DIGEST_DIGITS = 12
+
+
+def temp_prefix(name: str) -> str:
+    """The prefix of a temporary for file or folder ``name`` written by this process (for ``tempfile``)."""
+    return f".{name}.citygen-{os.getpid()}-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's live process
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Remove the temporaries in ``folder`` (files or folders named by :func:`temp_prefix`) whose process no
+    longer runs; return what was removed. Nothing else is touched."""
+    removed = []
+    with contextlib.suppress(OSError):
+        for entry in folder.iterdir():
+            match = _TEMPORARY.match(entry.name)
+            if match and int(match[1]) != os.getpid() and not _alive(int(match[1])):
+                if entry.is_dir() and not entry.is_symlink():
+                    shutil.rmtree(entry, ignore_errors=True)
+                else:
+                    entry.unlink(missing_ok=True)
+                removed.append(entry)
+    return removed
+
+
+def publish_tile(staged: Path, tiles_dir: Path) -> str:
+    """Move the finished tile layer ``staged`` (``Tile_i_j.usdc``) into ``tiles_dir`` as ``Tile_i_j.<digest>.usdc``;
+    return that name. A tile of the same name there already has the same bytes: it stays, ``staged`` goes."""
+    digest = hashlib.blake2b(digest_size=DIGEST_DIGITS // 2)
+    with open(staged, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    name = f"{staged.stem}.{digest.hexdigest()}{staged.suffix}"
+    target = tiles_dir / name
+    if target.is_file():
+        staged.unlink()
+    else:
+        os.replace(staged, target)
+    return name
+
+
+def remove_unlisted_tiles(tiles_dir: Path, listed: Collection[str], since: float) -> None:
+    """After the root was replaced: remove the files in ``tiles_dir`` it does not list that are older than
+    ``since`` (the run's start; a concurrent run's newer tiles stay for its root), and stale temporaries."""
+    remove_stale_temporaries(tiles_dir)
+    with contextlib.suppress(OSError):
+        for entry in tiles_dir.iterdir():
+            if entry.name in listed or _TEMPORARY.match(entry.name) or not entry.is_file():
+                continue
+            with contextlib.suppress(OSError):
+                if entry.stat().st_mtime < since:
+                    entry.unlink()
