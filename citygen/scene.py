@@ -295,6 +295,25 @@ def _plausibility(r: _Reader, data: Mapping[str, Any]) -> PlausibilityRules:
     return PlausibilityRules.from_mapping(table)
 
 
+def _materials(r: _Reader, table: Any, assignments: tuple[Assignment, ...]) -> dict[str, Material]:
+    """The materials rulesets (their ``<stem>.materials.toml`` sidecars) and the scene's ``[materials]`` define;
+    the scene's win over a ruleset's of the same name, both over the built-ins."""
+    if not isinstance(table, Mapping):
+        r.fail("[materials] must be a table of material tables", "materials")
+    found: dict[str, Material] = {}
+    for a in assignments:
+        for ruleset in a.rulesets + ((a.fallback,) if a.fallback else ()):
+            if _is_file(side := sidecar(ruleset)):
+                found.update(read_materials(side))
+    for name, spec in table.items():
+        try:
+            found.update(parse_materials({name: spec}, str(r.path), r.path.parent))
+        except SceneError as exc:
+            header = re.search(rf"^\s*\[materials\.\"?{re.escape(str(name))}\"?\]", r.text, re.M)
+            r.fail(exc.message, line=r.text.count("\n", 0, header.start()) + 1 if header else None, hint=exc.hint)
+    return found
+
+
 def _assignments(r: _Reader, items: Any) -> tuple[Assignment, ...]:
     if not isinstance(items, list) or not items:
         r.fail("at least one [[assign]] table with a ruleset is required", "assign", line=1)
