@@ -169,6 +169,19 @@ function drawFacade(layout, svg = $("facade")) {
     }
   }
   for (const y of layout.floor_lines.slice(1, -1)) element("line", {class: "floor", x1: 0, x2: w, y1: h - y, y2: h - y}, svg);
+  if (layers.length > 1) {  // a layer stack's alignment columns: region edges that several layers share
+    const edges = new Map();
+    for (const r of layout.leaves) {
+      if (r.label == null) continue;
+      for (const x of [r.x, r.x + r.w]) {
+        const key = x.toFixed(2);
+        if (x > 1e-6 && x < w - 1e-6) edges.set(key, (edges.get(key) || new Set()).add(r.layer));
+      }
+    }
+    for (const [x, owners] of edges) {
+      if (owners.size > 1) element("line", {class: "column", x1: x, x2: x, y1: 0, y2: h}, svg);
+    }
+  }
 }
 
 // ---- editor ----------------------------------------------------------------------------------------------------
