@@ -4,7 +4,6 @@ from __future__ import annotations
 import base64
 import json
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -184,11 +183,12 @@ def test_a_scene_that_fails_to_load_is_reported_as_data(tmp_path):
 def test_generate_runs_the_scene_with_progress_report_and_download(client, scene):
     started = client.post("/api/generate", json={"format": ".glb"}).json()
     assert started["output"] == "studio-out/scene.glb"
-    for _ in range(600):
-        state = client.get("/api/generate").json()
-        if not state["running"]:
-            break
-        time.sleep(0.1)
+    assert client.post("/api/generate", json={"format": ".glb"}).status_code in (200, 409)  # (409 while running)
+    with client.stream("GET", "/api/generate/events") as events:
+        assert events.headers["content-type"].startswith("text/event-stream")
+        states = [json.loads(line[len("data: "):]) for line in events.iter_lines() if line.startswith("data: ")]
+    state = states[-1]
+    assert not state["running"] and all(s["running"] for s in states[:-1])
     assert state["error"] is None and state["done"] == state["total"] == 2
     assert state["report"]["written"] == 2 and "written 2 buildings" in state["report"]["summary"]
     download = client.get("/api/output", params={"name": state["output"]})

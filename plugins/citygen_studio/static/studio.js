@@ -377,14 +377,18 @@ async function generate() {
   $("download").hidden = true;
   $("progress").hidden = false;
   try {
-    let run = await api("/api/generate", {format: $("format").value, jobs: 1});
-    while (run.running) {
-      $("progress").max = Math.max(run.total, 1);
-      $("progress").value = run.done;
-      status(`generating: ${run.done} / ${run.total} buildings`);
-      await new Promise((resolve) => setTimeout(resolve, 500));
-      run = await api("/api/generate");
-    }
+    await api("/api/generate", {format: $("format").value, jobs: 1});
+    const run = await new Promise((resolve, reject) => {  // progress pushed by the server until the run ends
+      const events = new EventSource("/api/generate/events");
+      events.onmessage = (event) => {
+        const state = JSON.parse(event.data);
+        $("progress").max = Math.max(state.total, 1);
+        $("progress").value = state.done;
+        status(`generating: ${state.done} / ${state.total} buildings`);
+        if (!state.running) { events.close(); resolve(state); }
+      };
+      events.onerror = () => { events.close(); reject(new Error("lost the progress of the run")); };
+    });
     $("progress").value = $("progress").max;
     if (run.error) throw Object.assign(new Error(run.error.message), {data: run.error});
     $("report").textContent = run.report.summary;
