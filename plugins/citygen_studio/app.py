@@ -99,8 +99,9 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         route("/api/generate", lambda q: session.generation_state()),
         Route("/api/generate/events", progress),
         Route("/api/output", output),
-        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b), b.get("width"),
-                                                     b.get("floor_height", 3.0)),
+        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b, "data"), b.get("width"),
+                                                     b.get("floor_height", 3.0),
+                                                     _base64(b, "label_map") if b.get("label_map") else None),
               post=True, limit=MAX_UPLOAD * 4 // 3 + 4096),  # (base64)
         route("/api/extract", lambda b: extract(b.get("layout"), b.get("method", "adp"), b.get("iterations", 2000),
                                                 b.get("seed", 0)), post=True, limit=4 * MAX_BODY),
@@ -155,11 +156,11 @@ def _size(body: dict[str, Any]) -> FaceRequestSize:
                            seed=body.get("seed", 0))
 
 
-def _base64(body: dict[str, Any]) -> bytes:
+def _base64(body: dict[str, Any], key: str) -> bytes:
     try:
-        return base64.b64decode(_field(body, "data", str), validate=True)
+        return base64.b64decode(_field(body, key, str), validate=True)
     except binascii.Error:
-        raise StudioError("data must be the file's bytes in base64") from None
+        raise StudioError(f"{key} must be the file's bytes in base64") from None
 
 
 def _overrides(body: dict[str, Any]) -> dict[str, str]:

@@ -219,6 +219,23 @@ def test_a_dropped_photo_becomes_a_layout(client):
     assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
 
 
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
+def test_a_dropped_cmp_annotation_becomes_a_layout(client):
+    def encoded(name: str) -> str:
+        return base64.b64encode((SHARED / name).read_bytes()).decode()
+
+    body = {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
+            "width": 10}
+    imported = client.post("/api/import", json=body).json()
+    assert imported["drawing"]["width"] == pytest.approx(10) and "no label map" not in imported["summary"]
+    assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
+    alone = client.post("/api/import", json={**body, "label_map": None}).json()
+    assert "no label map" in alone["summary"]
+    broken = {"name": "cmp_b0001.xml", "data": base64.b64encode(b"<object><name>").decode()}
+    error = client.post("/api/import", json=broken).json()["error"]
+    assert error["message"].startswith("cmp_b0001.xml:1:")
+
+
 def test_bad_drops_are_errors_naming_the_file(client):
     bad = base64.b64encode(b"not an image").decode()
     response = client.post("/api/import", json={"name": "facade.jpg", "data": bad})

@@ -317,13 +317,20 @@ function base64Of(file) {
   });
 }
 
-// A dropped photo or layout JSON becomes a layout (drawn in the facade view), ready for grammar extraction.
-async function importFile(file) {
+// A dropped photo, layout JSON or CMP annotation (its XML, with the label-map PNG of the same name when dropped
+// together) becomes a layout, drawn in the facade view, ready for grammar extraction.
+async function importFiles(files) {
+  const list = [...files];
+  const xml = list.find((f) => f.name.toLowerCase().endsWith(".xml"));
+  const file = xml || list[0];
+  if (!file) return;
+  const stem = file.name.replace(/\.[^.]*$/, "");
+  const labelMap = xml && list.find((f) => f.name.toLowerCase() === (stem + ".png").toLowerCase());
   $("import-summary").textContent = `reading ${file.name} ...`;
   try {
     const width = Number($("photo-width").value) || null;
     const result = await api("/api/import", {name: file.name, data: await base64Of(file), width,
-      floor_height: Number($("floor").value)});
+      floor_height: Number($("floor").value), label_map: labelMap ? await base64Of(labelMap) : null});
     state.imported = {name: file.name, layout: result.layout};
     drawFacade(result.drawing);
     $("import-summary").textContent = result.summary;
@@ -353,7 +360,7 @@ async function extractGrammar() {
 
 function setUpInverse() {
   const panel = $("inverse-panel");
-  $("drop").addEventListener("change", () => { if ($("drop").files[0]) importFile($("drop").files[0]); });
+  $("drop").addEventListener("change", () => importFiles($("drop").files));
   $("extract").addEventListener("click", extractGrammar);
   panel.addEventListener("dragover", (e) => { e.preventDefault(); panel.classList.add("dragging"); });
   panel.addEventListener("dragleave", () => panel.classList.remove("dragging"));
@@ -361,7 +368,7 @@ function setUpInverse() {
     e.preventDefault();
     panel.classList.remove("dragging");
     panel.open = true;
-    if (e.dataTransfer.files[0]) importFile(e.dataTransfer.files[0]);
+    importFiles(e.dataTransfer.files);
   });
 }
 
