@@ -67,7 +67,7 @@ Y_UP_QUATERNION = np.array([-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)])
 
 
 def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton products ``a * b`` of quaternions ``(..., 4)`` stored ``x, y, z, w`` (the rotation ``b``, then ``a``)."""
+    """Hamilton products ``a * b`` of quaternions ``(..., 4)`` stored ``x, y, z, w`` (rotation ``b``, then ``a``)."""
     ax, ay, az, aw = np.moveaxis(np.asarray(a, dtype=float), -1, 0)
     bx, by, bz, bw = np.moveaxis(np.asarray(b, dtype=float), -1, 0)
     return np.stack([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,

@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 import tempfile
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,8 +33,8 @@ from citygen.geometry.building import MeshData
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
 from citygen.gltf import GLTF_SUFFIXES
-from citygen.gltf.meshes import (Y_UP, Y_UP_QUATERNION, Primitive, PrototypeMeshes, instance_matrices,
-                                 quaternion_product, transform_points, triangles)
+from citygen.gltf.meshes import (Y_UP, Y_UP_QUATERNION, Primitive, PrototypeMeshes, quaternion_product,
+                                 transform_points, triangles)
 from citygen.usd.materials import Material, material
 from citygen.usd.writer import BuildingRecord, StageStats
 
@@ -50,6 +51,16 @@ def material_look(name: str, library: Mapping[str, Material] | None = None
     alike."""
     found = material(name, library)
     return found.linear, found.roughness, found.metallic, found.opacity
+
+
+@dataclass(frozen=True)
+class _Placements:
+    """A building's instances in its Y-up frame: prototype mesh names and rounded glTF transforms."""
+
+    geometry: tuple[str, ...]
+    translations: np.ndarray
+    rotations: np.ndarray
+    scales: np.ndarray
 
 
 class _Material(PBRMaterial):
@@ -84,6 +95,7 @@ class GltfScene:
         self.meshes = PrototypeMeshes()
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
         self.trs: dict[str, dict[str, list[float]]] = {}  # node name -> glTF translation / rotation / scale
+        self.placements: dict[str, _Placements] = {}  # building node -> its instances' nodes, added on export
 
     def _material(self, name: str) -> _Material:
         if name not in self.materials:
@@ -148,20 +160,19 @@ class GltfScene:
         if geo.roof is not None:
             self._mesh_node(f"{name}/Roof", name, geo.roof, local, geo.roof_material, "roof")
         inst = geo.instances
-        matrices = local @ instance_matrices(inst)
-        translations = np.round((inst.positions - origin) @ Y_UP[:3, :3].T, DECIMALS).tolist()
-        rotations = np.round(quaternion_product(Y_UP_QUATERNION, inst.orientations), DECIMALS + 2).tolist()
-        scales = np.round(inst.scales.astype(float), DECIMALS + 2).tolist()
-        for k, (index, matrix) in enumerate(zip(inst.proto_indices.tolist(), matrices)):
-            node = f"{name}/{k}"
-            self._node(node, name, matrix, self._prototype(inst.protos[index], geo.modules))
-            self.trs[node] = {"translation": translations[k], "rotation": rotations[k], "scale": scales[k]}
+        if len(inst.proto_indices):
+            self.placements[name] = _Placements(
+                tuple(self._prototype(inst.protos[k], geo.modules) for k in inst.proto_indices.tolist()),
+                np.round((inst.positions - origin) @ Y_UP[:3, :3].T, DECIMALS),
+                np.round(quaternion_product(Y_UP_QUATERNION, inst.orientations), DECIMALS + 2),
+                np.round(inst.scales.astype(float), DECIMALS + 2))
         self.counts["instances"] += len(inst.proto_indices)
         self.counts["buildings"] += 1
 
     def _postprocess(self, tree: dict[str, Any]) -> None:
         """Prototype primitives joined into one mesh each; node transforms as translation, rotation and scale
-        (shorter than trimesh's matrices); buffer view targets; materials' exact linear colours (trimesh keeps 8 bits)."""
+        (shorter than trimesh's matrices); the instance nodes (kept out of trimesh's scene graph, where 100k nodes
+        cost seconds and memory); buffer view targets; materials' exact linear colours (trimesh keeps 8 bits)."""
         tree["asset"]["generator"] = f"citygen {__version__} (trimesh {trimesh.__version__})"
         meshes, renumber, by_name = [], {}, {}
         for k, mesh in enumerate(tree.get("meshes", [])):
@@ -173,13 +184,22 @@ class GltfScene:
                 meshes[by_name[owner]]["primitives"] += mesh["primitives"]
         if meshes:
             tree["meshes"] = meshes
-        for node in tree.get("nodes", []):
+        nodes = tree.setdefault("nodes", [])
+        for node in nodes:
             if "mesh" in node:
                 node["mesh"] = renumber[node["mesh"]]
             trs = self.trs.get(node["name"])
             if trs is not None:
                 node.pop("matrix", None)
                 node.update(trs)
+        for parent in [node for node in nodes if node["name"] in self.placements]:
+            rows = self.placements[parent["name"]]
+            children = parent.setdefault("children", [])
+            for k, (geometry, t, r, scale) in enumerate(zip(rows.geometry, rows.translations.tolist(),
+                                                            rows.rotations.tolist(), rows.scales.tolist())):
+                children.append(len(nodes))
+                nodes.append({"name": f"{parent['name']}/{k}", "mesh": by_name[geometry], "translation": t,
+                              "rotation": r, "scale": scale})
         views = tree.get("bufferViews")  # (a GLB's are in place here; a .gltf's come after)
         if views:
             for mesh in meshes:
@@ -201,7 +221,8 @@ class GltfScene:
         return files["model.gltf"]
 
     def stats(self, path: Path, size: int) -> StageStats:
-        return StageStats(path=path, buildings=self.counts["buildings"], prims=len(self.scene.graph.nodes),
+        return StageStats(path=path, buildings=self.counts["buildings"],
+                          prims=len(self.scene.graph.nodes) + self.counts["instances"],
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
                           prototypes=len(self.prototypes), polygons=self.counts["polygons"], bytes=size)
 

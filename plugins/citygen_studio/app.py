@@ -21,7 +21,7 @@ from starlette.applications import Starlette
 from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
@@ -36,6 +36,8 @@ MAX_BODY = 512 * 1024
 TIME_LIMIT = 20.0
 STATIC = Path(__file__).with_name("static")
 LOOPBACK = ["127.0.0.1", "localhost"]
+#: Seconds between the progress events of a generation.
+PROGRESS_EVERY = 0.25
 
 
 def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
@@ -72,6 +74,17 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
             return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=exc.status)
         return FileResponse(path, filename=path.name)
 
+    async def progress(request: Request) -> StreamingResponse:
+        """The running generation's state as server-sent events, every :data:`PROGRESS_EVERY` s until it ends."""
+        async def events():
+            while True:
+                state = session.generation_state()
+                yield f"data: {json.dumps(state)}\n\n"
+                if not state["running"]:
+                    return
+                await anyio.sleep(PROGRESS_EVERY)
+        return StreamingResponse(events(), media_type="text/event-stream", headers={"cache-control": "no-store"})
+
     routes = [
         route("/api/scene", lambda q: session.info()),
         route("/api/buildings", lambda q: {"buildings": session.buildings()}),
@@ -84,9 +97,11 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
                                                               _size(b), b.get("count", 8)), post=True),
         route("/api/generate", lambda b: session.generate(_field(b, "format", str), b.get("jobs", 1)), post=True),
         route("/api/generate", lambda q: session.generation_state()),
+        Route("/api/generate/events", progress),
         Route("/api/output", output),
-        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b), b.get("width"),
-                                                     b.get("floor_height", 3.0)),
+        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b, "data"), b.get("width"),
+                                                     b.get("floor_height", 3.0),
+                                                     _base64(b, "label_map") if b.get("label_map") else None),
               post=True, limit=MAX_UPLOAD * 4 // 3 + 4096),  # (base64)
         route("/api/extract", lambda b: extract(b.get("layout"), b.get("method", "adp"), b.get("iterations", 2000),
                                                 b.get("seed", 0)), post=True, limit=4 * MAX_BODY),
@@ -141,11 +156,11 @@ def _size(body: dict[str, Any]) -> FaceRequestSize:
                            seed=body.get("seed", 0))
 
 
-def _base64(body: dict[str, Any]) -> bytes:
+def _base64(body: dict[str, Any], key: str) -> bytes:
     try:
-        return base64.b64decode(_field(body, "data", str), validate=True)
+        return base64.b64decode(_field(body, key, str), validate=True)
     except binascii.Error:
-        raise StudioError("data must be the file's bytes in base64") from None
+        raise StudioError(f"{key} must be the file's bytes in base64") from None
 
 
 def _overrides(body: dict[str, Any]) -> dict[str, str]:

@@ -111,6 +111,8 @@ class Session:
             self.names = [prim_name(fp.id, taken) for fp in self.footprints]
         except CitygenError as exc:
             self.scene, self.load_error = None, error_data(exc, self.confinement)
+        except Exception as exc:  # a library bug: the page says so instead of a studio that never loads
+            self.scene, self.load_error = None, {"message": f"internal error {type(exc).__name__}: {exc}"}
         finally:
             self.loaded.set()
 
@@ -125,10 +127,12 @@ class Session:
                 "floor_height": scene.defaults.floor_height if scene else 3.0}
 
     def rulesets(self) -> list[str]:
-        """The rulesets the scene names, then the other ruleset files in its folder, as the browser names them."""
+        """The rulesets the scene names, then the other ruleset files in its folder and its subfolders, as the
+        browser names them."""
         suffixes = tuple(s for k in self.registry.ruleset_kinds.values() for s in k.suffixes)
         named = sorted(self.confinement.show(str(p)) for p in self.confinement.named)
-        local = sorted(os.path.relpath(p, self.confinement.root) for p in self.confinement.root.rglob("*")
+        root = self.confinement.root  # (two levels deep: a studio opened in a big folder stays quick)
+        local = sorted(os.path.relpath(p, root) for p in (*root.glob("*"), *root.glob("*/*"))
                        if p.is_file() and p.name.endswith(suffixes) and not p.name.startswith("."))
         return list(dict.fromkeys(named + local))
 

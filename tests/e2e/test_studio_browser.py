@@ -132,6 +132,21 @@ def test_extract_a_grammar_from_a_dropped_layout(studio, tmp_path):
         browser.close()
 
 
+def test_a_layer_stack_shows_its_account_and_alignment_columns(studio, tmp_path):
+    url, scene = studio
+    shutil.copy(Path(__file__).parents[2] / "rulesets" / "tenement.layers", scene.parent / "tenement.layers")
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        page.locator("#ruleset").select_option("tenement.layers")
+        page.wait_for_selector("#facade line.column", state="attached", timeout=30_000)
+        assert page.locator("#explain").inner_text().startswith("layers ruleset tenement")
+        page.screenshot(path=tmp_path / "layers.png")
+        browser.close()
+
+
 def test_generate_the_scene_and_see_the_report(studio, tmp_path):
     url, scene = studio
     with sync_api.sync_playwright() as p:

@@ -4,7 +4,6 @@ from __future__ import annotations
 import base64
 import json
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -184,11 +183,12 @@ def test_a_scene_that_fails_to_load_is_reported_as_data(tmp_path):
 def test_generate_runs_the_scene_with_progress_report_and_download(client, scene):
     started = client.post("/api/generate", json={"format": ".glb"}).json()
     assert started["output"] == "studio-out/scene.glb"
-    for _ in range(600):
-        state = client.get("/api/generate").json()
-        if not state["running"]:
-            break
-        time.sleep(0.1)
+    assert client.post("/api/generate", json={"format": ".glb"}).status_code in (200, 409)  # (409 while running)
+    with client.stream("GET", "/api/generate/events") as events:
+        assert events.headers["content-type"].startswith("text/event-stream")
+        states = [json.loads(line[len("data: "):]) for line in events.iter_lines() if line.startswith("data: ")]
+    state = states[-1]
+    assert not state["running"] and all(s["running"] for s in states[:-1])
     assert state["error"] is None and state["done"] == state["total"] == 2
     assert state["report"]["written"] == 2 and "written 2 buildings" in state["report"]["summary"]
     download = client.get("/api/output", params={"name": state["output"]})
@@ -217,6 +217,23 @@ def test_a_dropped_photo_becomes_a_layout(client):
     imported = client.post("/api/import", json={"name": "cmp_b0001.jpg", "data": data, "width": 12}).json()
     assert imported["drawing"]["width"] == pytest.approx(12)
     assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
+def test_a_dropped_cmp_annotation_becomes_a_layout(client):
+    def encoded(name: str) -> str:
+        return base64.b64encode((SHARED / name).read_bytes()).decode()
+
+    body = {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
+            "width": 10}
+    imported = client.post("/api/import", json=body).json()
+    assert imported["drawing"]["width"] == pytest.approx(10) and "no label map" not in imported["summary"]
+    assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
+    alone = client.post("/api/import", json={**body, "label_map": None}).json()
+    assert "no label map" in alone["summary"]
+    broken = {"name": "cmp_b0001.xml", "data": base64.b64encode(b"<object><name>").decode()}
+    error = client.post("/api/import", json=broken).json()["error"]
+    assert error["message"].startswith("cmp_b0001.xml:1:")
 
 
 def test_bad_drops_are_errors_naming_the_file(client):

@@ -169,6 +169,19 @@ function drawFacade(layout, svg = $("facade")) {
     }
   }
   for (const y of layout.floor_lines.slice(1, -1)) element("line", {class: "floor", x1: 0, x2: w, y1: h - y, y2: h - y}, svg);
+  if (layers.length > 1) {  // a layer stack's alignment columns: region edges that several layers share
+    const edges = new Map();
+    for (const r of layout.leaves) {
+      if (r.label == null) continue;
+      for (const x of [r.x, r.x + r.w]) {
+        const key = x.toFixed(2);
+        if (x > 1e-6 && x < w - 1e-6) edges.set(key, (edges.get(key) || new Set()).add(r.layer));
+      }
+    }
+    for (const [x, owners] of edges) {
+      if (owners.size > 1) element("line", {class: "column", x1: x, x2: x, y1: 0, y2: h}, svg);
+    }
+  }
 }
 
 // ---- editor ----------------------------------------------------------------------------------------------------
@@ -304,13 +317,20 @@ function base64Of(file) {
   });
 }
 
-// A dropped photo or layout JSON becomes a layout (drawn in the facade view), ready for grammar extraction.
-async function importFile(file) {
+// A dropped photo, layout JSON or CMP annotation (its XML, with the label-map PNG of the same name when dropped
+// together) becomes a layout, drawn in the facade view, ready for grammar extraction.
+async function importFiles(files) {
+  const list = [...files];
+  const xml = list.find((f) => f.name.toLowerCase().endsWith(".xml"));
+  const file = xml || list[0];
+  if (!file) return;
+  const stem = file.name.replace(/\.[^.]*$/, "");
+  const labelMap = xml && list.find((f) => f.name.toLowerCase() === (stem + ".png").toLowerCase());
   $("import-summary").textContent = `reading ${file.name} ...`;
   try {
     const width = Number($("photo-width").value) || null;
     const result = await api("/api/import", {name: file.name, data: await base64Of(file), width,
-      floor_height: Number($("floor").value)});
+      floor_height: Number($("floor").value), label_map: labelMap ? await base64Of(labelMap) : null});
     state.imported = {name: file.name, layout: result.layout};
     drawFacade(result.drawing);
     $("import-summary").textContent = result.summary;
@@ -340,7 +360,7 @@ async function extractGrammar() {
 
 function setUpInverse() {
   const panel = $("inverse-panel");
-  $("drop").addEventListener("change", () => { if ($("drop").files[0]) importFile($("drop").files[0]); });
+  $("drop").addEventListener("change", () => importFiles($("drop").files));
   $("extract").addEventListener("click", extractGrammar);
   panel.addEventListener("dragover", (e) => { e.preventDefault(); panel.classList.add("dragging"); });
   panel.addEventListener("dragleave", () => panel.classList.remove("dragging"));
@@ -348,7 +368,7 @@ function setUpInverse() {
     e.preventDefault();
     panel.classList.remove("dragging");
     panel.open = true;
-    if (e.dataTransfer.files[0]) importFile(e.dataTransfer.files[0]);
+    importFiles(e.dataTransfer.files);
   });
 }
 
@@ -364,14 +384,18 @@ async function generate() {
   $("download").hidden = true;
   $("progress").hidden = false;
   try {
-    let run = await api("/api/generate", {format: $("format").value, jobs: 1});
-    while (run.running) {
-      $("progress").max = Math.max(run.total, 1);
-      $("progress").value = run.done;
-      status(`generating: ${run.done} / ${run.total} buildings`);
-      await new Promise((resolve) => setTimeout(resolve, 500));
-      run = await api("/api/generate");
-    }
+    await api("/api/generate", {format: $("format").value, jobs: 1});
+    const run = await new Promise((resolve, reject) => {  // progress pushed by the server until the run ends
+      const events = new EventSource("/api/generate/events");
+      events.onmessage = (event) => {
+        const state = JSON.parse(event.data);
+        $("progress").max = Math.max(state.total, 1);
+        $("progress").value = state.done;
+        status(`generating: ${state.done} / ${state.total} buildings`);
+        if (!state.running) { events.close(); resolve(state); }
+      };
+      events.onerror = () => { events.close(); reject(new Error("lost the progress of the run")); };
+    });
     $("progress").value = $("progress").max;
     if (run.error) throw Object.assign(new Error(run.error.message), {data: run.error});
     $("report").textContent = run.report.summary;
