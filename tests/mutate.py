@@ -102,6 +102,18 @@ def insert_odd(text: str, rng: random.Random) -> str:
     return text[:i] + rng.choice(ODD) + text[i:]
 
 
+def nest_token(text: str, rng: random.Random) -> str:
+    """Wrap a token in 40, 400 or 3000 levels of brackets or prefix operators (was RecursionError in four
+    readers, issue 23)."""
+    spans = _spans(_TOKEN, text)
+    if not spans:
+        return text
+    span = rng.choice(spans)
+    depth = rng.choice((40, 400, 3000))
+    opening, closing = rng.choice((("(", ")"), ("{", "}"), ("[", "]"), ("-", ""), ("not ", "")))
+    return _replace(text, span, opening * depth + text[span[0]:span[1]] + closing * depth)
+
+
 def truncate(text: str, rng: random.Random) -> str:
     return text[:rng.randrange(len(text) + 1)]
 
@@ -116,7 +128,7 @@ def number_mutation(dialect: str) -> Callable[[str, random.Random], str]:
 
 def text_mutations(dialect: str) -> tuple[Callable[[str, random.Random], str], ...]:
     return (delete_line, duplicate_line, swap_lines, delete_token, duplicate_token, swap_tokens, odd_token,
-            insert_odd, truncate, number_mutation(dialect), number_mutation(dialect), number_mutation(dialect))
+            insert_odd, nest_token, truncate, number_mutation(dialect), number_mutation(dialect), number_mutation(dialect))
 
 
 def number_spans(text: str) -> list[tuple[int, int]]:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from citygen.errors import CitygenError, ParseError, SourceLocation, read_user_text
-from citygen.layout import FacadeLayout
+from citygen.layout import FacadeLayout, check_partition
 from citygen_safe.edit import BUDGET_S
 from citygen_safe.grids import GridSpec, auto_specs
 from citygen_safe.leaves import Facade, facade_from_layout
@@ -131,6 +131,10 @@ def parse_ruleset(text: str, source: str = "<safe>", base: Path | None = None) -
                          hint="name a UTF-8 FacadeLayout JSON file") from exc
     except CitygenError as exc:
         raise ParseError(f"layout {layout[0]!r} is invalid: {exc}", where=layout[1]) from exc
+    problems = check_partition(lay)
+    if problems:  # (was accepted: the editing then moved overlapping or gapped regions)
+        raise ParseError(f"layout {layout[0]!r} is not a partition: {problems[0]}", where=layout[1],
+                         hint="its terminal regions must cover the facade exactly once (docs/layout-json.md)")
     facade = facade_from_layout(_relabelled(lay, relabels))
     specs = grids or {s.name: s for s in auto_specs(facade)}
     for grid_name, lineno, col in active:

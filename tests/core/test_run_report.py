@@ -59,4 +59,4 @@ def test_an_importer_option_error_names_the_scene_file_and_line(tmp_path):
     scene.write_text(scene.read_text().replace('path = "city.geojson"\n', 'path = "city.geojson"\nmin_area = -1\n'))
     with pytest.raises(SceneError) as info:
         generate_city(load_scene(scene))
-    assert str(info.value).startswith(f"{scene}:4: [footprints] min_area = -1 is invalid")
+    assert str(info.value).startswith(f"{scene}:5: [footprints] min_area = -1 is invalid")

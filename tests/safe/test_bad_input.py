@@ -80,3 +80,15 @@ def test_ruleset_that_is_not_utf8_is_a_parse_error(tmp_path):
     (tmp_path / "s.safe").write_bytes(b"safe s\xff\n")  # was: UnicodeDecodeError
     with pytest.raises(ParseError, match=r"not UTF-8 text \(byte 0xff at offset 6\).*save the file as UTF-8"):
         load_ruleset(tmp_path / "s.safe")
+
+
+def test_a_layout_that_is_not_a_partition_is_a_parse_error(tmp_path):
+    """Was: accepted (a window overlapping the wall it sits on, a gap), and the edits moved broken regions."""
+    from citygen.layout import FacadeLayout, Region
+    overlapping = FacadeLayout(10.0, 6.0, Region(0.0, 0.0, 10.0, 6.0, "Facade", children=(
+        Region(0.0, 0.0, 10.0, 6.0, "Wall", "wall"), Region(2.0, 2.0, 1.0, 1.5, "Window", "window"))))
+    (tmp_path / "f.layout.json").write_text(overlapping.dumps())
+    (tmp_path / "s.safe").write_text(SAFE)
+    with pytest.raises(ParseError, match="layout 'f.layout.json' is not a partition: ") as info:
+        load_ruleset(tmp_path / "s.safe")
+    assert str(info.value.where).endswith("s.safe:2:8")
