@@ -110,3 +110,21 @@ def test_cmp_b0002_at_5_5_x_7_has_no_slivers_of_windows_or_balconies():
     layout = KIND.generate(g, req)
     assert facade_outcome(layout, req)[0] == "dressed"
     assert all(t.w >= 0.3 for t in layout.terminals() if t.label in ("window", "balcony"))
+
+
+@pytest.mark.parametrize("width", [1.62, 1.66, 1.9, 2.3])
+def test_house_entrance_on_a_narrow_face_has_no_wall_slivers(width):
+    """Regression (issue 21, Helsinki way/29049248): the 1.6 m door bay left 0.01-0.04 m side walls on entrance
+    faces 1.6-2.3 m wide (house.grammar now offers the door bay alone, and the door column alone under 1.1 m)."""
+    g = _loaded(REPO / "rulesets" / "house.grammar")
+    lines = FacadeRequest.preview(width, 6.0, floor_height=2.9, ground_height=3.3).floor_lines
+    req = FacadeRequest(width, 6.0, lines, entrance=True, corner_widths=(0.3, 0.3), seed=(1,))
+    assert facade_outcome(KIND.generate(g, req), req)[0] == "dressed"
+
+
+def test_office_lobby_under_3_m_has_no_sliver_transom():
+    """Regression (issue 21, Helsinki way/122595243): a 2.75 m lobby gave the entrance a 0.15 m transom."""
+    g = _loaded(REPO / "rulesets" / "office.grammar")
+    req = FacadeRequest.preview(30.0, 12.0, floor_height=3.0, ground_height=2.75)
+    layout = KIND.generate(g, req)
+    assert facade_outcome(layout, req)[0] == "dressed" and layout.count("door") == 1
