@@ -14,7 +14,8 @@ from citygen.request import FaceContext, FacadeRequest, check_request
 from citygen.scene import Defaults
 from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
-from citygen_inverse.independent import extract_size_independent, floor_cuts, slab_layouts
+from citygen_inverse.independent import extract_size_independent
+from citygen_inverse.slabs import floor_cuts, slab_layouts
 
 from .helpers import assert_reproduces, random_layout
 from .test_extract import regular_facade
