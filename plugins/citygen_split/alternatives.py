@@ -41,11 +41,13 @@ class Outcome:
 
 
 def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUDGET,
-                     rules: PlausibilityRules = DEFAULT_RULES) -> Outcome:
+                     rules: PlausibilityRules | None = None) -> Outcome:
     """The first plausible layout of ``grammar`` on ``request`` found by advancing choice points (module doc); a
     plain wall (``meta["fallback"]``, with the entrance's door when the face has one) when none is found within
     ``budget`` derivations. A layout whose only problems are request problems it cannot avoid (e.g. a grammar
-    without a door on the entrance face) is returned as it is: the builder repairs the entrance."""
+    without a door on the entrance face) is returned as it is: the builder repairs the entrance. ``rules``:
+    the request's (the scene's), else the defaults."""
+    rules = rules or request.plausibility or DEFAULT_RULES
     tried: set[PointKey] = set()
     best = _attempt(grammar, request, {}, rules)  # moves are kept only when better: the last kept is the best
     derivations = 1

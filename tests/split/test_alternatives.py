@@ -128,3 +128,15 @@ def test_office_lobby_under_3_m_has_no_sliver_transom():
     req = FacadeRequest.preview(30.0, 12.0, floor_height=3.0, ground_height=2.75)
     layout = KIND.generate(g, req)
     assert facade_outcome(layout, req)[0] == "dressed" and layout.count("door") == 1
+
+
+def test_the_scene_s_plausibility_rules_travel_with_the_request():
+    """A scene that accepts 0.2 m slits ([plausibility], carried by ``FacadeRequest.plausibility``) gets them."""
+    from dataclasses import replace
+
+    from citygen.plausible import PlausibilityRules
+    g = grammar("F --> split(x) { '1: Wall | 0.2: Window | '1: Wall }\n")
+    req = request(3.0, 2.0)
+    assert KIND.generate(g, req).meta.get("fallback")
+    relaxed = PlausibilityRules.from_mapping({"min_size": {"window": [0.1, 0.3]}})
+    assert not KIND.generate(g, replace(req, plausibility=relaxed)).meta.get("fallback")
