@@ -7,8 +7,8 @@ Per facade (every S-th CMP base facade, at most K): import, extract the ``--size
 through the split kind (``generate``: alternatives tried, else plain wall) at width and height factors
 0.5, 0.65, 0.8, 1, 1.25, 1.5, 1.7, 2 (3 m storeys, 4 m ground floor, entrance), each case classified as
 ``citygen facade`` does. Prints the outcome counts, the most common finding codes and labels, how many facades
-have repeated bays, the grid rules in the grammars and, with ``--plain``, the counts of the plain derivation (no alternatives: what the generator did before).
-Skips cleanly when the shared data is absent.
+have repeated bays, the grid rules in the grammars and, with ``--plain``, the counts of the plain derivation (no
+alternatives: what the generator did before). Skips cleanly when the shared data is absent.
 """
 from __future__ import annotations
 

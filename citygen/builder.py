@@ -175,7 +175,8 @@ class Builder:
             used: list[str] = []
             tally: Counter[str] = Counter()
             for scope, courtyard in () if self.scene.output.masses else (("street", False), ("courtyard", True)):
-                requests = [r for r in plan.requests if r.context.is_courtyard == courtyard]
+                requests = [replace(r, plausibility=self.scene.plausibility) for r in plan.requests
+                            if r.context.is_courtyard == courtyard]
                 if not requests:
                     continue
                 choice = self.choose(footprint, mass, scope)

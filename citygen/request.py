@@ -52,6 +52,9 @@ class FacadeRequest:
     corner_widths: tuple[float, float] = (0.0, 0.0)
     context: FaceContext = field(default_factory=lambda: FaceContext(building_id="preview", face_index=0, levels=1))
     seed: tuple[int, ...] = (0,)
+    #: The scene's :class:`citygen.plausible.PlausibilityRules` a generator holds its candidates to (None: the
+    #: defaults); set by the builder from the scene's ``[plausibility]`` table.
+    plausibility: Any = field(default=None, compare=False)
 
     @property
     def floor_count(self) -> int:

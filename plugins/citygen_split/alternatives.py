@@ -41,35 +41,31 @@ class Outcome:
 
 
 def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUDGET,
-                     rules: PlausibilityRules = DEFAULT_RULES) -> Outcome:
+                     rules: PlausibilityRules | None = None) -> Outcome:
     """The first plausible layout of ``grammar`` on ``request`` found by advancing choice points (module doc); a
     plain wall (``meta["fallback"]``, with the entrance's door when the face has one) when none is found within
-    ``budget`` derivations. A layout whose only
-    problems are request problems it cannot avoid (e.g. a grammar without a door on the entrance face) is returned
-    as it is: the builder repairs the entrance."""
-    chosen: dict[PointKey, int] = {}
+    ``budget`` derivations. A layout whose only problems are request problems it cannot avoid (e.g. a grammar
+    without a door on the entrance face) is returned as it is: the builder repairs the entrance. ``rules``:
+    the request's (the scene's), else the defaults."""
+    rules = rules or request.plausibility or DEFAULT_RULES
     tried: set[PointKey] = set()
-    best = _attempt(grammar, request, chosen, rules)
-    current = best
+    best = _attempt(grammar, request, {}, rules)  # moves are kept only when better: the last kept is the best
     derivations = 1
-    while (current.findings or current.problems) and derivations < budget:
-        key = _next_point(current, tried)
+    while (best.findings or best.problems) and derivations < budget:
+        key = _next_point(best, tried)
         if key is None:
             break
-        k, moved = current.alternatives.get(key, 0), False
-        count = current.points[key]
+        k, count, moved = best.alternatives.get(key, 0), best.points[key], False
         for j in dict.fromkeys(min(j, count - 1) for j in (k + 1, k + 2, k + 3, count - 1)):
             if derivations >= budget:
                 break
-            attempt = _attempt(grammar, request, {**current.alternatives, key: j}, rules)
+            attempt = _attempt(grammar, request, {**best.alternatives, key: j}, rules)
             derivations += 1
-            if attempt.score < current.score:
-                current, moved = attempt, True
+            if attempt.score < best.score:
+                best, moved = attempt, True
                 break
         if not moved:
             tried.add(key)
-        if current.score < best.score:
-            best = current
     if best.findings:
         layout, _ = enforce_entrance(plain_wall(request, f"implausible layout: {summary(list(best.findings))}",
                                                 best.findings, kind=PLUGIN_ID, ruleset=grammar.source), request)

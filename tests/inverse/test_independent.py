@@ -14,7 +14,8 @@ from citygen.request import FaceContext, FacadeRequest, check_request
 from citygen.scene import Defaults
 from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
-from citygen_inverse.independent import extract_size_independent, floor_cuts, slab_layouts
+from citygen_inverse.independent import extract_size_independent
+from citygen_inverse.slabs import floor_cuts, slab_layouts
 
 from .helpers import assert_reproduces, random_layout
 from .test_extract import regular_facade
@@ -335,3 +336,23 @@ def test_no_storey_loses_its_windows_at_other_heights(factor):
     for lo, hi in zip(lines[1:], lines[2:]):
         assert any(t.label == "window" and lo - 1e-9 <= t.y < hi for t in out.terminals()), (lo, hi)
     assert check_plausible(out, req) == []
+
+
+@cache
+def _b0009_grammar():
+    return citygen_split.parse(extract_size_independent(cmp_layout("cmp_b0009"), "greedy").text, "b0009")
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(wf=st.floats(0.4, 2.5), hf=st.floats(0.4, 2.5), storey=st.floats(2.6, 3.6), entrance=st.booleans())
+def test_extracted_grammars_never_report_a_broken_facade_as_dressed(wf, hf, storey, entrance):
+    """Issue 21 property: the split kind's generator on an extracted grammar at random sizes is dressed or falls
+    back with findings, never implausible or breaking the request."""
+    from citygen.cli import facade_outcome
+    from citygen.registry import default_registry
+    layout = cmp_layout("cmp_b0009")
+    req = FacadeRequest.preview(wf * layout.width, max(hf * layout.height, 3.0), floor_height=storey,
+                                ground_height=max(storey, 4.0), entrance=entrance)
+    out = default_registry().ruleset_kind("split").generate(_b0009_grammar(), req)
+    outcome, reasons = facade_outcome(out, req)
+    assert outcome in ("dressed", "fell-back"), reasons

@@ -110,3 +110,33 @@ def test_cmp_b0002_at_5_5_x_7_has_no_slivers_of_windows_or_balconies():
     layout = KIND.generate(g, req)
     assert facade_outcome(layout, req)[0] == "dressed"
     assert all(t.w >= 0.3 for t in layout.terminals() if t.label in ("window", "balcony"))
+
+
+@pytest.mark.parametrize("width", [1.62, 1.66, 1.9, 2.3])
+def test_house_entrance_on_a_narrow_face_has_no_wall_slivers(width):
+    """Regression (issue 21, Helsinki way/29049248): the 1.6 m door bay left 0.01-0.04 m side walls on entrance
+    faces 1.6-2.3 m wide (house.grammar now offers the door bay alone, and the door column alone under 1.1 m)."""
+    g = _loaded(REPO / "rulesets" / "house.grammar")
+    lines = FacadeRequest.preview(width, 6.0, floor_height=2.9, ground_height=3.3).floor_lines
+    req = FacadeRequest(width, 6.0, lines, entrance=True, corner_widths=(0.3, 0.3), seed=(1,))
+    assert facade_outcome(KIND.generate(g, req), req)[0] == "dressed"
+
+
+def test_office_lobby_under_3_m_has_no_sliver_transom():
+    """Regression (issue 21, Helsinki way/122595243): a 2.75 m lobby gave the entrance a 0.15 m transom."""
+    g = _loaded(REPO / "rulesets" / "office.grammar")
+    req = FacadeRequest.preview(30.0, 12.0, floor_height=3.0, ground_height=2.75)
+    layout = KIND.generate(g, req)
+    assert facade_outcome(layout, req)[0] == "dressed" and layout.count("door") == 1
+
+
+def test_the_scene_s_plausibility_rules_travel_with_the_request():
+    """A scene that accepts 0.2 m slits ([plausibility], carried by ``FacadeRequest.plausibility``) gets them."""
+    from dataclasses import replace
+
+    from citygen.plausible import PlausibilityRules
+    g = grammar("F --> split(x) { '1: Wall | 0.2: Window | '1: Wall }\n")
+    req = request(3.0, 2.0)
+    assert KIND.generate(g, req).meta.get("fallback")
+    relaxed = PlausibilityRules.from_mapping({"min_size": {"window": [0.1, 0.3]}})
+    assert not KIND.generate(g, replace(req, plausibility=relaxed)).meta.get("fallback")
