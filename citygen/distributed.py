@@ -2,9 +2,9 @@
 
 A task builds its tile's buildings (the same per-building seeds and error handling as the local path: a bad
 building skips itself) and writes the tile's layer itself, into the root stage's staging folder on a filesystem the
-workers share. The layer is a complete stage of its own: ``/World`` with the ``Looks`` and ``/Prototypes`` its
-buildings use, so it opens alone and composes under the root. Only small results travel back (a
-:class:`TileResult`); the main process lists the layers, in tile order, as sublayers of the root. Every tile is
+workers share, with the same writer the local executor's tile layers use: a complete stage of its own, ``/World``
+with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so it opens alone. Only small results
+travel back (a :class:`TileResult`); the main process payloads the layers, in tile order, from the root. Every tile is
 built from a fresh module cache, so its bytes depend on the seed and its buildings only, never on which worker
 built it or when.
 

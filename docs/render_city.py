@@ -29,7 +29,7 @@ def main() -> None:
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 720))
     args = parser.parse_args()
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    assert bpy.ops.wm.usd_import(filepath=args.stage) == {"FINISHED"}
+    assert bpy.ops.wm.usd_import(filepath=args.stage, mtl_name_collision_mode="REFERENCE_EXISTING") == {"FINISHED"}
     scene = bpy.context.scene
     corners = [o.matrix_world @ mathutils.Vector(c) for o in bpy.data.objects if o.type == "MESH" for c in o.bound_box]
     xs, ys = [c.x for c in corners], [c.y for c in corners]

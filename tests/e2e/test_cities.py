@@ -100,7 +100,8 @@ def test_helsinki_opens_unloaded_and_a_building_is_an_asset(helsinki):
     size = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_], useExtentsHint=True) \
         .ComputeWorldBound(unloaded.GetPseudoRoot()).ComputeAlignedRange().GetSize()
     assert 900 < size[0] < 1500 and 20 < size[2] < 120
-    source = next(p for p in buildings(Usd.Stage.Open(str(out))) if p.GetName() == "way_122595241")
+    city = Usd.Stage.Open(str(out))
+    source = next(p for p in buildings(city) if p.GetName() == "way_122595241")
     stage = Usd.Stage.CreateInMemory()
     stage.DefinePrim("/Stockmann", "Xform").GetReferences().AddReference(str(out), source.GetPath())
     assert_resolves(stage, "/Stockmann")
