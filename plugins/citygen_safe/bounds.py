@@ -11,6 +11,7 @@ other elements keeps ``sliver``.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -114,7 +115,7 @@ def collapse(facade: Facade, root: Node, threshold: float) -> Facade:
             return
         kids = list(node.children)
         if node.split == X:
-            tiny = [k for k, c in enumerate(kids) if _thin(c, extent, threshold)
+            tiny = [k for k, c in enumerate(kids) if extent(c)[1] - extent(c)[0] < threshold
                     and all(leaves[i].label in COLLAPSIBLE for i in c.leaves)]
             if tiny and len(tiny) < len(kids):
                 first = next(k for k in range(len(kids)) if k not in tiny)
@@ -131,12 +132,8 @@ def collapse(facade: Facade, root: Node, threshold: float) -> Facade:
     return replace(facade, leaves=tuple(f for i, f in enumerate(leaves) if i not in gone))
 
 
-def _thin(node: Node, extent, threshold: float) -> bool:
-    lo, hi = extent(node)
-    return hi - lo < threshold
-
-
-def _give(kids: list[Node], k: int, tiny: set[int], extent, leaves: list[Leaf]) -> None:
+def _give(kids: list[Node], k: int, tiny: set[int], extent: Callable[[Node], tuple[float, float]],
+          leaves: list[Leaf]) -> None:
     """Grow the nearest kept slab left of ``kids[k]`` (else right of it) over ``kids[k]``'s extent."""
     lo, hi = extent(kids[k])
     left = [j for j in range(k - 1, -1, -1) if j not in tiny]

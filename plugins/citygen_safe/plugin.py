@@ -48,7 +48,7 @@ class SafeKind(RulesetKind):
 
 def _describe(v: Variation) -> str:
     """A variation on one line: its cost, E(x), first defects, leaf count and jumps."""
-    defects = f", {len(v.defects)} defects: {'; '.join(v.defects[:2])}" if v.defects else ""
+    defects = f", {len(v.defects)} defect(s): {'; '.join(v.defects[:2])}" if v.defects else ""
     return (f"cost {v.cost:.4g} (E={v.objective:.4g}{defects}), {len(v.facade.leaves)} leaves: "
             f"{'; '.join(map(str, v.jumps)) or 'resize only'}")
 

@@ -2,9 +2,8 @@
 
 E(x) (Eq. 1) measures a variation against the facade *after* its jumps, so a jump that cuts a window in half or
 fuses two strips into one costs nothing there, and such a variation could outrank the clean resize. Each
-*defect* below (counted once per input terminal: copies share it) adds ``DEFECT`` to the cost, about the E of
-squeezing or stretching every window of a face by a metre, so a few cut strips rank below a clean resize of a
-narrower face but above a resize that stretches a wide face's windows to several metres:
+*defect* below (counted once per input terminal: copies share it) adds ``DEFECT`` to the cost (on cmp_b0035 one
+cut signboard outweighs squeezing five window columns to 1.3 m on an 8.5 m face, E 4-9e4):
 
 * ``cut``: after removal jumps, an element (a labelled terminal that is neither wall nor one of the ``BANDS``
   jumps stretch legitimately) narrower than its input terminal by more than ``CHANGED`` (a removal slab's edge ran

