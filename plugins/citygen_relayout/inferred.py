@@ -13,7 +13,7 @@ and these defaults turn its structure into bao2013 §5.2 repetitions and generou
   (``freq ... 1..1``): a face without entrance takes a window bay there (the door budget of §9.1 relaxes it);
 * size ranges: openings 50-150 % of their input size (never below the plausibility minimums, doors at least
   1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what their content allows, storeys
-  55-160 % of their height, the parts of rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys of other heights fit; the minimum
+  55-160 % of their height, the top band 25-125 %, the parts of rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys of other heights fit; the minimum
   sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever axis their parent splits.
 
 Every default yields to what the model file states for that composite or symbol.
@@ -32,6 +32,7 @@ OPENING_RANGE = (0.5, 1.5)
 PLAIN_RANGE = (0.25, 3.0)
 COMPOSITE_RANGE = (0.4, 20.0)  # the upper bound: in effect what the content allows
 STOREY_RANGE = (0.55, 1.6)
+TOP_RANGE = (0.25, 1.25)  # the top band may shrink into the top storey, not grow into storeys of its own
 GAP_RANGE = (0.05, 2.0)  # metres: a gap band absorbs the top band's height in every storey pitch
 SIGMA = 0.1
 _MAX_UNIT = 3
@@ -81,7 +82,7 @@ def size_range(sym: Symbol, axis: str, role: str | None = None) -> SizeRange:
     if role == "storey" and axis == "y":
         lo, hi = STOREY_RANGE
     elif role == "top" and axis == "y":
-        lo, hi = PLAIN_RANGE
+        lo, hi = TOP_RANGE
     elif role == "band" and axis == "x":
         lo, hi = PLAIN_RANGE[0], COMPOSITE_RANGE[1]
     elif not sym.is_terminal:
