@@ -4,7 +4,8 @@ A model written by hand states its sequences and size ranges; one built from an 
 without them (issue 21): the automatic segmentation (:mod:`citygen_relayout.hierarchy`) gives storeys and bays,
 and these defaults turn its structure into bao2013 §5.2 repetitions and generous size ranges:
 
-* the facade repeats each storey above the ground (``Ground Storey+ Top``), so storey counts vary;
+* the facade repeats each storey above the ground with the gap band before it (``Ground (Gap Storey)+ Top``), so
+  storey counts follow the building's floors;
 * a row (x-split) repeats each run of a repeated unit of one to three children holding a bay
   (``Wall (Bay Pier)+ Bay Wall``: the unit occurs twice or more in the input; plain walls match each other and
   so do window bays), so bay counts vary and a door between two runs stays between bays, where the input had
@@ -12,9 +13,11 @@ and these defaults turn its structure into bao2013 §5.2 repetitions and generou
 * a door-bearing child of a row may also be one of the row's opening bays (``{DoorBay Bay}``), once per row
   (``freq ... 1..1``): a face without entrance takes a window bay there (the door budget of §9.1 relaxes it);
 * size ranges: openings 50-150 % of their input size (never below the plausibility minimums, doors at least
-  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what their content allows, storeys
-  55-160 % of their height, the top band 25-125 %, the parts of rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys of other heights fit; the minimum
-  sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever axis their parent splits.
+  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what
+  their content allows, storeys 40-160 % of their height, the top band 25-125 %, gaps 0.05-2 m, the parts of
+  rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys
+  of other heights fit; the minimum sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever
+  axis their parent splits.
 
 Every default yields to what the model file states for that composite or symbol.
 """
@@ -31,7 +34,7 @@ from citygen_relayout.model import Frequency, SizeRange, Symbol
 OPENING_RANGE = (0.5, 1.5)
 PLAIN_RANGE = (0.25, 3.0)
 COMPOSITE_RANGE = (0.4, 20.0)  # the upper bound: in effect what the content allows
-STOREY_RANGE = (0.55, 1.6)
+STOREY_RANGE = (0.4, 1.6)
 TOP_RANGE = (0.25, 1.25)  # the top band may shrink into the top storey, not grow into storeys of its own
 GAP_RANGE = (0.05, 2.0)  # metres: a gap band absorbs the top band's height in every storey pitch
 SIGMA = 0.1
