@@ -176,7 +176,7 @@ def test_an_implausible_model_falls_back_with_its_findings():
     assert layout.meta["fallback"].startswith("no ") and "small-opening" in " ".join(layout.meta["findings"])
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(name=st.sampled_from([n for n in sweep.SHIPPED if n.endswith(".relayout")]),
        width=st.floats(2.0, 60.0), height=st.floats(3.0, 60.0), storey=st.sampled_from(sweep.STOREYS))
 def test_no_shipped_model_reports_a_broken_facade_as_dressed(name, width, height, storey):
