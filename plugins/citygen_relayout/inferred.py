@@ -10,6 +10,8 @@ and these defaults turn its structure into bao2013 §5.2 repetitions and generou
   (``Wall (Bay Pier)+ Bay Wall``: the unit occurs twice or more in the input; plain walls match each other and
   so do window bays), so bay counts vary and a door between two runs stays between bays, where the input had
   it, never at the facade's end;
+* a row holding one door bay in its middle whose children read the same from both ends by kind is
+  ``symmetric`` (mirror positions share their symbols), so the door stays centred as in the input;
 * a door-bearing child of a row may also be one of the row's opening bays (``{DoorBay Bay}``), once per row
   (``freq ... 1..1``): a face without entrance takes a window bay there (the door budget of §9.1 relaxes it);
 * size ranges: openings 50-150 % of their input size (never below the plausibility minimums, doors at least
@@ -63,6 +65,17 @@ def sequences(sym: Symbol, symbols: Mapping[str, Symbol], segmentation: Segmenta
     if sym.split == "x":
         return gen.repetition(_row_pattern(sym.children, symbols))
     return gen.replication(tuple(frozenset({c}) for c in sym.children))
+
+
+def symmetric(sym: Symbol, symbols: Mapping[str, Symbol]) -> bool:
+    """A row holding a door whose children read the same from both ends by kind (plain walls alike, window bays
+    alike) with the door in the middle: it is laid out symmetric, so the door stays centred."""
+    if sym.split != "x" or len(sym.children) % 2 == 0:
+        return False
+    doors = frozenset(c for c in sym.children if holds_label(c, "door", symbols))
+    keys = _kinds(sym.children, symbols, doors)
+    return bool(doors) and sym.children[len(keys) // 2] in doors and sum(c in doors for c in sym.children) == 1 \
+        and keys == keys[::-1]
 
 
 def frequencies(sym: Symbol, symbols: Mapping[str, Symbol]) -> list[Frequency]:
@@ -147,6 +160,14 @@ def _storey_pattern(children: tuple[str, ...], storeys: tuple[str, ...], gaps: t
     return gen.Node("seq", parts=tuple(parts))
 
 
+def _kinds(children: tuple[str, ...], symbols: Mapping[str, Symbol], doors: frozenset[str]) -> list[str]:
+    """Children by kind: ``wall`` (a plain wall terminal), ``bay`` (an opening bay without door), ``door`` (the
+    door bay), else the symbol itself."""
+    bays = set(_bays(children, symbols, doors))
+    return ["door" if c in doors else "wall" if symbols[c].is_terminal and symbols[c].label == "wall"
+            else "bay" if c in bays else c for c in children]
+
+
 def _bays(children: tuple[str, ...], symbols: Mapping[str, Symbol], doors: frozenset[str]) -> list[str]:
     """The row's opening bays without a door, most frequent first."""
     counts: dict[str, int] = {}
@@ -162,17 +183,13 @@ def _row_pattern(children: tuple[str, ...], symbols: Mapping[str, Symbol]) -> ge
     commonest bay."""
     doors = frozenset(c for c in children if holds_label(c, "door", symbols))
     bays = _bays(children, symbols, doors)
-
-    def kind(c: str) -> str:
-        sym = symbols[c]
-        if sym.is_terminal and sym.label == "wall":
-            return "wall"
-        return "bay" if c in bays else c
-
-    keys = [kind(c) for c in children]
+    keys = _kinds(children, symbols, doors)
+    if symmetric(Symbol("?", (0.0, 0.0), split="x", children=children), symbols):
+        # mirror positions take each other's symbols, so the row reads the same from both ends
+        children = tuple("|".join(sorted({a, b})) for a, b in zip(children, reversed(children)))
 
     def item(names) -> gen.Node:
-        names = set(names)
+        names = {part for name in names for part in name.split("|")}
         if names & doors and bays:
             names.add(bays[0])
         return gen.Node("item", item=frozenset(names))
@@ -183,7 +200,7 @@ def _row_pattern(children: tuple[str, ...], symbols: Mapping[str, Symbol]) -> ge
         best_len, best_reps = 1, 1
         for size in range(1, _MAX_UNIT + 1):
             unit = keys[i:i + size]
-            if len(unit) < size or doors & set(children[i:i + size]) or "bay" not in unit:
+            if len(unit) < size or "door" in unit or "bay" not in unit:
                 continue
             reps = 1
             while keys[i + reps * size:i + (reps + 1) * size] == unit:
