@@ -226,14 +226,23 @@ class _Layout:
 
     def _empty_floor(self) -> bool:
         """Whether a y-arrangement that puts its openings in floors leaves a floor it could hold one in (it covers
-        at least the smallest opening-bearing child) without any: a storey without windows is not a storey."""
-        taken = {k for k in self.st.floor if k is not None}
-        opening = self.ctx.compiled.opening
-        if self.axis != "y" or self.floors is None or not taken \
-                or any(k is None and opening[s] for k, (s, _) in zip(self.st.floor, self.st.elems)):
-            return False  # an opening-bearing element spanning floors places its openings itself
-        least = min((self.min_size[s] for s, _ in self.st.elems if opening[s]), default=0.0)
+        at least the smallest opening-bearing child) without any: a storey without windows is not a storey. An
+        opening-bearing element spanning floors (it places its openings itself) counts for the floors its
+        provisional interval overlaps."""
+        st, opening = self.st, self.ctx.compiled.opening
+        if self.axis != "y" or self.floors is None or self.symmetric or not any(k is not None for k in st.floor):
+            return False
         lines, (k0, k1) = self.ctx.floor_lines, self.floors
+        taken = {k for k in st.floor if k is not None}
+        if any(k is None and opening[s] for k, (s, _) in zip(st.floor, st.elems)):
+            if st.x.size != len(st.elems):
+                return False
+            pos = self.off + np.concatenate([[0.0], np.cumsum(st.x)])
+            for v, (k, (s, _)) in enumerate(zip(st.floor, st.elems)):
+                if k is None and opening[s]:
+                    taken.update(j for j in range(k0, k1 + 1)
+                                 if min(pos[v + 1], lines[j + 1]) - max(pos[v], lines[j]) > 1e-6)
+        least = min((self.min_size[s] for s, _ in st.elems if opening[s]), default=0.0)
         a, b = self.off, self.off + self.total
         return any(k not in taken and min(b, lines[k + 1]) - max(a, lines[k]) >= least - 1e-9
                    for k in range(k0, k1 + 1))

@@ -62,7 +62,8 @@ def _storeys(box: Region, leaves: list[Region], table: dict, signatures: dict) -
     at the splitting line nearest the middle."""
     lo, hi = box.y, box.y + box.h
     edges = [lo, *_cuts(leaves, lo, hi, "y"), hi]
-    slices = [(a, b, [r for r in leaves if a - _EPS <= r.y and r.y + r.h <= b + _EPS]) for a, b in zip(edges, edges[1:])]
+    slices = [(a, b, [r for r in leaves if a - _EPS <= r.y and r.y + r.h <= b + _EPS])
+              for a, b in zip(edges, edges[1:])]
     cores = [(a, b) for a, b, inside in slices
              if any(r.label in OPENING_LABELS and r.h >= CORE_HEIGHT - _EPS for r in inside)]
     if len(cores) < 2:
@@ -100,7 +101,8 @@ def _storeys(box: Region, leaves: list[Region], table: dict, signatures: dict) -
     root = _register(Symbol(box.symbol, (box.w, box.h), None, 0.0, None, None, "y", tuple(kids)), table)
 
     def having(role: str, skip_first: bool = False) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(c for k, (c, r) in enumerate(zip(kids, roles)) if r == role and (k or not skip_first)))
+        return tuple(dict.fromkeys(c for k, (c, r) in enumerate(zip(kids, roles))
+                                   if r == role and (k or not skip_first)))
     return Segmentation(table, root, having("storey", skip_first=True), having("gap"), having("top"))
 
 

@@ -4,17 +4,22 @@ A model written by hand states its sequences and size ranges; one built from an 
 without them (issue 21): the automatic segmentation (:mod:`citygen_relayout.hierarchy`) gives storeys and bays,
 and these defaults turn its structure into bao2013 §5.2 repetitions and generous size ranges:
 
-* the facade repeats each storey above the ground (``Ground Storey+ Top``), so storey counts vary;
+* the facade repeats each storey above the ground with the gap band before it (``Ground (Gap Storey)+ Top``), so
+  storey counts follow the building's floors;
 * a row (x-split) repeats each run of a repeated unit of one to three children holding a bay
   (``Wall (Bay Pier)+ Bay Wall``: the unit occurs twice or more in the input; plain walls match each other and
   so do window bays), so bay counts vary and a door between two runs stays between bays, where the input had
   it, never at the facade's end;
+* a row holding one door bay in its middle whose children read the same from both ends by kind is
+  ``symmetric`` (mirror positions share their symbols), so the door stays centred as in the input;
 * a door-bearing child of a row may also be one of the row's opening bays (``{DoorBay Bay}``), once per row
   (``freq ... 1..1``): a face without entrance takes a window bay there (the door budget of §9.1 relaxes it);
 * size ranges: openings 50-150 % of their input size (never below the plausibility minimums, doors at least
-  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what their content allows, storeys
-  55-160 % of their height, the parts of rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys of other heights fit; the minimum
-  sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever axis their parent splits.
+  1.9 m tall, no other labelled terminal a sliver), walls and bands 25-300 %, composites from 40 % up to what
+  their content allows, storeys 40-160 % of their height, the top band 25-125 %, gaps 0.05-2 m, the parts of
+  rows without openings (moldings, wall bands) as wide as needed, so faces far from the input size and storeys
+  of other heights fit; the minimum sizes of openings hold on both axes (:attr:`Model.terminal_min`), whichever
+  axis their parent splits.
 
 Every default yields to what the model file states for that composite or symbol.
 """
@@ -31,7 +36,8 @@ from citygen_relayout.model import Frequency, SizeRange, Symbol
 OPENING_RANGE = (0.5, 1.5)
 PLAIN_RANGE = (0.25, 3.0)
 COMPOSITE_RANGE = (0.4, 20.0)  # the upper bound: in effect what the content allows
-STOREY_RANGE = (0.55, 1.6)
+STOREY_RANGE = (0.4, 1.6)
+TOP_RANGE = (0.25, 1.25)  # the top band may shrink into the top storey, not grow into storeys of its own
 GAP_RANGE = (0.05, 2.0)  # metres: a gap band absorbs the top band's height in every storey pitch
 SIGMA = 0.1
 _MAX_UNIT = 3
@@ -61,6 +67,17 @@ def sequences(sym: Symbol, symbols: Mapping[str, Symbol], segmentation: Segmenta
     return gen.replication(tuple(frozenset({c}) for c in sym.children))
 
 
+def symmetric(sym: Symbol, symbols: Mapping[str, Symbol]) -> bool:
+    """A row holding a door whose children read the same from both ends by kind (plain walls alike, window bays
+    alike) with the door in the middle: it is laid out symmetric, so the door stays centred."""
+    if sym.split != "x" or len(sym.children) % 2 == 0:
+        return False
+    doors = frozenset(c for c in sym.children if holds_label(c, "door", symbols))
+    keys = _kinds(sym.children, symbols, doors)
+    return bool(doors) and sym.children[len(keys) // 2] in doors and sum(c in doors for c in sym.children) == 1 \
+        and keys == keys[::-1]
+
+
 def frequencies(sym: Symbol, symbols: Mapping[str, Symbol]) -> list[Frequency]:
     """One door per row that holds the door (a row with a door-bearing child offered in place of a bay)."""
     if sym.split != "x":
@@ -81,7 +98,7 @@ def size_range(sym: Symbol, axis: str, role: str | None = None) -> SizeRange:
     if role == "storey" and axis == "y":
         lo, hi = STOREY_RANGE
     elif role == "top" and axis == "y":
-        lo, hi = PLAIN_RANGE
+        lo, hi = TOP_RANGE
     elif role == "band" and axis == "x":
         lo, hi = PLAIN_RANGE[0], COMPOSITE_RANGE[1]
     elif not sym.is_terminal:
@@ -143,6 +160,14 @@ def _storey_pattern(children: tuple[str, ...], storeys: tuple[str, ...], gaps: t
     return gen.Node("seq", parts=tuple(parts))
 
 
+def _kinds(children: tuple[str, ...], symbols: Mapping[str, Symbol], doors: frozenset[str]) -> list[str]:
+    """Children by kind: ``wall`` (a plain wall terminal), ``bay`` (an opening bay without door), ``door`` (the
+    door bay), else the symbol itself."""
+    bays = set(_bays(children, symbols, doors))
+    return ["door" if c in doors else "wall" if symbols[c].is_terminal and symbols[c].label == "wall"
+            else "bay" if c in bays else c for c in children]
+
+
 def _bays(children: tuple[str, ...], symbols: Mapping[str, Symbol], doors: frozenset[str]) -> list[str]:
     """The row's opening bays without a door, most frequent first."""
     counts: dict[str, int] = {}
@@ -158,17 +183,13 @@ def _row_pattern(children: tuple[str, ...], symbols: Mapping[str, Symbol]) -> ge
     commonest bay."""
     doors = frozenset(c for c in children if holds_label(c, "door", symbols))
     bays = _bays(children, symbols, doors)
-
-    def kind(c: str) -> str:
-        sym = symbols[c]
-        if sym.is_terminal and sym.label == "wall":
-            return "wall"
-        return "bay" if c in bays else c
-
-    keys = [kind(c) for c in children]
+    keys = _kinds(children, symbols, doors)
+    if symmetric(Symbol("?", (0.0, 0.0), split="x", children=children), symbols):
+        # mirror positions take each other's symbols, so the row reads the same from both ends
+        children = tuple("|".join(sorted({a, b})) for a, b in zip(children, reversed(children)))
 
     def item(names) -> gen.Node:
-        names = set(names)
+        names = {part for name in names for part in name.split("|")}
         if names & doors and bays:
             names.add(bays[0])
         return gen.Node("item", item=frozenset(names))
@@ -179,7 +200,7 @@ def _row_pattern(children: tuple[str, ...], symbols: Mapping[str, Symbol]) -> ge
         best_len, best_reps = 1, 1
         for size in range(1, _MAX_UNIT + 1):
             unit = keys[i:i + size]
-            if len(unit) < size or doors & set(children[i:i + size]) or "bay" not in unit:
+            if len(unit) < size or "door" in unit or "bay" not in unit:
                 continue
             reps = 1
             while keys[i + reps * size:i + (reps + 1) * size] == unit:

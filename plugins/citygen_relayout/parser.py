@@ -412,8 +412,9 @@ class _Builder:
                 seqs = inferred.sequences(sym, self.symbols, seg)
                 freqs = freqs or inferred.frequencies(sym, self.symbols)
             seqs = seqs or gen.replication(tuple(frozenset({c}) for c in sym.children))
-            rules[name] = CompositeRules(tuple(seqs), tuple(freqs), dict(self.instances.get(name, {})),
-                                         name in self.symmetric)
+            mirrored = name in self.symmetric or (seg is not None and name not in self.sequences
+                                                  and inferred.symmetric(sym, self.symbols))
+            rules[name] = CompositeRules(tuple(seqs), tuple(freqs), dict(self.instances.get(name, {})), mirrored)
         sizes = dict(self.sizes)
         lo, hi, sig = DEFAULT_RANGE
         bands = _band_parts(self.symbols) if seg is not None else frozenset()
