@@ -245,8 +245,8 @@ class Builder:
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
         each such name reported once per ruleset with its fallback."""
-        undefined = {r.material for r in layout.leaves if r.material is not None and r.material != BUILDING_RENDER
-                     and resolve(r.material, self.scene.materials) is None}
+        named = {r.material for r in layout.leaves} - {None, BUILDING_RENDER}
+        undefined = {m for m in named if resolve(m, self.scene.materials) is None}
         if not undefined:
             return layout
         for region in layout.leaves:
