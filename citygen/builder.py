@@ -8,6 +8,7 @@ dask executor one per worker thread. Any error while building one building becom
 from __future__ import annotations
 
 import difflib
+import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -38,14 +39,16 @@ from citygen.usd.writer import BuildingRecord
 
 @dataclass(frozen=True)
 class BuildingOutcome:
-    """A built building's stage record, or why it was skipped; the warnings met on the way; and, from a builder
-    that keeps them, the facade layout of each dressed face (by face index)."""
+    """A built building's stage record, or why it was skipped; the warnings met on the way; from a builder
+    that keeps them, the facade layout of each dressed face (by face index); and the CPU seconds its build took,
+    measured in the thread that built it (a worker process's or the main one's)."""
 
     record: BuildingRecord | None
     skipped: Skipped | None
     warnings: tuple[str, ...]
     faces: tuple[tuple[str, int], ...] = ()  # (:func:`face_tally`)
     layouts: Mapping[int, FacadeLayout] | None = None
+    cpu: float = 0.0
 
 
 def face_tally(layouts: Sequence[FacadeLayout]) -> Counter[str]:
@@ -167,6 +170,13 @@ class Builder:
 
     def build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
               tile: tuple[int, int]) -> BuildingOutcome:
+        """The building's outcome, with the CPU its build took (this thread's, so it holds beside other workers)."""
+        start = time.thread_time()
+        outcome = self._build(footprint, mass, cover, name, tile)
+        return replace(outcome, cpu=time.thread_time() - start)
+
+    def _build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
+               tile: tuple[int, int]) -> BuildingOutcome:
         warnings: list[str] = []
         try:
             bins = face_bins(cover)
@@ -236,8 +246,8 @@ class Builder:
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
         each such name reported once per ruleset with its fallback."""
-        undefined = {r.material for r in layout.leaves if r.material is not None and r.material != BUILDING_RENDER
-                     and resolve(r.material, self.scene.materials) is None}
+        named = {r.material for r in layout.leaves} - {None, BUILDING_RENDER}
+        undefined = {m for m in named if resolve(m, self.scene.materials) is None}
         if not undefined:
             return layout
         for region in layout.leaves:

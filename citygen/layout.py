@@ -14,7 +14,7 @@ import json
 import math
 import operator
 import reprlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any
 
@@ -309,6 +309,19 @@ def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, 
         pair = " and ".join(regions[i].symbol for i in hit[:2])
         problems.append(f"{name}: regions {pair} overlap at x={xs[gx]:.4g}, y={ys[gy]:.4g}")
     return problems
+
+
+def remembered(layout: FacadeLayout, check: str, inputs: tuple[Any, ...], compute: Callable[[], list]) -> list:
+    """``compute()``, the ``check`` of ``layout`` against ``inputs``, run once per layout and inputs (the same
+    objects): a layout is immutable, so the builder's checks after a generator's reuse the generator's result.
+    Returns a new list each time."""
+    memo = layout.__dict__.setdefault("_checks", [])
+    for name, seen, result in memo:
+        if name == check and all(a is b for a, b in zip(seen, inputs)):
+            return list(result)
+    result = compute()
+    memo.append((check, inputs, tuple(result)))
+    return list(result)
 
 
 def require_partition(layout: FacadeLayout, where: str = "<layout>", plugin: str | None = None) -> FacadeLayout:

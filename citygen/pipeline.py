@@ -45,14 +45,26 @@ GROUND_MARGIN = 20.0
 
 @dataclass
 class Report:
-    """What a run did: counts, skipped buildings with reasons, warnings, timings and the stage's figures."""
+    """What a run did: counts, skipped buildings with reasons, warnings, timings and the stage's figures.
+
+    ``timings`` are wall seconds per phase; ``cpu`` the main process's CPU seconds per phase (``usd``: the stage
+    writer's, its ``add`` calls while buildings stream in and its close) plus ``builds``, the CPU the buildings'
+    builds took summed wherever they ran, and ``workers``, the part of it spent in worker processes. With worker
+    processes, the wall time of the ``buildings`` phase holds the writer's work too: the two overlap."""
 
     written: int = 0
     skipped: list[Skipped] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
+    cpu: dict[str, float] = field(default_factory=dict)
     stats: StageStats | None = None
     faces: Counter[str] = field(default_factory=Counter)  # (:func:`citygen.builder.face_tally`, summed)
+
+    @property
+    def buildings_per_s(self) -> float:
+        """Buildings written per wall second of the whole run (0 before it has a total)."""
+        total = self.timings.get("total", 0.0)
+        return self.written / total if total > 0 else 0.0
 
     def summary(self) -> str:
         lines = [f"written {self.written} buildings, skipped {len(self.skipped)}, warnings {len(self.warnings)}"]
@@ -68,14 +80,20 @@ class Report:
             s = self.stats
             lines.append(f"stage {s.path.name}: {s.bytes / 1e6:.1f} MB, {s.prims} prims, {s.meshes} meshes, "
                          f"{s.polygons} polygons, {s.instances} instances of {s.prototypes} prototypes")
-        lines.append("time " + ", ".join(f"{k} {v:.2f}s" for k, v in self.timings.items()))
+        lines.append("time " + ", ".join(f"{k} {v:.2f}s" for k, v in self.timings.items())
+                     + f"; {self.buildings_per_s:.1f} buildings/s")
+        if self.cpu:
+            lines.append("cpu " + ", ".join(f"{k} {v:.2f}s" for k, v in self.cpu.items())
+                         + (f"; {1000 * self.cpu['builds'] / self.written:.0f} ms per building"
+                            if self.written and "builds" in self.cpu else ""))
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
         """The whole report as JSON-ready data (every skipped building and warning, the stage's figures)."""
         stats = None if self.stats is None else {**asdict(self.stats), "path": str(self.stats.path)}
         return {"written": self.written, "skipped": [asdict(s) for s in self.skipped], "warnings": self.warnings,
-                "faces": dict(sorted(self.faces.items())), "stage": stats, "timings": self.timings}
+                "faces": dict(sorted(self.faces.items())), "stage": stats, "timings": self.timings, "cpu": self.cpu,
+                "buildings_per_s": self.buildings_per_s}
 
 
 def _faces_line(faces: Counter[str]) -> str:
@@ -139,7 +157,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                            hint="use the local executor for .glb/.gltf, or write .usdc")
     check_stage_path(Path(out))
     report = Report()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     # a ruleset that does not load stops the run before any building (masses only: none is used)
     rulesets = {} if scene.output.masses else load_rulesets(scene, registry)
     imported = import_footprints(scene, registry)
@@ -147,7 +165,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.warnings += imported.warnings
     if not imported.footprints:
         report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     footprints, masses = [], []
     roofs = registry.roof_builders
     for fp in imported.footprints:
@@ -177,7 +195,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
                                f"worker processes: {plugins}")
         jobs, plugins = 1, None
-    t2 = time.perf_counter()
+    t2, c2 = time.perf_counter(), time.process_time()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if gltf:
@@ -189,8 +207,9 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
                           progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **report.timings,
                           "total": time.perf_counter() - t0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **report.cpu, "total": time.process_time() - c0}
         return report
-    usd = 0.0
+    usd = builds = 0.0  # CPU seconds: the writer's add calls (this thread), the builds (wherever they ran)
     with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
         writer = stack.enter_context(_writer(out, scene, layer_data))
         if ground:
@@ -200,17 +219,20 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         for outcome in outcomes:
             report.warnings += outcome.warnings
             report.faces.update(dict(outcome.faces))
+            builds += outcome.cpu
             if outcome.record is None:
                 report.skipped.append(outcome.skipped)
                 continue
-            tw = time.perf_counter()
+            tw = time.thread_time()
             writer.add(outcome.record)
-            usd += time.perf_counter() - tw
+            usd += time.thread_time() - tw
             report.written += 1
-        t3 = time.perf_counter()
+        t3, c3 = time.perf_counter(), time.process_time()
         report.stats = writer.close()
-    report.timings = {"import": t1 - t0, "masses": t2 - t1, "facades+geometry": t3 - t2 - usd,
-                      "usd": usd + time.perf_counter() - t3, "total": time.perf_counter() - t0}
+    t4, c4 = time.perf_counter(), time.process_time()
+    report.timings = {"import": t1 - t0, "masses": t2 - t1, "buildings": t3 - t2, "usd": t4 - t3, "total": t4 - t0}
+    report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
+                  "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
 
 
@@ -263,14 +285,14 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
                       progress: Callable[[int, int], None] | None,
                       ground: tuple[float, float, float, float, float] | None) -> None:
     """Tiles built and written by dask workers; the root layer listing them (and the ground) written here."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
         results = run_tiles(work, job, scheduler, jobs, progress)
-        t1 = time.perf_counter()
+        t1, c1 = time.perf_counter(), time.process_time()
         for result in results:
             report.warnings += result.warnings
             report.faces.update(dict(result.faces))
@@ -280,6 +302,12 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
                 report.written += result.stats.buildings
         report.stats = writer.close()
     report.timings = {"tiles (dask)": t1 - t0, "usd": time.perf_counter() - t1}
+    report.cpu = {"tiles (dask)": c1 - c0, "usd": time.process_time() - c1}
+
+
+def _in_workers(jobs: int, total: int) -> bool:
+    """Whether :func:`_run` builds ``total`` buildings in worker processes (else in this one)."""
+    return jobs > 1 and total >= 2 * jobs
 
 
 def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
@@ -289,7 +317,7 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
     already loaded (worker processes load their own)."""
     total = len(work)
-    if jobs <= 1 or total < 2 * jobs:
+    if not _in_workers(jobs, total):
         builder = Builder(scene, seed, registry, rulesets)
         for k, item in enumerate(work):
             yield builder.build(*item)

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from citygen.errors import SceneError
-from citygen.layout import FacadeLayout, Region
+from citygen.layout import FacadeLayout, Region, remembered
 from citygen.request import FacadeRequest
 
 #: Labels of openings: what a storey is recognised by.
@@ -122,6 +122,11 @@ def check_plausible(layout: FacadeLayout, request: FacadeRequest | None = None,
     Costs O(terminals) with numpy over :attr:`FacadeLayout.leaf_rects`; at most a few findings per rule are
     listed (with a count), so a degenerate layout of thousands of terminals reads in a few lines.
     """
+    rules = DEFAULT_RULES if rules == DEFAULT_RULES else rules  # (a scene's default rules: the generator's)
+    return remembered(layout, "plausible", (request, rules), lambda: _findings(layout, request, rules))
+
+
+def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: PlausibilityRules) -> list[Finding]:
     leaves = layout.leaves
     if not leaves:
         return []

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
+from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, remembered
 from citygen.rng import derive_rng
 
 #: The least storey height (metres) a scene or a preview command may ask for.
@@ -99,6 +99,10 @@ def split_floors(height: float, floor_height: float, ground_height: float | None
 
 def check_request(layout: FacadeLayout, request: FacadeRequest, tol: float = 1e-6) -> list[str]:
     """Problems with ``layout`` as an answer to ``request``; empty when every constraint holds."""
+    return remembered(layout, "request", (request, tol), lambda: _problems(layout, request, tol))
+
+
+def _problems(layout: FacadeLayout, request: FacadeRequest, tol: float) -> list[str]:
     problems: list[str] = []
     eps = tol * max(request.width, request.height, 1.0)
     if abs(layout.width - request.width) > eps or abs(layout.height - request.height) > eps:
