@@ -73,7 +73,7 @@ def feature_id(feature: Mapping[str, Any], properties: Mapping[str, Any], index:
         return f"feature/{index}"
     osm_type = properties.get("osm_type", properties.get("@type"))
     if isinstance(value, int | float) and not isinstance(value, bool) and osm_type in OSM_TYPES \
-            and math.isfinite(value):
+            and (isinstance(value, int) or math.isfinite(value)):  # (an int beyond float range is still an id)
         return f"{osm_type}/{int(value)}"
     return str(value)
 

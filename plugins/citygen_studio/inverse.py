@@ -38,9 +38,10 @@ def import_layout(name: str, data: bytes, width: float | None = None, floor_heig
             summary = (f"{name}: {len(layout.terminals())} terminals, {layout.width:.2f} x {layout.height:.2f} m"
                        + ("" if label_map else " (no label map: proportions assumed square)"))
         else:
-            from citygen_inverse.photo import analyse, load_photo
-            layout = analyse(load_photo(io.BytesIO(data)), name, width=width, floor_height=floor_height,
-                             meta={"source": name}).layout
+            from citygen_photo.learned import analyse_learned
+            from citygen_photo.photo import load_photo
+            layout = analyse_learned(load_photo(io.BytesIO(data)), name, width=width, floor_height=floor_height,
+                                     meta={"source": name}).layout
             summary = (f"{name}: {layout.meta['floors']} floors x {layout.meta['tiles_per_floor']} tiles, "
                        f"{layout.count('window')} windows, {layout.count('door')} doors, "
                        f"{layout.width:.2f} x {layout.height:.2f} m")

@@ -30,7 +30,7 @@ from citygen.pipeline import import_footprints
 from citygen.registry import Registry
 from citygen.request import MIN_STOREY, FacadeRequest, check_request
 from citygen.scene import Scene, load_scene
-from citygen.usd.materials import LOOKS
+from citygen.usd.materials import BUILTIN
 from citygen.usd.writer import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
 from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
@@ -123,7 +123,7 @@ class Session:
                 "error": self.load_error, "buildings": len(self.footprints), "rulesets": self.rulesets(),
                 "kinds": [{"id": k.id, "suffixes": list(k.suffixes), "description": k.description}
                           for k in self.registry.ruleset_kinds.values()],
-                "materials": sorted(LOOKS), "labels": list(LABELS),
+                "materials": sorted({*BUILTIN, *(self.scene.materials if self.scene else {})}), "labels": list(LABELS),
                 "floor_height": scene.defaults.floor_height if scene else 3.0}
 
     def rulesets(self) -> list[str]:

@@ -77,7 +77,7 @@ def test_round_trip_through_trimesh_counts_buildings_instances_and_materials(cit
     shared = [g for g, n in Counter(graph[node][1] for node in graph.nodes_geometry).items() if n > 1]
     assert len(shared) >= len([m for m, n in users.items() if n > 1])
     # the same materials, with the stage's linear colours
-    looks = {p.GetName(): UsdShade.Material(p) for p in stage.GetPrimAtPath("/World/Looks").GetChildren()}
+    looks = {p.GetName(): UsdShade.Material(p) for p in stage.GetPrimAtPath("/Materials").GetAllChildren()}
     assert sorted(m["name"] for m in doc["materials"]) == sorted(looks)
     for material in doc["materials"]:
         shader = looks[material["name"]].ComputeSurfaceSource()[0]

@@ -46,7 +46,7 @@ def test_a_stage_whose_folder_is_a_file_or_a_folder_itself_is_refused(tmp_path, 
         pipeline.generate_city(scene, out=tmp_path / "file" / "city.usdc")
     with pytest.raises(ExportError, match="the path is a folder"):
         pipeline.generate_city(scene, out=tmp_path / "dir.usdc")
-    with pytest.raises(ExportError, match="unsupported stage extension '.obj'"):
+    with pytest.raises(ExportError, match="unsupported output extension '.obj'"):
         pipeline.generate_city(scene, out=tmp_path / "city.obj")
 
 

@@ -21,9 +21,10 @@ TILED = 'tile_layers = true\ntile_size = 40\n'
 
 
 def _layers(root: Path) -> dict[str, bytes]:
-    """The root's bytes and those of every tile layer it lists (a missing one: b"")."""
+    """The root's bytes and those of every tile layer its tile prims payload (a missing one: b"")."""
     layer = Sdf.Layer.FindOrOpen(str(root))
-    paths = list(layer.subLayerPaths)
+    paths = [item.assetPath.removeprefix("./") for tile in layer.GetPrimAtPath("/World").nameChildren
+             for item in tile.payloadList.prependedItems]
     Sdf.Layer.Reload(layer)
     files = {root.name: root.read_bytes()}
     for sub in paths:

@@ -85,10 +85,10 @@ def test_build_gives_face_layouts_and_a_glb_of_the_building(client):
 def test_build_with_an_edited_ruleset_uses_the_edit(client, scene):
     text = (scene.parent / "house.grammar").read_text()
     plain = client.post("/api/build", json={"index": 0}).json()
-    edited = text.replace("window", "shop")
+    edited = text.replace("terminal(window", "terminal(blind")  # (a plausible edit: shutters for windows)
     changed = client.post("/api/build", json={"index": 0, "rulesets": {"house.grammar": edited}}).json()
     labels = {r["label"] for f in changed["faces"] if f["layout"] for r in f["layout"]["leaves"]}
-    assert "shop" in labels and changed["glb"] != plain["glb"]
+    assert "blind" in labels and changed["glb"] != plain["glb"]
     assert (scene.parent / "house.grammar").read_text() == text  # nothing saved
 
 
