@@ -32,10 +32,6 @@ RELAXATIONS = (((), ""),
 #: lower than its letters vanishes; with this bound such a candidate is not solved and the next one is taken.
 LEAST = 1.0 / 3.0
 
-#: Metres a band's bounds are widened by: storeys as tall as their floor meet both bounds exactly, and the
-#: rounding of floor lines (4.0 + 6 x 17.5 / 6 ...) made such systems "infeasible" for the active-set solver.
-BAND_SLACK = 1e-7
-
 #: Weight that ties an unsized symbol to its sampled size; only picks one optimum among equal ones.
 UNSIZED_WEIGHT = 1e-4
 
@@ -130,7 +126,7 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
                     eq_rows += [({s: 1.0}, lo, "pin"), ({t: 1.0}, hi, "pin")]
                 if i in bands.get(key, {}):
                     lo, hi = bands[key][i]
-                    ineq += [({s: -1.0}, BAND_SLACK - lo, "band"), ({t: 1.0}, hi + BAND_SLACK, "band")]
+                    ineq += [({s: -1.0}, -lo, "band"), ({t: 1.0}, hi, "band")]
                 if letter.symbol in pinned:
                     # storeys vary with the floor lines: each instance outside the floor word keeps its own size
                     if key not in pins:

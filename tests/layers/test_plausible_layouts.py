@@ -34,7 +34,7 @@ def preview(width, height, storey=3.0, ground=4.0, entrance=True):
     return FacadeRequest.preview(width, height, floor_height=storey, ground_height=ground, entrance=entrance)
 
 
-def test_regression_terraced_house_14m_dressed_at_every_height_6_to_40m():
+def test_regression_terraced_house_14m_dressed_at_every_height_6_to_40m():  # 25.5 m: quadprog cycled forever
     """Issue 21: 14 m wide it was degenerate at 32 of 69 heights (a 0 m ground floor with seven 0 m shops, a
     ledge as a 3.2 m storey, a 12.7 m storey with its windows relabelled wall), all reported solved."""
     rs = load(ROOT / "rulesets" / "terraced_house.layers")
@@ -54,8 +54,8 @@ def test_regression_terraced_house_6_to_9_storeys_at_scene_default_floor_heights
 
 
 def test_regression_storeys_as_tall_as_their_floor_keep_one_size():
-    """Floor lines 4 + 6 x 17.5/6 m: storey letters exactly as tall as their floor met both band bounds, and the
-    rounding made the active-set solver drop synchronisation (a 0 m ground floor)."""
+    """Floor lines 4 + 6 x 17.5/6 m: storey letters exactly as tall as their floor meet both band bounds; quadprog
+    called such systems infeasible (synchronisation dropped, a 0 m ground floor), DAQP solves them."""
     rs = load(ROOT / "rulesets" / "terraced_house.layers")
     clear_solved()
     _, sy = solve_request(rs, preview(14.0, 21.5))
