@@ -52,7 +52,7 @@ def test_random_stacks(rs, width, height):
     layout = generate(rs, request)
     assert check_partition(layout) == []                          # visible regions of every layer partition it
     if layout.meta.get("fallback"):                               # no plausible layout: a plain wall, findings
-        assert layout.meta["findings"] and [r.label for r in layout.leaves] == ["wall"]
+        assert layout.meta["findings"] and {r.label for r in layout.leaves} <= {"wall", "door", None}
     else:
         assert {c.layer for c in layout.root.children} == {layer.name for layer in rs.layers}
         assert check_plausible(layout, request) == []
@@ -87,8 +87,9 @@ def test_shipped_rulesets_honour_requests(name, width, height, entrance, corner)
     request = FacadeRequest(width, height, base.floor_lines, entrance, (corner, corner), base.context)
     layout = generate(rs, request)
     assert check_partition(layout) == []
-    if not layout.meta.get("fallback"):       # a plain wall says it could not dress the face (findings)
-        assert check_request(layout, request) == [] and check_plausible(layout, request) == []
+    assert check_request(layout, request) == []     # a plain wall (fall-back) carries the entrance too
+    if not layout.meta.get("fallback"):
+        assert check_plausible(layout, request) == []
 
 
 def test_registry_finds_the_kind():
@@ -140,7 +141,7 @@ def test_regression_narrow_entrance_face_keeps_its_door(width, corner):
     layout = generate(rs, request)
     assert check_partition(layout) == []
     if layout.meta.get("fallback"):
-        assert layout.meta["findings"] and [r.label for r in layout.leaves] == ["wall"]
+        assert layout.meta["findings"] and {r.label for r in layout.leaves} <= {"wall", "door", None}
     else:
         assert check_request(layout, request) == [] and check_plausible(layout, request) == []
         assert layout.count("door") == 1
