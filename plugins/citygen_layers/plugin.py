@@ -162,3 +162,6 @@ class LayersKind(RulesetKind):
 @hookimpl
 def citygen_ruleset_kinds() -> list[RulesetKind]:
     return [LayersKind()]
+
+
+__all__ = ["LayersKind", "alternatives", "citygen_ruleset_kinds", "clear_solved", "generate", "solve_request"]
