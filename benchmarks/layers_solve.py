@@ -55,8 +55,11 @@ def main() -> None:
             generate(ruleset, request)
             reused.append(time.perf_counter() - t0)
         status = "/".join(layout.meta["status"].values())
+        if layout.meta.get("fallback"):      # no plausible layout: the plain wall keeps the solve's status
+            status += " -> fell back: " + "; ".join(layout.meta["findings"][:1])
+        expansions = layout.meta.get("expansions", "-")
         print(f"{name:34} {1e3 * statistics.median(wall):10.1f} {1e3 * statistics.median(cpu):8.1f} "
-              f"{layout.meta['expansions']:10d} {1e3 * statistics.median(reused):10.1f}  {status}")
+              f"{expansions:>10} {1e3 * statistics.median(reused):10.1f}  {status}")
 
 
 if __name__ == "__main__":

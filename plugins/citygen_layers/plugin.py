@@ -114,7 +114,8 @@ def _layout(ruleset: Ruleset, request: FacadeRequest, sx: DirectionSolution, sy:
 def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack): the first
     pair of direction solutions whose layout :func:`citygen.plausible.check_plausible` accepts, advancing the
-    direction(s) each layout's findings blame; a plain wall with the findings when none is within ``TRIES``."""
+    direction(s) each layout's findings blame; a plain wall (with the entrance's door) and the findings when none is
+    within ``TRIES``."""
     xs, ys = alternatives(ruleset, request)
     i = j = tries = 0
     first: tuple[FacadeLayout, list] | None = None
@@ -131,9 +132,10 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
         axes = blamed_axes(findings)
         i, j = i + ("x" in axes), j + ("y" in axes)
     layout, findings = first
-    return plain_wall(request, f"no plausible layer-stack layout in {tries} tried: {summary(findings)}", findings,
-                      kind="layers", ruleset=ruleset.source, status=layout.meta["status"],
-                      diagnostics=layout.meta.get("diagnostics", []))
+    plain = plain_wall(request, f"no plausible layer-stack layout in {tries} tried: {summary(findings)}", findings,
+                       kind="layers", ruleset=ruleset.source, status=layout.meta["status"],
+                       diagnostics=layout.meta.get("diagnostics", []))
+    return enforce_entrance(plain, request)[0]   # the request's contract holds on the plain wall too
 
 
 class LayersKind(RulesetKind):
@@ -163,3 +165,6 @@ class LayersKind(RulesetKind):
 @hookimpl
 def citygen_ruleset_kinds() -> list[RulesetKind]:
     return [LayersKind()]
+
+
+__all__ = ["LayersKind", "alternatives", "citygen_ruleset_kinds", "clear_solved", "generate", "solve_request"]

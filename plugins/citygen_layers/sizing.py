@@ -4,7 +4,8 @@ Stitching (within an entry and at column borders), full coverage and column alig
 with shared position variables (one per column border per matrix, one per letter border inside an entry), which
 is the paper's system with its equality constraints eliminated exactly. What remains: the objective over the
 prototype letter of each sized symbol, synchronisation of every letter (and across alignment groups) with its
-prototype, ``s <= t``, and the building's pins (floor lines) and bands (corner strips, floor bands).
+prototype, ``s <= t``, a least size of visible sized letters (:data:`LEAST`, beyond the paper), and the
+building's pins (floor lines) and bands (corner strips, floor bands).
 """
 from __future__ import annotations
 
@@ -21,9 +22,15 @@ from citygen_layers.words import Letter
 
 #: Constraint kinds given up, in order, when the system has no solution (each step is reported).
 RELAXATIONS = (((), ""),
-               (("sync",), "synchronisation of symbol sizes dropped (pins and bands leave no common size)"),
-               (("sync", "band"), "corner/floor bands dropped (no room for them)"),
-               (("sync", "band", "pin"), "floor pins dropped (the words cannot meet the floor lines)"))
+               (("least",), "minimum sizes dropped (letters shrink below a third of their size)"),
+               (("least", "sync"), "synchronisation of symbol sizes dropped (pins and bands leave no common size)"),
+               (("least", "sync", "band"), "corner/floor bands dropped (no room for them)"),
+               (("least", "sync", "band", "pin"), "floor pins dropped (the words cannot meet the floor lines)"))
+
+#: The least share of its size a visible sized letter keeps (``t - s >= LEAST * size``). The paper's objective
+#: shrinks every letter of a column by the same metres, so a 0.12 m sill or a 0.25 m ledge in a storey 0.4 m
+#: lower than its letters vanishes; with this bound such a candidate is not solved and the next one is taken.
+LEAST = 1.0 / 3.0
 
 #: Weight that ties an unsized symbol to its sampled size; only picks one optimum among equal ones.
 UNSIZED_WEIGHT = 1e-4
@@ -112,6 +119,8 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
             for i, letter in enumerate(matrix.originals[r]):
                 s, t = letter_vars[key][i]
                 ineq.append(({s: 1.0, t: -1.0}, 0.0, "order"))
+                if not (letter.transparent or letter.unsized) and letter.size > 0.0 and key not in pins:
+                    ineq.append(({s: 1.0, t: -1.0}, -LEAST * letter.size, "least"))
                 if key in pins:
                     lo, hi = pins[key][i]
                     eq_rows += [({s: 1.0}, lo, "pin"), ({t: 1.0}, hi, "pin")]

@@ -99,6 +99,7 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     fallback: tuple[Candidate, float] | None = None
     relaxed: DirectionSolution | None = None
     relaxed_at = solved = 0
+    seen: set[tuple] = set()
     # per hash of a candidate's words (hashed once: letters are slow to hash), [words, matrices, cutoff searched,
     # done (yielded or rejected: never sized again)]
     cache: dict[int, list[list]] = {}
@@ -133,6 +134,10 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                     if relaxed is None:
                         relaxed, relaxed_at = replace(solution, status="best-effort"), len(diagnostics)
                     continue
+                placed = _placement(solution)
+                if placed in seen:      # another sample of an unsized letter, sized to the same layout
+                    continue
+                seen.add(placed)
                 solved += 1
                 yield solution
         if budget.exhausted:
@@ -163,6 +168,13 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     solution = _sized(ruleset, spec, candidate, matrices, mu_c, "best-effort", budget, bands, floor_lines,
                       diagnostics)
     yield replace(solution, timed_out=True) if late else solution
+
+
+def _placement(solution: DirectionSolution) -> tuple:
+    """What a direction solution places: every row's letters and their bounds (to the micrometre)."""
+    return tuple((key, tuple((seg.letter.symbol if seg.letter else None, round(seg.s, 6), round(seg.t, 6))
+                             for seg in segments))
+                 for key, segments in sorted(solution.sizing.segments.items()))
 
 
 def solve_direction(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,

@@ -52,7 +52,7 @@ def test_random_stacks(rs, width, height):
     layout = generate(rs, request)
     assert check_partition(layout) == []                          # visible regions of every layer partition it
     if layout.meta.get("fallback"):                               # no plausible layout: a plain wall, findings
-        assert layout.meta["findings"] and [r.label for r in layout.leaves] == ["wall"]
+        assert layout.meta["findings"] and {r.label for r in layout.leaves} <= {"wall", "door", None}
     else:
         assert {c.layer for c in layout.root.children} == {layer.name for layer in rs.layers}
         assert check_plausible(layout, request) == []
@@ -87,8 +87,9 @@ def test_shipped_rulesets_honour_requests(name, width, height, entrance, corner)
     request = FacadeRequest(width, height, base.floor_lines, entrance, (corner, corner), base.context)
     layout = generate(rs, request)
     assert check_partition(layout) == []
-    if not layout.meta.get("fallback"):       # a plain wall says it could not dress the face (findings)
-        assert check_request(layout, request) == [] and check_plausible(layout, request) == []
+    assert check_request(layout, request) == []     # a plain wall (fall-back) carries the entrance too
+    if not layout.meta.get("fallback"):
+        assert check_plausible(layout, request) == []
 
 
 def test_registry_finds_the_kind():
@@ -132,13 +133,18 @@ def test_preview_renders(tmp_path):
 @pytest.mark.parametrize(("width", "corner"), [(3.5, 0.6), (4.0, 0.375), (4.0, 0.6), (5.0, 0.375)])
 def test_regression_narrow_entrance_face_keeps_its_door(width, corner):
     """The terraced house's door follows its full-width bay W into the corner strips on narrow faces; it was made
-    wall (no door at all). Openings are now cut at the strip line, and a door is carved as a last resort."""
+    wall (no door at all), later cut at the strip line and carved, with shops and pillars 0 m wide around it.
+    Such a face now gets a plausible layout with its door, or a plain wall that says why (issue 21)."""
     rs = load(ROOT / "rulesets" / "terraced_house.layers")
     base = FacadeRequest.preview(width, 7.5, floor_height=3.0, ground_height=4.0, entrance=True)
     request = FacadeRequest(width, 7.5, base.floor_lines, True, (corner, corner), base.context)
     layout = generate(rs, request)
-    assert check_partition(layout) == [] and check_request(layout, request) == []
-    assert layout.count("door") == 1 and layout.meta["diagnostics"]
+    assert check_partition(layout) == []
+    if layout.meta.get("fallback"):
+        assert layout.meta["findings"] and {r.label for r in layout.leaves} <= {"wall", "door", None}
+    else:
+        assert check_request(layout, request) == [] and check_plausible(layout, request) == []
+        assert layout.count("door") == 1
 
 
 def test_conform_cuts_openings_at_the_corner_strip():
