@@ -80,6 +80,11 @@ class RelayoutCommand(Command):
             print("error: give --size W H (or --symbols)", file=sys.stderr)
             return 2
         width, height = args.size
+        estimate = estimated_terminals(model, width, height)
+        if estimate > PREVIEW_TERMINALS:
+            print(f"error: {args.model}: at {width:g} x {height:g} m the model would lay out about {estimate:,.0f} "
+                  f"terminals; a preview stops at {PREVIEW_TERMINALS:,} -- give a smaller --size", file=sys.stderr)
+            return 2
         results = variations(model, width, height, args.count, seed=args.seed, budget_s=args.budget)
         layouts = [r.layout for r in results if r.success]
         for k, r in enumerate(results):
@@ -91,6 +96,20 @@ class RelayoutCommand(Command):
                     print(f"variation {k}: {len(r.layout.terminals())} terminals, {r.seconds * 1000:.1f} ms, "
                           f"{r.backtracks} backtracks, {r.restarts} restarts")
         return 0 if len(layouts) == len(results) else 1
+
+
+#: Most terminals a ``citygen relayout`` preview lays out (a 1000 x 1000 m preview of a house-sized model needed
+#: 950 MB and 50 s; 60k terminals take a few seconds).
+PREVIEW_TERMINALS = 60_000
+
+
+def estimated_terminals(model, width: float, height: float) -> float:
+    """The model's input terminal count scaled by the face's area over the input's: what a variation lays out."""
+    def count(name: str) -> int:
+        symbol = model.symbols[name]
+        return 1 if symbol.is_terminal else sum(count(c) for c in symbol.children)
+    w0, h0 = model.symbols[model.root].extent
+    return count(model.root) * (width * height) / max(w0 * h0, 1e-9)
 
 
 @hookimpl

@@ -36,3 +36,15 @@ def test_groups_and_sets_nested_past_the_bound_are_a_parse_error(tmp_path):
     (tmp_path / "ok.relayout").write_text(model.replace("repeat Upper : Wall (Bay Wall)+", "repeat Upper : Wall "
                                                         + "(" * 31 + "Bay Wall" + ")" * 31 + "+"))
     load_model(tmp_path / "ok.relayout")
+
+
+def test_regression_a_huge_preview_is_refused_before_laying_out(capsys):
+    """Was: ``citygen relayout townhouse.relayout --size 1000 1000`` took 950 MB and 50 s; now one error line."""
+    from pathlib import Path
+
+    from citygen.cli import main
+    model = Path(__file__).resolve().parents[2] / "rulesets" / "townhouse.relayout"
+    assert main(["relayout", str(model), "--size", "1000", "1000"]) == 2
+    err = capsys.readouterr().err
+    assert "terminals; a preview stops at 60,000 -- give a smaller --size" in err and "townhouse.relayout" in err
+    assert main(["relayout", str(model), "--size", "20", "15"]) == 0
