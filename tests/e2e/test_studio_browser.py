@@ -71,13 +71,13 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         page.locator("#view3d canvas").click()  # the middle of the view: a face of the building
         page.wait_for_function("document.getElementById('status').textContent.endsWith('picked')", timeout=10_000)
 
-        # an edit: every window becomes a shop front (the SVG preview follows), the walls brick (the 3D view does)
+        # an edit: every window gets shutters instead (the SVG preview follows), the walls brick (the 3D view does)
         previews, builds = page.evaluate("[window.studio.previews, window.studio.builds]")
         page.evaluate("""() => { const cm = document.querySelector('.CodeMirror').CodeMirror;
-                                 cm.setValue(cm.getValue().replace('terminal(window', 'terminal(shop')
+                                 cm.setValue(cm.getValue().replace('terminal(window', 'terminal(blind')
                                                          .replace('terminal(wall, material: render', 'terminal(wall, material: brick')); }""")
         page.wait_for_function(f"window.studio.builds > {builds}", timeout=30_000)
-        page.wait_for_selector("#facade rect[data-label=shop]", timeout=10_000)
+        page.wait_for_selector("#facade rect[data-label=blind]", timeout=10_000)
         assert page.locator("#facade rect[data-label=window]").count() == 0
         assert page.evaluate("window.studio.previews") > previews
         page.wait_for_timeout(500)
