@@ -11,7 +11,7 @@ The rules (defaults in brackets; a scene's ``[plausibility]`` table overrides th
 
 * ``zero-size``: no labelled terminal narrower or lower than ``min_extent`` [0.01 m];
 * ``small-opening``: openings at least ``min_size[label]`` wide and tall [window 0.3 x 0.3, door 0.7 x 1.9,
-  shop 0.8 x 1.5, balcony 0.6 x 0.3 m];
+  shop 0.8 x 1.2, balcony 0.6 x 0.3 m];
 * ``short-door`` / ``floating-door``: doors at least ``door_min_height`` [1.9 m] tall and within ``door_step``
   [0.3 m] of the floor line they stand on;
 * ``sliver``: no labelled terminal thinner than ``sliver`` [0.05 m] unless its label is in ``thin_labels`` (sill,
@@ -44,7 +44,7 @@ class PlausibilityRules:
 
     min_extent: float = 0.01
     min_size: Mapping[str, tuple[float, float]] = field(default_factory=lambda: {
-        "window": (0.3, 0.3), "door": (0.7, 1.9), "shop": (0.8, 1.5), "balcony": (0.6, 0.3)})
+        "window": (0.3, 0.3), "door": (0.7, 1.9), "shop": (0.8, 1.2), "balcony": (0.6, 0.3)})
     door_min_height: float = 1.9
     door_step: float = 0.3
     sliver: float = 0.05

