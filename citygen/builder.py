@@ -170,8 +170,12 @@ class Builder:
 
     def build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
               tile: tuple[int, int]) -> BuildingOutcome:
-        """The building's outcome, with the CPU its build took (this thread's, so it holds beside other workers)."""
+        """The building's outcome, with the CPU its build took (this thread's, so it holds beside other workers).
+        Module prototypes are shared within the building only: one built from another building's region (whichever
+        this process built before, which depends on how chunks fell to workers) differs from it by up to ~1e-4 m, and
+        the stage would differ between runs and job counts."""
         start = time.thread_time()
+        clear_module_cache()
         outcome = self._build(footprint, mass, cover, name, tile)
         return replace(outcome, cpu=time.thread_time() - start)
 
