@@ -16,7 +16,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from citygen.registry import default_registry  # noqa: E402
-from tests.sweep import HEIGHTS, SMALL_HEIGHTS, SMALL_WIDTHS, STOREYS, WIDTHS, sweep  # noqa: E402
+from tests.sweep import HEIGHTS, SMALL_HEIGHTS, SMALL_WIDTHS, STOREYS, WIDTHS, classify, sweep  # noqa: E402
 
 OUTCOMES = ("dressed", "fell-back", "implausible", "constraints-broken", "error")
 SCALES = (0.5, 0.65, 0.8, 1.0, 1.25, 1.5, 1.7, 2.0)
@@ -47,7 +47,7 @@ def main() -> None:
             size = load(path).size
             kind = registry.kind_for_path(path)
             grammar = kind.load(path)
-            cases = [_case(kind, grammar, path.name, sx * size[0], sy * size[1], storey)
+            cases = [classify(kind, grammar, path.name, sx * size[0], sy * size[1], storey)
                      for sx in SCALES for sy in SCALES for storey in (3.0,)]
             total += report(path.name, cases)
     else:
@@ -56,19 +56,6 @@ def main() -> None:
             total += report(name, list(sweep(registry, (name,), widths, heights, STOREYS)))
     print(f"{'total':<28} " + " ".join(f"{total[o]:>5}" for o in OUTCOMES))
     print(f"{time.perf_counter() - start:.1f} s")
-
-
-def _case(kind, grammar, name, width, height, storey):
-    from citygen.cli import facade_outcome
-    from citygen.errors import CitygenError
-    from tests.sweep import Case, request
-    req = request(width, height, storey)
-    try:
-        layout = kind.generate(grammar, req)
-    except CitygenError as exc:
-        return Case(name, width, height, storey, "error", (str(exc),))
-    outcome, reasons = facade_outcome(layout, req)
-    return Case(name, width, height, storey, outcome, tuple(reasons))
 
 
 if __name__ == "__main__":

@@ -51,6 +51,11 @@ def run_case(registry: Registry, name: str, width: float, height: float, storey:
     """One ruleset at one size, classified as ``citygen facade`` classifies it (``error``: the generator raised a
     citygen error, which the builder also turns into a fallback)."""
     kind, ruleset = _loaded(registry, name)
+    return classify(kind, ruleset, name, width, height, storey, seed)
+
+
+def classify(kind, ruleset, name: str, width: float, height: float, storey: float, seed: int = 0) -> Case:
+    """One loaded ruleset of ``kind`` at one size (any ruleset: an extracted grammar too), classified."""
     req = request(width, height, storey, seed)
     try:
         layout = kind.generate(ruleset, req)
