@@ -33,7 +33,11 @@ def solve_face(model: Model, request: FacadeRequest, shared: dict | None = None,
 
 
 def generate_face(model: Model, request: FacadeRequest, shared: dict | None = None) -> FacadeLayout:
-    result = solve_face(model, request, shared)
+    return face_layout(solve_face(model, request, shared), request)
+
+
+def face_layout(result: RelayoutResult, request: FacadeRequest) -> FacadeLayout:
+    """The layout of a face's solve: the relayout, or the fallback when the search failed."""
     if result.success:
         return result.layout
     return fallback_layout(request, result.message, outside_range=result.status == "infeasible",

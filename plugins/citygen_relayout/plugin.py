@@ -9,6 +9,7 @@ from pathlib import Path
 from citygen.cliargs import add_size_arguments, seconds, seed, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
+from citygen.lastsolve import LastSolve
 from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
@@ -25,6 +26,9 @@ class RelayoutKind(RulesetKind):
     suffixes = (".relayout",)
     description = "relayout model (bao2013): constrained variations of one facade layout"
 
+    def __init__(self) -> None:
+        self._solve = LastSolve(building.solve_face)  # (explain after generate: one solve)
+
     def load(self, path: Path) -> Model:
         return load_model(path)
 
@@ -32,13 +36,13 @@ class RelayoutKind(RulesetKind):
         return parse_model(text, str(path), base=path.parent)
 
     def generate(self, ruleset: Model, request: FacadeRequest) -> FacadeLayout:
-        return building.generate_face(ruleset, request)
+        return building.face_layout(self._solve(ruleset, request), request)
 
     def generate_building(self, ruleset: Model, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
         return building.generate_building(ruleset, requests)
 
     def explain(self, ruleset: Model, request: FacadeRequest) -> str:
-        result = building.solve_face(ruleset, request)
+        result = self._solve(ruleset, request)
         head = (f"relayout model {ruleset.name}: {len(ruleset.symbols)} symbols, {ruleset.terminal_count()} input "
                 f"terminals, {sum(len(r.sequences) for r in ruleset.rules.values())} sequences, "
                 f"{len(ruleset.alignments)} alignments, {len(ruleset.samesizes)} same-size constraints")

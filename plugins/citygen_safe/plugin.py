@@ -8,6 +8,7 @@ from pathlib import Path
 from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.errors import CitygenError
 from citygen.hookspecs import hookimpl
+from citygen.lastsolve import LastSolve
 from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
@@ -22,6 +23,9 @@ class SafeKind(RulesetKind):
     suffixes = (".safe",)
     description = "structure-aware facade editing (dang2014): grid row/column jumps + QP on one input layout"
 
+    def __init__(self) -> None:
+        self._edit = LastSolve(edit)  # (explain after generate: one edit)
+
     def load(self, path: Path) -> SafeRuleset:
         return load_ruleset(path)
 
@@ -29,10 +33,10 @@ class SafeKind(RulesetKind):
         return parse_ruleset(text, str(path), base=path.parent)
 
     def generate(self, ruleset: SafeRuleset, request: FacadeRequest) -> FacadeLayout:
-        return edit(ruleset, request).layout
+        return self._edit(ruleset, request).layout
 
     def explain(self, ruleset: SafeRuleset, request: FacadeRequest) -> str:
-        result = edit(ruleset, request)
+        result = self._edit(ruleset, request)
         lines = [f"safe ruleset {ruleset.name}: {len(ruleset.facade.leaves)} input leaves, grids "
                  f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
                  f"floors: {'; '.join(result.floor_jumps) or 'no jumps'}"]

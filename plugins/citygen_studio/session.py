@@ -34,6 +34,7 @@ from citygen.usd.materials import BUILTIN
 from citygen.usd.writer import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
 from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
+from citygen_studio.memo import Memo
 
 #: The largest ruleset text the studio parses or saves (bytes).
 MAX_TEXT = 256 * 1024
@@ -82,6 +83,10 @@ class Session:
         self.load_error: dict[str, Any] | None = None
         self.footprints, self.masses, self.cover, self.names = [], [], [], []
         self.generation: Generation | None = None
+        # parsed texts by (kind, path, text); previews by text and size; builds by building and ruleset texts
+        self.parsed: Memo[Any] = Memo(64)
+        self.previews: Memo[dict[str, Any]] = Memo(256)
+        self.built: Memo[dict[str, Any]] = Memo(16)
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
         self.loaded = threading.Event()
@@ -154,22 +159,60 @@ class Session:
     def _builder(self, overrides: Mapping[str, str] | None = None) -> Builder:
         if self.scene is None:
             raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
-        builder = Builder(self.scene, self.scene.seed, self.registry, keep_layouts=True)
+        edited = {self.confinement.resolve(name) for name in overrides or {}}
+        rulesets = {}
+        for (kind_id, path), text in self._ruleset_texts(overrides).items():
+            try:
+                rulesets[kind_id, path] = self._parse(self.registry.ruleset_kind(kind_id), path, text)
+            except CitygenError:
+                if path in edited:  # (an edit that does not parse: its error, as data)
+                    raise
+                continue  # (a saved ruleset that does not load: the builder reports it, as generate would)
+        return Builder(self.scene, self.scene.seed, self.registry, rulesets, keep_layouts=True)
+
+    def _ruleset_texts(self, overrides: Mapping[str, str] | None = None) -> dict[tuple[str, Path], str]:
+        """The text of every ruleset the scene names, by (kind id, path): its file's, or its edit in ``overrides``
+        (by ruleset name; an edited ruleset the scene does not name is parsed too, so its errors show)."""
+        assert self.scene is not None
+        edited = {}
         for name, text in (overrides or {}).items():
             path = self.confinement.resolve(name)
-            kind = self.registry.kind_for_path(path)
-            builder.rulesets[(kind.id, path)] = kind.loads(_text(text), path)
-        return builder
+            edited[path] = (self.registry.kind_for_path(path).id, _text(text))
+        texts: dict[tuple[str, Path], str] = {}
+        for a in self.scene.assignments:
+            for path in (*a.rulesets, *([a.fallback] if a.fallback else [])):
+                kind_id = a.kind if a.kind and path in a.rulesets else self.registry.kind_for_path(path).id
+                if path in edited:
+                    texts[kind_id, path] = edited[path][1]
+                elif (kind_id, path) not in texts:
+                    try:
+                        texts[kind_id, path] = path.read_text(encoding="utf-8")
+                    except (OSError, UnicodeDecodeError):
+                        continue  # (the builder's own load reports it)
+        for path, (kind_id, text) in edited.items():
+            texts.setdefault((kind_id, path), text)
+        return texts
+
+    def _parse(self, kind: Any, path: Path, text: str) -> Any:
+        """``text`` parsed by ``kind`` as the file ``path`` (kept: a ruleset object is immutable, and kinds that
+        reuse solves per ruleset object, such as layer stacks, keep reusing them while the text is unchanged)."""
+        return self.parsed.get((kind.id, path, text), lambda: kind.loads(text, path))
 
     def build(self, index: int, overrides: Mapping[str, str] | None = None) -> dict[str, Any]:
         """One building with the scene's rulesets (``overrides``: edited texts by ruleset name): every face's
         frame in the GLB's coordinates (Y-up, origin at the building's pivot) and layout (when dressed), and the
         building as GLB (base64)."""
+        if self.scene is None:
+            raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
+        if not isinstance(index, int) or not 0 <= index < len(self.footprints):
+            raise StudioError(f"no building {index!r} (the scene has {len(self.footprints)})", 404)
+        key = (index, tuple(sorted(self._ruleset_texts(overrides).items())))
+        return self.built.get(key, lambda: self._build(index, overrides))
+
+    def _build(self, index: int, overrides: Mapping[str, str] | None) -> dict[str, Any]:
         from citygen.gltf.writer import building_glb
 
         builder = self._builder(overrides)
-        if not isinstance(index, int) or not 0 <= index < len(self.footprints):
-            raise StudioError(f"no building {index!r} (the scene has {len(self.footprints)})", 404)
         fp, mass = self.footprints[index], self.masses[index]
         outcome = builder.build(fp, mass, self.cover[index], self.names[index], (0, 0))
         if outcome.record is None:
@@ -192,7 +235,7 @@ class Session:
         path, text = self.confinement.resolve(name), _text(text)
         kind = self.registry.kind_for_path(path)
         try:
-            kind.loads(text, path)
+            self._parse(kind, path, text)
         except CitygenError as exc:
             return {"ok": False, "error": error_data(exc, self.confinement)}
         return {"ok": True, "error": None}
@@ -202,10 +245,13 @@ class Session:
         that does not parse (or a ruleset that cannot dress the size) gives its error as data."""
         path, text = self.confinement.resolve(name), _text(text)
         kind = self.registry.kind_for_path(path)
+        return self.previews.get((kind.id, path, text, size), lambda: self._preview(kind, path, text, size))
+
+    def _preview(self, kind: Any, path: Path, text: str, size: FaceRequestSize) -> dict[str, Any]:
         request = FacadeRequest.preview(size.width, size.height, floor_height=size.floor_height,
                                         ground_height=size.ground_height, seed=size.seed)
         try:
-            ruleset = kind.loads(text, path)
+            ruleset = self._parse(kind, path, text)
             layout = kind.generate(ruleset, request)
             explain = kind.explain(ruleset, request)
         except CitygenError as exc:
@@ -222,7 +268,7 @@ class Session:
         path, text = self.confinement.resolve(name), _text(text)
         kind = self.registry.kind_for_path(path)
         try:
-            ruleset = kind.loads(text, path)
+            ruleset = self._parse(kind, path, text)
         except CitygenError as exc:
             return {"ok": False, "error": error_data(exc, self.confinement), "variations": []}
         found, seen = [], set()
@@ -288,6 +334,8 @@ class Session:
             os.replace(tmp, path)
         finally:
             Path(tmp).unlink(missing_ok=True)
+        self.parsed.clear()  # (a saved file may be one another ruleset refers to)
+        self.previews.clear()
         return {"name": name, "saved": True}
 
 
