@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -40,30 +41,44 @@ def timed(call, repeat: int) -> tuple[float, float]:
     return statistics.median(walls), statistics.median(cpus)
 
 
-def first_paint(scene: Path) -> tuple[float, float]:
-    """Seconds from starting ``citygen studio`` to the page's first paint, and to the map drawn, in headless
-    Chromium."""
+def first_paint(scene: Path) -> dict[str, float]:
+    """Seconds from starting ``citygen studio`` (headless Chromium already running, as a user's browser is) to: its
+    URL printed, the page's first paint, the editor showing a ruleset, the map drawn."""
     from playwright.sync_api import sync_playwright
 
-    t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "citygen.cli", "studio", str(scene), "--no-browser"],
-                            stdout=subprocess.PIPE, text=True)
-    try:
-        url = re.search(r"http://\S+", proc.stdout.readline()).group(0)
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path="/usr/bin/chromium",
-                                        args=["--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
-            page = browser.new_page()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path="/usr/bin/chromium",
+                                    args=["--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
+        page = browser.new_page()
+        t0 = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "citygen.launch", "studio", str(scene), "--no-browser"],
+                                stdout=subprocess.PIPE, text=True)
+        try:
+            url = re.search(r"http://\S+", proc.stdout.readline()).group(0)
+            times = {"url": time.perf_counter() - t0}
             page.goto(url, wait_until="commit")
             page.wait_for_function("performance.getEntriesByName('first-paint').length > 0", timeout=60_000)
-            painted = time.perf_counter() - t0
+            times["first paint"] = time.perf_counter() - t0
+            page.wait_for_function("document.querySelector('.CodeMirror') && "
+                                   "document.querySelector('.CodeMirror').CodeMirror.getValue().length > 0",
+                                   timeout=60_000)
+            times["editor"] = time.perf_counter() - t0
             page.wait_for_selector("#map path", timeout=60_000)
-            mapped = time.perf_counter() - t0
+            times["map"] = time.perf_counter() - t0
+        finally:
+            proc.terminate()
+            proc.wait()
             browser.close()
-        return painted, mapped
-    finally:
-        proc.terminate()
-        proc.wait()
+    return times
+
+
+def print_paint(scene: Path) -> None:
+    c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    times = first_paint(scene)
+    c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime
+    print("start to " + ", ".join(f"{what} {seconds:.2f} s" for what, seconds in times.items())
+          + f" (studio process CPU {cpu:.2f} s until stopped)")
 
 
 def main() -> None:
@@ -76,8 +91,7 @@ def main() -> None:
     args = parser.parse_args()
     scene = Path(args.scene).resolve()
     if args.paint_only:
-        painted, mapped = first_paint(scene)
-        print(f"start to first paint: {painted:.2f} s, to the map drawn: {mapped:.2f} s")
+        print_paint(scene)
         return
     t0 = time.perf_counter()
     session = Session(default_registry(), scene)
@@ -111,8 +125,7 @@ def main() -> None:
         print(f"{buildings[index]['id']:<30} {edit[0]:>9.1f} {edit[1]:>9.1f} {same[0]:>9.1f} {same[1]:>9.1f} "
               f"{size:>7.0f}")
     if args.browser:
-        painted, mapped = first_paint(scene)
-        print(f"start to first paint: {painted:.2f} s, to the map drawn: {mapped:.2f} s")
+        print_paint(scene)
 
 
 if __name__ == "__main__":

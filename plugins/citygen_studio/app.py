@@ -11,9 +11,10 @@ from __future__ import annotations
 import base64
 import binascii
 import json
+import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import anyio
 import anyio.to_thread
@@ -26,9 +27,10 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from citygen.errors import CitygenError
-from citygen_studio.inverse import MAX_UPLOAD, extract, import_layout
-from citygen_studio.confinement import StudioError, error_data
-from citygen_studio.session import FaceRequestSize, Session
+from citygen_studio.confinement import MAX_UPLOAD, StudioError, error_data
+
+if TYPE_CHECKING:
+    from citygen_studio.session import FaceRequestSize, Session
 
 #: The largest request body (bytes): a ruleset text and a few numbers.
 MAX_BODY = 512 * 1024
@@ -44,16 +46,25 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
     """The studio application over ``session``."""
     limiter = anyio.CapacityLimiter(2)
 
-    async def run(request: Request, work: Callable[[dict[str, Any]], Any], post: bool, limit: int) -> JSONResponse:
+    def shown(exc: CitygenError) -> dict[str, Any]:
+        """The error as data, its paths as the browser names them (when the session could be made)."""
+        try:
+            confinement = session.confinement
+        except StudioError:
+            confinement = None
+        return error_data(exc, confinement)
+
+    async def run(request: Request, work: Callable[[dict[str, Any]], Any], post: bool, limit: int,
+                  ready: threading.Event) -> JSONResponse:
         try:
             body = await _json_body(request, limit) if post else dict(request.query_params)
             with anyio.fail_after(time_limit):
-                result = await anyio.to_thread.run_sync(_when_loaded, session, work, body, abandon_on_cancel=True,
+                result = await anyio.to_thread.run_sync(_when, ready, work, body, abandon_on_cancel=True,
                                                         limiter=limiter)
         except StudioError as exc:
-            return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=exc.status)
+            return JSONResponse({"error": shown(exc)}, status_code=exc.status)
         except CitygenError as exc:
-            return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=400)
+            return JSONResponse({"error": shown(exc)}, status_code=400)
         except TimeoutError:
             return JSONResponse({"error": {"message": f"the request took longer than {time_limit:g} s",
                                            "hint": "try a smaller size"}}, status_code=504)
@@ -62,16 +73,20 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
                                 status_code=500)
         return JSONResponse(result)
 
-    def route(path: str, work: Callable[[dict[str, Any]], Any], post: bool = False, limit: int = MAX_BODY) -> Route:
+    def route(path: str, work: Callable[[dict[str, Any]], Any], post: bool = False, limit: int = MAX_BODY,
+              buildings: bool = False) -> Route:
+        """An API route; its work waits for the scene (and with ``buildings`` for its footprints and masses)."""
+        ready = session.loaded if buildings else session.scene_ready
+
         async def endpoint(request: Request) -> JSONResponse:
-            return await run(request, work, post, limit)
+            return await run(request, work, post, limit, ready)
         return Route(path, endpoint, methods=["POST"] if post else ["GET"])
 
     async def output(request: Request) -> Response:
         try:
             path = session.output(request.query_params.get("name", ""))
         except StudioError as exc:
-            return JSONResponse({"error": error_data(exc, session.confinement)}, status_code=exc.status)
+            return JSONResponse({"error": shown(exc)}, status_code=exc.status)
         return FileResponse(path, filename=path.name)
 
     async def progress(request: Request) -> StreamingResponse:
@@ -87,7 +102,7 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
 
     routes = [
         route("/api/scene", lambda q: session.info()),
-        route("/api/buildings", lambda q: {"buildings": session.buildings()}),
+        route("/api/buildings", lambda q: {"buildings": session.buildings()}, buildings=True),
         route("/api/ruleset", lambda q: session.read(_field(q, "name", str))),
         route("/api/ruleset", lambda b: session.save(_field(b, "name", str), _field(b, "text", str)), post=True),
         route("/api/check", lambda b: session.check(_field(b, "ruleset", str), _field(b, "text", str)), post=True),
@@ -99,21 +114,18 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         route("/api/generate", lambda q: session.generation_state()),
         Route("/api/generate/events", progress),
         Route("/api/output", output),
-        route("/api/import", lambda b: import_layout(_field(b, "name", str), _base64(b, "data"), b.get("width"),
-                                                     b.get("floor_height", 3.0),
-                                                     _base64(b, "label_map") if b.get("label_map") else None),
-              post=True, limit=MAX_UPLOAD * 4 // 3 + 4096),  # (base64)
-        route("/api/extract", lambda b: extract(b.get("layout"), b.get("method", "adp"), b.get("iterations", 2000),
-                                                b.get("seed", 0)), post=True, limit=4 * MAX_BODY),
-        route("/api/build", lambda b: session.build(_field(b, "index", int), _overrides(b)), post=True),
+        route("/api/import", _import, post=True, limit=MAX_UPLOAD * 4 // 3 + 4096),  # (base64)
+        route("/api/extract", _extract, post=True, limit=4 * MAX_BODY),
+        route("/api/build", lambda b: session.build(_field(b, "index", int), _overrides(b)), post=True,
+              buildings=True),
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]
     return Starlette(routes=routes, middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=LOOPBACK)])
 
 
-def _when_loaded(session: Session, work: Callable[[dict[str, Any]], Any], body: dict[str, Any]) -> Any:
-    """``work`` once the session's scene is loaded (a studio started in the background answers when it is)."""
-    session.loaded.wait()
+def _when(ready: threading.Event, work: Callable[[dict[str, Any]], Any], body: dict[str, Any]) -> Any:
+    """``work`` once ``ready`` (a studio loading its scene in the background answers when what it needs is)."""
+    ready.wait()
     return work(body)
 
 
@@ -150,7 +162,19 @@ def _field(body: dict[str, Any], key: str, kind: type) -> Any:
     return value
 
 
+def _import(body: dict[str, Any]) -> dict[str, Any]:
+    from citygen_studio.inverse import import_layout
+    return import_layout(_field(body, "name", str), _base64(body, "data"), body.get("width"),
+                         body.get("floor_height", 3.0), _base64(body, "label_map") if body.get("label_map") else None)
+
+
+def _extract(body: dict[str, Any]) -> dict[str, Any]:
+    from citygen_studio.inverse import extract
+    return extract(body.get("layout"), body.get("method", "adp"), body.get("iterations", 2000), body.get("seed", 0))
+
+
 def _size(body: dict[str, Any]) -> FaceRequestSize:
+    from citygen_studio.session import FaceRequestSize
     return FaceRequestSize(width=body.get("width"), height=body.get("height"),
                            floor_height=body.get("floor_height", 3.0), ground_height=body.get("ground_height"),
                            seed=body.get("seed", 0))

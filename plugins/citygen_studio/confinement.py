@@ -9,6 +9,9 @@ from typing import Any
 
 from citygen.errors import CitygenError, SourceLocation
 
+#: The largest file dropped on the studio (bytes).
+MAX_UPLOAD = 8 * 1024 * 1024
+
 
 class StudioError(CitygenError):
     """A request the studio refuses: ``status`` is the HTTP status it answers with."""

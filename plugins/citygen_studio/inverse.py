@@ -10,11 +10,9 @@ from typing import Any
 
 from citygen.errors import CitygenError, LayoutError, SourceLocation
 from citygen.layout import FacadeLayout, check_partition
-from citygen_studio.confinement import StudioError
+from citygen_studio.confinement import MAX_UPLOAD, StudioError
 from citygen_studio.session import layout_data
 
-#: The largest dropped file (bytes).
-MAX_UPLOAD = 8 * 1024 * 1024
 #: Extraction methods the studio offers (``exact`` runs an integer program: use the command line).
 METHODS = ("greedy", "is", "adp")
 MAX_ITERATIONS = 5000

@@ -74,10 +74,13 @@ def layout_data(layout: FacadeLayout, floor_lines: Iterable[float] = ()) -> dict
 
 class Session:
     """The scene the studio was opened on (or just a folder of rulesets when there is none). With ``background``
-    the scene loads in a thread; ``loaded`` is set when it is done (the app waits for it before any request)."""
+    the scene loads in a thread: ``scene_ready`` is set once the scene file and its rulesets are known (what the
+    editor and previews need), ``loaded`` once its footprints and masses are built too (what the map and builds
+    need); the app waits for the one a request needs. ``events``: those two events, made by the caller (a server
+    that answered before this session existed waits on them)."""
 
     def __init__(self, registry: Registry, scene_path: Path | None = None, root: Path | None = None,
-                 background: bool = False) -> None:
+                 background: bool = False, events: tuple[threading.Event, threading.Event] | None = None) -> None:
         self.registry = registry
         self.scene: Scene | None = None
         self.load_error: dict[str, Any] | None = None
@@ -89,7 +92,7 @@ class Session:
         self.built: Memo[dict[str, Any]] = Memo(16)
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
-        self.loaded = threading.Event()
+        self.scene_ready, self.loaded = events or (threading.Event(), threading.Event())
         if background:  # the page paints while the footprints and masses are built; requests wait for them
             threading.Thread(target=self._load, args=(scene_path,), daemon=True).start()
         else:
@@ -104,6 +107,7 @@ class Session:
             self.scene = load_scene(scene_path, registry.roof_builders, registry.ruleset_kinds)
             named = [p for a in self.scene.assignments for p in (*a.rulesets, *([a.fallback] if a.fallback else []))]
             self.confinement = Confinement(self.confinement.root, named)
+            self.scene_ready.set()
             imported = import_footprints(self.scene, registry)
             for fp in imported.footprints:
                 try:
@@ -119,13 +123,15 @@ class Session:
         except Exception as exc:  # a library bug: the page says so instead of a studio that never loads
             self.scene, self.load_error = None, {"message": f"internal error {type(exc).__name__}: {exc}"}
         finally:
+            self.scene_ready.set()
             self.loaded.set()
 
     def info(self) -> dict[str, Any]:
         """The scene, its rulesets, the ruleset kinds and what an editor completes (materials, labels)."""
         scene = self.scene
         return {"scene": scene.name if scene else None, "file": scene.path.name if scene else None,
-                "error": self.load_error, "buildings": len(self.footprints), "rulesets": self.rulesets(),
+                "error": self.load_error, "rulesets": self.rulesets(),
+                "buildings": len(self.footprints) if self.loaded.is_set() else None,
                 "kinds": [{"id": k.id, "suffixes": list(k.suffixes), "description": k.description}
                           for k in self.registry.ruleset_kinds.values()],
                 "materials": sorted({*BUILTIN, *(self.scene.materials if self.scene else {})}), "labels": list(LABELS),

@@ -29,7 +29,7 @@ def studio(tmp_path):
     """The studio on a two-house scene, served on a free loopback port from a thread."""
     import uvicorn
     from citygen_studio.app import create_app
-    from citygen_studio.command import listen
+    from citygen_studio.serve import listen
     from citygen_studio.session import Session
 
     scene = make_scene(tmp_path)

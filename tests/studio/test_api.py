@@ -167,8 +167,10 @@ def test_unknown_ruleset_kind_is_an_error(client):
 def test_a_scene_loading_in_the_background_is_waited_for(scene):
     session = Session(default_registry(), scene, background=True)
     client = TestClient(create_app(session), base_url=URL)
-    assert client.get("/api/scene").json()["buildings"] == 2 and session.loaded.is_set()
+    assert client.get("/api/scene").json()["rulesets"] and session.scene_ready.is_set()  # (maybe before the masses)
     assert client.get("/api/ruleset", params={"name": "../shared/apartment.grammar"}).status_code == 200
+    assert len(client.get("/api/buildings").json()["buildings"]) == 2 and session.loaded.is_set()
+    assert client.get("/api/scene").json()["buildings"] == 2
 
 
 def test_a_scene_that_fails_to_load_is_reported_as_data(tmp_path):

@@ -1,8 +1,5 @@
 // citygen studio: the map of the scene's footprints, the selected building in 3D (its GLB), a ruleset editor
 // and a live 2D preview of the facade while typing. Everything is computed by the server's JSON API.
-import * as THREE from "three";
-import {GLTFLoader} from "./vendor/three/examples/jsm/loaders/GLTFLoader.js";
-import {OrbitControls} from "./vendor/three/examples/jsm/controls/OrbitControls.js";
 
 const $ = (id) => document.getElementById(id);
 const SVG = "http://www.w3.org/2000/svg";
@@ -75,80 +72,17 @@ function drawMap() {
 
 // ---- 3D view ---------------------------------------------------------------------------------------------------
 
-const view = {renderer: null, scene: null, camera: null, controls: null, model: null};
+let view = null;  // the 3D view: view3d.js (three.js) is fetched on the first selection, not before the first paint
 
-function setUpView() {
-  const host = $("view3d");
-  view.renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
-  view.renderer.setPixelRatio(window.devicePixelRatio);
-  host.appendChild(view.renderer.domElement);
-  view.scene = new THREE.Scene();
-  view.scene.background = new THREE.Color(0xdde3ea);
-  view.scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8d80, 2.2));
-  const sun = new THREE.DirectionalLight(0xffffff, 2.0);
-  sun.position.set(40, 80, 30);
-  view.scene.add(sun);
-  view.camera = new THREE.PerspectiveCamera(40, 1, 0.1, 5000);
-  view.camera.position.set(30, 25, 40);
-  view.controls = new OrbitControls(view.camera, view.renderer.domElement);
-  let down = null;
-  view.renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
-  view.renderer.domElement.addEventListener("pointerup", (e) => {
-    if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) pickFace(e);
-  });
-  const resize = () => {
-    const {clientWidth: w, clientHeight: h} = host;
-    view.renderer.setSize(w, h, false);
-    view.camera.aspect = w / Math.max(h, 1);
-    view.camera.updateProjectionMatrix();
-  };
-  new ResizeObserver(resize).observe(host);
-  resize();
-  view.renderer.setAnimationLoop(() => { view.controls.update(); view.renderer.render(view.scene, view.camera); });
+function viewReady() {
+  view = view || import("./view3d.js").then(({createView}) => createView($("view3d"),
+    () => (state.built && state.built.faces) || [],
+    (face) => { $("face").value = String(face.index); showFace(); status(`face ${face.index} picked`); },
+    (error) => status("cannot show the building: " + error)));
+  return view;
 }
 
-// A click (not a drag) on the building picks the dressed face under the pointer: the face whose rectangle holds the
-// hit point, nearest along its normal (reveals and balconies stand off the wall plane).
-function pickFace(event) {
-  if (!view.model || !state.built || !state.built.faces) return;
-  const rect = view.renderer.domElement.getBoundingClientRect();
-  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
-    -((event.clientY - rect.top) / rect.height) * 2 + 1);
-  const raycaster = new THREE.Raycaster();
-  raycaster.setFromCamera(pointer, view.camera);
-  const hit = raycaster.intersectObject(view.model, true)[0];
-  if (!hit) return;
-  let best = null, bestDistance = 1.5;
-  for (const face of state.built.faces) {
-    if (!face.layout) continue;
-    const d = hit.point.clone().sub(new THREE.Vector3(...face.origin));
-    const x = d.dot(new THREE.Vector3(...face.u)), off = Math.abs(d.dot(new THREE.Vector3(...face.normal)));
-    if (x >= -0.05 && x <= face.width + 0.05 && d.y >= -0.05 && d.y <= face.height + 0.05 && off < bestDistance) {
-      best = face;
-      bestDistance = off;
-    }
-  }
-  if (!best) return;
-  $("face").value = String(best.index);
-  showFace();
-  status(`face ${best.index} picked`);
-}
-
-function showGlb(base64, frame) {
-  const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
-  new GLTFLoader().parse(bytes.buffer, "", (gltf) => {
-    if (view.model) view.scene.remove(view.model);
-    view.model = gltf.scene;
-    view.scene.add(view.model);
-    if (frame) {
-      const box = new THREE.Box3().setFromObject(view.model);
-      const centre = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3()).length();
-      view.controls.target.copy(centre);
-      view.camera.position.copy(centre).add(new THREE.Vector3(0.6, 0.45, 0.8).multiplyScalar(size));
-    }
-    $("view3d").dataset.meshes = String(gltf.scene.getObjectsByProperty("isMesh", true).length);
-  }, (error) => status("cannot show the building: " + error));
-}
+async function showGlb(base64, frame) { (await viewReady()).show(base64, frame); }
 
 // ---- facade drawing --------------------------------------------------------------------------------------------
 
@@ -468,7 +402,6 @@ async function select(index) {
 }
 
 async function start() {
-  setUpView();
   state.info = await api("/api/scene");
   setUpEditor();
   $("scene-name").textContent = state.info.scene ? `${state.info.scene} (${state.info.file})` : "no scene";
@@ -486,13 +419,15 @@ async function start() {
   setUpInverse();
   $("generate").disabled = !state.info.scene;
   for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
-  if (state.info.buildings) {
+  if (state.info.rulesets.length) await openRuleset(state.info.rulesets[0]);
+  if (state.info.scene) {  // (the editor works while the server builds the footprints and masses)
+    status("loading the buildings ...");
     state.buildings = (await api("/api/buildings")).buildings;
     drawMap();
   }
-  if (state.info.rulesets.length) await openRuleset(state.info.rulesets[0]);
   status("ready");
   document.body.dataset.ready = "true";
+  if (state.info.scene) viewReady();  // (three.js fetched now, so the first selection shows at once)
 }
 
 start().catch((error) => { $("banner").hidden = false; $("banner").textContent = error.message; });
