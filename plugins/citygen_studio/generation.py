@@ -18,10 +18,11 @@ OUTPUT_FOLDER = "studio-out"
 
 
 class Generation:
-    """One run of the whole scene in a background thread, its progress readable while it runs."""
+    """One run of the whole scene in a background thread, its progress readable while it runs; ``edited`` names the
+    rulesets it reads as unsaved edits (``registry`` reads them so)."""
 
-    def __init__(self, scene: Scene, registry: Registry, out: Path, jobs: int) -> None:
-        self.out, self.done, self.total = out, 0, 0
+    def __init__(self, scene: Scene, registry: Registry, out: Path, jobs: int, edited: tuple[str, ...] = ()) -> None:
+        self.out, self.done, self.total, self.edited = out, 0, 0, edited
         self.report: dict[str, Any] | None = None
         self.error: dict[str, Any] | None = None
         self.thread = threading.Thread(target=self._run, args=(scene, registry, jobs), daemon=True)
@@ -42,4 +43,5 @@ class Generation:
     def state(self, root: Path) -> dict[str, Any]:
         running = self.thread.is_alive()
         return {"running": running, "done": self.done, "total": self.total, "error": self.error,
-                "report": None if running else self.report, "output": os.path.relpath(self.out, root)}
+                "report": None if running else self.report, "output": os.path.relpath(self.out, root),
+                "edited": list(self.edited)}

@@ -33,6 +33,7 @@ from citygen.scene import Scene, load_scene
 from citygen.usd.materials import BUILTIN
 from citygen.usd.writer import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
+from citygen_studio.edited import edited_registry
 from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
 from citygen_studio.memo import Memo
 
@@ -292,24 +293,36 @@ class Session:
                 found.append({"seed": seed, "layout": layout})
         return {"ok": True, "error": None, "variations": found}
 
-    def generate(self, suffix: str, jobs: int = 1) -> dict[str, Any]:
-        """Start generating the whole scene (its saved rulesets) into ``studio-out/<scene><suffix>`` under the scene's
-        folder; one run at a time. Its progress and report: :meth:`generation_state`."""
+    def generate(self, suffix: str, jobs: int = 1, overrides: Mapping[str, str] | None = None) -> dict[str, Any]:
+        """Start generating the whole scene into ``studio-out/<scene><suffix>`` under the scene's folder, one run at a
+        time, from its rulesets as the editor has them: ``overrides`` (edited texts by ruleset name) are read in
+        place of their files, which are not written. Its progress and report: :meth:`generation_state`."""
         if self.scene is None:
             raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
         if suffix not in OUTPUT_SUFFIXES:
             raise StudioError(f"format must be one of {', '.join(OUTPUT_SUFFIXES)}, got {suffix!r}")
         if not isinstance(jobs, int) or not 1 <= jobs <= (os.cpu_count() or 1):
             raise StudioError(f"jobs must be 1 to {os.cpu_count() or 1}, got {jobs!r}")
+        edits: dict[Path, str] = {}
+        for name, text in (overrides or {}).items():
+            path = self.confinement.resolve(name)
+            self._parse(self.registry.kind_for_path(path), path, _text(text))  # (an edit that does not parse: 400)
+            edits[path] = text
+        if edits and jobs != 1:
+            raise StudioError("generating from unsaved edits runs in the studio's process: jobs must be 1",
+                              hint="save the rulesets to generate with more jobs")
         if self.generation is not None and self.generation.thread.is_alive():
             raise StudioError("the scene is already being generated", 409, hint="wait for it to finish")
         out = self.confinement.root / OUTPUT_FOLDER / f"{self.scene.path.stem}{suffix}"
-        self.generation = Generation(self.scene, self.registry, out, jobs)
+        registry = edited_registry(self.registry, edits, self._parse) if edits else self.registry
+        self.generation = Generation(self.scene, registry, out, jobs,
+                                     tuple(sorted(self.confinement.show(str(p)) for p in edits)))
         return self.generation_state()
 
     def generation_state(self) -> dict[str, Any]:
         if self.generation is None:
-            return {"running": False, "done": 0, "total": 0, "error": None, "report": None, "output": None}
+            return {"running": False, "done": 0, "total": 0, "error": None, "report": None, "output": None,
+                    "edited": []}
         return self.generation.state(self.confinement.root)
 
     def output(self, name: str) -> Path:

@@ -154,11 +154,17 @@ def test_generate_the_scene_and_see_the_report(studio, tmp_path):
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.goto(url)
         page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        assert page.locator("#ruleset").input_value() == "../shared/apartment.grammar"
+        page.evaluate("""() => { const cm = document.querySelector('.CodeMirror').CodeMirror;
+                                 cm.setValue(cm.getValue().replace('terminal(window', 'terminal(blind')); }""")
         page.locator("#format").select_option(".glb")
         page.locator("#generate").click()
         page.wait_for_selector("#download:not([hidden])", timeout=120_000)
-        assert "written 2 buildings" in page.locator("#report").inner_text()
+        report = page.locator("#report").inner_text()
+        assert "written 2 buildings" in report and "unsaved edits of ../shared/apartment.grammar" in report
         assert page.locator("#download").get_attribute("href").endswith("studio-out%2Fscene.glb")
         page.screenshot(path=tmp_path / "generated.png")
         browser.close()
     assert (scene.parent / "studio-out" / "scene.glb").is_file()
+    shared = scene.parent.parent / "shared" / "apartment.grammar"
+    assert shared.read_text() == (Path(__file__).parents[2] / "rulesets" / "apartment.grammar").read_text()

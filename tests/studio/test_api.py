@@ -276,3 +276,31 @@ def test_the_page_and_its_libraries_are_served(client):
     assert page.status_code == 200 and "citygen studio" in page.text
     assert client.get("/vendor/three/build/three.module.js").status_code == 200
     assert client.get("/vendor/codemirror/lib/codemirror.js").status_code == 200
+
+
+def test_generate_reads_unsaved_edits_without_writing_them(client, scene):
+    house = scene.parent / "house.grammar"
+    saved = house.read_text()
+    edited = saved.replace("terminal(window", "terminal(blind")
+    started = client.post("/api/generate", json={"format": ".usda", "rulesets": {"house.grammar": edited}}).json()
+    assert started["edited"] == ["house.grammar"]
+    with client.stream("GET", "/api/generate/events") as events:
+        state = [json.loads(line[6:]) for line in events.iter_lines() if line.startswith("data: ")][-1]
+    assert state["error"] is None and state["report"]["written"] == 2 and state["edited"] == ["house.grammar"]
+    stage = (scene.parent / "studio-out" / "scene.usda").read_text()
+    assert "blind" in stage  # the edit's labels are in the city
+    assert house.read_text() == saved  # and the file is as it was
+    assert sorted(p.name for p in scene.parent.iterdir()) == ["city.geojson", "house.grammar", "scene.toml",
+                                                               "studio-out"]
+
+
+def test_generate_refuses_edits_that_do_not_parse_or_need_workers(client, scene):
+    broken = client.post("/api/generate", json={"format": ".glb", "rulesets": {"house.grammar": "Facade --> ???"}})
+    assert broken.status_code == 400 and broken.json()["error"]["file"] == "house.grammar"
+    assert broken.json()["error"]["line"] == 1
+    text = (scene.parent / "house.grammar").read_text()
+    more = client.post("/api/generate", json={"format": ".glb", "jobs": 2, "rulesets": {"house.grammar": text}})
+    assert more.status_code == 400 and "jobs must be 1" in more.json()["error"]["message"]
+    outside = client.post("/api/generate", json={"format": ".glb", "rulesets": {"../secret.grammar": "x"}})
+    assert outside.status_code == 403
+    assert client.get("/api/generate").json()["running"] is False  # (nothing started)

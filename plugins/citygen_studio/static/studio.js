@@ -308,17 +308,14 @@ function setUpInverse() {
 
 // ---- generate ------------------------------------------------------------------------------------------------------
 
-// Run the whole scene (its saved rulesets) on the server, follow its progress, then show the report and the file.
+// Run the whole scene on the server with the rulesets as the editor has them (unsaved edits read in place of their
+// files, which are not written), follow its progress, then show the report and the file.
 async function generate() {
-  if (Object.keys(edited()).length) {
-    $("report").textContent = "Save the edited rulesets first: the city is generated from the files.";
-    return;
-  }
   $("generate").disabled = true;
   $("download").hidden = true;
   $("progress").hidden = false;
   try {
-    await api("/api/generate", {format: $("format").value, jobs: 1});
+    await api("/api/generate", {format: $("format").value, jobs: 1, rulesets: edited()});
     const run = await new Promise((resolve, reject) => {  // progress pushed by the server until the run ends
       const events = new EventSource("/api/generate/events");
       events.onmessage = (event) => {
@@ -332,7 +329,8 @@ async function generate() {
     });
     $("progress").value = $("progress").max;
     if (run.error) throw Object.assign(new Error(run.error.message), {data: run.error});
-    $("report").textContent = run.report.summary;
+    $("report").textContent = (run.edited.length ? `from the unsaved edits of ${run.edited.join(", ")} ` +
+      "(their files not written)\n" : "") + run.report.summary;
     $("download").href = "/api/output?name=" + encodeURIComponent(run.output);
     $("download").textContent = "download " + run.output;
     $("download").hidden = false;
