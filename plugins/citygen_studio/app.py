@@ -100,14 +100,23 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
                 await anyio.sleep(PROGRESS_EVERY)
         return StreamingResponse(events(), media_type="text/event-stream", headers={"cache-control": "no-store"})
 
+    def _preview(body: dict[str, Any]) -> dict[str, Any]:
+        """A ruleset text at a size, or on a building's face (``building``, ``face``) under its own request."""
+        name, text = _field(body, "ruleset", str), _field(body, "text", str)
+        if body.get("building") is None:
+            return session.preview(name, text, _size(body))
+        loaded = session.loaded.wait(time_limit)  # (a face needs the building's mass; the route waits for the scene)
+        if not loaded:
+            raise StudioError("the buildings are still loading", 503, hint="try again in a moment")
+        return session.preview_face(name, text, _field(body, "building", int), _field(body, "face", int))
+
     routes = [
         route("/api/scene", lambda q: session.info()),
         route("/api/buildings", lambda q: {"buildings": session.buildings()}, buildings=True),
         route("/api/ruleset", lambda q: session.read(_field(q, "name", str))),
         route("/api/ruleset", lambda b: session.save(_field(b, "name", str), _field(b, "text", str)), post=True),
         route("/api/check", lambda b: session.check(_field(b, "ruleset", str), _field(b, "text", str)), post=True),
-        route("/api/preview", lambda b: session.preview(_field(b, "ruleset", str), _field(b, "text", str), _size(b)),
-              post=True),
+        route("/api/preview", _preview, post=True),
         route("/api/variations", lambda b: session.variations(_field(b, "ruleset", str), _field(b, "text", str),
                                                               _size(b), b.get("count", 8)), post=True),
         route("/api/generate", lambda b: session.generate(_field(b, "format", str), b.get("jobs", 1), _overrides(b)),

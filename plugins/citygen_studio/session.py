@@ -34,6 +34,7 @@ from citygen.usd.materials import BUILTIN
 from citygen.usd.writer import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
 from citygen_studio.edited import edited_registry
+from citygen_studio.faces import city_problems, face_layout, face_requests, request_data
 from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
 from citygen_studio.memo import Memo
 
@@ -91,6 +92,7 @@ class Session:
         self.parsed: Memo[Any] = Memo(64)
         self.previews: Memo[dict[str, Any]] = Memo(256)
         self.built: Memo[dict[str, Any]] = Memo(16)
+        self.requests: Memo[dict[int, FacadeRequest]] = Memo(64)
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
         self.scene_ready, self.loaded = events or (threading.Event(), threading.Event())
@@ -224,13 +226,15 @@ class Session:
         outcome = builder.build(fp, mass, self.cover[index], self.names[index], (0, 0))
         if outcome.record is None:
             return {"id": fp.id, "skipped": outcome.skipped.reason, "warnings": list(outcome.warnings)}
+        requests = self._requests(index)
         origin = np.asarray(outcome.record.pivot, dtype=float)
         turn = Y_UP[:3, :3]  # the GLB's frame: Y-up, origin at the pivot
         faces = [{"index": f.index, "width": f.width, "height": f.height, "courtyard": f.is_courtyard,
                   "origin": (turn @ (np.asarray(f.origin) - origin)).round(4).tolist(),
                   "u": (turn @ np.asarray(f.u)).round(6).tolist(),
                   "normal": (turn @ np.asarray(f.normal)).round(6).tolist(),
-                  "layout": layout_data(outcome.layouts[f.index]) if f.index in outcome.layouts else None}
+                  "layout": layout_data(outcome.layouts[f.index]) if f.index in outcome.layouts else None,
+                  "request": request_data(requests[f.index]) if f.index in requests else None}
                  for f in mass.faces]
         glb = building_glb(outcome.record, self.scene.materials if self.scene else None)
         return {"id": fp.id, "skipped": None, "warnings": list(outcome.warnings), "faces": faces,
@@ -266,6 +270,43 @@ class Session:
         problems = check_partition(layout) + check_request(layout, request)
         return {"ok": True, "error": None, "kind": kind.id, "layout": layout_data(layout, request.floor_lines),
                 "explain": explain, "problems": [str(p) for p in problems]}
+
+    def preview_face(self, name: str, text: str, index: int, face: int) -> dict[str, Any]:
+        """Face ``face`` of building ``index`` dressed by a ruleset text under the building's own request (its floor
+        lines, entrance, corner strips and seed; coupled with its other faces where the kind couples them), and
+        what the city would do with it (``problems``): the preview shows what the city gets."""
+        path, text = self.confinement.resolve(name), _text(text)
+        kind = self.registry.kind_for_path(path)
+        if self.scene is None:
+            raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
+        if not isinstance(index, int) or not 0 <= index < len(self.footprints):
+            raise StudioError(f"no building {index!r} (the scene has {len(self.footprints)})", 404)
+        requests = self._requests(index)
+        if face not in requests:
+            raise StudioError(f"building {self.footprints[index].id} has no dressed face {face!r}", 404,
+                              hint=f"its dressed faces: {', '.join(map(str, sorted(requests))) or 'none'}")
+        return self.previews.get(("face", kind.id, path, text, index, face),
+                                 lambda: self._preview_face(kind, path, text, requests, face))
+
+    def _requests(self, index: int) -> dict[int, FacadeRequest]:
+        """The coordinator's request of every dressed face of building ``index``."""
+        assert self.scene is not None
+        return self.requests.get(index, lambda: face_requests(self.scene, self.footprints[index], self.masses[index],
+                                                              self.cover[index]))
+
+    def _preview_face(self, kind: Any, path: Path, text: str, requests: dict[int, FacadeRequest],
+                      face: int) -> dict[str, Any]:
+        request = requests[face]
+        try:
+            ruleset = self._parse(kind, path, text)
+            layout = face_layout(kind, ruleset, requests, face)
+            explain = kind.explain(ruleset, request)
+        except CitygenError as exc:
+            return {"ok": False, "error": error_data(exc, self.confinement), "kind": kind.id}
+        problems = [str(p) for p in check_partition(layout) + check_request(layout, request)]
+        return {"ok": True, "error": None, "kind": kind.id, "layout": layout_data(layout, request.floor_lines),
+                "explain": explain, "problems": problems + city_problems(layout, request),
+                "request": request_data(request)}
 
     def variations(self, name: str, text: str, size: FaceRequestSize, count: int) -> dict[str, Any]:
         """The distinct layouts of a ruleset text at a size over the seeds ``size.seed ... + count - 1`` (a relayout

@@ -80,6 +80,10 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         page.wait_for_selector("#facade rect[data-label=blind]", timeout=10_000)
         assert page.locator("#facade rect[data-label=window]").count() == 0
         assert page.evaluate("window.studio.previews") > previews
+        # the preview dressed the picked face under the building's own request (its floors, its entrance or not)
+        page.wait_for_function("document.getElementById('face-mode').textContent.includes('floor lines')",
+                               timeout=10_000)
+        assert "as the city gets it" in page.locator("#face-mode").inner_text()
         page.wait_for_timeout(500)
         page.screenshot(path=tmp_path / "2-edited.png")
         assert (np.abs(canvas(page) - before).sum(axis=2) > 30).mean() > 0.05  # the 3D view changed

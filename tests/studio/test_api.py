@@ -304,3 +304,28 @@ def test_generate_refuses_edits_that_do_not_parse_or_need_workers(client, scene)
     outside = client.post("/api/generate", json={"format": ".glb", "rulesets": {"../secret.grammar": "x"}})
     assert outside.status_code == 403
     assert client.get("/api/generate").json()["running"] is False  # (nothing started)
+
+
+def test_a_face_preview_is_the_face_the_city_gets(client, scene):
+    built = client.post("/api/build", json={"index": 1}).json()
+    text = (scene.parent.parent / "shared" / "apartment.grammar").read_text()
+    body = {"ruleset": "../shared/apartment.grammar", "text": text, "building": 1, "width": 1, "height": 1}
+    dressed = [f for f in built["faces"] if f["layout"]]
+    for face in dressed:
+        preview = client.post("/api/preview", json={**body, "face": face["index"]}).json()
+        assert preview["ok"] and preview["layout"]["leaves"] == face["layout"]["leaves"]  # (not 1 x 1 m)
+        assert preview["request"] == face["request"]
+        assert preview["request"]["floor_lines"] == preview["layout"]["floor_lines"]
+    assert sum(client.post("/api/preview", json={**body, "face": f["index"]}).json()["request"]["entrance"]
+               for f in dressed) == 1  # the building's one entrance
+    edited = client.post("/api/preview", json={**body, "face": dressed[0]["index"],
+                                               "text": text.replace("terminal(window", "terminal(blind")}).json()
+    assert "blind" in {r["label"] for r in edited["layout"]["leaves"]}
+
+
+def test_a_face_preview_of_a_missing_building_or_face_is_an_error(client, scene):
+    body = {"ruleset": "house.grammar", "text": (scene.parent / "house.grammar").read_text(), "face": 0}
+    assert client.post("/api/preview", json={**body, "building": 9}).status_code == 404
+    response = client.post("/api/preview", json={**body, "building": 0, "face": 99})
+    assert response.status_code == 404 and "dressed faces" in response.json()["error"]["hint"]
+    assert client.post("/api/preview", json={**body, "building": 0, "face": "front"}).status_code == 400

@@ -11,7 +11,7 @@ const MODES = {split: "citygen-grammar", layers: "citygen-layers", relayout: "ci
 const PREVIEW_DELAY = 250, BUILD_DELAY = 700;
 
 const state = {info: null, buildings: [], selected: null, built: null, ruleset: null, texts: {}, saved: {},
-  annotations: [], previews: 0, builds: 0};
+  annotations: [], previews: 0, builds: 0, face: null};
 window.studio = state;  // (for the end-to-end tests and the curious)
 
 async function api(path, body) {
@@ -190,8 +190,9 @@ async function preview() {
   if (!state.ruleset) return;
   const started = performance.now();
   let result;
+  const onFace = state.face ? {building: state.face.building, face: state.face.face} : {};
   try {
-    result = await api("/api/preview", {ruleset: state.ruleset, text: editor.getValue(), ...size()});
+    result = await api("/api/preview", {ruleset: state.ruleset, text: editor.getValue(), ...size(), ...onFace});
   } catch (error) {
     $("error").textContent = where(error.data) || error.message;
     return;
@@ -203,6 +204,7 @@ async function preview() {
     to: CodeMirror.Pos(error.line - 1, (error.column || 1))}] : [];
   editor.performLint();
   $("error").textContent = error ? where(error) : result.problems.join("\n");
+  if (result.request && state.face) showRequest(result.request);
   if (!error) {
     drawFacade(result.layout);
     $("explain").textContent = result.explain;
@@ -232,6 +234,7 @@ async function variations() {
     cell.appendChild(caption);
     cell.addEventListener("click", () => {
       $("seed").value = variation.seed;
+      freeSize();
       for (const other of grid.children) other.classList.toggle("picked", other === cell);
       preview();
     });
@@ -375,8 +378,8 @@ async function build(frame = false) {
   showFace(frame);
 }
 
-// The selected face as the building got it (its floors and entrance from the building's coordinator); ``resize``
-// also sets the preview size to the face's, for the stand-alone previews while typing.
+// The selected face as the building got it (its floors, entrance and corners from the building's coordinator); the
+// previews while typing then dress this face under the same request, until a size or seed is set by hand.
 function showFace(resize = true) {
   const face = state.built && state.built.faces.find((f) => String(f.index) === $("face").value);
   if (!face) return;
@@ -384,12 +387,30 @@ function showFace(resize = true) {
     $("width").value = face.width.toFixed(2);
     $("height").value = face.height.toFixed(2);
   }
+  state.face = {building: state.selected, face: face.index, id: state.built.id};
   drawFacade(face.layout);
+  showRequest(face.request);
   $("explain").textContent = `face ${face.index} of ${state.built.id} as built`;
+}
+
+// What the building's coordinator asks of the previewed face.
+function showRequest(request) {
+  const corners = request.corner_widths.some((w) => w > 0) ?
+    `, corner strips ${request.corner_widths.map((w) => w.toFixed(2)).join(" / ")} m` : "";
+  $("face-mode").textContent = `face ${state.face.face} of ${state.face.id} as the city gets it: ` +
+    `${request.width.toFixed(2)} x ${request.height.toFixed(2)} m, floor lines ` +
+    `${request.floor_lines.map((y) => y.toFixed(2)).join(", ")}` + (request.entrance ? ", the entrance" : "") + corners;
+}
+
+// Previews at the size and seed of the controls, not on the building's face.
+function freeSize() {
+  state.face = null;
+  $("face-mode").textContent = "free size: the controls' width, height, floor height and seed";
 }
 
 async function select(index) {
   state.selected = index;
+  freeSize();  // (until the building's faces are known)
   const building = state.buildings[index];
   for (const path of $("map").querySelectorAll("path")) path.classList.toggle("selected", path.dataset.index === String(index));
   $("building-title").textContent = building.id;
@@ -416,7 +437,9 @@ async function start() {
   $("generate").addEventListener("click", generate);
   setUpInverse();
   $("generate").disabled = !state.info.scene;
-  for (const id of ["width", "height", "floor", "seed"]) $(id).addEventListener("input", () => schedule("preview", preview, PREVIEW_DELAY));
+  for (const id of ["width", "height", "floor", "seed"]) {
+    $(id).addEventListener("input", () => { freeSize(); schedule("preview", preview, PREVIEW_DELAY); });
+  }
   if (state.info.rulesets.length) await openRuleset(state.info.rulesets[0]);
   if (state.info.scene) {  // (the editor works while the server builds the footprints and masses)
     status("loading the buildings ...");
