@@ -329,3 +329,22 @@ def test_a_face_preview_of_a_missing_building_or_face_is_an_error(client, scene)
     response = client.post("/api/preview", json={**body, "building": 0, "face": 99})
     assert response.status_code == 404 and "dressed faces" in response.json()["error"]["hint"]
     assert client.post("/api/preview", json={**body, "building": 0, "face": "front"}).status_code == 400
+
+
+def test_a_face_preview_of_a_kind_that_couples_faces_matches_the_build(tmp_path):
+    scene = make_scene(tmp_path)
+    for name in ("townhouse.relayout", "cmp_b0035.relayout", "cmp_b0035.layout.json"):
+        shutil.copy(REPO / "rulesets" / name, scene.parent / name)
+    text = scene.read_text()
+    scene.write_text(text[:text.index("[[assign]]")] + '[[assign]]\nruleset = "townhouse.relayout"\n'
+                     + text[text.index("[output]"):])
+    client = TestClient(create_app(Session(default_registry(), scene)), base_url=URL)
+    built = client.post("/api/build", json={"index": 1}).json()
+    body = {"ruleset": "townhouse.relayout", "text": (scene.parent / "townhouse.relayout").read_text(), "building": 1}
+    same = 0
+    for face in (f for f in built["faces"] if f["layout"]):
+        preview = client.post("/api/preview", json={**body, "face": face["index"]}).json()
+        if not preview["problems"]:
+            assert preview["layout"]["leaves"] == face["layout"]["leaves"]
+            same += 1
+    assert same >= 2
