@@ -173,9 +173,10 @@ def _field(body: dict[str, Any], key: str, kind: type) -> Any:
 
 
 def _import(body: dict[str, Any]) -> dict[str, Any]:
-    from citygen_studio.inverse import import_layout
+    from citygen_studio.inverse import ImportOptions, import_layout
     return import_layout(_field(body, "name", str), _base64(body, "data"), body.get("width"),
-                         body.get("floor_height", 3.0), _base64(body, "label_map") if body.get("label_map") else None)
+                         body.get("floor_height", 3.0), _base64(body, "label_map") if body.get("label_map") else None,
+                         ImportOptions.from_json(body.get("options")))
 
 
 def _extract(body: dict[str, Any]) -> dict[str, Any]:

@@ -172,3 +172,44 @@ def test_generate_the_scene_and_see_the_report(studio, tmp_path):
     assert (scene.parent / "studio-out" / "scene.glb").is_file()
     shared = scene.parent.parent / "shared" / "apartment.grammar"
     assert shared.read_text() == (Path(__file__).parents[2] / "rulesets" / "apartment.grammar").read_text()
+
+
+SHARED = Path(__file__).parents[2].parent / "shared" / "data" / "cmp_facade" / "base"
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP facade data")
+def test_import_options_cmp_tolerances_and_a_photo_crop(studio, tmp_path):
+    url, _ = studio
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        page.locator("#inverse-panel summary").click()
+        page.locator("#photo-width").fill("10")
+        page.locator("#drop").set_input_files([str(SHARED / "cmp_b0001.xml"), str(SHARED / "cmp_b0001.png")])
+        page.wait_for_function("document.getElementById('import-summary').textContent.includes('snap 0.01')",
+                               timeout=30_000)
+        page.locator("#snap").fill("0.05")
+        page.locator("#element-caps").uncheck()
+        page.locator("#reimport").click()
+        page.wait_for_function("document.getElementById('import-summary').textContent.includes("
+                               "'snap 0.05, align 0.025, equal sizes 0.03, no element caps')", timeout=30_000)
+
+        page.locator("#parser").select_option("contrast")
+        page.locator("#drop").set_input_files(str(SHARED / "cmp_b0001.jpg"))
+        page.wait_for_function("document.getElementById('import-summary').textContent.includes('contrast parser)')",
+                               timeout=60_000)
+        box = page.locator("#photo").bounding_box()  # a drag across the middle of the photo sets the crop
+        page.mouse.move(box["x"] + 0.2 * box["width"], box["y"] + 0.1 * box["height"])
+        page.mouse.down()
+        page.mouse.move(box["x"] + 0.8 * box["width"], box["y"] + 0.9 * box["height"], steps=5)
+        page.mouse.up()
+        page.wait_for_function("document.getElementById('import-summary').textContent.includes('contrast parser, crop')",
+                               timeout=60_000)
+        crop = [float(v) for v in page.locator("#crop").input_value().split()]
+        natural = page.evaluate("[document.getElementById('photo').naturalWidth, "
+                                "document.getElementById('photo').naturalHeight]")
+        assert crop[0] == pytest.approx(0.2 * natural[0], abs=3) and crop[3] == pytest.approx(0.9 * natural[1], abs=3)
+        page.screenshot(path=tmp_path / "crop.png")
+        browser.close()

@@ -348,3 +348,44 @@ def test_a_face_preview_of_a_kind_that_couples_faces_matches_the_build(tmp_path)
             assert preview["layout"]["leaves"] == face["layout"]["leaves"]
             same += 1
     assert same >= 2
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
+def test_cmp_import_takes_the_command_lines_tolerances(client):
+    def encoded(name: str) -> str:
+        return base64.b64encode((SHARED / name).read_bytes()).decode()
+
+    body = {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
+            "width": 10}
+    default = client.post("/api/import", json=body).json()
+    loose = client.post("/api/import", json={**body, "options": {"snap": 0.05, "align": 0.1, "equal_sizes": 0.2,
+                                                                  "element_caps": False}}).json()
+    assert "snap 0.05, align 0.1, equal sizes 0.2, no element caps" in loose["summary"]
+    assert loose["layout"] != default["layout"]  # (coarser tolerances merge more edges)
+    for options in ({"snap": 0.5}, {"align": -0.1}, {"element_caps": "yes"}, {"tolerance": 1}, [0.01]):
+        response = client.post("/api/import", json={**body, "options": options})
+        assert response.status_code == 400 and response.json()["error"]["message"]
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.jpg").is_file(), reason="needs the shared CMP facade photos")
+def test_photo_import_takes_a_crop_box_and_a_parser(client):
+    data = base64.b64encode((SHARED / "cmp_b0001.jpg").read_bytes()).decode()
+    body = {"name": "cmp_b0001.jpg", "data": data, "width": 8}
+    cropped = client.post("/api/import", json={**body, "options": {"crop": [20, 10, 300, 400],
+                                                                    "parser": "contrast"}}).json()
+    assert "contrast parser, crop 20 10 300 400" in cropped["summary"]
+    assert cropped["drawing"]["width"] == pytest.approx(8)
+    assert cropped["drawing"]["height"] == pytest.approx(8 * 390 / 280, rel=0.02)  # (the crop's proportions)
+    outside = client.post("/api/import", json={**body, "options": {"crop": [0, 0, 99999, 10]}})
+    assert outside.status_code == 400 and outside.json()["error"]["message"].startswith("cmp_b0001.jpg: ")
+    assert client.post("/api/import", json={**body, "options": {"parser": "magic"}}).status_code == 400
+    assert client.post("/api/import", json={**body, "options": {"crop": [1, 2, 3]}}).status_code == 400
+
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0284.xml").is_file(), reason="needs the shared CMP annotations")
+def test_cmp_import_refuses_or_drops_zero_size_boxes(client):
+    body = {"name": "cmp_b0284.xml", "data": base64.b64encode((SHARED / "cmp_b0284.xml").read_bytes()).decode()}
+    refused = client.post("/api/import", json=body)
+    assert refused.status_code == 400 and "zero-size box" in refused.json()["error"]["message"]
+    assert refused.json()["error"]["message"].startswith("cmp_b0284.xml: ")
+    assert client.post("/api/import", json={**body, "options": {"drop_degenerate": True}}).status_code == 200

@@ -254,20 +254,72 @@ function base64Of(file) {
   });
 }
 
+// The import options as the command line takes them: a CMP annotation's tolerances, a photo's crop and parser.
+function importOptions() {
+  const crop = $("crop").value.trim() ? $("crop").value.trim().split(/[\s,]+/).map(Number) : null;
+  if (crop && (crop.length !== 4 || crop.some((v) => !Number.isFinite(v)))) {
+    throw new Error("crop: give four pixel numbers x0 y0 x1 y1 (y down)");
+  }
+  return {snap: Number($("snap").value), align: Number($("align").value), equal_sizes: Number($("equal-sizes").value),
+    element_caps: $("element-caps").checked, drop_degenerate: $("drop-degenerate").checked, parser: $("parser").value,
+    crop};
+}
+
+// The dropped photo, on which a drag sets the crop box (in the photo's pixels).
+function showPhoto(file) {
+  const holder = $("photo-crop"), photo = $("photo");
+  holder.hidden = !file;
+  if (!file) return;
+  if (photo.src) URL.revokeObjectURL(photo.src);
+  photo.src = URL.createObjectURL(file);
+  $("crop-box").hidden = true;
+}
+
+function setUpCrop() {
+  const holder = $("photo-crop"), photo = $("photo"), box = $("crop-box");
+  let start = null;
+  const at = (e) => {
+    const r = photo.getBoundingClientRect();
+    return [Math.min(Math.max(e.clientX - r.left, 0), r.width), Math.min(Math.max(e.clientY - r.top, 0), r.height)];
+  };
+  const draw = (a, b) => {
+    Object.assign(box.style, {left: `${Math.min(a[0], b[0])}px`, top: `${Math.min(a[1], b[1])}px`,
+      width: `${Math.abs(b[0] - a[0])}px`, height: `${Math.abs(b[1] - a[1])}px`});
+    box.hidden = false;
+  };
+  holder.addEventListener("pointerdown", (e) => { start = at(e); holder.setPointerCapture(e.pointerId); });
+  holder.addEventListener("pointermove", (e) => { if (start) draw(start, at(e)); });
+  holder.addEventListener("pointerup", (e) => {
+    if (!start) return;
+    const end = at(e), scale = photo.naturalWidth / photo.getBoundingClientRect().width;
+    const [x0, x1] = [start[0], end[0]].sort((a, b) => a - b), [y0, y1] = [start[1], end[1]].sort((a, b) => a - b);
+    start = null;
+    if (x1 - x0 < 4 || y1 - y0 < 4) return;  // (a click, not a box)
+    $("crop").value = [x0, y0, x1, y1].map((v) => Math.round(v * scale)).join(" ");
+    if (state.dropped) importFiles(state.dropped);
+  });
+}
+
 // A dropped photo, layout JSON or CMP annotation (its XML, with the label-map PNG of the same name when dropped
 // together) becomes a layout, drawn in the facade view, ready for grammar extraction.
 async function importFiles(files) {
   const list = [...files];
+  state.dropped = list;
+  $("reimport").disabled = !list.length;
   const xml = list.find((f) => f.name.toLowerCase().endsWith(".xml"));
   const file = xml || list[0];
   if (!file) return;
   const stem = file.name.replace(/\.[^.]*$/, "");
   const labelMap = xml && list.find((f) => f.name.toLowerCase() === (stem + ".png").toLowerCase());
+  const photo = !xml && !file.name.toLowerCase().endsWith(".json");
+  if (photo && state.photo !== file) { state.photo = file; $("crop").value = ""; showPhoto(file); }
+  if (!photo) { state.photo = null; showPhoto(null); }
   $("import-summary").textContent = `reading ${file.name} ...`;
   try {
     const width = Number($("photo-width").value) || null;
     const result = await api("/api/import", {name: file.name, data: await base64Of(file), width,
-      floor_height: Number($("floor").value), label_map: labelMap ? await base64Of(labelMap) : null});
+      floor_height: Number($("floor").value), label_map: labelMap ? await base64Of(labelMap) : null,
+      options: importOptions()});
     state.imported = {name: file.name, layout: result.layout};
     drawFacade(result.drawing);
     $("import-summary").textContent = result.summary;
@@ -299,6 +351,8 @@ function setUpInverse() {
   const panel = $("inverse-panel");
   $("drop").addEventListener("change", () => importFiles($("drop").files));
   $("extract").addEventListener("click", extractGrammar);
+  $("reimport").addEventListener("click", () => state.dropped && importFiles(state.dropped));
+  setUpCrop();
   panel.addEventListener("dragover", (e) => { e.preventDefault(); panel.classList.add("dragging"); });
   panel.addEventListener("dragleave", () => panel.classList.remove("dragging"));
   panel.addEventListener("drop", (e) => {
