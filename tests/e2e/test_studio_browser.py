@@ -205,8 +205,8 @@ def test_import_options_cmp_tolerances_and_a_photo_crop(studio, tmp_path):
         page.mouse.down()
         page.mouse.move(box["x"] + 0.8 * box["width"], box["y"] + 0.9 * box["height"], steps=5)
         page.mouse.up()
-        page.wait_for_function("document.getElementById('import-summary').textContent.includes('contrast parser, crop')",
-                               timeout=60_000)
+        page.wait_for_function(
+            "document.getElementById('import-summary').textContent.includes('contrast parser, crop')", timeout=60_000)
         crop = [float(v) for v in page.locator("#crop").input_value().split()]
         natural = page.evaluate("[document.getElementById('photo').naturalWidth, "
                                 "document.getElementById('photo').naturalHeight]")
