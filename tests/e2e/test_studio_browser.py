@@ -69,7 +69,7 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         assert page.locator("#ruleset").input_value() == "house.grammar"
         assert page.locator("#facade rect[data-label=window]").count() > 0
         page.locator("#view3d canvas").click()  # the middle of the view: a face of the building
-        page.wait_for_function("document.getElementById('status').textContent.endsWith('picked')", timeout=10_000)
+        page.wait_for_function("window.studio.picks >= 1", timeout=10_000)
 
         # an edit: every window gets shutters instead (the SVG preview follows), the walls brick (the 3D view does)
         previews, builds = page.evaluate("[window.studio.previews, window.studio.builds]")

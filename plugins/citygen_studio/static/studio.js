@@ -11,7 +11,7 @@ const MODES = {split: "citygen-grammar", layers: "citygen-layers", relayout: "ci
 const PREVIEW_DELAY = 250, BUILD_DELAY = 700;
 
 const state = {info: null, buildings: [], selected: null, built: null, ruleset: null, texts: {}, saved: {},
-  annotations: [], previews: 0, builds: 0, face: null};
+  annotations: [], previews: 0, builds: 0, picks: 0, face: null};
 window.studio = state;  // (for the end-to-end tests and the curious)
 
 async function api(path, body) {
@@ -77,7 +77,7 @@ let view = null;  // the 3D view: view3d.js (three.js) is fetched on the first s
 function viewReady() {
   view = view || import("./view3d.js").then(({createView}) => createView($("view3d"),
     () => (state.built && state.built.faces) || [],
-    (face) => { $("face").value = String(face.index); showFace(); status(`face ${face.index} picked`); },
+    (face) => { state.picks++; $("face").value = String(face.index); showFace(); status(`face ${face.index} picked`); },
     (error) => status("cannot show the building: " + error)));
   return view;
 }
@@ -441,10 +441,14 @@ function showFace(resize = true) {
     $("width").value = face.width.toFixed(2);
     $("height").value = face.height.toFixed(2);
   }
+  const picked = !state.face || state.face.building !== state.selected || state.face.face !== face.index;
   state.face = {building: state.selected, face: face.index, id: state.built.id};
   drawFacade(face.layout);
   showRequest(face.request);
-  $("explain").textContent = `face ${face.index} of ${state.built.id} as built`;
+  if (picked) {  // (a rebuild keeps the account of the last preview of this face)
+    $("explain").textContent = `face ${face.index} of ${state.built.id} as built`;
+    schedule("preview", preview, 0);  // its account and what the city does with it
+  }
 }
 
 // What the building's coordinator asks of the previewed face.
