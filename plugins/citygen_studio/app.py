@@ -84,13 +84,19 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
 
     async def output(request: Request) -> Response:
         try:
+            await _ready(session.scene_ready, time_limit)
             path = session.output(request.query_params.get("name", ""))
         except StudioError as exc:
             return JSONResponse({"error": shown(exc)}, status_code=exc.status)
         return FileResponse(path, filename=path.name)
 
-    async def progress(request: Request) -> StreamingResponse:
+    async def progress(request: Request) -> Response:
         """The running generation's state as server-sent events, every :data:`PROGRESS_EVERY` s until it ends."""
+        try:
+            await _ready(session.scene_ready, time_limit)
+        except StudioError as exc:
+            return JSONResponse({"error": shown(exc)}, status_code=exc.status)
+
         async def events():
             while True:
                 state = session.generation_state()
@@ -131,6 +137,12 @@ def create_app(session: Session, time_limit: float = TIME_LIMIT) -> Starlette:
         Mount("/", StaticFiles(directory=STATIC, html=True), name="static"),
     ]
     return Starlette(routes=routes, middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=LOOPBACK)])
+
+
+async def _ready(ready: threading.Event, time_limit: float) -> None:
+    """Wait (off the event loop) until ``ready``, at most ``time_limit`` seconds."""
+    if not ready.is_set() and not await anyio.to_thread.run_sync(ready.wait, time_limit, abandon_on_cancel=True):
+        raise StudioError("the studio is still loading its scene", 503, hint="try again in a moment")
 
 
 def _when(ready: threading.Event, work: Callable[[dict[str, Any]], Any], body: dict[str, Any]) -> Any:

@@ -54,3 +54,14 @@ def test_citygen_studio_starts_early_and_serves_the_scene(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "citygen.launch", "studio", "--port", "http"], capture_output=True,
                          text=True)
     assert bad.returncode == 2 and "a port is a whole number" in bad.stderr
+
+
+def test_streams_and_downloads_wait_for_the_session_off_the_event_loop(tmp_path):
+    scene = make_scene(tmp_path)
+    client = TestClient(create_app(PendingSession(lambda events: Session(default_registry(), scene, background=True,
+                                                                            events=events))), base_url=URL)
+    with client.stream("GET", "/api/generate/events") as events:  # (no run yet: one state, not running)
+        states = [json.loads(line[6:]) for line in events.iter_lines() if line.startswith("data: ")]
+    assert states == [{"running": False, "done": 0, "total": 0, "error": None, "report": None, "output": None,
+                       "edited": []}]
+    assert client.get("/api/output", params={"name": "studio-out/scene.glb"}).status_code == 404
