@@ -152,8 +152,10 @@ class Session:
 
     def buildings(self) -> list[dict[str, Any]]:
         """Every building: id, outline rings (local metres), attributes, and the rulesets its faces get."""
+        if self.scene is None:
+            raise StudioError("no scene is loaded", 409, hint="start the studio with a scene: citygen studio SCENE")
         out = []
-        builder = self._builder()
+        builder = Builder(self.scene, self.scene.seed, self.registry)  # (to choose rulesets, not to load them)
         for k, (fp, mass) in enumerate(zip(self.footprints, self.masses)):
             parts = mass.outline.geoms if isinstance(mass.outline, MultiPolygon) else [mass.outline]
             rings = [[[round(x, 2), round(y, 2)] for x, y in ring.coords] for part in parts
