@@ -317,6 +317,10 @@ class Session:
             raise StudioError(f"count must be 1 to {MAX_VARIATIONS}, got {count!r}")
         path, text = self.confinement.resolve(name), _text(text)
         kind = self.registry.kind_for_path(path)
+        return self.previews.get(("variations", kind.id, path, text, size, count),
+                                 lambda: self._variations(kind, path, text, size, count))
+
+    def _variations(self, kind: Any, path: Path, text: str, size: FaceRequestSize, count: int) -> dict[str, Any]:
         try:
             ruleset = self._parse(kind, path, text)
         except CitygenError as exc:

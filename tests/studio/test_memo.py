@@ -33,6 +33,9 @@ def test_previews_are_remembered_by_text_and_size(session):
     assert session.preview("house.grammar", text + "\n# edited\n", size) is not first
     assert session.preview("house.grammar", text, FaceRequestSize(13, 9)) is not first
     assert session.parsed.misses == 2  # (two texts parsed, the second size reused the parsed text)
+    variations = session.variations("house.grammar", text, size, 4)
+    assert session.variations("house.grammar", text, size, 4) is variations
+    assert session.variations("house.grammar", text, size, 3) is not variations
 
 
 def test_builds_are_remembered_until_a_ruleset_text_changes(session):
