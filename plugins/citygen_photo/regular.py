@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from scipy.ndimage import gaussian_filter1d, uniform_filter
 
 from citygen.layout import FacadeLayout, Region
 from citygen_photo.labels import CMP_LABELS
@@ -41,6 +41,15 @@ TIGHT = 0.5
 MISSING_ROW = 1.6
 #: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
 GROUND_SHARE = 0.5
+#: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
+#: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
+SHOP_BAND = 0.2
+#: An attic row (dormers, a gable's windows: too few for the row mean) is a run where the window probability,
+#: smoothed over ``ATTIC_BOX`` pixels, peaks at ``ATTIC_PEAK`` or more somewhere along the row, at least
+#: ``ATTIC_GAP`` pitches above the top row.
+ATTIC_BOX = 5
+ATTIC_PEAK = 0.4
+ATTIC_GAP = 0.6
 
 Span = tuple[float, float]
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in working pixels, y down
@@ -59,11 +68,11 @@ class RegularFacade:
     ground: bool
 
 
-def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2) -> list[Span]:
-    """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least 0.08), at least
-    ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
+def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2, floor: float = 0.08) -> list[Span]:
+    """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least ``floor``), at
+    least ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
     high = float(np.percentile(profile, 95)) if profile.size else 0.0
-    above = profile > max(share * high, 0.08)
+    above = profile > max(share * high, floor)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], above.astype(np.int8), [0]])))
     spans = [(float(a), float(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= least]
     if len(spans) < 2:
@@ -123,13 +132,20 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     h, w, _ = prob.shape
     window = prob[..., WINDOW] + prob[..., BLIND]  # (a window behind closed blinds is a window of the layout)
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
+    shops = shop_band(prob)
+    if shops is not None:
+        rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
+    rows = _with_attic(window, rows, pitch)
     lines = [0.0]
     for (_, b), (a, _) in zip(rows, rows[1:]):
         lines.append((b + a) / 2)
     ground_top = None
-    if rows:
+    if rows and shops is not None:
+        ground_top = max((rows[-1][1] + shops) / 2, rows[-1][1])
+        lines.append(ground_top)
+    elif rows:
         gap = float(np.median([a - b for (_, b), (a, _) in zip(rows, rows[1:])])) if len(rows) > 1 else 0.1 * h
         below = rows[-1][1] + max(gap, 0.0) / 2
         if pitch and h - below >= GROUND_SHARE * pitch:
@@ -158,6 +174,34 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
+
+
+def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
+    """``rows`` with an attic row put on top: the lowest run, at least ``ATTIC_GAP`` pitches above the top row,
+    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least 40 % of the rows'
+    median height (a few dormers are a row of windows though their row mean is low)."""
+    if not rows or pitch <= 0:
+        return rows
+    top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
+    if top <= 2:
+        return rows
+    peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
+    above = runs(peak, share=0.0, least=max(2, round(0.4 * float(np.median([b - a for a, b in rows])))),
+                 floor=ATTIC_PEAK)
+    return [above[-1], *rows] if above else rows
+
+
+def shop_band(prob: np.ndarray) -> float | None:
+    """The top (working pixels) of a band of shops and doors standing on the ground: the lowest run of the shop +
+    door probability's row profile, when it reaches the bottom tenth of the facade and its mean is at least
+    ``SHOP_BAND``; None without one."""
+    h = prob.shape[0]
+    profile = gaussian_filter1d((prob[..., SHOP] + prob[..., DOOR]).mean(axis=1), 1.0)
+    bands = runs(profile, share=0.5, least=max(2, round(0.03 * h)))
+    if not bands or bands[-1][1] < 0.9 * h:
+        return None
+    a, b = bands[-1]
+    return a if profile[int(a):int(np.ceil(b))].mean() >= SHOP_BAND else None
 
 
 def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) -> Span:

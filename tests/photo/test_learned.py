@@ -99,3 +99,30 @@ def test_cli_writes_the_label_map_and_the_overlay(tmp_path, capsys):
     with Image.open(labels) as a, Image.open(overlay) as b:
         assert a.size == b.size == (rgb.shape[1], rgb.shape[0])
     assert "windows" in capsys.readouterr().err
+
+
+def test_an_attic_row_of_few_dormers_is_a_floor():
+    """Regression (validation photos cmp_b0264, b0298): a gable's or attic's one or two windows are too few for
+    the row mean, and the attic was merged into the floor below."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    attic = np.zeros((30, prob.shape[1], n))
+    attic[..., CMP_LABELS.index("facade")] = 1.0
+    attic[8:22, 55:65] = np.eye(n)[WINDOW]  # one dormer in a 120 px wide facade
+    facade_ = regular_facade(np.concatenate([attic, prob]))
+    assert len(facade_.floor_lines) - 1 == 5
+    assert any(box[1] < 30 for box, label in facade_.elements if label == "window")
+
+
+def test_shop_windows_are_the_ground_floor_not_a_row_of_windows():
+    """A band of shops standing on the ground whose glass the parser also calls window is the ground floor: its
+    shop windows are not a row of windows of the floors above (nor cut by their tile lines)."""
+    prob = probabilities(floors=4, ground_h=40)
+    top = 4 * 30
+    prob[top + 6:, 4:40] = 0.5 * (np.eye(len(CMP_LABELS))[SHOP] + np.eye(len(CMP_LABELS))[WINDOW])
+    prob[top + 6:, 64:110] = 0.5 * (np.eye(len(CMP_LABELS))[SHOP] + np.eye(len(CMP_LABELS))[WINDOW])
+    facade_ = regular_facade(prob)
+    assert facade_.ground and len(facade_.floor_lines) - 1 == 5
+    assert top - 8 < facade_.floor_lines[-2] <= top + 6
+    assert not any(box[1] > top for box, label in facade_.elements if label == "window")
+    assert sum(label == "shop" for _, label in facade_.elements) == 2
