@@ -28,7 +28,7 @@ from scipy.ndimage import gaussian_filter1d, uniform_filter
 from citygen.layout import FacadeLayout, Region
 from citygen_photo.labels import CMP_LABELS
 
-WINDOW, DOOR, SHOP, BLIND = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind"))
+WINDOW, DOOR, SHOP, BLIND, BALCONY = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind", "balcony"))
 #: A row or column belongs to a run of windows where its profile exceeds this share of the profile's high value.
 RUN_SHARE = 0.4
 #: Rows (columns) of windows whose height (width) is within this share of the median take the median.
@@ -50,6 +50,11 @@ SHOP_BAND = 0.2
 ATTIC_BOX = 5
 ATTIC_PEAK = 0.4
 ATTIC_GAP = 0.6
+#: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
+#: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
+BALCONY_VOTE = 0.15
+#: Samples of a window's height in the balcony group's mean profile.
+PROFILE = 32
 
 Span = tuple[float, float]
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in working pixels, y down
@@ -170,6 +175,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             box = _clip((c, a, d, b), w, h)
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
+    elements = _with_balconies(prob, elements)
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
@@ -189,6 +195,39 @@ def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span
     above = runs(peak, share=0.0, least=max(2, round(0.4 * float(np.median([b - a for a, b in rows])))),
                  floor=ATTIC_PEAK)
     return [above[-1], *rows] if above else rows
+
+
+def _with_balconies(prob: np.ndarray, windows: list[tuple[Box, str]]) -> list[tuple[Box, str]]:
+    """Windows behind a balcony's railing split into the glass above and the balcony below, at one railing height
+    for the whole balcony group: the windows whose lower half the balcony probability votes for (``BALCONY_VOTE``)
+    are resampled to ``PROFILE`` rows and averaged (the group's mean tile, mueller2007 §3.2; synchronised sizes,
+    wu2014 §3.3), and the railing starts at the first row below the window's middle where the mean balcony
+    probability exceeds the mean glass probability."""
+    glass, railing = prob[..., WINDOW], prob[..., BALCONY]
+
+    def profile(plane: np.ndarray, box: Box) -> np.ndarray:
+        x0, y0, x1, y1 = box
+        rows = plane[int(y0):max(int(np.ceil(y1)), int(y0) + 1), int(x0):max(int(np.ceil(x1)), int(x0) + 1)]
+        line = rows.mean(axis=1)
+        return np.interp(np.linspace(0, line.size - 1, PROFILE), np.arange(line.size), line)
+
+    group = [i for i, (box, _) in enumerate(windows)
+             if profile(railing, box)[PROFILE // 2:].mean() >= BALCONY_VOTE]
+    if not group:
+        return windows
+    mean_glass = np.mean([profile(glass, windows[i][0]) for i in group], axis=0)
+    mean_railing = np.mean([profile(railing, windows[i][0]) for i in group], axis=0)
+    below = np.flatnonzero(mean_railing[PROFILE // 2:] > mean_glass[PROFILE // 2:])
+    if below.size == 0:
+        return windows
+    share = (PROFILE // 2 + below[0]) / PROFILE
+    out = list(windows)
+    for i in group:
+        (x0, y0, x1, y1), _ = windows[i]
+        cut = y0 + share * (y1 - y0)
+        out[i] = ((x0, y0, x1, cut), "window")
+        out.append(((x0, cut, x1, y1), "balcony"))
+    return out
 
 
 def shop_band(prob: np.ndarray) -> float | None:
@@ -290,26 +329,38 @@ def facade_layout(facade: RegularFacade, h: int, w: int, scale: float, meta: dic
 def _floor(name: str, boxes: list[tuple[Box, str]], y0: float, y1: float, w: int, h: int, scale: float) -> Region:
     """One floor ``y0..y1`` (metres, y up) split at its elements' sides; each element column split into wall
     below, the element, wall above (elements in working pixels of a ``w x h`` facade, y down)."""
-    cuts: list[tuple[float, float, tuple[float, float, str] | None]] = []
-    x = 0.0
+    cuts: list[tuple[float, float, list[tuple[float, float, str]]]] = []
+    x, stacked = 0.0, None
     for (bx0, by0, bx1, by1), label in boxes:
+        element = ((h - by1) * scale, (h - by0) * scale, label)
+        if cuts and cuts[-1][2] and (bx0, bx1) == stacked:  # (a balcony below its window: one column)
+            cuts[-1][2].append(element)
+            continue
+        stacked = (bx0, bx1)
         bx0 = max(bx0, x)  # (overlapping boxes of one floor: the later one starts where the earlier ends)
         if bx1 - bx0 < 1:
             continue
         if bx0 > x:
-            cuts.append((x, bx0, None))
-        cuts.append((bx0, bx1, ((h - by1) * scale, (h - by0) * scale, label)))
+            cuts.append((x, bx0, []))
+        cuts.append((bx0, bx1, [element]))
         x = bx1
     if x < w:
-        cuts.append((x, float(w), None))
+        cuts.append((x, float(w), []))
     columns = []
-    for a, b, element in cuts:
+    for a, b, elements in cuts:
         xa, wd = a * scale, (b - a) * scale
-        if element is None:
+        if not elements:
             columns.append(Region(xa, y0, wd, y1 - y0, "Wall", "wall"))
             continue
-        ey0, ey1, label = max(element[0], y0), min(element[1], y1), element[2]
-        parts = [(y0, ey0, "Wall", "wall"), (ey0, ey1, label.capitalize(), label), (ey1, y1, "Wall", "wall")]
-        columns.append(Region(xa, y0, wd, y1 - y0, f"{label.capitalize()}Tile", children=tuple(
+        parts, top = [], y0
+        for ey0, ey1, label in sorted(elements):
+            ey0, ey1 = max(ey0, top), min(ey1, y1)
+            if ey1 - ey0 <= 1e-9:
+                continue
+            parts += [(top, ey0, "Wall", "wall"), (ey0, ey1, label.capitalize(), label)]
+            top = ey1
+        parts.append((top, y1, "Wall", "wall"))
+        main = max(elements, key=lambda e: e[1] - e[0])[2]
+        columns.append(Region(xa, y0, wd, y1 - y0, f"{main.capitalize()}Tile", children=tuple(
             Region(xa, a0, wd, a1 - a0, sym, lab) for a0, a1, sym, lab in parts if a1 - a0 > 1e-9)))
     return Region(0.0, y0, w * scale, y1 - y0, name, children=tuple(columns))

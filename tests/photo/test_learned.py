@@ -126,3 +126,26 @@ def test_shop_windows_are_the_ground_floor_not_a_row_of_windows():
     assert top - 8 < facade_.floor_lines[-2] <= top + 6
     assert not any(box[1] > top for box, label in facade_.elements if label == "window")
     assert sum(label == "shop" for _, label in facade_.elements) == 2
+
+
+def test_windows_behind_railings_share_one_balcony_cut():
+    """The balcony group (wu2014 §3.3's synchronised sizes): windows whose lower part the parser calls balcony
+    stop at one railing height, with a balcony terminal below them in the same column; the others keep their
+    height."""
+    prob = probabilities(floors=4, jitter=0.0)
+    n = len(CMP_LABELS)
+    balcony = CMP_LABELS.index("balcony")
+    for i in (1, 2):  # railings over the lower 5 rows of the 14-row windows of the 2nd and 3rd floors
+        for j in range(5):
+            r0, c0 = i * 30 + 8, j * 24 + 7
+            prob[r0 + 9:r0 + 14, c0:c0 + 10] = np.eye(n)[balcony]
+    facade_ = regular_facade(prob)
+    windows = [b for b, label in facade_.elements if label == "window"]
+    balconies = [b for b, label in facade_.elements if label == "balcony"]
+    assert len(windows) == 20 and len(balconies) == 10
+    railed = [b for b in windows if 30 <= b[1] < 90]
+    assert len(railed) == 10 and len({round(b[3] - b[1], 6) for b in railed}) == 1
+    assert all(b[3] == pytest.approx(30 * (1 + (b[1] >= 60)) + 8 + 9, abs=1.0) for b in railed)  # at the railing
+    assert all(any(r[0] == b[0] and r[1] == b[3] for r in balconies) for b in railed)
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == [] and layout.count("balcony") == 10 and layout.count("window") == 20
