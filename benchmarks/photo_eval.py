@@ -1,15 +1,18 @@
 """Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
 
-    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40]
+    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40] [--parser learned|contrast] [--model M.npz]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors
 without windows such as a shop ground floor or an attic, and whether every row of windows lies in a floor of its
-own), tiles with the columns of windows,
+own; and with the annotated floors: the rows plus a ground floor of doors or shops below them), tiles with the
+columns of windows,
 detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5); windows both as the reported element
 boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary
 is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
-(cmp_b0021-0040) and all. Timings are CPU seconds (process_time).
+(cmp_b0021-0040) and all. Timings are CPU seconds (process_time). The learned parser is trained on
+cmp_b0061-0300, so for it all of cmp_b0001-0040 is held out: its choices are made on cmp_b0261-0300
+(``--first 261 --last 300``) with a model trained by ``python -m citygen_photo.train --validate -o M.npz``.
 """
 from __future__ import annotations
 

@@ -73,13 +73,15 @@ def test_training_is_reproducible_and_learns_two_labels():
 
 
 @pytest.mark.skipif(not (CMP / "cmp_b0031.jpg").is_file(), reason="CMP photos (shared data) not available")
-@pytest.mark.parametrize("number", [28, 31])
-def test_window_pixels_of_held_out_photos(number):
-    """Two held-out photos (never trained on): the layout's window pixels against the label map."""
+@pytest.mark.parametrize("number, floors", [(28, 4), (31, 4)])
+def test_floors_and_window_pixels_of_held_out_photos(number, floors):
+    """Two held-out photos (never trained on): the floor count (cmp_b0028: three rows of windows over a
+    ground floor of doors and shops) and the layout's window pixels against the label map."""
     from citygen_photo.learned import analyse_learned
     from citygen_photo.parser import load_labels
     rgb, labels = load_labels(CMP / f"cmp_b{number:04d}.jpg")
     result = analyse_learned(rgb, "cmp")
+    assert len(result.floor_lines) - 1 == floors
     s = result.layout.meta["metres_per_pixel"]
     mine = np.zeros(labels.shape, dtype=bool)
     for r in result.layout.leaves:
