@@ -8,14 +8,18 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    lie in the gaps between them. A gap much longer than the others' pitch holds floors whose windows the parser
    missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
-   few. A band below the lowest row at least half a floor tall is the ground floor.
+   few. An attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
+   shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
+   lowest row at least half a floor tall is.
 2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
    upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
    voted per tile (the mean probability in its window box).
 3. **Synchronised sizes** (§3.2, wu2014 §3.3): windows share their row's height and their column's width; rows
-   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size.
+   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size. The
+   windows behind railings (the balcony group) stop at one railing height, a balcony below them.
 4. **Ground floor**: shops and the entrance door from their own probabilities and their own columns (the upper
-   floors' tile lines do not cut a shop window); the door stands on the ground.
+   floors' tile lines do not cut a shop window); the door stands on the ground. Without a ground floor of its
+   own the door is looked for in the lowest floor and replaces the windows it overlaps.
 """
 from __future__ import annotations
 
@@ -55,6 +59,9 @@ ATTIC_GAP = 0.6
 BALCONY_VOTE = 0.15
 #: Samples of a window's height in the balcony group's mean profile.
 PROFILE = 32
+#: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
+#: probability there are frames or gaps between windows).
+DOOR_WIDTH = 0.6
 
 Span = tuple[float, float]
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in working pixels, y down
@@ -178,6 +185,11 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     elements = _with_balconies(prob, elements)
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
+    elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
+        found = _door(prob, lines[-2], door(lines[-2]) if door else None)
+        widths = [box[2] - box[0] for box, label in elements if label == "window"]
+        if found is not None and widths and found[2] - found[0] >= DOOR_WIDTH * float(np.median(widths)):
+            elements = [(box, label) for box, label in elements if not _overlap(box, found)] + [(found, "door")]
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
 
@@ -278,18 +290,34 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
     return (x0, y0, x1, y1) if x1 - x0 >= 1 and y1 - y0 >= 1 else None
 
 
+def _door(prob: np.ndarray, top: float, door: Box | None = None) -> Box | None:
+    """The entrance door of the floor ``top``..h standing on the ground: ``door`` when given (found by other
+    means), else the door probability's most probable run of columns (mean >= 0.15 there)."""
+    if door is not None:
+        return door
+    h, w, _ = prob.shape
+    band = prob[round(top):, :, DOOR]
+    columns = runs(band.mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
+    if not columns:
+        return None
+    c, d = max(columns, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1]))].sum())
+    rows = runs(band[:, int(c):int(np.ceil(d))].mean(axis=1), share=0.5)
+    if rows and band[:, int(c):int(np.ceil(d))].mean() >= 0.15:
+        return _clip((c, top + rows[0][0], d, float(h)), w, h)
+    return None
+
+
+def _overlap(a: Box, b: Box) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
 def _ground(prob: np.ndarray, top: float, door: Box | None = None) -> list[tuple[Box, str]]:
     """Shops and the entrance door of the ground floor (``top``..h), each on its own columns, standing on the
     ground; the door (``door``, else the most probable door column) cuts the shop it falls in."""
     h, w, _ = prob.shape
     band = prob[round(top):]
     out: list[tuple[Box, str]] = []
-    door_cols = [] if door else runs(band[..., DOOR].mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
-    if door_cols:
-        c, d = max(door_cols, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1])), DOOR].sum())
-        rows = runs(band[:, int(c):int(np.ceil(d)), DOOR].mean(axis=1), share=0.5)
-        if rows and band[:, int(c):int(np.ceil(d)), DOOR].mean() >= 0.15:
-            door = _clip((c, top + rows[0][0], d, float(h)), w, h)
+    door = _door(prob, top, door)
     for c, d in runs(band[..., SHOP].mean(axis=0), share=0.5, least=max(2, round(0.03 * w))):
         rows = runs(band[:, int(c):int(np.ceil(d)), SHOP].mean(axis=1), share=0.5)
         if not rows:

@@ -149,3 +149,28 @@ def test_windows_behind_railings_share_one_balcony_cut():
     assert all(any(r[0] == b[0] and r[1] == b[3] for r in balconies) for b in railed)
     layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
     assert check_partition(layout) == [] and layout.count("balcony") == 10 and layout.count("window") == 20
+
+
+def test_a_door_in_the_lowest_floor_of_windows_replaces_the_window_it_overlaps():
+    """Without a ground floor of its own (the lowest floor has windows too) the entrance door is looked for in the
+    lowest floor: it stands on the ground and the window of its tile gives way."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    prob[90 + 4:, 55:65] = np.eye(n)[DOOR]  # in the lowest floor's third tile (its window at 55..65 too)
+    facade_ = regular_facade(prob)
+    assert not facade_.ground and len(facade_.floor_lines) - 1 == 4
+    doors = [b for b, label in facade_.elements if label == "door"]
+    assert len(doors) == 1 and doors[0][3] == prob.shape[0] and doors[0][0] == pytest.approx(55, abs=1)
+    assert sum(label == "window" for _, label in facade_.elements) == 19
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == [] and layout.count("door") == 1
+
+
+def test_a_sliver_of_door_probability_beside_the_lowest_windows_is_no_door():
+    """Regression (test_cli_from_photo's synthetic facade): a 5 px run of door probability between the lowest
+    floor's windows replaced a window; a door there is at least ``DOOR_WIDTH`` of the windows' width."""
+    prob = probabilities(floors=4)
+    prob[90 + 10:, 118:120] = np.eye(len(CMP_LABELS))[DOOR]
+    facade_ = regular_facade(prob)
+    assert not any(label == "door" for _, label in facade_.elements)
+    assert sum(label == "window" for _, label in facade_.elements) == 20
