@@ -6,11 +6,12 @@ cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation (``benchmarks/photo
 
 Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`),
 and ``--samples`` pixels are drawn per photo (rare labels drawn more often). Stage 1 is a multilayer perceptron on
-the pixel features; stage 2 (auto-context) another one on the same features plus stage 1's label probabilities
-smoothed over the neighbourhood and profiled along rows and columns. Both are exported as plain weight arrays,
-with the ratio of each label's share of the photos to its share of the drawn pixels (``prior``), by which inference
-turns stage 2's output back into probabilities under the photos' own label frequencies; inference
-(:mod:`citygen_photo.parser`) needs numpy only.
+the pixel features; each further stage (``--stages``, auto-context) another one on the same features plus the
+previous stage's label probabilities around the pixel (:func:`citygen_photo.parser.context_features`). All are
+exported as plain weight arrays, with the ratio of each label's share of the photos to its share of the drawn
+pixels (``prior``), by which inference turns the last stage's output back into probabilities under the photos'
+own label frequencies; inference (:mod:`citygen_photo.parser`) needs numpy only. ``--validate`` trains on
+cmp_b0061-0260 and reports the per-class pixel accuracy on cmp_b0261-0300, the split every choice is made on.
 """
 from __future__ import annotations
 
