@@ -7,7 +7,7 @@ import numpy as np
 
 from citygen.errors import LayoutError
 from citygen.layout import check_partition
-from citygen_photo.parser import load_parser
+from citygen_photo.parser import FacadeParser, load_parser
 from citygen_photo.doors import axis_door, mirror_axis, repeats_floor_above
 from citygen_photo.photo import FLOOR_RANGE, MI_WORK, WORK, PhotoAnalysis, _work, luminance
 from citygen_photo.regular import Box
@@ -19,16 +19,17 @@ LEAST = 48
 
 
 def analyse_learned(image: np.ndarray, source: str = "<photo>", *, width: float | None = None,
-                    floor_height: float = 3.0, meta: dict | None = None) -> PhotoAnalysis:
+                    floor_height: float = 3.0, meta: dict | None = None,
+                    model: FacadeParser | None = None) -> PhotoAnalysis:
     """The layout of an RGB ``(H, W, 3)`` crop of the facade (0..1); ``width`` metres for the crop, else
-    ``floor_height`` metres per floor pitch."""
+    ``floor_height`` metres per floor pitch; ``model``: the parser (the shipped one by default)."""
     if image.ndim == 2:
         image = np.repeat(image[..., None], 3, axis=2)
     H, W = image.shape[:2]
     if min(H, W) < LEAST:
         raise LayoutError(f"the facade is only {W}x{H} pixels", where=source,
                           hint="give a larger photo or a larger --crop")
-    prob = load_parser().probabilities(image)
+    prob = (model or load_parser()).probabilities(image)
     h, w = prob.shape[:2]
     f = H / h  # crop pixels per working pixel
     small, g = _work(luminance(image), MI_WORK)

@@ -1,9 +1,10 @@
 """The learned facade parser: per-pixel probabilities of the 12 CMP labels for a facade photo.
 
-Two stages (auto-context): stage 1 is a small multilayer perceptron on :func:`citygen_photo.features.pixel_features`;
-stage 2 another one on the same features plus stage 1's probabilities averaged over a neighbourhood and profiled
-along the pixel's row and column, so a pixel learns from the labels around it (a window pane between window
-frames, a door below a window column). Weights ship in ``model/facade_parser.npz`` (trained by
+Stages of auto-context (Tu & Bai 2010): stage 1 is a small multilayer perceptron on
+:func:`citygen_photo.features.pixel_features`; every further stage another one on the same features plus the
+previous stage's probabilities averaged over two neighbourhoods, at a few offsets above, below, left and right of
+the pixel, and profiled along the pixel's row and column, so a pixel learns from the labels around it (a window
+pane between window frames, a door below a window column, a row of windows at the pitch above). Weights ship in ``model/facade_parser.npz`` (trained by
 :mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
 is numpy only and nothing is downloaded.
 """
@@ -21,8 +22,12 @@ from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
-#: Neighbourhood (working pixels) over which stage 1's probabilities are averaged for stage 2.
-CONTEXT = 15
+#: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
+CONTEXT = (7, 21)
+#: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.
+OFFSETS = (0.04, 0.1)
+#: Context features a stage adds per label.
+CONTEXT_FEATURES = len(CONTEXT) + 2 + 4 * len(OFFSETS)
 
 
 @dataclass(frozen=True)
@@ -61,31 +66,42 @@ def predict_stage(stage: Stage, features: np.ndarray) -> np.ndarray:
 
 
 def context_features(prob: np.ndarray) -> np.ndarray:
-    """Stage 2's extra features ``(H, W, 36)``: the probabilities averaged over ``CONTEXT`` pixels, and their
-    means along the pixel's row and column."""
+    """A later stage's extra features ``(H, W, 12 * CONTEXT_FEATURES)``: the probabilities averaged over each of
+    ``CONTEXT`` pixels, the smaller average shifted by each of ``OFFSETS`` up, down, left and right (edge pixels
+    repeated), and the means along the pixel's row and column."""
     h, w, n = prob.shape
-    local = uniform_filter(prob, size=(CONTEXT, CONTEXT, 1), mode="nearest")
-    rows = np.broadcast_to(prob.mean(axis=1, keepdims=True), (h, w, n))
-    cols = np.broadcast_to(prob.mean(axis=0, keepdims=True), (h, w, n))
-    return np.concatenate([local, rows, cols], axis=-1).astype(np.float32)
+    local = [uniform_filter(prob, size=(s, s, 1), mode="nearest") for s in CONTEXT]
+    planes = [*local, np.broadcast_to(prob.mean(axis=1, keepdims=True), (h, w, n)),
+              np.broadcast_to(prob.mean(axis=0, keepdims=True), (h, w, n))]
+    padded = np.pad(local[0], ((h, h), (w, w), (0, 0)), mode="edge")
+    for share in OFFSETS:
+        d = max(1, round(share * max(h, w)))
+        planes += [padded[h - d:2 * h - d, w:2 * w], padded[h + d:2 * h + d, w:2 * w],
+                   padded[h:2 * h, w - d:2 * w - d], padded[h:2 * h, w + d:2 * w + d]]
+    return np.concatenate(planes, axis=-1).astype(np.float32)
+
+
+def stage_input(features: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """A stage's input: the pixel features, and after stage 1 the previous stage's context."""
+    return features if previous is None else np.concatenate([features, context_features(previous)], axis=-1)
 
 
 @dataclass(frozen=True)
 class FacadeParser:
-    """The two trained stages."""
+    """The trained stages, applied in turn."""
 
-    stage1: Stage
-    stage2: Stage
+    stages: tuple[Stage, ...]
     prior: np.ndarray  # label share in the photos / share in the training sample (see citygen_photo.train)
 
     def probabilities(self, rgb: np.ndarray) -> np.ndarray:
         """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size
         (longest side :data:`citygen_photo.features.WORK`)."""
         features = pixel_features(working_image(rgb))
-        first = predict_stage(self.stage1, features)
-        second = predict_stage(self.stage2, np.concatenate([features, context_features(first)], axis=-1))
-        second *= self.prior
-        return second / second.sum(axis=-1, keepdims=True)
+        prob = None
+        for stage in self.stages:
+            prob = predict_stage(stage, stage_input(features, prob))
+        prob *= self.prior
+        return prob / prob.sum(axis=-1, keepdims=True)
 
 
 @functools.lru_cache(maxsize=4)
@@ -97,7 +113,8 @@ def load_parser(path: Path = MODEL_PATH) -> FacadeParser:
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
                           hint="reinstall citygen, or train a model with python -m citygen_photo.train") from None
-    return FacadeParser(Stage.from_arrays(arrays, "s1"), Stage.from_arrays(arrays, "s2"), arrays["prior"])
+    count = sum(1 for key in arrays if key.endswith("_mean"))
+    return FacadeParser(tuple(Stage.from_arrays(arrays, f"s{k}") for k in range(1, count + 1)), arrays["prior"])
 
 
 def upsampled(prob: np.ndarray, shape: tuple[int, int]) -> np.ndarray:

@@ -8,14 +8,18 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    lie in the gaps between them. A gap much longer than the others' pitch holds floors whose windows the parser
    missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
-   few. A band below the lowest row at least half a floor tall is the ground floor.
+   few. An attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
+   shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
+   lowest row at least half a floor tall is.
 2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
    upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
    voted per tile (the mean probability in its window box).
 3. **Synchronised sizes** (§3.2, wu2014 §3.3): windows share their row's height and their column's width; rows
-   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size.
+   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size. The
+   windows behind railings (the balcony group) stop at one railing height, a balcony below them.
 4. **Ground floor**: shops and the entrance door from their own probabilities and their own columns (the upper
-   floors' tile lines do not cut a shop window); the door stands on the ground.
+   floors' tile lines do not cut a shop window); the door stands on the ground. Without a ground floor of its
+   own the door is looked for in the lowest floor and replaces the windows it overlaps.
 """
 from __future__ import annotations
 
@@ -23,12 +27,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from scipy.ndimage import gaussian_filter1d, uniform_filter
 
 from citygen.layout import FacadeLayout, Region
 from citygen_photo.labels import CMP_LABELS
 
-WINDOW, DOOR, SHOP, BLIND = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind"))
+WINDOW, DOOR, SHOP, BLIND, BALCONY = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind", "balcony"))
 #: A row or column belongs to a run of windows where its profile exceeds this share of the profile's high value.
 RUN_SHARE = 0.4
 #: Rows (columns) of windows whose height (width) is within this share of the median take the median.
@@ -41,6 +45,23 @@ TIGHT = 0.5
 MISSING_ROW = 1.6
 #: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
 GROUND_SHARE = 0.5
+#: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
+#: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
+SHOP_BAND = 0.2
+#: An attic row (dormers, a gable's windows: too few for the row mean) is a run where the window probability,
+#: smoothed over ``ATTIC_BOX`` pixels, peaks at ``ATTIC_PEAK`` or more somewhere along the row, at least
+#: ``ATTIC_GAP`` pitches above the top row.
+ATTIC_BOX = 5
+ATTIC_PEAK = 0.4
+ATTIC_GAP = 0.6
+#: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
+#: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
+BALCONY_VOTE = 0.15
+#: Samples of a window's height in the balcony group's mean profile.
+PROFILE = 32
+#: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
+#: probability there are frames or gaps between windows).
+DOOR_WIDTH = 0.6
 
 Span = tuple[float, float]
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 in working pixels, y down
@@ -59,11 +80,11 @@ class RegularFacade:
     ground: bool
 
 
-def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2) -> list[Span]:
-    """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least 0.08), at least
-    ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
+def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2, floor: float = 0.08) -> list[Span]:
+    """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least ``floor``), at
+    least ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
     high = float(np.percentile(profile, 95)) if profile.size else 0.0
-    above = profile > max(share * high, 0.08)
+    above = profile > max(share * high, floor)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], above.astype(np.int8), [0]])))
     spans = [(float(a), float(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= least]
     if len(spans) < 2:
@@ -123,13 +144,20 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     h, w, _ = prob.shape
     window = prob[..., WINDOW] + prob[..., BLIND]  # (a window behind closed blinds is a window of the layout)
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
+    shops = shop_band(prob)
+    if shops is not None:
+        rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
+    rows = _with_attic(window, rows, pitch)
     lines = [0.0]
     for (_, b), (a, _) in zip(rows, rows[1:]):
         lines.append((b + a) / 2)
     ground_top = None
-    if rows:
+    if rows and shops is not None:
+        ground_top = max((rows[-1][1] + shops) / 2, rows[-1][1])
+        lines.append(ground_top)
+    elif rows:
         gap = float(np.median([a - b for (_, b), (a, _) in zip(rows, rows[1:])])) if len(rows) > 1 else 0.1 * h
         below = rows[-1][1] + max(gap, 0.0) / 2
         if pitch and h - below >= GROUND_SHARE * pitch:
@@ -154,10 +182,77 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             box = _clip((c, a, d, b), w, h)
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
+    elements = _with_balconies(prob, elements)
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
+    elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
+        found = _door(prob, lines[-2], door(lines[-2]) if door else None)
+        widths = [box[2] - box[0] for box, label in elements if label == "window"]
+        if found is not None and widths and found[2] - found[0] >= DOOR_WIDTH * float(np.median(widths)):
+            elements = [(box, label) for box, label in elements if not _overlap(box, found)] + [(found, "door")]
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
+
+
+def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
+    """``rows`` with an attic row put on top: the lowest run, at least ``ATTIC_GAP`` pitches above the top row,
+    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least 40 % of the rows'
+    median height (a few dormers are a row of windows though their row mean is low)."""
+    if not rows or pitch <= 0:
+        return rows
+    top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
+    if top <= 2:
+        return rows
+    peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
+    above = runs(peak, share=0.0, least=max(2, round(0.4 * float(np.median([b - a for a, b in rows])))),
+                 floor=ATTIC_PEAK)
+    return [above[-1], *rows] if above else rows
+
+
+def _with_balconies(prob: np.ndarray, windows: list[tuple[Box, str]]) -> list[tuple[Box, str]]:
+    """Windows behind a balcony's railing split into the glass above and the balcony below, at one railing height
+    for the whole balcony group: the windows whose lower half the balcony probability votes for (``BALCONY_VOTE``)
+    are resampled to ``PROFILE`` rows and averaged (the group's mean tile, mueller2007 §3.2; synchronised sizes,
+    wu2014 §3.3), and the railing starts at the first row below the window's middle where the mean balcony
+    probability exceeds the mean glass probability."""
+    glass, railing = prob[..., WINDOW], prob[..., BALCONY]
+
+    def profile(plane: np.ndarray, box: Box) -> np.ndarray:
+        x0, y0, x1, y1 = box
+        rows = plane[int(y0):max(int(np.ceil(y1)), int(y0) + 1), int(x0):max(int(np.ceil(x1)), int(x0) + 1)]
+        line = rows.mean(axis=1)
+        return np.interp(np.linspace(0, line.size - 1, PROFILE), np.arange(line.size), line)
+
+    group = [i for i, (box, _) in enumerate(windows)
+             if profile(railing, box)[PROFILE // 2:].mean() >= BALCONY_VOTE]
+    if not group:
+        return windows
+    mean_glass = np.mean([profile(glass, windows[i][0]) for i in group], axis=0)
+    mean_railing = np.mean([profile(railing, windows[i][0]) for i in group], axis=0)
+    below = np.flatnonzero(mean_railing[PROFILE // 2:] > mean_glass[PROFILE // 2:])
+    if below.size == 0:
+        return windows
+    share = (PROFILE // 2 + below[0]) / PROFILE
+    out = list(windows)
+    for i in group:
+        (x0, y0, x1, y1), _ = windows[i]
+        cut = y0 + share * (y1 - y0)
+        out[i] = ((x0, y0, x1, cut), "window")
+        out.append(((x0, cut, x1, y1), "balcony"))
+    return out
+
+
+def shop_band(prob: np.ndarray) -> float | None:
+    """The top (working pixels) of a band of shops and doors standing on the ground: the lowest run of the shop +
+    door probability's row profile, when it reaches the bottom tenth of the facade and its mean is at least
+    ``SHOP_BAND``; None without one."""
+    h = prob.shape[0]
+    profile = gaussian_filter1d((prob[..., SHOP] + prob[..., DOOR]).mean(axis=1), 1.0)
+    bands = runs(profile, share=0.5, least=max(2, round(0.03 * h)))
+    if not bands or bands[-1][1] < 0.9 * h:
+        return None
+    a, b = bands[-1]
+    return a if profile[int(a):int(np.ceil(b))].mean() >= SHOP_BAND else None
 
 
 def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) -> Span:
@@ -195,18 +290,34 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
     return (x0, y0, x1, y1) if x1 - x0 >= 1 and y1 - y0 >= 1 else None
 
 
+def _door(prob: np.ndarray, top: float, door: Box | None = None) -> Box | None:
+    """The entrance door of the floor ``top``..h standing on the ground: ``door`` when given (found by other
+    means), else the door probability's most probable run of columns (mean >= 0.15 there)."""
+    if door is not None:
+        return door
+    h, w, _ = prob.shape
+    band = prob[round(top):, :, DOOR]
+    columns = runs(band.mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
+    if not columns:
+        return None
+    c, d = max(columns, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1]))].sum())
+    rows = runs(band[:, int(c):int(np.ceil(d))].mean(axis=1), share=0.5)
+    if rows and band[:, int(c):int(np.ceil(d))].mean() >= 0.15:
+        return _clip((c, top + rows[0][0], d, float(h)), w, h)
+    return None
+
+
+def _overlap(a: Box, b: Box) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
 def _ground(prob: np.ndarray, top: float, door: Box | None = None) -> list[tuple[Box, str]]:
     """Shops and the entrance door of the ground floor (``top``..h), each on its own columns, standing on the
     ground; the door (``door``, else the most probable door column) cuts the shop it falls in."""
     h, w, _ = prob.shape
     band = prob[round(top):]
     out: list[tuple[Box, str]] = []
-    door_cols = [] if door else runs(band[..., DOOR].mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
-    if door_cols:
-        c, d = max(door_cols, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1])), DOOR].sum())
-        rows = runs(band[:, int(c):int(np.ceil(d)), DOOR].mean(axis=1), share=0.5)
-        if rows and band[:, int(c):int(np.ceil(d)), DOOR].mean() >= 0.15:
-            door = _clip((c, top + rows[0][0], d, float(h)), w, h)
+    door = _door(prob, top, door)
     for c, d in runs(band[..., SHOP].mean(axis=0), share=0.5, least=max(2, round(0.03 * w))):
         rows = runs(band[:, int(c):int(np.ceil(d)), SHOP].mean(axis=1), share=0.5)
         if not rows:
@@ -246,26 +357,38 @@ def facade_layout(facade: RegularFacade, h: int, w: int, scale: float, meta: dic
 def _floor(name: str, boxes: list[tuple[Box, str]], y0: float, y1: float, w: int, h: int, scale: float) -> Region:
     """One floor ``y0..y1`` (metres, y up) split at its elements' sides; each element column split into wall
     below, the element, wall above (elements in working pixels of a ``w x h`` facade, y down)."""
-    cuts: list[tuple[float, float, tuple[float, float, str] | None]] = []
-    x = 0.0
+    cuts: list[tuple[float, float, list[tuple[float, float, str]]]] = []
+    x, stacked = 0.0, None
     for (bx0, by0, bx1, by1), label in boxes:
+        element = ((h - by1) * scale, (h - by0) * scale, label)
+        if cuts and cuts[-1][2] and (bx0, bx1) == stacked:  # (a balcony below its window: one column)
+            cuts[-1][2].append(element)
+            continue
+        stacked = (bx0, bx1)
         bx0 = max(bx0, x)  # (overlapping boxes of one floor: the later one starts where the earlier ends)
         if bx1 - bx0 < 1:
             continue
         if bx0 > x:
-            cuts.append((x, bx0, None))
-        cuts.append((bx0, bx1, ((h - by1) * scale, (h - by0) * scale, label)))
+            cuts.append((x, bx0, []))
+        cuts.append((bx0, bx1, [element]))
         x = bx1
     if x < w:
-        cuts.append((x, float(w), None))
+        cuts.append((x, float(w), []))
     columns = []
-    for a, b, element in cuts:
+    for a, b, elements in cuts:
         xa, wd = a * scale, (b - a) * scale
-        if element is None:
+        if not elements:
             columns.append(Region(xa, y0, wd, y1 - y0, "Wall", "wall"))
             continue
-        ey0, ey1, label = max(element[0], y0), min(element[1], y1), element[2]
-        parts = [(y0, ey0, "Wall", "wall"), (ey0, ey1, label.capitalize(), label), (ey1, y1, "Wall", "wall")]
-        columns.append(Region(xa, y0, wd, y1 - y0, f"{label.capitalize()}Tile", children=tuple(
+        parts, top = [], y0
+        for ey0, ey1, label in sorted(elements):
+            ey0, ey1 = max(ey0, top), min(ey1, y1)
+            if ey1 - ey0 <= 1e-9:
+                continue
+            parts += [(top, ey0, "Wall", "wall"), (ey0, ey1, label.capitalize(), label)]
+            top = ey1
+        parts.append((top, y1, "Wall", "wall"))
+        main = max(elements, key=lambda e: e[1] - e[0])[2]
+        columns.append(Region(xa, y0, wd, y1 - y0, f"{main.capitalize()}Tile", children=tuple(
             Region(xa, a0, wd, a1 - a0, sym, lab) for a0, a1, sym, lab in parts if a1 - a0 > 1e-9)))
     return Region(0.0, y0, w * scale, y1 - y0, name, children=tuple(columns))

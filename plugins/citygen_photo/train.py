@@ -6,11 +6,12 @@ cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation (``benchmarks/photo
 
 Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`),
 and ``--samples`` pixels are drawn per photo (rare labels drawn more often). Stage 1 is a multilayer perceptron on
-the pixel features; stage 2 (auto-context) another one on the same features plus stage 1's label probabilities
-smoothed over the neighbourhood and profiled along rows and columns. Both are exported as plain weight arrays,
-with the ratio of each label's share of the photos to its share of the drawn pixels (``prior``), by which inference
-turns stage 2's output back into probabilities under the photos' own label frequencies; inference
-(:mod:`citygen_photo.parser`) needs numpy only.
+the pixel features; each further stage (``--stages``, auto-context) another one on the same features plus the
+previous stage's label probabilities around the pixel (:func:`citygen_photo.parser.context_features`). All are
+exported as plain weight arrays, with the ratio of each label's share of the photos to its share of the drawn
+pixels (``prior``), by which inference turns the last stage's output back into probabilities under the photos'
+own label frequencies; inference (:mod:`citygen_photo.parser`) needs numpy only. ``--validate`` trains on
+cmp_b0061-0260 and reports the per-class pixel accuracy on cmp_b0261-0300, the split every choice is made on.
 """
 from __future__ import annotations
 
@@ -23,10 +24,15 @@ import numpy as np
 
 from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.parser import MODEL_PATH, Stage, context_features, load_labels, predict_stage
-from citygen_photo.photo import load_photo
+from citygen_photo.parser import MODEL_PATH, FacadeParser, Stage, load_labels, predict_stage, stage_input
 
+#: The photos the shipped model is trained on; the last 40 of them are the validation split for choices.
 TRAIN = range(61, 301)
+VALIDATION = range(261, 301)
+#: Defaults of the shipped model: pixels drawn per photo, auto-context stages, hidden layer sizes.
+SAMPLES = 1500
+STAGES = 2
+HIDDEN = (64, 64)
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
@@ -67,43 +73,91 @@ def fit(x: np.ndarray, y: np.ndarray, hidden: tuple[int, ...], seed: int) -> Sta
     full_w, full_b = mlp.coefs_[-1], mlp.intercepts_[-1]
     last_w = np.zeros((full_w.shape[0], len(CMP_LABELS)), dtype=np.float32)
     last_b = np.full(len(CMP_LABELS), -30.0, dtype=np.float32)  # labels never seen stay improbable
-    last_w[:, mlp.classes_] = full_w
-    last_b[mlp.classes_] = full_b
+    if len(mlp.classes_) == 2:  # one logistic output: softmax of the logits (0, z) gives the same probabilities
+        last_w[:, mlp.classes_[0]], last_b[mlp.classes_[0]] = 0.0, 0.0
+        last_w[:, mlp.classes_[1]], last_b[mlp.classes_[1]] = full_w[:, 0], full_b[0]
+    else:
+        last_w[:, mlp.classes_] = full_w
+        last_b[mlp.classes_] = full_b
     layers = [(w.astype(np.float32), b.astype(np.float32)) for w, b in zip(mlp.coefs_[:-1], mlp.intercepts_[:-1])]
     return Stage(mean.astype(np.float32), std.astype(np.float32), (*layers, (last_w, last_b)))
+
+
+def train(photos: list[tuple[np.ndarray, np.ndarray]], samples: int, stages: int, hidden: tuple[int, ...],
+          seed: int) -> FacadeParser:
+    """The parser's ``stages`` perceptrons fitted in turn on ``samples`` pixels drawn per photo (the same pixels
+    for every stage), and the prior that undoes the drawing's label weights."""
+    rng = np.random.default_rng(seed)
+    picks = [sample(lab, samples, rng) for _, lab in photos]
+    y = np.concatenate([lab.ravel()[p] for (_, lab), p in zip(photos, picks)]) - 1
+    fitted: list[Stage] = []
+    previous: list[np.ndarray | None] = [None] * len(photos)
+    t0 = time.process_time()
+    for k in range(stages):
+        rows = []
+        for i, ((work, _), p) in enumerate(zip(photos, picks)):
+            features = stage_input(pixel_features(work), previous[i])
+            rows.append(features.reshape(-1, features.shape[-1])[p])
+        fitted.append(fit(np.concatenate(rows), y, hidden, seed + k))
+        if k + 1 < stages:
+            previous = [predict_stage(fitted[-1], stage_input(pixel_features(work), prev))
+                        for (work, _), prev in zip(photos, previous)]
+        print(f"stage {k + 1}: {len(photos)} photos, {len(y)} pixels, {time.process_time() - t0:.0f} s cpu",
+              file=sys.stderr)
+    counts = sum(np.bincount(lab.ravel() - 1, minlength=len(CMP_LABELS)) for _, lab in photos)
+    drawn = np.bincount(y, minlength=len(CMP_LABELS))
+    prior = (counts / counts.sum()) / np.maximum(drawn / drawn.sum(), 1e-9)  # undoes the sampling's label weights
+    return FacadeParser(tuple(fitted), prior.astype(np.float32))
+
+
+def confusion(parser: FacadeParser, photos: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """``(12, 12)`` pixel counts, annotated label by predicted label (argmax), over ``photos`` at working size."""
+    n = len(CMP_LABELS)
+    out = np.zeros((n, n), dtype=np.int64)
+    for work, lab in photos:
+        predicted = parser.probabilities(work).argmax(axis=-1).ravel()
+        out += np.bincount((lab.ravel() - 1) * n + predicted, minlength=n * n).reshape(n, n)
+    return out
+
+
+def report(matrix: np.ndarray) -> str:
+    """Overall pixel accuracy and per-class recall / precision of a confusion matrix."""
+    recall = matrix.diagonal() / np.maximum(matrix.sum(axis=1), 1)
+    precision = matrix.diagonal() / np.maximum(matrix.sum(axis=0), 1)
+    lines = [f"overall pixel accuracy {matrix.trace() / matrix.sum():.3f}",
+             f"{'label':<12}{'pixels':>10}{'recall':>9}{'precision':>11}"]
+    lines += [f"{name:<12}{matrix[i].sum():>10}{recall[i]:>9.3f}{precision[i]:>11.3f}"
+              for i, name in enumerate(CMP_LABELS)]
+    return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA)
     parser.add_argument("-o", "--output", type=Path, default=MODEL_PATH)
-    parser.add_argument("--samples", type=int, default=1500, help="pixels drawn per photo")
+    parser.add_argument("--samples", type=int, default=SAMPLES, help="pixels drawn per photo")
+    parser.add_argument("--stages", type=int, default=STAGES, help="auto-context stages")
+    parser.add_argument("--hidden", type=int, nargs="+", default=list(HIDDEN), help="hidden layer sizes")
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--validate", action="store_true",
+                        help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
+                             f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
     args = parser.parse_args(argv)
-    t0 = time.process_time()
-    rng = np.random.default_rng(args.seed)
-    photos = facade_examples(args.data, TRAIN)
+    numbers = range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN
+    photos = facade_examples(args.data, numbers)
     if not photos:
-        print(f"no CMP photos cmp_b0061-0300 in {args.data}", file=sys.stderr)
+        print(f"no CMP photos cmp_b{numbers.start:04d}-{numbers.stop - 1:04d} in {args.data}", file=sys.stderr)
         return 2
-    feats = [pixel_features(work) for work, _ in photos]
-    picks = [sample(lab, args.samples, rng) for _, lab in photos]
-    y = np.concatenate([lab.ravel()[p] for (_, lab), p in zip(photos, picks)]) - 1
-    x1 = np.concatenate([f.reshape(-1, f.shape[-1])[p] for f, p in zip(feats, picks)])
-    stage1 = fit(x1, y, (64, 64), args.seed)
-    print(f"stage 1: {len(photos)} photos, {len(y)} pixels, {time.process_time() - t0:.0f} s cpu", file=sys.stderr)
-    x2 = np.concatenate([np.concatenate([f, context_features(predict_stage(stage1, f))], axis=-1)
-                         .reshape(-1, f.shape[-1] + 3 * len(CMP_LABELS))[p] for f, p in zip(feats, picks)])
-    stage2 = fit(x2, y, (64, 64), args.seed + 1)
-    print(f"stage 2: {time.process_time() - t0:.0f} s cpu", file=sys.stderr)
+    model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed)
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    counts = sum(np.bincount(lab.ravel() - 1, minlength=len(CMP_LABELS)) for _, lab in photos)
-    drawn = np.bincount(y, minlength=len(CMP_LABELS))
-    prior = (counts / counts.sum()) / np.maximum(drawn / drawn.sum(), 1e-9)  # undoes the sampling's label weights
-    arrays = {**stage1.arrays("s1"), **stage2.arrays("s2"), "prior": prior.astype(np.float32)}
+    arrays = {"prior": model.prior}
+    for k, stage in enumerate(model.stages, start=1):
+        arrays.update(stage.arrays(f"s{k}"))
     with open(args.output, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     print(f"wrote {args.output} ({args.output.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)
+    if args.validate:
+        print(report(confusion(model, facade_examples(args.data, VALIDATION))))
     return 0
 
 

@@ -99,3 +99,78 @@ def test_cli_writes_the_label_map_and_the_overlay(tmp_path, capsys):
     with Image.open(labels) as a, Image.open(overlay) as b:
         assert a.size == b.size == (rgb.shape[1], rgb.shape[0])
     assert "windows" in capsys.readouterr().err
+
+
+def test_an_attic_row_of_few_dormers_is_a_floor():
+    """Regression (validation photos cmp_b0264, b0298): a gable's or attic's one or two windows are too few for
+    the row mean, and the attic was merged into the floor below."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    attic = np.zeros((30, prob.shape[1], n))
+    attic[..., CMP_LABELS.index("facade")] = 1.0
+    attic[8:22, 55:65] = np.eye(n)[WINDOW]  # one dormer in a 120 px wide facade
+    facade_ = regular_facade(np.concatenate([attic, prob]))
+    assert len(facade_.floor_lines) - 1 == 5
+    assert any(box[1] < 30 for box, label in facade_.elements if label == "window")
+
+
+def test_shop_windows_are_the_ground_floor_not_a_row_of_windows():
+    """A band of shops standing on the ground whose glass the parser also calls window is the ground floor: its
+    shop windows are not a row of windows of the floors above (nor cut by their tile lines)."""
+    prob = probabilities(floors=4, ground_h=40)
+    top = 4 * 30
+    prob[top + 6:, 4:40] = 0.5 * (np.eye(len(CMP_LABELS))[SHOP] + np.eye(len(CMP_LABELS))[WINDOW])
+    prob[top + 6:, 64:110] = 0.5 * (np.eye(len(CMP_LABELS))[SHOP] + np.eye(len(CMP_LABELS))[WINDOW])
+    facade_ = regular_facade(prob)
+    assert facade_.ground and len(facade_.floor_lines) - 1 == 5
+    assert top - 8 < facade_.floor_lines[-2] <= top + 6
+    assert not any(box[1] > top for box, label in facade_.elements if label == "window")
+    assert sum(label == "shop" for _, label in facade_.elements) == 2
+
+
+def test_windows_behind_railings_share_one_balcony_cut():
+    """The balcony group (wu2014 §3.3's synchronised sizes): windows whose lower part the parser calls balcony
+    stop at one railing height, with a balcony terminal below them in the same column; the others keep their
+    height."""
+    prob = probabilities(floors=4, jitter=0.0)
+    n = len(CMP_LABELS)
+    balcony = CMP_LABELS.index("balcony")
+    for i in (1, 2):  # railings over the lower 5 rows of the 14-row windows of the 2nd and 3rd floors
+        for j in range(5):
+            r0, c0 = i * 30 + 8, j * 24 + 7
+            prob[r0 + 9:r0 + 14, c0:c0 + 10] = np.eye(n)[balcony]
+    facade_ = regular_facade(prob)
+    windows = [b for b, label in facade_.elements if label == "window"]
+    balconies = [b for b, label in facade_.elements if label == "balcony"]
+    assert len(windows) == 20 and len(balconies) == 10
+    railed = [b for b in windows if 30 <= b[1] < 90]
+    assert len(railed) == 10 and len({round(b[3] - b[1], 6) for b in railed}) == 1
+    assert all(b[3] == pytest.approx(30 * (1 + (b[1] >= 60)) + 8 + 9, abs=1.0) for b in railed)  # at the railing
+    assert all(any(r[0] == b[0] and r[1] == b[3] for r in balconies) for b in railed)
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == [] and layout.count("balcony") == 10 and layout.count("window") == 20
+
+
+def test_a_door_in_the_lowest_floor_of_windows_replaces_the_window_it_overlaps():
+    """Without a ground floor of its own (the lowest floor has windows too) the entrance door is looked for in the
+    lowest floor: it stands on the ground and the window of its tile gives way."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    prob[90 + 4:, 55:65] = np.eye(n)[DOOR]  # in the lowest floor's third tile (its window at 55..65 too)
+    facade_ = regular_facade(prob)
+    assert not facade_.ground and len(facade_.floor_lines) - 1 == 4
+    doors = [b for b, label in facade_.elements if label == "door"]
+    assert len(doors) == 1 and doors[0][3] == prob.shape[0] and doors[0][0] == pytest.approx(55, abs=1)
+    assert sum(label == "window" for _, label in facade_.elements) == 19
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == [] and layout.count("door") == 1
+
+
+def test_a_sliver_of_door_probability_beside_the_lowest_windows_is_no_door():
+    """Regression (test_cli_from_photo's synthetic facade): a 5 px run of door probability between the lowest
+    floor's windows replaced a window; a door there is at least ``DOOR_WIDTH`` of the windows' width."""
+    prob = probabilities(floors=4)
+    prob[90 + 10:, 118:120] = np.eye(len(CMP_LABELS))[DOOR]
+    facade_ = regular_facade(prob)
+    assert not any(label == "door" for _, label in facade_.elements)
+    assert sum(label == "window" for _, label in facade_.elements) == 20

@@ -1,0 +1,92 @@
+"""The learned parser's features and auto-context (citygen_photo.features, .parser), its training script
+(citygen_photo.train, needs scikit-learn) and the shipped model on shared CMP photos (skipped without the data)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from citygen_photo.features import FEATURES, pixel_features, working_image
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.parser import CONTEXT_FEATURES, OFFSETS, context_features, load_parser
+from tests.photo.synthetic import facade
+
+CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
+
+
+def test_pixel_features_are_finite_and_lighting_invariant_in_luminance():
+    rgb, _, _ = facade(floors=3, cols=4)
+    work = working_image(rgb)
+    a, b = pixel_features(work), pixel_features(0.5 * work)
+    assert a.shape == (*work.shape[:2], FEATURES) and np.isfinite(a).all()
+    assert np.allclose(a[..., 3], b[..., 3], atol=1e-3)  # normalised luminance: the photo's own statistics
+
+
+def test_context_sees_the_labels_above_and_below_at_the_offsets():
+    """Regression: the shifted context planes must show the probabilities *above* the pixel first, then below,
+    left, right (the order the shipped weights were trained with)."""
+    n = len(CMP_LABELS)
+    prob = np.zeros((100, 100, n))
+    prob[..., 1] = 1.0
+    prob[20:30, 45:55] = np.eye(n)[2]  # a window block
+    ctx = context_features(prob)
+    assert ctx.shape == (100, 100, n * CONTEXT_FEATURES)
+    d = round(OFFSETS[0] * 100)
+    above, below = ctx[..., 4 * n + 2], ctx[..., 5 * n + 2]  # after 2 averages and the row / column profiles
+    assert above[25 + d, 50] > 0.5 and above[25 - d, 50] < 0.5  # the block is above pixels d below it
+    assert below[25 - d, 50] > 0.5 and below[25 + d, 50] < 0.5
+
+
+def test_shipped_model_is_small_and_gives_probabilities():
+    model = load_parser()
+    assert len(model.stages) >= 2
+    rgb, _, _ = facade(floors=4, cols=5)
+    prob = model.probabilities(rgb)
+    assert prob.shape[-1] == len(CMP_LABELS) and np.allclose(prob.sum(axis=-1), 1.0, atol=1e-4)
+    from citygen_photo.parser import MODEL_PATH
+    assert MODEL_PATH.stat().st_size < 256 * 1024
+
+
+def test_training_is_reproducible_and_learns_two_labels():
+    """Regression: with two labels scikit-learn's perceptron has one logistic output, which was copied into both
+    label columns, so every pixel got the label the prior favours (the synthetic windows were all wall)."""
+    pytest.importorskip("sklearn")
+    from citygen_photo.train import confusion, train
+    photos = []
+    for seed in range(3):
+        rgb, boxes, _ = facade(floors=3, cols=4, seed=seed)
+        lab = np.full(rgb.shape[:2], 2, dtype=np.uint8)  # facade
+        for x0, y0, x1, y1 in boxes:
+            lab[y0:y1, x0:x1] = 3  # window
+        work = working_image(rgb)
+        rows = (np.arange(work.shape[0]) * rgb.shape[0] / work.shape[0]).astype(int)
+        cols = (np.arange(work.shape[1]) * rgb.shape[1] / work.shape[1]).astype(int)
+        photos.append((work, lab[np.ix_(rows, cols)]))
+    a = train(photos, 3000, 2, (16,), seed=3)
+    b = train(photos, 3000, 2, (16,), seed=3)
+    assert len(a.stages) == 2
+    assert all(np.array_equal(wa, wb) for sa, sb in zip(a.stages, b.stages)
+               for (wa, _), (wb, _) in zip(sa.layers, sb.layers))
+    matrix = confusion(a, photos)
+    assert matrix[2, 2] / matrix[2].sum() > 0.8  # the synthetic windows are learned
+
+
+@pytest.mark.skipif(not (CMP / "cmp_b0031.jpg").is_file(), reason="CMP photos (shared data) not available")
+@pytest.mark.parametrize("number, floors", [(28, 4), (31, 4)])
+def test_floors_and_window_pixels_of_held_out_photos(number, floors):
+    """Two held-out photos (never trained on): the floor count (cmp_b0028: three rows of windows over a
+    ground floor of doors and shops) and the layout's window pixels against the label map."""
+    from citygen_photo.learned import analyse_learned
+    from citygen_photo.parser import load_labels
+    rgb, labels = load_labels(CMP / f"cmp_b{number:04d}.jpg")
+    result = analyse_learned(rgb, "cmp")
+    assert len(result.floor_lines) - 1 == floors
+    s = result.layout.meta["metres_per_pixel"]
+    mine = np.zeros(labels.shape, dtype=bool)
+    for r in result.layout.leaves:
+        if r.label == "window":
+            y0 = round(labels.shape[0] - (r.y + r.h) / s)
+            mine[max(y0, 0):round(labels.shape[0] - r.y / s), round(r.x / s):round((r.x + r.w) / s)] = True
+    truth = labels == 3
+    assert (mine & truth).sum() >= 0.6 * mine.sum() and (mine & truth).sum() >= 0.6 * truth.sum()
