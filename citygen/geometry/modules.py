@@ -64,7 +64,7 @@ def _leaf(r: Region) -> tuple[int, bool, int]:
 class Signatures:
     """Signature, detail flag and terminal count of the inner regions of some layouts, plus signature counts.
 
-    Each subtree is hashed once, bottom-up, in one walk; terminals are looked up by their content. Regions
+    Each subtree is hashed once, bottom-up, in one walk (terminals and keyed copies inline). Regions
     carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later copies
     reuse the first one's results, including the counts of everything inside it.
     """
