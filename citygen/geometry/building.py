@@ -21,7 +21,7 @@ import numpy as np
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
-from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld
+from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld, weld_many
 from citygen.layout import FacadeLayout, Region
 from citygen.mass import Face, Mass
 from citygen.usd.materials import COLOUR_PREFIX
@@ -53,7 +53,15 @@ class MeshData:
     def from_quads(cls, quads: np.ndarray) -> MeshData:
         """Welded quads; quads that collapse under welding (sub-millimetre slivers) are dropped, since a face
         repeating a vertex is invalid in DCC importers."""
-        points, indices = weld(quads)
+        return cls._welded(*weld(quads))
+
+    @classmethod
+    def many_from_quads(cls, quads: Sequence[np.ndarray]) -> list[MeshData]:
+        """:meth:`from_quads` of each ``(m, 4, 3)`` array, welded in one batch."""
+        return [cls._welded(points, indices) for points, indices in weld_many(list(quads))]
+
+    @classmethod
+    def _welded(cls, points: np.ndarray, indices: np.ndarray) -> MeshData:
         idx = indices.reshape(-1, 4)
         ok = ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
               & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
@@ -141,9 +149,6 @@ class _Sink:
             index = np.array([self.keys.setdefault(p, len(self.keys)) for p in emitted.protos], np.int64)
             self.add_instances(index[emitted.kinds], emitted.positions, emitted.rotation, emitted.scales)
 
-    def meshes(self) -> dict[tuple[str, str], MeshData]:
-        return {k: MeshData.from_quads(np.concatenate(v)) for k, v in sorted(self.quads.items())}
-
     def instances(self) -> Instances:
         if not self.rows:
             return Instances(tuple(self.keys), np.zeros(0, np.int32), np.zeros((0, 3)), np.zeros((0, 4)),
@@ -223,6 +228,14 @@ def _look(label: str, material: str | None, depth: float, wall_material: str,
         material = wall_material  # the building's colour; a colour from the data paints every wall
     depth = depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
     return depth, styles.setdefault((label, material), len(styles))
+
+
+def _meshes(sinks: Sequence[_Sink]) -> list[dict[tuple[str, str], MeshData]]:
+    """Every sink's facade meshes (per (label, material), sorted), welded in one batch."""
+    keys = [sorted(sink.quads) for sink in sinks]
+    welded = iter(MeshData.many_from_quads([np.concatenate(sink.quads[k]) for sink, ks in zip(sinks, keys)
+                                            for k in ks]))
+    return [{k: next(welded) for k in ks} for ks in keys]
 
 
 def face_quaternion(matrix: np.ndarray) -> np.ndarray:
@@ -391,12 +404,9 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
                     built.append((key, len(units)))
                     units.append(_Unit(r.terminals(), _IDENTITY, r.x, r.y, qw / r.w, qh / r.h))
     emitted = _emit(units, _terminal_arrays(units, wall_material), wall_material)
-    for key, unit in built:
-        own = _Sink()
+    sinks = [_Sink() for _ in built]
+    for own, (_, unit) in zip(sinks, built):
         own.take(emitted[unit])
-        if len(cache) >= _MODULE_CACHE_SIZE:
-            cache.clear()
-        protos[key] = cache[key] = ModuleProto(own.meshes(), own.instances())
     sink = _Sink()
     for face, m, unit, keyed in faces:
         if unit is None:
@@ -409,9 +419,13 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
                                to_world(np.asarray([(r.x, r.y, 0.0) for _, r in keyed], dtype=float), m),
                                face_quaternion(m), np.asarray([(r.w / key.size[0], r.h / key.size[1])
                                                                for key, r in keyed]))
+    *module_meshes, meshes = _meshes([*sinks, sink])
+    for (key, _), own, own_meshes in zip(built, sinks, module_meshes):
+        if len(cache) >= _MODULE_CACHE_SIZE:
+            cache.clear()
+        protos[key] = cache[key] = ModuleProto(own_meshes, own.instances())
     plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), m)
              for face, m, _, _ in faces] if walls else []
-    meshes = sink.meshes()
     mass_walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
     roof, gables = roof.split_vertical() if roof is not None else (None, None)
     if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail

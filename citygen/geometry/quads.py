@@ -112,3 +112,35 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
         _, first, inverse = np.unique(grid, axis=0, return_index=True, return_inverse=True)
     points = origin + grid[first] * step
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)
+
+
+def weld_many(quads: list[np.ndarray], decimals: int = 3) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`weld` of each ``(m, 4, 3)`` array of ``quads`` (vertices merge only within their array), in one
+    batch: every array's points and indices are those ``weld`` gives for it alone."""
+    sizes = [4 * len(q) for q in quads]
+    if not quads or 0 in sizes:
+        return [weld(q, decimals) for q in quads]
+    step = 10.0 ** -decimals
+    flat = np.concatenate(quads).reshape(-1, 3)
+    starts = np.cumsum([0, *sizes[:-1]])
+    mesh = np.repeat(np.arange(len(quads)), sizes)
+    origin = np.minimum.reduceat(flat, starts, axis=0)
+    grid = np.rint((flat - origin[mesh]) / step).astype(np.int64)
+    if np.max(grid) >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
+        return [weld(q, decimals) for q in quads]
+    key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
+    order = np.lexsort((key, mesh))
+    sorted_key, sorted_mesh = key[order], mesh[order]
+    new = np.empty(len(order), dtype=bool)
+    new[0] = True
+    new[1:] = (sorted_key[1:] != sorted_key[:-1]) | (sorted_mesh[1:] != sorted_mesh[:-1])
+    first = order[new]
+    inverse = np.empty(len(order), np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    point_starts = np.searchsorted(mesh[first], np.arange(len(quads) + 1))
+    points = (origin[mesh[first]] + grid[first] * step).astype(np.float32)
+    inverse -= point_starts[mesh]
+    inverse = inverse.astype(np.int32)
+    bounds = [*starts, len(flat)]
+    return [(points[point_starts[k]:point_starts[k + 1]], inverse[bounds[k]:bounds[k + 1]])
+            for k in range(len(quads))]
