@@ -370,6 +370,12 @@ def clear_module_cache() -> None:
     _module_cache().clear()
 
 
+def _plain_quads(faces: Sequence[tuple[Face, ...]]) -> np.ndarray:
+    """``(n, 4, 3)``: each face's rectangle as one flat quad in the face's frame."""
+    return box_quads(np.array([(0.0, 0.0, face.width, face.height) for face, *_ in faces]).reshape(-1, 4),
+                     np.zeros(len(faces)))
+
+
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
                    roof: MeshData | None, modules: bool = True, roof_material: str = "roof_dark",
                    walls: bool = False) -> BuildingGeometry:
@@ -408,10 +414,10 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     for own, (_, unit) in zip(sinks, built):
         own.take(emitted[unit])
     sink = _Sink()
-    for face, m, unit, keyed in faces:
+    flat = _plain_quads(faces)
+    for k, (face, m, unit, keyed) in enumerate(faces):
         if unit is None:
-            sink.add_quads(("wall", wall_material),
-                           to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), m))
+            sink.add_quads(("wall", wall_material), to_world(flat[k][None], m))
             continue
         sink.take(emitted[unit])
         if keyed:
@@ -424,8 +430,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         if len(cache) >= _MODULE_CACHE_SIZE:
             cache.clear()
         protos[key] = cache[key] = ModuleProto(own_meshes, own.instances())
-    plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), m)
-             for face, m, _, _ in faces] if walls else []
+    plain = [to_world(q[None], m) for q, (_, m, _, _) in zip(_plain_quads(faces), faces)] if walls else []
     mass_walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
     roof, gables = roof.split_vertical() if roof is not None else (None, None)
     if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail
