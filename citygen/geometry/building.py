@@ -185,14 +185,15 @@ class _Terminals:
 
 
 def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
-    """Terminal arrays of every unit (one Python pass; the style and depth of each distinct (label, material,
-    depth) are worked out once)."""
+    """Terminal arrays of every unit (one Python pass into one flat list; the style and depth of each distinct
+    (label, material, depth) are worked out once)."""
     styles: dict[tuple[str, str], int] = {}
     looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
-    rows = []
-    frames = []
-    for k, unit in enumerate(units):
-        frame = (unit.dx, unit.dy, unit.sx, unit.sy, k)
+    rows: list[float] = []  # x0, y0, x1, y1, depth, style code per terminal
+    extend = rows.extend
+    sizes = []
+    for unit in units:
+        start = len(rows)
         for r in unit.regions:
             label = r.label
             if label is None or r.w <= 1e-6 or r.h <= 1e-6:
@@ -200,12 +201,14 @@ def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
             look = looks.get((label, r.material, r.depth))
             if look is None:
                 look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
-            rows.append((r.x, r.y, r.x + r.w, r.y + r.h, *look))
-            frames.append(frame)
+            x, y = r.x, r.y
+            extend((x, y, x + r.w, y + r.h, *look))
+        sizes.append((len(rows) - start) // 6)
     table = np.array(rows, dtype=float).reshape(-1, 6)
-    frame = np.array(frames, dtype=float).reshape(-1, 5)
+    unit_of = np.repeat(np.arange(len(units)), sizes)
+    frame = np.array([(u.dx, u.dy, u.sx, u.sy) for u in units], dtype=float).reshape(-1, 4)[unit_of]
     rects = (table[:, :4] - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
-    codes, unit_of = table[:, 5].astype(np.int64), frame[:, 4].astype(np.int64)
+    codes = table[:, 5].astype(np.int64)
     return _Terminals(rects, table[:, 4], codes, unit_of, _local_codes(unit_of, codes, len(styles)), tuple(styles))
 
 
