@@ -41,6 +41,12 @@ LABEL_MATERIAL = {"window": "frame_white", "door": "door_wood", "shop": "frame_d
                   "roof": "roof_dark"}
 
 
+def _proper(idx: np.ndarray) -> np.ndarray:
+    """Which welded quads ``(m, 4)`` keep four distinct corners."""
+    return ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
+            & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
+
+
 @dataclass(frozen=True)
 class MeshData:
     """A polygon mesh: ``points (k, 3) float32``, ``counts (m,) int32`` and ``indices (sum(counts),) int32``."""
@@ -53,19 +59,22 @@ class MeshData:
     def from_quads(cls, quads: np.ndarray) -> MeshData:
         """Welded quads; quads that collapse under welding (sub-millimetre slivers) are dropped, since a face
         repeating a vertex is invalid in DCC importers."""
-        return cls._welded(*weld(quads))
+        points, indices = weld(quads)
+        idx = indices.reshape(-1, 4)
+        ok = _proper(idx)
+        return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
 
     @classmethod
     def many_from_quads(cls, quads: Sequence[np.ndarray]) -> list[MeshData]:
         """:meth:`from_quads` of each ``(m, 4, 3)`` array, welded in one batch."""
-        return [cls._welded(points, indices) for points, indices in weld_many(list(quads))]
-
-    @classmethod
-    def _welded(cls, points: np.ndarray, indices: np.ndarray) -> MeshData:
+        points, indices, pb, ib = weld_many(list(quads))
         idx = indices.reshape(-1, 4)
-        ok = ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
-              & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
-        return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
+        ok = _proper(idx)
+        kept = np.concatenate([[0], np.cumsum(ok)])[ib // 4].tolist()
+        idx = idx[ok].reshape(-1)
+        pb = pb.tolist()
+        return [cls(points[pb[k]:pb[k + 1]], np.full(kept[k + 1] - kept[k], 4, np.int32),
+                    idx[4 * kept[k]:4 * kept[k + 1]]) for k in range(len(pb) - 1)]
 
     @classmethod
     def concat(cls, meshes: Sequence[MeshData]) -> MeshData:

@@ -114,33 +114,32 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)
 
 
-def weld_many(quads: list[np.ndarray], decimals: int = 3) -> list[tuple[np.ndarray, np.ndarray]]:
-    """:func:`weld` of each ``(m, 4, 3)`` array of ``quads`` (vertices merge only within their array), in one
-    batch: every array's points and indices are those ``weld`` gives for it alone."""
+def weld_many(quads: list[np.ndarray], decimals: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`weld` of each ``(m, 4, 3)`` array of ``quads`` (vertices merge only within their array) in one batch:
+    ``(points, indices, point bounds, index bounds)``, array ``k``'s points ``points[pb[k]:pb[k + 1]]`` and indices
+    (into them) ``indices[ib[k]:ib[k + 1]]`` being exactly those ``weld`` gives for it alone."""
     sizes = [4 * len(q) for q in quads]
-    if not quads or 0 in sizes:
-        return [weld(q, decimals) for q in quads]
+    index_bounds = np.cumsum([0, *sizes])
     step = 10.0 ** -decimals
-    flat = np.concatenate(quads).reshape(-1, 3)
-    starts = np.cumsum([0, *sizes[:-1]])
+    flat = np.concatenate(quads).reshape(-1, 3) if quads else np.zeros((0, 3))
     mesh = np.repeat(np.arange(len(quads)), sizes)
-    origin = np.minimum.reduceat(flat, starts, axis=0)
+    starts = index_bounds[:-1][np.asarray(sizes, dtype=np.int64) > 0]
+    origin = np.zeros((len(quads), 3))
+    if len(flat):
+        origin[mesh[starts]] = np.minimum.reduceat(flat, starts, axis=0)
     grid = np.rint((flat - origin[mesh]) / step).astype(np.int64)
-    if np.max(grid) >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
-        return [weld(q, decimals) for q in quads]
+    if len(grid) and np.max(grid) >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
+        alone = [weld(q, decimals) for q in quads]
+        return (np.concatenate([p for p, _ in alone]), np.concatenate([i for _, i in alone]),
+                np.cumsum([0, *(len(p) for p, _ in alone)]), index_bounds)
     key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
     order = np.lexsort((key, mesh))
     sorted_key, sorted_mesh = key[order], mesh[order]
-    new = np.empty(len(order), dtype=bool)
-    new[0] = True
+    new = np.ones(len(order), dtype=bool)
     new[1:] = (sorted_key[1:] != sorted_key[:-1]) | (sorted_mesh[1:] != sorted_mesh[:-1])
     first = order[new]
     inverse = np.empty(len(order), np.int64)
     inverse[order] = np.cumsum(new) - 1
-    point_starts = np.searchsorted(mesh[first], np.arange(len(quads) + 1))
+    point_bounds = np.searchsorted(mesh[first], np.arange(len(quads) + 1))
     points = (origin[mesh[first]] + grid[first] * step).astype(np.float32)
-    inverse -= point_starts[mesh]
-    inverse = inverse.astype(np.int32)
-    bounds = [*starts, len(flat)]
-    return [(points[point_starts[k]:point_starts[k + 1]], inverse[bounds[k]:bounds[k + 1]])
-            for k in range(len(quads))]
+    return points, (inverse - point_bounds[mesh]).astype(np.int32), point_bounds, index_bounds

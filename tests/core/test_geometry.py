@@ -190,10 +190,14 @@ def test_weld_many_welds_each_array_as_weld_does(meshes, shift):
     arrays = [box_quads(np.array([(x, y, x + 1, y + 1) for x, y, _ in cells], float) + shift * k,
                         np.array([d for _, _, d in cells])) for k, cells in enumerate(meshes)]
     arrays.append(box_quads(np.array([[0.0, 0.0, 1.0, 1.0]]), np.zeros(1)) * np.array([1.0, 2500.0, 1.0]))
-    for batched, alone in zip(weld_many(arrays), map(weld, arrays)):
-        assert batched[0].dtype == alone[0].dtype and batched[1].dtype == alone[1].dtype
-        assert np.array_equal(batched[0], alone[0]) and np.array_equal(batched[1], alone[1])
-    assert weld_many(arrays[:-1])[0][0].tobytes() == weld(arrays[0])[0].tobytes()
+    points, indices, pb, ib = weld_many(arrays)
+    for k, (alone_points, alone_indices) in enumerate(map(weld, arrays)):
+        batched_points, batched_indices = points[pb[k]:pb[k + 1]], indices[ib[k]:ib[k + 1]]
+        assert batched_points.dtype == alone_points.dtype and batched_indices.dtype == alone_indices.dtype
+        assert np.array_equal(batched_points, alone_points) and np.array_equal(batched_indices, alone_indices)
+    points, indices, pb, ib = weld_many([arrays[0], np.zeros((0, 4, 3)), arrays[1]])
+    assert pb[1] == pb[2] and ib[1] == ib[2]
+    assert indices[ib[2]:ib[3]].tobytes() == weld(arrays[1])[1].tobytes()
 
 
 @pytest.mark.parametrize("modules", [True, False])
