@@ -87,8 +87,9 @@ def merge_rects_grouped(rects: np.ndarray, groups: np.ndarray, eps: float = 1e-6
 
 
 def to_world(quads: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """Apply a 4x4 row-vector transform to ``(..., 3)`` points."""
-    return quads @ matrix[:3, :3] + matrix[3, :3]
+    """Apply a 4x4 row-vector transform to ``(..., 3)`` points (as one ``(n, 3)`` product: a stack of quads would
+    be multiplied quad by quad)."""
+    return (quads.reshape(-1, 3) @ matrix[:3, :3]).reshape(quads.shape) + matrix[3, :3]
 
 
 def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
