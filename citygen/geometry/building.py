@@ -371,6 +371,12 @@ _MODULE_CACHE_SIZE = 4096
 
 
 def _module_cache() -> dict[ModuleKey, ModuleProto]:
+    """The calling thread's module prototypes by key: buildings dressed by one ruleset share most modules.
+
+    Stages stay deterministic: the writer keeps the first prototype of a key in stage order, and that building,
+    being the first with the key in its worker too, built it itself (the pipeline clears the cache per building,
+    the dask executor per tile). Per thread, so tiles built by concurrent threads of one process never share it.
+    """
     cache = getattr(_MODULE_CACHE, "modules", None)
     if cache is None:
         cache = _MODULE_CACHE.modules = {}
