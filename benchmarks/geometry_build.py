@@ -4,8 +4,9 @@
 
 The scene is derived once (one job, nothing written) while every ``build_geometry`` call's arguments are recorded;
 ``--cache FILE`` pickles them so later runs skip the derivation. Then the recorded calls are replayed ``--repeat``
-times and the script prints the median and best CPU (process_time) per building and a sha256 digest of every output array
-(meshes, instances, module prototypes, roof, walls): the digest must not change when the geometry code gets faster.
+times and the script prints the median and best CPU (process_time) per building and a sha256 digest of every
+output array (meshes, instances, module prototypes, roof, walls): the digest must not change when the geometry code
+only gets faster.
 ``--profile`` replays once under pyinstrument instead (installed with the ``bench`` extra).
 """
 from __future__ import annotations

@@ -4,7 +4,8 @@
 
 Per roof the median CPU time (process_time) over the repeats; prints the median, p99 and worst roof, the slowest
 footprints with their vertex counts, the roofs that failed (the pipeline would build those flat), the builders'
-warnings and a sha256 digest of every roof mesh (it must not change when the roof code only gets faster). ``--party``: roof with the party walls the pipeline finds (neighbours up to the eave)."""
+warnings and a sha256 digest of every roof mesh (it must not change when the roof code only gets faster).
+``--party``: roof with the party walls the pipeline finds (neighbours up to the eave)."""
 from __future__ import annotations
 
 import argparse
