@@ -3,11 +3,13 @@
     python benchmarks/roofs_hipped.py [--shape hipped] [--repeat 3] [--party] [FILE ...]
 
 Per roof the median CPU time (process_time) over the repeats; prints the median, p99 and worst roof, the slowest
-footprints with their vertex counts, the roofs that failed (the pipeline would build those flat) and the builders'
-warnings. ``--party``: roof with the party walls the pipeline finds (neighbours up to the eave)."""
+footprints with their vertex counts, the roofs that failed (the pipeline would build those flat), the builders'
+warnings and a sha256 digest of every roof mesh (it must not change when the roof code only gets faster).
+``--party``: roof with the party walls the pipeline finds (neighbours up to the eave)."""
 from __future__ import annotations
 
 import argparse
+import hashlib
 import statistics
 import time
 import warnings
@@ -43,6 +45,7 @@ def main() -> None:
         masses = [build_mass(fp) for fp in read_footprints(path, {}).footprints]
         covers = neighbour_cover(masses) if args.party else [np.zeros(len(m.faces)) for m in masses]
         times, failures, attached, ignored = [], [], 0, []
+        digest = hashlib.sha256()
         for mass, cover in zip(masses, covers):
             party = tuple(int(k) for k in np.flatnonzero(party_walls(cover, [f.width for f in mass.faces],
                                                                         mass.height)))
@@ -54,12 +57,15 @@ def main() -> None:
                 try:
                     with warnings.catch_warnings(record=True) as caught:
                         warnings.simplefilter("always")
-                        builder.build(mass.outline, mass.base + mass.height, spec)
+                        mesh = builder.build(mass.outline, mass.base + mass.height, spec)
                 except Exception as exc:
                     failures.append(f"{type(exc).__name__}: {exc}")
                     break
                 runs.append(time.process_time() - t0)
             ignored += [str(w.message) for w in caught] if runs else []
+            if runs:
+                for array in (mesh.points, mesh.counts, mesh.indices):
+                    digest.update(np.ascontiguousarray(array).tobytes())
             times.append(statistics.median(runs) if runs else float("nan"))
         ms = np.array(times) * 1000
         ok = ms[~np.isnan(ms)]
@@ -67,6 +73,7 @@ def main() -> None:
               f"(flat fallback); "
               f"CPU per roof median {np.median(ok):.2f} ms, p99 {np.percentile(ok, 99):.1f} ms, "
               f"max {ok.max():.0f} ms, total {ok.sum() / 1000:.2f} s")
+        print(f"  digest {digest.hexdigest()}")
         for k in np.argsort(-np.nan_to_num(ms))[:3]:
             print(f"  slow: {ms[k]:.0f} ms, {_vertices(masses[k].outline)} vertices")
         for failure in failures:

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
-from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld
+from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld, weld_many
 from citygen.layout import FacadeLayout, Region
 from citygen.mass import Face, Mass
 from citygen.usd.materials import COLOUR_PREFIX
@@ -41,6 +41,12 @@ LABEL_MATERIAL = {"window": "frame_white", "door": "door_wood", "shop": "frame_d
                   "roof": "roof_dark"}
 
 
+def _proper(idx: np.ndarray) -> np.ndarray:
+    """Which welded quads ``(m, 4)`` keep four distinct corners."""
+    return ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
+            & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
+
+
 @dataclass(frozen=True)
 class MeshData:
     """A polygon mesh: ``points (k, 3) float32``, ``counts (m,) int32`` and ``indices (sum(counts),) int32``."""
@@ -55,9 +61,20 @@ class MeshData:
         repeating a vertex is invalid in DCC importers."""
         points, indices = weld(quads)
         idx = indices.reshape(-1, 4)
-        ok = ((idx[:, 0] != idx[:, 1]) & (idx[:, 1] != idx[:, 2]) & (idx[:, 2] != idx[:, 3]) & (idx[:, 3] != idx[:, 0])
-              & (idx[:, 0] != idx[:, 2]) & (idx[:, 1] != idx[:, 3]))
+        ok = _proper(idx)
         return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
+
+    @classmethod
+    def many_from_quads(cls, quads: Sequence[np.ndarray]) -> list[MeshData]:
+        """:meth:`from_quads` of each ``(m, 4, 3)`` array, welded in one batch."""
+        points, indices, pb, ib = weld_many(list(quads))
+        idx = indices.reshape(-1, 4)
+        ok = _proper(idx)
+        kept = np.concatenate([[0], np.cumsum(ok)])[ib // 4].tolist()
+        idx = idx[ok].reshape(-1)
+        pb = pb.tolist()
+        return [cls(points[pb[k]:pb[k + 1]], np.full(kept[k + 1] - kept[k], 4, np.int32),
+                    idx[4 * kept[k]:4 * kept[k + 1]]) for k in range(len(pb) - 1)]
 
     @classmethod
     def concat(cls, meshes: Sequence[MeshData]) -> MeshData:
@@ -133,8 +150,13 @@ class _Sink:
         scale3 = np.column_stack([scales, np.ones(len(proto))])
         self.rows.append((proto, positions, np.repeat(rotation[None, :], len(proto), axis=0), scale3))
 
-    def meshes(self) -> dict[tuple[str, str], MeshData]:
-        return {k: MeshData.from_quads(np.concatenate(v)) for k, v in sorted(self.quads.items())}
+    def take(self, emitted: _Emitted) -> None:
+        """A unit's quads and element instances (its prototypes registered in the order it lists them)."""
+        for key, quads in emitted.quads:
+            self.add_quads(key, quads)
+        if emitted.kinds is not None:
+            index = np.array([self.keys.setdefault(p, len(self.keys)) for p in emitted.protos], np.int64)
+            self.add_instances(index[emitted.kinds], emitted.positions, emitted.rotation, emitted.scales)
 
     def instances(self) -> Instances:
         if not self.rows:
@@ -145,34 +167,68 @@ class _Sink:
 
 
 @dataclass(frozen=True)
+class _Unit:
+    """Terminal regions emitted together through one transform: a face's loose terminals, or a module prototype's
+    (shifted by ``-dx, -dy``, then scaled by ``sx, sy`` into its own frame)."""
+
+    regions: Iterable[Region]
+    matrix: np.ndarray
+    dx: float = 0.0
+    dy: float = 0.0
+    sx: float = 1.0
+    sy: float = 1.0
+
+
+@dataclass(frozen=True)
 class _Terminals:
-    """Visible terminals as arrays: rects ``(n, 4)`` x0 y0 x1 y1, depth, and a style code per terminal
-    indexing ``styles`` (label, material) -- label defaults for depth and material already applied."""
+    """Visible terminals of some units as arrays: rects ``(n, 4)`` x0 y0 x1 y1 (in their unit's frame), depth, the
+    unit of each, and a style code indexing ``styles`` (label, material) -- label defaults for depth and material
+    already applied. ``local`` numbers each unit's styles in the order they first occur in it."""
 
     rects: np.ndarray
     depth: np.ndarray
     codes: np.ndarray
+    units: np.ndarray
+    local: np.ndarray
     styles: tuple[tuple[str, str], ...]
 
 
-def _terminal_arrays(regions: Iterable[Region], wall_material: str, dx: float = 0.0, dy: float = 0.0,
-                     sx: float = 1.0, sy: float = 1.0) -> _Terminals:
-    """Terminal arrays of ``regions``, shifted by ``-dx, -dy`` then scaled by ``sx, sy`` (one Python pass; the
-    style and depth of each distinct (label, material, depth) are worked out once)."""
+def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
+    """Terminal arrays of every unit (one Python pass into one flat list; the style and depth of each distinct
+    (label, material, depth) are worked out once)."""
     styles: dict[tuple[str, str], int] = {}
     looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
-    rows = []
-    for r in regions:
-        label = r.label
-        if label is None or r.w <= 1e-6 or r.h <= 1e-6:
-            continue
-        look = looks.get((label, r.material, r.depth))
-        if look is None:
-            look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
-        rows.append((r.x, r.y, r.x + r.w, r.y + r.h, *look))
+    rows: list[float] = []  # x0, y0, x1, y1, depth, style code per terminal
+    extend = rows.extend
+    sizes = []
+    for unit in units:
+        start = len(rows)
+        for r in unit.regions:
+            label = r.label
+            if label is None or r.w <= 1e-6 or r.h <= 1e-6:
+                continue
+            look = looks.get((label, r.material, r.depth))
+            if look is None:
+                look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
+            x, y = r.x, r.y
+            extend((x, y, x + r.w, y + r.h, *look))
+        sizes.append((len(rows) - start) // 6)
     table = np.array(rows, dtype=float).reshape(-1, 6)
-    rects = (table[:, :4] - (dx, dy, dx, dy)) * (sx, sy, sx, sy)
-    return _Terminals(rects, table[:, 4], table[:, 5].astype(np.int64), tuple(styles))
+    unit_of = np.repeat(np.arange(len(units)), sizes)
+    frame = np.array([(u.dx, u.dy, u.sx, u.sy) for u in units], dtype=float).reshape(-1, 4)[unit_of]
+    rects = (table[:, :4] - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
+    codes = table[:, 5].astype(np.int64)
+    return _Terminals(rects, table[:, 4], codes, unit_of, _local_codes(unit_of, codes, len(styles)), tuple(styles))
+
+
+def _local_codes(units: np.ndarray, codes: np.ndarray, n_styles: int) -> np.ndarray:
+    """Per terminal the rank of its style among its unit's styles, in the order they first occur in the unit."""
+    pairs, first, inverse = np.unique(units * max(n_styles, 1) + codes, return_index=True, return_inverse=True)
+    unit = pairs // max(n_styles, 1)
+    order = np.lexsort((first, unit))
+    rank = np.empty(len(pairs), np.int64)
+    rank[order] = np.arange(len(pairs)) - np.searchsorted(unit[order], unit[order])
+    return rank[inverse.ravel()]
 
 
 def _look(label: str, material: str | None, depth: float, wall_material: str,
@@ -184,6 +240,14 @@ def _look(label: str, material: str | None, depth: float, wall_material: str,
         material = wall_material  # the building's colour; a colour from the data paints every wall
     depth = depth or DEFAULT_DEPTH.get(label) or TRIM_DEPTH.get(label, 0.0)
     return depth, styles.setdefault((label, material), len(styles))
+
+
+def _meshes(sinks: Sequence[_Sink]) -> list[dict[tuple[str, str], MeshData]]:
+    """Every sink's facade meshes (per (label, material), sorted), welded in one batch."""
+    keys = [sorted(sink.quads) for sink in sinks]
+    welded = iter(MeshData.many_from_quads([np.concatenate(sink.quads[k]) for sink, ks in zip(sinks, keys)
+                                            for k in ks]))
+    return [{k: next(welded) for k in ks} for ks in keys]
 
 
 def face_quaternion(matrix: np.ndarray) -> np.ndarray:
@@ -202,83 +266,121 @@ def face_quaternion(matrix: np.ndarray) -> np.ndarray:
     return np.asarray(q, dtype=float)
 
 
-def _emit(sink: _Sink, t: _Terminals, matrix: np.ndarray, wall_material: str) -> None:
-    """Facade quads and element instances of terminals, transformed by a face (or identity) matrix."""
+def _runs(*keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stable sort by ``keys`` (the last one primary): ``(order, start of each run of equal keys in it, run of
+    each element)`` -- a run's first element is the first occurrence of its keys."""
+    order = np.lexsort(keys)
+    change = np.zeros(len(order), dtype=bool)
+    change[:1] = True
+    for key in keys:
+        sorted_key = key[order]
+        change[1:] |= sorted_key[1:] != sorted_key[:-1]
+    run = np.empty(len(order), np.int64)
+    run[order] = np.cumsum(change) - 1
+    return order, np.flatnonzero(change), run
+
+
+#: Panel-group key of the flat wall quads behind attachments: after the unit's other groups.
+_BEHIND = 1 << 50
+
+
+@dataclass
+class _Emitted:
+    """One unit's output, for its sink to take in order: facade quads per (label, material), in groups, and
+    element instances (``kinds`` index ``protos``; ``scales`` ``(n, 2)``)."""
+
+    quads: list[tuple[tuple[str, str], np.ndarray]] = field(default_factory=list)
+    protos: list[ProtoKey] = field(default_factory=list)
+    kinds: np.ndarray | None = None
+    positions: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    scales: np.ndarray | None = None
+
+
+def _emit(units: Sequence[_Unit], t: _Terminals, wall_material: str) -> list[_Emitted]:
+    """Facade quads and element instances of every unit's terminals, transformed by the unit's matrix; all units
+    in one batch."""
+    out = [_Emitted() for _ in units]
     if not len(t.rects):
-        return
+        return out
     style_instanced = np.array([label in INSTANCED for label, _ in t.styles])
     style_behind = np.array([label in INSTANCED and label not in OPENINGS for label, _ in t.styles])
     instanced = style_instanced[t.codes]
-    _emit_panels(sink, t, ~instanced, style_behind[t.codes], matrix, wall_material)
+    _emit_panels(out, units, t, ~instanced, style_behind[t.codes], wall_material)
     if instanced.any():
-        _emit_elements(sink, t, instanced, matrix)
+        _emit_elements(out, units, t, instanced)
+    return out
 
 
-def _emit_panels(sink: _Sink, t: _Terminals, panel: np.ndarray, behind: np.ndarray, matrix: np.ndarray,
-                 wall_material: str) -> None:
-    """Boxes of the ``panel`` terminals, merged per (style, depth in mm) at the group's first depth, then flat wall
-    quads behind the ``behind`` attachments: all groups of a face merged, boxed and transformed in one batch."""
+def _emit_panels(out: list[_Emitted], units: Sequence[_Unit], t: _Terminals, panel: np.ndarray,
+                 behind: np.ndarray, wall_material: str) -> None:
+    """Boxes of the ``panel`` terminals, merged per (unit, style, depth in mm) at the group's first depth, then
+    flat wall quads behind the ``behind`` attachments: every group merged and boxed in one batch, each unit's
+    quads transformed by its matrix and listed per group (its styles in first-occurrence order, then by depth)."""
     depth_mm = np.rint(t.depth[panel] * 1000).astype(np.int64)
-    keys, first, groups = np.unique((t.codes[panel] << 32) | (depth_mm & 0xFFFFFFFF), return_index=True,
-                                    return_inverse=True)
-    styles = [t.styles[k >> 32] for k in keys.tolist()]
-    depths, rects, groups = t.depth[panel][first], t.rects[panel], groups.ravel()
-    if behind.any():
-        styles.append(("wall", wall_material))
-        depths = np.append(depths, 0.0)
-        rects = np.concatenate([rects, t.rects[behind]])
-        groups = np.concatenate([groups, np.full(int(behind.sum()), len(keys))])
-    flat, flat_groups = merge_rects_grouped(rects, groups)
+    n_behind = int(behind.sum())
+    keys = np.concatenate([(t.local[panel] << 32) | (depth_mm & 0xFFFFFFFF), np.full(n_behind, _BEHIND)])
+    unit_of = np.concatenate([t.units[panel], t.units[behind]])
+    order, first, groups = _runs(keys, unit_of)
+    head = order[first]
+    code = np.concatenate([t.codes[panel], np.full(n_behind, -1)])[head]
+    depths = np.concatenate([t.depth[panel], np.zeros(n_behind)])[head]
+    group_unit = unit_of[head]
+    flat, flat_groups = merge_rects_grouped(np.concatenate([t.rects[panel], t.rects[behind]]), groups)
     quads, quad_groups = box_quads_grouped(flat, depths[flat_groups], flat_groups)
-    quads = to_world(quads, matrix)
-    bounds = np.searchsorted(quad_groups, np.arange(len(styles) + 1))
-    for style, lo, hi in zip(styles, bounds[:-1].tolist(), bounds[1:].tolist()):
-        sink.add_quads(style, quads[lo:hi])
+    unit_bounds = np.searchsorted(group_unit[quad_groups], np.arange(len(units) + 1)).tolist()
+    for u in np.unique(group_unit).tolist():
+        lo, hi = unit_bounds[u], unit_bounds[u + 1]
+        quads[lo:hi] = to_world(quads[lo:hi], units[u].matrix)
+    bounds = np.searchsorted(quad_groups, np.arange(len(head) + 1)).tolist()
+    wall = ("wall", wall_material)
+    for g, (c, u) in enumerate(zip(code.tolist(), group_unit.tolist())):
+        out[u].quads.append((t.styles[c] if c >= 0 else wall, quads[bounds[g]:bounds[g + 1]]))
 
 
-def _emit_elements(sink: _Sink, t: _Terminals, instanced: np.ndarray, matrix: np.ndarray) -> None:
-    """Instances of the ``instanced`` terminals: one prototype per (style, size in quanta, depth in cm)."""
-    r, codes, depth = t.rects[instanced], t.codes[instanced], t.depth[instanced]
+def _emit_elements(out: list[_Emitted], units: Sequence[_Unit], t: _Terminals, instanced: np.ndarray) -> None:
+    """Instances of the ``instanced`` terminals: one prototype per (style, size in quanta, depth in cm), listed per
+    unit in the order of its (style rank, size, depth)."""
+    r, local, depth, unit_of = t.rects[instanced], t.local[instanced], t.depth[instanced], t.units[instanced]
+    codes = t.codes[instanced]
     size = np.column_stack([r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]])
     q = np.maximum(1, np.rint(size / QUANTUM)).astype(np.int64)
     qd = np.rint(depth * 100).astype(np.int64)
-    key = (codes << 48) | (q[:, 0] << 32) | (q[:, 1] << 16) | (qd & 0xFFFF)
-    uniq, inverse = np.unique(key, return_inverse=True)
-    index = np.empty(len(uniq), np.int64)
-    for k, u in enumerate(uniq.tolist()):
-        (label, material), d = t.styles[u >> 48], ((u & 0xFFFF) ^ 0x8000) - 0x8000
-        proto = ProtoKey(label, material, (u >> 32) & 0xFFFF, (u >> 16) & 0xFFFF, d)
-        index[k] = sink.keys.setdefault(proto, len(sink.keys))
-    proto_index = index[inverse.ravel()]
-    sink.add_instances(proto_index, to_world(np.column_stack([r[:, 0], r[:, 1], np.zeros(len(r))]), matrix),
-                       face_quaternion(matrix), size / (q * QUANTUM))
+    key = (local << 48) | (q[:, 0] << 32) | (q[:, 1] << 16) | (qd & 0xFFFF)
+    order, first, kind = _runs(key, unit_of)
+    head = order[first]
+    kind_unit = unit_of[head]
+    for u, c, k in zip(kind_unit.tolist(), codes[head].tolist(), key[head].tolist()):
+        label, material = t.styles[c]
+        out[u].protos.append(ProtoKey(label, material, (k >> 32) & 0xFFFF, (k >> 16) & 0xFFFF,
+                                      ((k & 0xFFFF) ^ 0x8000) - 0x8000))
+    kind -= np.searchsorted(kind_unit, unit_of)  # (a unit's kinds count from 0)
+    scales = size / (q * QUANTUM)
+    bounds = np.searchsorted(unit_of, np.arange(len(units) + 1)).tolist()
+    for u in np.unique(unit_of).tolist():
+        lo, hi = bounds[u], bounds[u + 1]
+        m = units[u].matrix
+        e = out[u]
+        e.kinds, e.scales, e.rotation = kind[lo:hi], scales[lo:hi], face_quaternion(m)
+        e.positions = to_world(np.column_stack([r[lo:hi, 0], r[lo:hi, 1], np.zeros(hi - lo)]), m)
 
 
+_IDENTITY = np.eye(4)
 _MODULE_CACHE = threading.local()
 _MODULE_CACHE_SIZE = 4096
 
 
 def _module_cache() -> dict[ModuleKey, ModuleProto]:
+    """The calling thread's module prototypes by key: buildings dressed by one ruleset share most modules.
+
+    Stages stay deterministic: the writer keeps the first prototype of a key in stage order, and that building,
+    being the first with the key in its worker too, built it itself (the pipeline clears the cache per building,
+    the dask executor per tile). Per thread, so tiles built by concurrent threads of one process never share it.
+    """
     cache = getattr(_MODULE_CACHE, "modules", None)
     if cache is None:
         cache = _MODULE_CACHE.modules = {}
     return cache
-
-
-def _module_proto(key: ModuleKey, region: Region) -> ModuleProto:
-    """A module's prototype geometry, cached per thread: buildings dressed by one ruleset share most modules.
-
-    Stages stay deterministic: the writer keeps the first prototype of a key in stage order, and that building,
-    being the first with the key in its worker too, built it itself (the pipeline clears the cache per city, the
-    dask executor per tile). Per thread, so tiles built by concurrent threads of one process never share it.
-    """
-    cache = _module_cache()
-    proto = cache.get(key)
-    if proto is None:
-        if len(cache) >= _MODULE_CACHE_SIZE:
-            cache.clear()
-        proto = cache[key] = _build_module_proto(key, region)
-    return proto
 
 
 def clear_module_cache() -> None:
@@ -286,12 +388,10 @@ def clear_module_cache() -> None:
     _module_cache().clear()
 
 
-def _build_module_proto(key: ModuleKey, region: Region) -> ModuleProto:
-    qw, qh = key.size
-    sink = _Sink()
-    _emit(sink, _terminal_arrays(region.terminals(), key.wall, region.x, region.y, qw / region.w, qh / region.h),
-          np.eye(4), key.wall)
-    return ModuleProto(sink.meshes(), sink.instances())
+def _plain_quads(faces: Sequence[tuple[Face, ...]]) -> np.ndarray:
+    """``(n, 4, 3)``: each face's rectangle as one flat quad in the face's frame."""
+    return box_quads(np.array([(0.0, 0.0, face.width, face.height) for face, *_ in faces]).reshape(-1, 4),
+                     np.zeros(len(faces)))
 
 
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
@@ -304,33 +404,51 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     (the ``mass`` level of detail). The roof's vertical faces (gables, steps between roof pieces) are wall: they
     join the ``("wall", wall_material)`` mesh (and the plain walls), the roof keeps the rest.
     """
-    sink = _Sink()
-    protos: dict[ModuleKey, ModuleProto] = {}
     signatures = Signatures(layout.root for _, layout in layouts if layout is not None and modules)
+    cache = _module_cache()
+    protos: dict[ModuleKey, ModuleProto | None] = {}  # (None: built below, with the faces' terminals)
+    units: list[_Unit] = []
+    built: list[tuple[ModuleKey, int]] = []  # modules to build, with their unit
+    faces: list[tuple[Face, np.ndarray, int | None, list[tuple[ModuleKey, Region]]]] = []  # + unit, modules
     for face, layout in layouts:
         m = face.matrix()
         if layout is None:
-            sink.add_quads(("wall", wall_material),
-                           to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), m))
+            faces.append((face, m, None, []))
             continue
         placed, loose = signatures.split(layout.root) if modules else ([], layout.leaves)
-        _emit(sink, _terminal_arrays(loose, wall_material), m, wall_material)
-        if not placed:
-            continue
-        proto, pos, scale = [], [], []
-        for r in placed:
-            key = ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)), wall_material)
+        keyed = [(ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)),
+                            wall_material), r) for r in placed]
+        faces.append((face, m, len(units), keyed))
+        units.append(_Unit(loose, m))
+        for key, r in keyed:
             if key not in protos:
-                protos[key] = _module_proto(key, r)
-            proto.append(sink.keys.setdefault(key, len(sink.keys)))
-            qw, qh = key.size
-            pos.append((r.x, r.y, 0.0))
-            scale.append((r.w / qw, r.h / qh))
-        sink.add_instances(np.asarray(proto), to_world(np.asarray(pos, dtype=float), m), face_quaternion(m),
-                           np.asarray(scale))
-    plain = [to_world(box_quads(np.array([[0.0, 0.0, face.width, face.height]]), np.zeros(1)), face.matrix())
-             for face, _ in layouts] if walls else []
-    meshes = sink.meshes()
+                protos[key] = cache.get(key)
+                if protos[key] is None:
+                    qw, qh = key.size
+                    built.append((key, len(units)))
+                    units.append(_Unit(r.terminals(), _IDENTITY, r.x, r.y, qw / r.w, qh / r.h))
+    emitted = _emit(units, _terminal_arrays(units, wall_material), wall_material)
+    sinks = [_Sink() for _ in built]
+    for own, (_, unit) in zip(sinks, built):
+        own.take(emitted[unit])
+    sink = _Sink()
+    flat = _plain_quads(faces)
+    for k, (face, m, unit, keyed) in enumerate(faces):
+        if unit is None:
+            sink.add_quads(("wall", wall_material), to_world(flat[k][None], m))
+            continue
+        sink.take(emitted[unit])
+        if keyed:
+            sink.add_instances(np.asarray([sink.keys.setdefault(key, len(sink.keys)) for key, _ in keyed]),
+                               to_world(np.asarray([(r.x, r.y, 0.0) for _, r in keyed], dtype=float), m),
+                               face_quaternion(m), np.asarray([(r.w / key.size[0], r.h / key.size[1])
+                                                               for key, r in keyed]))
+    *module_meshes, meshes = _meshes([*sinks, sink])
+    for (key, _), own, own_meshes in zip(built, sinks, module_meshes):
+        if len(cache) >= _MODULE_CACHE_SIZE:
+            cache.clear()
+        protos[key] = cache[key] = ModuleProto(own_meshes, own.instances())
+    plain = [to_world(q[None], m) for q, (_, m, _, _) in zip(_plain_quads(faces), faces)] if walls else []
     mass_walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
     roof, gables = roof.split_vertical() if roof is not None else (None, None)
     if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail

@@ -54,11 +54,19 @@ def _code(text: str | None) -> int:
     return zlib.crc32((text or "").encode("utf-8"))
 
 
-class Signatures:
-    """Signature, detail flag and terminal count of the regions of some layouts, plus signature counts.
+def _leaf(r: Region) -> tuple[int, bool, int]:
+    """Signature, detail flag and terminal count (1) of a terminal region."""
+    return (hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
+                  round(r.h * CM))),
+            (r.label != "wall" and r.label is not None) or r.depth != 0.0, 1)
 
-    Regions carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later
-    copies reuse the first one's results, including the counts of everything inside it.
+
+class Signatures:
+    """Signature, detail flag and terminal count of the inner regions of some layouts, plus signature counts.
+
+    Each subtree is hashed once, bottom-up, in one walk (terminals and keyed copies inline). Regions
+    carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later copies
+    reuse the first one's results, including the counts of everything inside it.
     """
 
     def __init__(self, roots: Iterable[Region]) -> None:
@@ -66,48 +74,64 @@ class Signatures:
         self.log: list[int] = []  # signature of every inner region visited or reused, in order
         self.first: dict[int, Region] = {}
         self.inner: dict[int, list[int]] = {}
+        self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
         for root in roots:
-            self._visit(root)
+            key = root.key
+            if key is not None and key in self.first:
+                self.log.extend(self.inner[key])
+            elif root.children:
+                self._visit(root)
+            elif key is not None:
+                self.first[key], self.inner[key], self.info[id(root)] = root, [], _leaf(root)
         self.counts: Counter[int] = Counter(self.log)
 
     def _visit(self, r: Region) -> tuple[int, bool, int]:
+        """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
+        first, inner, info, log = self.first, self.inner, self.info, self.log
+        x, y = r.x, r.y
+        start = len(log)
+        content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
+        detail, terminals = False, 0
+        for c in r.children:
+            key = c.key
+            if key is not None and key in first:
+                sig, more, n = info[id(first[key])]
+                log.extend(inner[key])
+            elif c.children:
+                sig, more, n = self._visit(c)
+            else:
+                sig, more, n = _leaf(c)
+                if key is not None:
+                    first[key], inner[key], info[id(c)] = c, [], (sig, more, n)
+            content.append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
+            detail = detail or more
+            terminals += n
+        result = (hash(tuple(content)), detail, terminals)
+        log.append(result[0])
         key = r.key
-        if key is not None and key in self.first:
-            info = self.info[id(self.first[key])]
-            self.log.extend(self.inner[key])
-            self.info[id(r)] = info
-            return info
-        children = r.children
-        if not children:
-            info = (hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM),
-                          round(r.w * CM), round(r.h * CM))),
-                    (r.label != "wall" and r.label is not None) or r.depth != 0.0, 1)
-        else:
-            x, y, visit = r.x, r.y, self._visit
-            start = len(self.log)
-            content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
-            detail, terminals = False, 0
-            for c in children:
-                sig, more, n = visit(c)
-                content.append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
-                detail = detail or more
-                terminals += n
-            info = (hash(tuple(content)), detail, terminals)
-            self.log.append(info[0])
-            if key is not None:
-                self.inner[key] = self.log[start:]
         if key is not None:
-            self.first[key] = r
-            self.inner.setdefault(key, [])
-        self.info[id(r)] = info
-        return info
+            first[key], inner[key] = r, log[start:]
+        info[id(r)] = result
+        return result
 
     def canonical(self, r: Region) -> Region:
         """The copy of ``r`` whose whole subtree was hashed (itself unless it repeats a keyed subtree)."""
         return self.first.get(r.key, r) if r.key is not None else r
 
     def signature(self, r: Region) -> int:
+        """The signature of the inner region ``r``."""
         return self.info[id(self.canonical(r))][0]
+
+    def _module(self, twin: Region) -> bool:
+        """Whether the hashed inner region ``twin`` (and every copy of it) is a module (see the module doc)."""
+        decided = self._modules.get(id(twin))
+        if decided is None:
+            sig, detail, n = self.info[id(twin)]
+            c = self.counts[sig]
+            decided = self._modules[id(twin)] = (
+                c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
+                and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children))
+        return decided
 
     def split(self, root: Region) -> tuple[list[Region], list[Region]]:
         """The face's ``(modules, loose terminals)``: maximal repeated subtrees, and every terminal outside them.
@@ -122,11 +146,9 @@ class Signatures:
             if not r.children:
                 loose.append(r)
                 continue
-            twin = self.canonical(twin)
-            sig, detail, n = self.info[id(twin)]
-            c = self.counts[sig]
-            if (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
-                    and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children)):
+            if twin.key is not None:
+                twin = self.first.get(twin.key, twin)
+            if self._module(twin):
                 modules.append(r)
             else:
                 stack.extend(reversed(list(zip(r.children, twin.children))))

@@ -87,8 +87,9 @@ def merge_rects_grouped(rects: np.ndarray, groups: np.ndarray, eps: float = 1e-6
 
 
 def to_world(quads: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """Apply a 4x4 row-vector transform to ``(..., 3)`` points."""
-    return quads @ matrix[:3, :3] + matrix[3, :3]
+    """Apply a 4x4 row-vector transform to ``(..., 3)`` points (as one ``(n, 3)`` product: a stack of quads would
+    be multiplied quad by quad)."""
+    return (quads.reshape(-1, 3) @ matrix[:3, :3]).reshape(quads.shape) + matrix[3, :3]
 
 
 def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
@@ -112,3 +113,34 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
         _, first, inverse = np.unique(grid, axis=0, return_index=True, return_inverse=True)
     points = origin + grid[first] * step
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)
+
+
+def weld_many(quads: list[np.ndarray], decimals: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`weld` of each ``(m, 4, 3)`` array of ``quads`` (vertices merge only within their array) in one batch:
+    ``(points, indices, point bounds, index bounds)``, array ``k``'s points ``points[pb[k]:pb[k + 1]]`` and indices
+    (into them) ``indices[ib[k]:ib[k + 1]]`` being exactly those ``weld`` gives for it alone."""
+    sizes = [4 * len(q) for q in quads]
+    index_bounds = np.cumsum([0, *sizes])
+    step = 10.0 ** -decimals
+    flat = np.concatenate(quads).reshape(-1, 3) if quads else np.zeros((0, 3))
+    mesh = np.repeat(np.arange(len(quads)), sizes)
+    starts = index_bounds[:-1][np.asarray(sizes, dtype=np.int64) > 0]
+    origin = np.zeros((len(quads), 3))
+    if len(flat):
+        origin[mesh[starts]] = np.minimum.reduceat(flat, starts, axis=0)
+    grid = np.rint((flat - origin[mesh]) / step).astype(np.int64)
+    if len(grid) and np.max(grid) >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
+        alone = [weld(q, decimals) for q in quads]
+        return (np.concatenate([p for p, _ in alone]), np.concatenate([i for _, i in alone]),
+                np.cumsum([0, *(len(p) for p, _ in alone)]), index_bounds)
+    key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
+    order = np.lexsort((key, mesh))
+    sorted_key, sorted_mesh = key[order], mesh[order]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = (sorted_key[1:] != sorted_key[:-1]) | (sorted_mesh[1:] != sorted_mesh[:-1])
+    first = order[new]
+    inverse = np.empty(len(order), np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    point_bounds = np.searchsorted(mesh[first], np.arange(len(quads) + 1))
+    points = (origin[mesh[first]] + grid[first] * step).astype(np.float32)
+    return points, (inverse - point_bounds[mesh]).astype(np.int32), point_bounds, index_bounds

@@ -106,11 +106,12 @@ def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
     ring = xy[face]
     cut = mapbox_earcut.triangulate_float64(ring, np.array([len(face)], np.uint32)).reshape(-1, 3)
     tris = [(face[a], face[b], face[c]) for a, b, c in cut]
-    scale = float(np.ptp(ring, axis=0).max()) ** 2
+    small = 1e-12 * float(np.ptp(ring, axis=0).max()) ** 2
+    thin = _thin(xy, tris, small)
     for _ in range(len(tris)):
-        sliver = next((k for k, t in enumerate(tris) if abs(_area(xy[list(t)])) < 1e-12 * scale), None)
-        if sliver is None:
+        if not thin.any():
             break
+        sliver = int(np.argmax(thin))
         t = tris[sliver]
         longest = max(range(3), key=lambda k: float(np.hypot(*(xy[t[k]] - xy[t[k - 1]]))))
         c, a = t[longest - 1], t[longest]  # the sliver is (a, b, c) with b on the long side c -> a
@@ -122,7 +123,17 @@ def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
         u = tris[other]
         d = next(n for n in u if n not in (a, c))
         tris[sliver], tris[other] = (a, b, d), (b, c, d)
+        thin[[sliver, other]] = _thin(xy, [tris[sliver], tris[other]], small)
     return tris
+
+
+def _thin(xy: np.ndarray, tris: list[tuple[int, int, int]], small: float) -> np.ndarray:
+    """Per triangle whether its area is below ``small``: :func:`_area` of every triangle at once (the same
+    differences to the first corner and the same products, so the same verdicts)."""
+    p = xy[np.asarray(tris, dtype=np.int64).reshape(-1, 3)]
+    x1, y1 = p[:, 1, 0] - p[:, 0, 0], p[:, 1, 1] - p[:, 0, 1]
+    x2, y2 = p[:, 2, 0] - p[:, 0, 0], p[:, 2, 1] - p[:, 0, 1]
+    return np.abs(0.5 * (x1 * y2 - x2 * y1)) < small
 
 
 def _mesh(points: np.ndarray, roof_faces: list[list[int]], walls: list[list[int]]) -> MeshData:

@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 
 from citygen.geometry.quads import box_quads, merge_rects, weld
@@ -177,3 +178,58 @@ def test_grouped_merge_and_boxes_match_each_group_alone(cells):
         alone = merge_rects(rects[groups == g])
         assert np.array_equal(merged[merged_groups == g], alone)
         assert np.array_equal(quads[quad_groups == g], box_quads(alone, np.full(len(alone), depth[g])))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.lists(st.tuples(st.integers(0, 9), st.integers(0, 9), st.sampled_from([0.0, 0.1, -0.2])),
+                         min_size=1, max_size=12), min_size=1, max_size=5), st.floats(-500.0, 500.0))
+def test_weld_many_welds_each_array_as_weld_does(meshes, shift):
+    """Batched welding (a building's facade and module meshes at once) must give each mesh weld's exact points
+    and indices: its own origin, its own vertex order."""
+    from citygen.geometry.quads import weld_many
+    arrays = [box_quads(np.array([(x, y, x + 1, y + 1) for x, y, _ in cells], float) + shift * k,
+                        np.array([d for _, _, d in cells])) for k, cells in enumerate(meshes)]
+    arrays.append(box_quads(np.array([[0.0, 0.0, 1.0, 1.0]]), np.zeros(1)) * np.array([1.0, 2500.0, 1.0]))
+    points, indices, pb, ib = weld_many(arrays)
+    for k, (alone_points, alone_indices) in enumerate(map(weld, arrays)):
+        batched_points, batched_indices = points[pb[k]:pb[k + 1]], indices[ib[k]:ib[k + 1]]
+        assert batched_points.dtype == alone_points.dtype and batched_indices.dtype == alone_indices.dtype
+        assert np.array_equal(batched_points, alone_points) and np.array_equal(batched_indices, alone_indices)
+    points, indices, pb, ib = weld_many([arrays[0], np.zeros((0, 4, 3)), arrays[1]])
+    assert pb[1] == pb[2] and ib[1] == ib[2]
+    assert indices[ib[2]:ib[3]].tobytes() == weld(arrays[1])[1].tobytes()
+
+
+@pytest.mark.parametrize("modules", [True, False])
+def test_a_buildings_faces_built_together_match_each_face_built_alone(modules):
+    """Every face's terminals and module prototypes go through one batch per building; a face's quads, element
+    prototypes and module prototypes must come out as if it were the building's only face (per-face style order,
+    per-face transform), so batching never changes a stage."""
+    from shapely.geometry import Polygon
+
+    from citygen.footprints import Footprint
+    from citygen.geometry.building import build_geometry, clear_module_cache
+    from citygen.layout import FacadeLayout
+    from citygen.mass import build_mass
+
+    mass = build_mass(Footprint("b", Polygon([(0, 0), (30, 0), (30, 9), (0, 9)]), 9.0, "height"))
+    layout = FacadeLayout(30, 9, _facade(False))
+    faces = [(f, layout if f.index % 2 == 0 else None) for f in mass.faces]
+    clear_module_cache()
+    together = build_geometry(mass, faces, "plaster_ochre", None, modules=modules)
+    alone = []
+    for face in faces:
+        clear_module_cache()
+        alone.append(build_geometry(mass, [face], "plaster_ochre", None, modules=modules))
+    for key, mesh in together.meshes.items():
+        quads = np.concatenate([g.meshes[key].points[g.meshes[key].indices].reshape(-1, 4, 3)
+                                for g in alone if key in g.meshes])
+        assert np.array_equal(mesh.points[mesh.indices].reshape(-1, 4, 3), quads)
+    assert bool(together.modules) == modules and list(together.modules) == list(alone[0].modules)
+    for key, proto in together.modules.items():
+        assert {k: m.points.tobytes() for k, m in proto.meshes.items()} == {
+            k: m.points.tobytes() for k, m in alone[0].modules[key].meshes.items()}
+    rows = [g.instances for g in alone if len(g.instances.positions)]
+    assert np.array_equal(together.instances.positions, np.concatenate([r.positions for r in rows]))
+    assert [together.instances.protos[k] for k in together.instances.proto_indices] == [
+        r.protos[k] for r in rows for k in r.proto_indices]
