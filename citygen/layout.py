@@ -151,6 +151,15 @@ class Region:
                    children=tuple(cls.from_json(c, f"{path}.children[{i}]", source) for i, c in enumerate(children)))
 
 
+def _collect_leaves(region: Region, add: Callable[[Region], None]) -> None:
+    """``add`` every terminal below ``region`` in tree order (recursion: cheaper than a generator's stack)."""
+    for child in region.children:
+        if child.children:
+            _collect_leaves(child, add)
+        else:
+            add(child)
+
+
 def _as_float(value: int | float) -> float:
     """``float(value)``, or inf for an integer too large for a float."""
     try:
@@ -174,7 +183,26 @@ class FacadeLayout:
     @functools.cached_property
     def leaves(self) -> tuple[Region, ...]:
         """Terminal regions in tree order, computed once (validators, geometry and repairs all walk them)."""
-        return tuple(self.root.terminals())
+        if not self.root.children:
+            return (self.root,)
+        out: list[Region] = []
+        _collect_leaves(self.root, out.append)
+        return tuple(out)
+
+    @functools.cached_property
+    def leaf_labels(self) -> tuple[tuple[str | None, ...], np.ndarray]:
+        """The terminals' distinct labels (in order of first appearance) and each terminal's index into them, as a
+        read-only int array: the checks test a few labels of a few hundred terminals as array lookups."""
+        index: dict[str | None, int] = {}
+        codes = np.fromiter((index.setdefault(r.label, len(index)) for r in self.leaves), dtype=np.intp,
+                            count=len(self.leaves))
+        codes.flags.writeable = False
+        return tuple(index), codes
+
+    def label_mask(self, labels: Callable[[str | None], bool]) -> np.ndarray:
+        """Which terminals have a label for which ``labels(label)`` holds (a bool array in tree order)."""
+        names, codes = self.leaf_labels
+        return np.array([bool(labels(n)) for n in names], dtype=bool)[codes] if names else np.zeros(0, bool)
 
     def terminals(self) -> list[Region]:
         return list(self.leaves)
