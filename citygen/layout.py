@@ -319,11 +319,12 @@ def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, 
     if nx * ny > 25_000_000:
         return [f"{name}: {len(regions)} regions on a {nx}x{ny} grid are too irregular to check"]
     stride = ny + 1
-    corners = np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1], ix[1] * stride + iy[0],
-                              ix[0] * stride + iy[1]])
-    weights = np.repeat([1, 1, -1, -1], len(regions))
-    diff = np.bincount(corners, weights, minlength=(nx + 1) * stride).reshape(nx + 1, stride)
-    cover = np.rint(np.cumsum(np.cumsum(diff, axis=0), axis=1)[: nx - 1, : ny - 1]).astype(np.int64)
+    cells = (nx + 1) * stride
+    diff = (np.bincount(np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1]]), minlength=cells)
+            - np.bincount(np.concatenate([ix[1] * stride + iy[0], ix[0] * stride + iy[1]]), minlength=cells))
+    cover = diff.reshape(nx + 1, stride).cumsum(axis=0).cumsum(axis=1)[: nx - 1, : ny - 1]
+    if not cover.size or cover.min() == cover.max() == 1:  # (integer counts: exact)
+        return []
     problems = []
     holes = np.argwhere(cover == 0)
     if holes.size:
