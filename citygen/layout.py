@@ -10,6 +10,7 @@ The JSON form (``schema_version`` 1) is documented in ``docs/layout-json.md``.
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 import math
 import operator
@@ -168,6 +169,10 @@ def _as_float(value: int | float) -> float:
         return math.inf
 
 
+#: A region's rectangle ``(x, y, w, h)``.
+_XYWH = operator.attrgetter("x", "y", "w", "h")
+_LABEL = operator.attrgetter("label")
+
 _REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
 
 
@@ -193,11 +198,12 @@ class FacadeLayout:
     def leaf_labels(self) -> tuple[tuple[str | None, ...], np.ndarray]:
         """The terminals' distinct labels (in order of first appearance) and each terminal's index into them, as a
         read-only int array: the checks test a few labels of a few hundred terminals as array lookups."""
-        index: dict[str | None, int] = {}
-        codes = np.fromiter((index.setdefault(r.label, len(index)) for r in self.leaves), dtype=np.intp,
-                            count=len(self.leaves))
+        labels = list(map(_LABEL, self.leaves))
+        names = tuple(dict.fromkeys(labels))
+        index = {name: k for k, name in enumerate(names)}
+        codes = np.fromiter(map(index.__getitem__, labels), dtype=np.intp, count=len(labels))
         codes.flags.writeable = False
-        return tuple(index), codes
+        return names, codes
 
     def label_mask(self, labels: Callable[[str | None], bool]) -> np.ndarray:
         """Which terminals have a label for which ``labels(label)`` holds (a bool array in tree order)."""
@@ -214,7 +220,9 @@ class FacadeLayout:
     def leaf_rects(self) -> np.ndarray:
         """Terminal rectangles in tree order as a read-only ``(n, 4)`` float array of ``x, y, w, h``, computed once
         (the partition and request checks both read it)."""
-        rects = np.array([(r.x, r.y, r.w, r.h) for r in self.leaves], dtype=float).reshape(-1, 4)
+        leaves = self.leaves
+        rects = np.fromiter(itertools.chain.from_iterable(map(_XYWH, leaves)), dtype=float,
+                            count=4 * len(leaves)).reshape(-1, 4)
         rects.flags.writeable = False
         return rects
 

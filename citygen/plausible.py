@@ -146,6 +146,23 @@ def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: Plausibi
     label (a floating door also needs a door), so one comparison with each label's largest limits rules most
     layouts out at once."""
     names, codes = layout.leaf_labels
+    known = _LIMITS.get((names, id(rules)))
+    if known is None or known[0] is not rules:
+        if len(_LIMITS) > 256:
+            _LIMITS.clear()
+        known = _LIMITS[names, id(rules)] = (rules, _limits(names, rules))
+    limit_w, limit_h = known[1][codes].T
+    return "door" in names or bool(np.any((w < limit_w) | (h < limit_h)))
+
+
+#: ``(labels, id(rules)) -> (rules, limits)``: the limits of :func:`_limits`, per label set and rules met (layouts
+#: of one ruleset share their labels).
+_LIMITS: dict[tuple[tuple[str | None, ...], int], tuple[PlausibilityRules, np.ndarray]] = {}
+
+
+def _limits(names: tuple[str | None, ...], rules: PlausibilityRules) -> np.ndarray:
+    """Per label, the largest width and height below which a per-terminal rule reports a terminal (an ``(n, 2)``
+    array; -inf for no label)."""
     limits = []
     for name in names:
         if not name:
@@ -155,8 +172,7 @@ def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: Plausibi
         low_w, low_h = (v - 1e-6 for v in rules.min_size.get(name, (-math.inf, -math.inf)))
         door = rules.door_min_height - 1e-6 if name == "door" else -math.inf
         limits.append((max(rules.min_extent, thin, low_w), max(rules.min_extent, thin, low_h, door)))
-    limit_w, limit_h = np.array(limits, dtype=float).reshape(-1, 2)[codes].T
-    return "door" in names or bool(np.any((w < limit_w) | (h < limit_h)))
+    return np.array(limits, dtype=float).reshape(-1, 2)
 
 
 def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np.ndarray, h: np.ndarray,
