@@ -14,6 +14,7 @@ import argparse
 import cProfile
 import functools
 import importlib
+import inspect
 import math
 import sys
 import time
@@ -26,6 +27,7 @@ REPO = Path(__file__).resolve().parents[1]
 def _phases() -> dict[str, tuple[object, str]]:
     """Phase name -> (owner of the function, its attribute name)."""
     import citygen.builder
+    import citygen.entrance
     import citygen.layout
     import citygen.plausible
     import citygen.request
@@ -40,6 +42,11 @@ def _phases() -> dict[str, tuple[object, str]]:
         "check_plausible": (citygen.plausible, "_findings"),
         "check_partition": (citygen.layout, "check_partition"),
         "check_request": (citygen.request, "_problems"),
+        "builder: _held": (citygen.builder.Builder, "_held"),
+        "builder: _checked": (citygen.builder.Builder, "_checked"),
+        "builder: _defined": (citygen.builder.Builder, "_defined"),
+        "hidden_behind": (citygen.builder, "hidden_behind"),
+        "enforce_entrance": (citygen.entrance, "enforce_entrance"),
         "roof": (citygen.builder.Builder, "_roof"),
         "build_geometry": (citygen.builder, "build_geometry"),
     }
@@ -71,7 +78,8 @@ def _instrument(phases: dict[str, tuple[object, str]]) -> tuple[dict[str, float]
             if getattr(module, "__name__", "").startswith(("citygen", "citygen_")) and \
                     getattr(module, attr, None) is original:
                 setattr(module, attr, wrapper)
-        setattr(owner, attr, wrapper)
+        static = isinstance(inspect.getattr_static(owner, attr), staticmethod)
+        setattr(owner, attr, staticmethod(wrapper) if static else wrapper)
     return cpu, calls
 
 

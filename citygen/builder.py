@@ -8,6 +8,7 @@ dask executor one per worker thread. Any error while building one building becom
 from __future__ import annotations
 
 import difflib
+import operator
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
@@ -254,7 +255,7 @@ class Builder:
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
         each such name reported once per ruleset with its fallback."""
-        named = {r.material for r in layout.leaves} - {None, BUILDING_RENDER}
+        named = set(map(_MATERIAL, layout.leaves)) - {None, BUILDING_RENDER}
         undefined = {m for m in named if resolve(m, self.scene.materials) is None}
         if not undefined:
             return layout
@@ -370,6 +371,9 @@ class Builder:
             warnings.append(f"{where}: {note}")
         warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
         return layout
+
+
+_MATERIAL = operator.attrgetter("material")
 
 
 def kept_tags(attributes: Mapping[str, Any], patterns: Sequence[str]) -> dict[str, Any]:
