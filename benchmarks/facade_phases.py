@@ -18,7 +18,6 @@ import inspect
 import math
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -86,6 +85,7 @@ def _instrument(phases: dict[str, tuple[object, str]]) -> tuple[dict[str, float]
 def _work(scene_path: Path) -> tuple[object, list[tuple]]:
     """The scene and its buildings' build arguments, in the pipeline's order."""
     from citygen.builder import load_rulesets
+    from citygen.errors import CitygenError
     from citygen.mass import neighbour_cover
     from citygen.pipeline import import_footprints
     from citygen.registry import default_registry
@@ -98,7 +98,10 @@ def _work(scene_path: Path) -> tuple[object, list[tuple]]:
     rulesets = load_rulesets(scene, registry)
     footprints, masses = [], []
     for fp in import_footprints(scene, registry).footprints:
-        masses.append(plan_mass(fp, scene, registry.roof_builders)[0])
+        try:
+            masses.append(plan_mass(fp, scene, registry.roof_builders)[0])
+        except CitygenError:  # (the pipeline skips it too)
+            continue
         footprints.append(fp)
     cover = neighbour_cover(masses)
     taken: set[str] = set()
@@ -122,12 +125,11 @@ def main() -> None:
         work = work[: args.limit]
     cpu, calls = _instrument(_phases())
     builder = Builder(scene, scene.seed, registry, rulesets)
-    build: Callable = builder.build
     profile = cProfile.Profile() if args.profile else None
     start = time.thread_time()
     if profile:
         profile.enable()
-    skipped = sum(build(*item).record is None for item in work)
+    skipped = sum(builder.build(*item).record is None for item in work)
     if profile:
         profile.disable()
         profile.dump_stats(args.profile)
