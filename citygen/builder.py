@@ -8,6 +8,7 @@ dask executor one per worker thread. Any error while building one building becom
 from __future__ import annotations
 
 import difflib
+import operator
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
@@ -23,6 +24,7 @@ from citygen.coordinator import face_bins, plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError, SceneError, SourceLocation
 from citygen.footprints import Footprint, Skipped
+from citygen.gcpause import cyclic_gc_paused
 from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
 from citygen.mass import Mass
@@ -173,10 +175,13 @@ class Builder:
         """The building's outcome, with the CPU its build took (this thread's, so it holds beside other workers).
         Module prototypes are shared within the building only: one built from another building's region (whichever
         this process built before, which depends on how chunks fell to workers) differs from it by up to ~1e-4 m, and
-        the stage would differ between runs and job counts."""
+        the stage would differ between runs and job counts. The cyclic garbage collector is paused during the build:
+        its hundreds of thousands of short-lived regions are freed by reference counting, and the collections they
+        triggered cost ~6 % of the build's CPU."""
         start = time.thread_time()
         clear_module_cache()
-        outcome = self._build(footprint, mass, cover, name, tile)
+        with cyclic_gc_paused():
+            outcome = self._build(footprint, mass, cover, name, tile)
         return replace(outcome, cpu=time.thread_time() - start)
 
     def _build(self, footprint: Footprint, mass: Mass, cover: np.ndarray, name: str,
@@ -250,7 +255,7 @@ class Builder:
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
         each such name reported once per ruleset with its fallback."""
-        named = {r.material for r in layout.leaves} - {None, BUILDING_RENDER}
+        named = set(map(_MATERIAL, layout.leaves)) - {None, BUILDING_RENDER}
         undefined = {m for m in named if resolve(m, self.scene.materials) is None}
         if not undefined:
             return layout
@@ -366,6 +371,9 @@ class Builder:
             warnings.append(f"{where}: {note}")
         warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
         return layout
+
+
+_MATERIAL = operator.attrgetter("material")
 
 
 def kept_tags(attributes: Mapping[str, Any], patterns: Sequence[str]) -> dict[str, Any]:

@@ -27,7 +27,7 @@ DOOR_DEPTH = -0.25
 
 def enforce_entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[FacadeLayout, str | None]:
     """``layout`` with exactly ``int(request.entrance)`` doors, and a note when a repair was needed."""
-    doors = [r for r in layout.leaves if r.label == "door"]
+    doors = [r for r in layout.leaves if r.label == "door"] if "door" in layout.leaf_labels[0] else []
     wanted = 1 if request.entrance else 0
     if len(doors) == wanted:
         return layout, None

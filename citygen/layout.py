@@ -10,6 +10,7 @@ The JSON form (``schema_version`` 1) is documented in ``docs/layout-json.md``.
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 import math
 import operator
@@ -151,6 +152,15 @@ class Region:
                    children=tuple(cls.from_json(c, f"{path}.children[{i}]", source) for i, c in enumerate(children)))
 
 
+def _collect_leaves(region: Region, add: Callable[[Region], None]) -> None:
+    """``add`` every terminal below ``region`` in tree order (recursion: cheaper than a generator's stack)."""
+    for child in region.children:
+        if child.children:
+            _collect_leaves(child, add)
+        else:
+            add(child)
+
+
 def _as_float(value: int | float) -> float:
     """``float(value)``, or inf for an integer too large for a float."""
     try:
@@ -158,6 +168,10 @@ def _as_float(value: int | float) -> float:
     except OverflowError:
         return math.inf
 
+
+#: A region's rectangle ``(x, y, w, h)``.
+_XYWH = operator.attrgetter("x", "y", "w", "h")
+_LABEL = operator.attrgetter("label")
 
 _REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
 
@@ -174,7 +188,27 @@ class FacadeLayout:
     @functools.cached_property
     def leaves(self) -> tuple[Region, ...]:
         """Terminal regions in tree order, computed once (validators, geometry and repairs all walk them)."""
-        return tuple(self.root.terminals())
+        if not self.root.children:
+            return (self.root,)
+        out: list[Region] = []
+        _collect_leaves(self.root, out.append)
+        return tuple(out)
+
+    @functools.cached_property
+    def leaf_labels(self) -> tuple[tuple[str | None, ...], np.ndarray]:
+        """The terminals' distinct labels (in order of first appearance) and each terminal's index into them, as a
+        read-only int array: the checks test a few labels of a few hundred terminals as array lookups."""
+        labels = list(map(_LABEL, self.leaves))
+        names = tuple(dict.fromkeys(labels))
+        index = {name: k for k, name in enumerate(names)}
+        codes = np.fromiter(map(index.__getitem__, labels), dtype=np.intp, count=len(labels))
+        codes.flags.writeable = False
+        return names, codes
+
+    def label_mask(self, labels: Callable[[str | None], bool]) -> np.ndarray:
+        """Which terminals have a label for which ``labels(label)`` holds (a bool array in tree order)."""
+        names, codes = self.leaf_labels
+        return np.array([bool(labels(n)) for n in names], dtype=bool)[codes] if names else np.zeros(0, bool)
 
     def terminals(self) -> list[Region]:
         return list(self.leaves)
@@ -186,7 +220,9 @@ class FacadeLayout:
     def leaf_rects(self) -> np.ndarray:
         """Terminal rectangles in tree order as a read-only ``(n, 4)`` float array of ``x, y, w, h``, computed once
         (the partition and request checks both read it)."""
-        rects = np.array([(r.x, r.y, r.w, r.h) for r in self.leaves], dtype=float).reshape(-1, 4)
+        leaves = self.leaves
+        rects = np.fromiter(itertools.chain.from_iterable(map(_XYWH, leaves)), dtype=float,
+                            count=4 * len(leaves)).reshape(-1, 4)
         rects.flags.writeable = False
         return rects
 
@@ -291,11 +327,12 @@ def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, 
     if nx * ny > 25_000_000:
         return [f"{name}: {len(regions)} regions on a {nx}x{ny} grid are too irregular to check"]
     stride = ny + 1
-    corners = np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1], ix[1] * stride + iy[0],
-                              ix[0] * stride + iy[1]])
-    weights = np.repeat([1, 1, -1, -1], len(regions))
-    diff = np.bincount(corners, weights, minlength=(nx + 1) * stride).reshape(nx + 1, stride)
-    cover = np.rint(np.cumsum(np.cumsum(diff, axis=0), axis=1)[: nx - 1, : ny - 1]).astype(np.int64)
+    cells = (nx + 1) * stride
+    diff = (np.bincount(np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1]]), minlength=cells)
+            - np.bincount(np.concatenate([ix[1] * stride + iy[0], ix[0] * stride + iy[1]]), minlength=cells))
+    cover = diff.reshape(nx + 1, stride).cumsum(axis=0).cumsum(axis=1)[: nx - 1, : ny - 1]
+    if not cover.size or cover.min() == cover.max() == 1:  # (integer counts: exact)
+        return []
     problems = []
     holes = np.argwhere(cover == 0)
     if holes.size:

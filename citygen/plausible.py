@@ -24,7 +24,7 @@ The rules (defaults in brackets; a scene's ``[plausibility]`` table overrides th
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
@@ -130,41 +130,81 @@ def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: Plausi
     leaves = layout.leaves
     if not leaves:
         return []
-    labels = np.array([r.label or "" for r in leaves], dtype=object)
     x, y, w, h = layout.leaf_rects.T
-    labelled = labels != ""
-    findings: list[Finding] = []
-
-    def report(code: str, mask: np.ndarray, describe) -> None:
-        hits = np.flatnonzero(mask)
-        for i in hits[:3].tolist():
-            findings.append(Finding(code, describe(leaves[i]), leaves[i]))
-        if hits.size > 3:
-            findings.append(Finding(code, f"... and {hits.size - 3} more"))
-
-    size = lambda r: f"{r.w:.2f} x {r.h:.2f} m at x={r.x:.2f}, y={r.y:.2f}"  # noqa: E731
-    zero = labelled & ((w < rules.min_extent) | (h < rules.min_extent))
-    report("zero-size", zero, lambda r: f"{r.label} {r.symbol} is {size(r)}")
-    for label, (min_w, min_h) in rules.min_size.items():
-        small = (labels == label) & ~zero & ((w < min_w - 1e-6) | (h < min_h - 1e-6))
-        report("small-opening", small,
-               lambda r, a=min_w, b=min_h: f"{r.label} {r.symbol} is {size(r)} (at least {a:g} x {b:g} m)")
-    doors = (labels == "door") & ~zero
-    report("short-door", doors & (h < rules.door_min_height - 1e-6),
-           lambda r: f"door {r.symbol} is {r.h:.2f} m tall (at least {rules.door_min_height:g} m)")
     lines = np.asarray(request.floor_lines if request is not None else (0.0,), dtype=float)
-    below = lines[np.clip(np.searchsorted(lines, y + 1e-6, side="right") - 1, 0, None)]
-    report("floating-door", doors & (y - below > rules.door_step + 1e-6),
-           lambda r: f"door {r.symbol} starts {r.y - _floor_below(lines, r.y):.2f} m above its floor "
-                     f"(at most {rules.door_step:g} m)")
-    thin = np.array([label in rules.thin_labels for label in labels], dtype=bool)
-    sliver = labelled & ~zero & ~thin & (np.minimum(w, h) < rules.sliver - 1e-6)
-    report("sliver", sliver, lambda r: f"{r.label} {r.symbol} is {size(r)} (thinner than {rules.sliver:g} m)")
+    findings = _terminal_findings(layout, x, y, w, h, lines, rules) if _suspect(layout, w, h, rules) else []
     if request is not None:
-        findings += _storeys(labels, y, h, request, rules)
+        findings += _storeys(layout, y, h, request, rules)
     relabelled = int(layout.meta.get("relabelled", 0) or 0)
     if relabelled:
         findings.append(Finding("relabelled", f"{relabelled} opening(s) were relabelled wall by the generator"))
+    return findings
+
+
+def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: PlausibilityRules) -> bool:
+    """Whether a terminal rule may report a terminal: every such rule asks for ``w < a or h < b`` with limits by
+    label (a floating door also needs a door), so one comparison with each label's largest limits rules most
+    layouts out at once."""
+    names, codes = layout.leaf_labels
+    known = _LIMITS.get((names, id(rules)))
+    if known is None or known[0] is not rules:
+        if len(_LIMITS) > 256:
+            _LIMITS.clear()
+        known = _LIMITS[names, id(rules)] = (rules, _limits(names, rules))
+    limit_w, limit_h = known[1][codes].T
+    return "door" in names or bool(np.any((w < limit_w) | (h < limit_h)))
+
+
+#: ``(labels, id(rules)) -> (rules, limits)``: the limits of :func:`_limits`, per label set and rules met (layouts
+#: of one ruleset share their labels).
+_LIMITS: dict[tuple[tuple[str | None, ...], int], tuple[PlausibilityRules, np.ndarray]] = {}
+
+
+def _limits(names: tuple[str | None, ...], rules: PlausibilityRules) -> np.ndarray:
+    """Per label, the largest width and height below which a per-terminal rule reports a terminal (an ``(n, 2)``
+    array; -inf for no label)."""
+    limits = []
+    for name in names:
+        if not name:
+            limits.append((-math.inf, -math.inf))
+            continue
+        thin = -math.inf if name in rules.thin_labels else rules.sliver - 1e-6
+        low_w, low_h = (v - 1e-6 for v in rules.min_size.get(name, (-math.inf, -math.inf)))
+        door = rules.door_min_height - 1e-6 if name == "door" else -math.inf
+        limits.append((max(rules.min_extent, thin, low_w), max(rules.min_extent, thin, low_h, door)))
+    return np.array(limits, dtype=float).reshape(-1, 2)
+
+
+def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np.ndarray, h: np.ndarray,
+                       lines: np.ndarray, rules: PlausibilityRules) -> list[Finding]:
+    """The findings of the rules on single terminals (zero-size, small-opening, short- and floating-door, sliver),
+    at most three listed per rule and label."""
+    leaves = layout.leaves
+    labelled = layout.label_mask(bool)  # (None and "" are no label)
+    zero = labelled & ((w < rules.min_extent) | (h < rules.min_extent))
+    size = lambda r: f"{r.w:.2f} x {r.h:.2f} m at x={r.x:.2f}, y={r.y:.2f}"  # noqa: E731
+    rows: list[tuple[str, np.ndarray, Callable[[Region], str]]] = [
+        ("zero-size", zero, lambda r: f"{r.label} {r.symbol} is {size(r)}")]
+    for label, (min_w, min_h) in rules.min_size.items():
+        small = layout.label_mask(lambda n, a=label: (n or "") == a) & ~zero & ((w < min_w - 1e-6) | (h < min_h - 1e-6))
+        rows.append(("small-opening", small,
+                     lambda r, a=min_w, b=min_h: f"{r.label} {r.symbol} is {size(r)} (at least {a:g} x {b:g} m)"))
+    doors = layout.label_mask(lambda n: n == "door") & ~zero
+    rows.append(("short-door", doors & (h < rules.door_min_height - 1e-6),
+                 lambda r: f"door {r.symbol} is {r.h:.2f} m tall (at least {rules.door_min_height:g} m)"))
+    below = lines[np.clip(np.searchsorted(lines, y + 1e-6, side="right") - 1, 0, None)]
+    rows.append(("floating-door", doors & (y - below > rules.door_step + 1e-6),
+                 lambda r: f"door {r.symbol} starts {r.y - _floor_below(lines, r.y):.2f} m above its floor "
+                           f"(at most {rules.door_step:g} m)"))
+    thin = layout.label_mask(lambda n: (n or "") in rules.thin_labels)
+    sliver = labelled & ~zero & ~thin & (np.minimum(w, h) < rules.sliver - 1e-6)
+    rows.append(("sliver", sliver, lambda r: f"{r.label} {r.symbol} is {size(r)} (thinner than {rules.sliver:g} m)"))
+    findings: list[Finding] = []
+    for code, mask, describe in rows:
+        hits = np.flatnonzero(mask)
+        findings += [Finding(code, describe(leaves[i]), leaves[i]) for i in hits[:3].tolist()]
+        if hits.size > 3:
+            findings.append(Finding(code, f"... and {hits.size - 3} more"))
     return findings
 
 
@@ -173,13 +213,13 @@ def _floor_below(lines: np.ndarray, y: float) -> float:
     return float(lines[max(k, 0)])
 
 
-def _storeys(labels: np.ndarray, y: np.ndarray, h: np.ndarray, request: FacadeRequest,
+def _storeys(layout: FacadeLayout, y: np.ndarray, h: np.ndarray, request: FacadeRequest,
              rules: PlausibilityRules) -> list[Finding]:
     """Upper storeys without openings where most have some, and opening rows too far apart."""
     lines = np.asarray(request.floor_lines, dtype=float)
     if lines.size < 3:
         return []
-    opening = np.array([label in OPENING_LABELS for label in labels], dtype=bool)
+    opening = layout.label_mask(lambda n: (n or "") in OPENING_LABELS)
     mid = y + h / 2
     band = np.searchsorted(lines, mid, side="right") - 1
     counts = np.bincount(band[opening & (band >= 0) & (band < lines.size - 1)], minlength=lines.size - 1)

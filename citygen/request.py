@@ -107,10 +107,9 @@ def _problems(layout: FacadeLayout, request: FacadeRequest, tol: float) -> list[
     eps = tol * max(request.width, request.height, 1.0)
     if abs(layout.width - request.width) > eps or abs(layout.height - request.height) > eps:
         problems.append(f"layout is {layout.width} x {layout.height}, request {request.width} x {request.height}")
-    labels = [r.label for r in layout.leaves]
     x, y, w, h = layout.leaf_rects.T
-    door = np.array([label == "door" for label in labels], dtype=bool)
-    bound = np.array([label in FLOOR_BOUND_LABELS for label in labels], dtype=bool)
+    door = layout.label_mask(lambda label: label == "door")
+    bound = layout.label_mask(lambda label: label in FLOOR_BOUND_LABELS)
     lines = np.asarray(request.floor_lines[1:-1], dtype=float)
     high_door = door & (y > request.floor_lines[1] - eps) if request.floor_count > 1 else np.zeros_like(door)
     straddles = (lines > (y + eps)[:, None]) & (lines < (y + h - eps)[:, None])

@@ -12,6 +12,7 @@ from typing import Literal, Union
 
 from citygen.errors import SourceLocation
 from citygen_split.gridspans import merge_cells
+from citygen_split.sizes import totals as _totals
 
 Axis = Literal["x", "y"]
 SizeKind = Literal["abs", "rel", "float"]
@@ -73,14 +74,29 @@ Expr = Union[Const, Var, Attr, Unary, Binary]
 
 # ---- rule bodies --------------------------------------------------------------------------------------------
 
+class _Sized:
+    """The sizes of a split's items and their sums (:func:`citygen_split.sizes.totals`), worked out once per rule
+    instead of once per region derived."""
+
+    items: tuple[Item, ...]
+
+    @cached_property
+    def sizes(self) -> tuple[Size, ...]:
+        return tuple(i.size for i in self.items)
+
+    @cached_property
+    def totals(self) -> tuple[float, float, float]:
+        return _totals(self.sizes)
+
+
 @dataclass(frozen=True)
-class Split:
+class Split(_Sized):
     axis: Axis
     items: tuple[Item, ...]
 
 
 @dataclass(frozen=True)
-class Repeat:
+class Repeat(_Sized):
     axis: Axis
     items: tuple[Item, ...]
 
@@ -101,6 +117,11 @@ class SymSplit:
     axis: Axis
     items: tuple[Item, ...]
 
+    @cached_property
+    def mirrored(self) -> Split:
+        """The split this one stands for: ``s1 .. sk-1 sk sk-1 .. s1``."""
+        return Split(self.axis, (*self.items, *reversed(self.items[:-1])))
+
 
 @dataclass(frozen=True)
 class Grid:
@@ -115,6 +136,11 @@ class Grid:
     def regions(self) -> tuple[tuple[str, int, int, int, int], ...]:
         """Merged regions as ``(symbol, col0, row0, col1, row1)`` (end-exclusive), bottom row first."""
         return merge_cells(self.cells)
+
+    @cached_property
+    def totals(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """The sums of the column sizes and of the row sizes (:func:`citygen_split.sizes.totals`)."""
+        return _totals(self.cols), _totals(self.rows)
 
 
 @dataclass(frozen=True)

@@ -81,6 +81,7 @@ class _Derivation:
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
+        self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
         self.points: dict[PointKey, int] = {}
@@ -97,23 +98,20 @@ class _Derivation:
         if symbol in self.reusable:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
-            if done is not None:
-                return self.translated(*done, x - done[0].x, y - done[0].y)
+            if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
+                original, size = done
+                self.count += size
+                if self.count > MAX_REGIONS:
+                    raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
+                                       plugin=PLUGIN_ID, where=self.grammar.source,
+                                       hint="the face is too large for this grammar's sizes")
+                return _moved(original, x - original.x, y - original.y)
             before = self.count
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
             self.cache[key] = (region, self.count - before)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
-
-    def translated(self, region: Region, size: int, dx: float, dy: float) -> Region:
-        """A copy of a derived subtree of ``size`` regions moved by ``(dx, dy)`` (regions of equal symbol, size
-        and floor derive alike)."""
-        self.count += size
-        if self.count > MAX_REGIONS:
-            raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {region.symbol}", plugin=PLUGIN_ID,
-                               where=self.grammar.source, hint="the face is too large for this grammar's sizes")
-        return _moved(region, dx, dy)
 
     def derive_region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
                       chain: tuple[str, ...]) -> Region:
@@ -127,12 +125,15 @@ class _Derivation:
         if rule is None:  # the built-in Corner strip
             self.note(depth, symbol, x, y, w, h, "corner strip, wall")
             return Region.fast(x, y, w, h, symbol, label="wall")
-        body, how = self.select(rule, w, h, floor)
-        if self.tracing:
-            self.note(depth, symbol, x, y, w, h, how)
+        body = rule.body
+        if isinstance(body, (Case, Choice)):
+            body, how = self.select(rule, w, h, floor)
+            if self.tracing:
+                self.note(depth, symbol, x, y, w, h, how)
+        elif self.tracing:
+            self.note(depth, symbol, x, y, w, h, _describe(body))
         if isinstance(body, Terminal):
-            return Region.fast(x, y, w, h, symbol, label=body.label, depth=body.depth, material=body.material,
-                           asset=self.asset(body.asset))
+            return Region.stamped(self.template(symbol, body), x, y, w, h)
         if isinstance(body, Rename):
             if body.symbol in chain or body.symbol == symbol:
                 cycle = " --> ".join((*chain, symbol, body.symbol))
@@ -142,6 +143,14 @@ class _Derivation:
             return Region.fast(x, y, w, h, symbol, children=(child,))
         children = self.children(body, x, y, w, h, floor, depth + 1, rule)
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
+
+    def template(self, symbol: str, body: Terminal) -> dict[str, Any]:
+        """The fields of ``symbol``'s terminal regions (:meth:`Region.template`), made once per symbol and body."""
+        made = self.templates.get(symbol)
+        if made is None or made[0] is not body:
+            made = self.templates[symbol] = (body, Region.template(
+                symbol, label=body.label, depth=body.depth, material=body.material, asset=self.asset(body.asset)))
+        return made[1]
 
     def note(self, depth: int, symbol: str, x: float, y: float, w: float, h: float, how: str) -> None:
         if self.tracing:
@@ -183,7 +192,7 @@ class _Derivation:
                 return chosen, ""
             label = f"{body.alternatives[k][0]:g}%" if k < n else "else"
             return chosen, f"{'each ' if body.each else ''}choice {label}: {_describe(chosen)}"
-        return body, (_describe(body) if self.tracing else "")
+        return body, (_describe(body) if self.tracing else "")  # type: ignore[return-value]
 
     def alternative(self, symbol: str, w: float, h: float, count: int) -> int:
         """Which of ``count`` alternatives the choice point of ``symbol`` on a ``w x h`` region takes."""
@@ -222,33 +231,42 @@ class _Derivation:
         axis = body.axis  # type: ignore[union-attr]
         length = w if axis == "x" else h
         start = x if axis == "x" else y
-        if isinstance(body, Repeat):
-            sizes = [i.size for i in body.items]
-            self.check_tiles(rule, preferred_length(sizes), length)
-            n = repeat_count(preferred_length(sizes), length)
+        if isinstance(body, Split):
+            items: Sequence[Item] = body.items
+            extents = resolve(body.sizes, length, body.totals)
+        elif isinstance(body, Repeat):
+            tile = preferred_length(body.sizes)
+            self.check_tiles(rule, tile, length)
+            n = repeat_count(tile, length)
             n -= self.alternative(rule.symbol, w, h, n)
-            extents = resolve(sizes, length / n) * n
-            items: Sequence[Item] = body.items * n
+            extents = resolve(body.sizes, length / n, body.totals) * n
+            items = body.items * n
         elif isinstance(body, RepeatABA):
             self.check_tiles(rule, preferred_length([body.a.size, body.b.size]), length)
             n = aba_count(preferred_length([body.a.size]), preferred_length([body.b.size]), length)
             n -= self.alternative(rule.symbol, w, h, n + 1)
             items = [body.a, body.b] * n + [body.a]
             extents = resolve([i.size for i in items], length)
-        elif isinstance(body, SymSplit):
-            items = [*body.items, *reversed(body.items[:-1])]
-            extents = resolve([i.size for i in items], length)
         else:
-            assert isinstance(body, Split)
-            items = body.items
-            extents = resolve([i.size for i in items], length)
+            assert isinstance(body, SymSplit)
+            items = body.mirrored.items
+            extents = resolve(body.mirrored.sizes, length, body.mirrored.totals)
+        # (place(extents, start, length), inlined: the same arithmetic)
         out = []
-        for item, (pos, extent) in zip(items, place(extents, start, length)):
+        region = self.region
+        end = start + length
+        pos = start
+        last = len(extents) - 1
+        for i, extent in enumerate(extents):
+            extent = max(extent, 0.0)
+            if i == last or pos + extent > end:
+                extent = max(end - pos, 0.0)
             if extent > 0:
                 if axis == "x":
-                    out.append(self.region(item.symbol, pos, y, extent, h, floor, depth, ()))
+                    out.append(region(items[i].symbol, pos, y, extent, h, floor, depth, ()))
                 else:
-                    out.append(self.region(item.symbol, x, pos, w, extent, floor, depth, ()))
+                    out.append(region(items[i].symbol, x, pos, w, extent, floor, depth, ()))
+            pos = pos + extent
         return out
 
     def check_tiles(self, rule: Rule, tile: float, length: float) -> None:
@@ -259,8 +277,9 @@ class _Derivation:
                                hint="make the repeated sizes larger")
 
     def grid(self, body: Grid, x: float, y: float, w: float, h: float, floor: int, depth: int) -> list[Region]:
-        xs = [pos for pos, _ in place(resolve(body.cols, w), x, w)] + [x + w]
-        ys = [pos for pos, _ in place(resolve(body.rows, h), y, h)] + [y + h]
+        cols, rows = body.totals
+        xs = [pos for pos, _ in place(resolve(body.cols, w, cols), x, w)] + [x + w]
+        ys = [pos for pos, _ in place(resolve(body.rows, h, rows), y, h)] + [y + h]
         out = []
         for symbol, c0, r0, c1, r1 in body.regions:
             rw, rh = xs[c1] - xs[c0], ys[r1] - ys[r0]
@@ -294,16 +313,17 @@ class _Derivation:
         return out
 
 
-def _moved(region: Region, dx: float, dy: float) -> Region:
+def _moved(region: Region, dx: float, dy: float, new=object.__new__) -> Region:
     """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (as :meth:`Region.fast`: no
     per-field ``object.__setattr__``)."""
-    copy = object.__new__(Region)
+    copy = new(Region)
     fields_ = copy.__dict__
     fields_.update(region.__dict__)
     fields_["x"] = region.x + dx
     fields_["y"] = region.y + dy
-    if region.children:
-        fields_["children"] = tuple([_moved(c, dx, dy) for c in region.children])
+    children = region.children
+    if children:
+        fields_["children"] = tuple([_moved(c, dx, dy) for c in children])
     return copy
 
 

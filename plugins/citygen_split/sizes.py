@@ -6,15 +6,22 @@ previous ends and the last ends exactly at the parent's edge; zero-size items ar
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-from citygen_split.ast import Size
+if TYPE_CHECKING:  # (the AST works out its rules' size sums with :func:`totals`)
+    from citygen_split.ast import Size
 
 
-def resolve(sizes: Sequence[Size], length: float) -> list[float]:
-    """Extents of ``sizes`` filling ``length`` (never negative)."""
-    fixed_abs = sum(s.value for s in sizes if s.kind == "abs")
-    floating = sum(s.value for s in sizes if s.kind == "float")
-    relative = sum(s.value for s in sizes if s.kind == "rel")
+def totals(sizes: Sequence[Size]) -> tuple[float, float, float]:
+    """The ``(absolute, floating, relative)`` sums of ``sizes`` that :func:`resolve` splits ``length`` by (a rule
+    whose sizes never change computes them once: see :attr:`citygen_split.ast.Split.totals`)."""
+    return (sum(s.value for s in sizes if s.kind == "abs"), sum(s.value for s in sizes if s.kind == "float"),
+            sum(s.value for s in sizes if s.kind == "rel"))
+
+
+def resolve(sizes: Sequence[Size], length: float, sums: tuple[float, float, float] | None = None) -> list[float]:
+    """Extents of ``sizes`` filling ``length`` (never negative); ``sums``: ``totals(sizes)`` when known."""
+    fixed_abs, floating, relative = sums or totals(sizes)
     if relative > 0:
         fixed = fixed_abs + floating
         if fixed <= length:

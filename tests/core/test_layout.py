@@ -122,3 +122,14 @@ def test_hidden_behind_walls_up_what_neighbours_hide():
     assert labels[(6, 0)] == "wall" and (6, 3) in labels  # the rest keeps its regions as they were
     partly = hidden_behind(layout, [6.0] * 4 + [0.0] * 6)  # covers x 0-4 only: the door bay (x 4-6) is seen
     assert [t.label for t in partly.leaves if t.label != "wall"] == ["door", "window"]
+
+
+def test_leaves_label_codes_and_masks_follow_tree_order():
+    inner = Region(0, 0, 2, 3, "L", children=(leaf(0, 0, 2, 1, "A", "wall"), leaf(0, 1, 2, 2, "B", "window")))
+    layout = FacadeLayout(4, 3, Region(0, 0, 4, 3, "F", children=(inner, leaf(2, 0, 2, 3, "C", None))))
+    assert layout.leaves == tuple(layout.root.terminals())
+    names, codes = layout.leaf_labels
+    assert [names[c] for c in codes] == ["wall", "window", None]
+    assert layout.label_mask(lambda label: label in ("window", None)).tolist() == [False, True, True]
+    lone = FacadeLayout(4, 3, leaf(0, 0, 4, 3, "Wall", "wall"))
+    assert lone.leaves == (lone.root,) and lone.label_mask(bool).tolist() == [True]

@@ -6,11 +6,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from citygen.errors import SceneError
 from citygen.layout import FacadeLayout, Region, leaf
-from citygen.plausible import DEFAULT_RULES, PlausibilityRules, check_plausible, plain_wall, summary
+from citygen.plausible import (
+    DEFAULT_RULES, PlausibilityRules, _suspect, _terminal_findings, check_plausible, plain_wall, summary,
+)
 from citygen.request import FacadeRequest
 from citygen.scene import load_scene
 
@@ -141,3 +146,30 @@ def test_a_bad_plausibility_table_names_its_line(tmp_path):
     with pytest.raises(SceneError, match=r"scene.toml:\d+: plausibility rule min_size = 3: not a table"):
         load_scene(path)
 
+
+
+_LABELS = st.sampled_from(["wall", "window", "door", "shop", "balcony", "sill", "molding", "deco", "", None])
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(_LABELS, st.floats(0, 3), st.floats(0, 3), st.floats(0, 8)), min_size=1, max_size=12),
+       st.sampled_from([DEFAULT_RULES, PlausibilityRules(sliver=0.5, min_extent=0.2, door_min_height=2.5)]))
+def test_terminal_rules_are_never_skipped_when_one_of_them_reports(terminals, rules):
+    """The one comparison that rules out most layouts (``_suspect``) holds whenever any per-terminal rule would
+    report a terminal."""
+    layout = layout_of(10, 10, *(leaf(1.0, y, w, h, f"T{i}", label) for i, (label, w, h, y) in enumerate(terminals)))
+    x, y, w, h = layout.leaf_rects.T
+    lines = np.asarray(FacadeRequest.preview(10, 10, 3.0).floor_lines, dtype=float)
+    if _terminal_findings(layout, x, y, w, h, lines, rules):
+        assert _suspect(layout, w, h, rules)
+
+
+@pytest.mark.parametrize("label, below, at, code", [
+    ("window", (0.3 - 2e-6, 1.0), (0.3, 1.0), "small-opening"),
+    ("window", (1.0, 0.3 - 2e-6), (1.0, 0.3), "small-opening"),
+    ("door", (1.0, 1.9 - 2e-6), (1.0, 1.9), "short-door"), ("wall", (0.05 - 2e-6, 3.0), (0.05, 3.0), "sliver"),
+    ("sill", (2.0, 0.0), (2.0, 0.01), "zero-size")])
+def test_each_terminal_limit_is_found_just_below_it_and_not_at_it(label, below, at, code):
+    request = FacadeRequest.preview(10, 10, 3.0, 3.0)
+    assert code in codes(layout_of(10, 10, leaf(1.0, 0.0, *below, "T", label)), request)
+    assert codes(layout_of(10, 10, leaf(1.0, 0.0, *at, "T", label)), request) == []

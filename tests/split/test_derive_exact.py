@@ -1,0 +1,42 @@
+"""The shipped grammars derive bit for bit what they derived before the derivation was made faster (issue 24): the
+stage's bytes depend on every coordinate, so a faster derivation must do the same floating-point arithmetic."""
+from __future__ import annotations
+
+import hashlib
+import json
+
+import pytest
+
+from citygen.request import FaceContext, FacadeRequest
+from citygen_split import load
+from citygen_split.alternatives import derive_plausible
+
+from .conftest import REPO
+
+#: A Helsinki demo building's floor lines (a 4.2 m ground floor, four 3.0 m storeys).
+LINES = (0.0, 4.220531614362382, 7.22360218612023, 10.226672757878077, 13.229743329635927, 16.232813901393776)
+
+#: The width of the cases whose face carries the entrance.
+ENTRANCE_WIDTH = 18.476058724158932
+
+#: sha256 (first 16 hex digits) of the region tree's JSON, as derived by the code before issue 24's changes.
+DIGESTS = {
+    ("apartment", 18.476058724158932): "ba16a92e595941bd", ("apartment", 7.3130512): "1ec8da831690ec26",
+    ("apartment", 41.92): "1b1cc39e0cdd1053", ("historic", 18.476058724158932): "c586994f4d58199e",
+    ("historic", 7.3130512): "aa549b60e3dffcbd", ("historic", 41.92): "e55ae825029b030d",
+    ("house", 18.476058724158932): "2aebab497dd81a34", ("house", 7.3130512): "28bc6bbbc048d07a",
+    ("house", 41.92): "11af87f83280b544", ("office", 18.476058724158932): "f3fe6aee3e3c8e36",
+    ("office", 7.3130512): "9bf97ac6051e8203", ("office", 41.92): "1fec079102526895",
+    ("cmp_b0002", 18.476058724158932): "7ad142238ef3f5c5", ("cmp_b0002", 7.3130512): "df878ecf4f6ca7d6",
+    ("cmp_b0002", 41.92): "b8f65b11f5e31c6a",
+}
+
+
+@pytest.mark.parametrize("name, width", sorted(DIGESTS))
+def test_regression_shipped_grammars_derive_the_same_coordinates_bit_for_bit(name, width):
+    request = FacadeRequest(width=width, height=LINES[-1], floor_lines=LINES, entrance=width == ENTRANCE_WIDTH,
+                            corner_widths=(0.5, 0.37), context=FaceContext("way/1", 0, 5, street_facing=True),
+                            seed=(2026, "way/1", 0))
+    layout = derive_plausible(load(REPO / "rulesets" / f"{name}.grammar"), request).layout
+    text = json.dumps(layout.root.to_json(), sort_keys=True)
+    assert hashlib.sha256(text.encode()).hexdigest()[:16] == DIGESTS[name, width]
