@@ -1,9 +1,12 @@
-"""citygen plugin: the ``safe`` ruleset kind (dang2014) and the ``citygen edit`` command."""
+"""citygen plugin: the ``safe`` ruleset kind (dang2014) and the ``citygen edit`` command. The editing itself (and
+SciPy and DAQP it needs) is imported on first use, so loading the plugin costs a city without SAFE rulesets
+nothing."""
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.errors import CitygenError
@@ -12,9 +15,11 @@ from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
-from citygen_safe.edit import Variation
-from citygen_safe.generate import Edit, edit
 from citygen_safe.ruleset import SafeRuleset, load_ruleset, parse_ruleset
+
+if TYPE_CHECKING:
+    from citygen_safe.edit import Variation
+    from citygen_safe.generate import Edit
 
 
 class SafeKind(RulesetKind):
@@ -29,9 +34,11 @@ class SafeKind(RulesetKind):
         return parse_ruleset(text, str(path), base=path.parent)
 
     def generate(self, ruleset: SafeRuleset, request: FacadeRequest) -> FacadeLayout:
+        from citygen_safe.generate import edit
         return edit(ruleset, request).layout
 
     def explain(self, ruleset: SafeRuleset, request: FacadeRequest) -> str:
+        from citygen_safe.generate import edit
         result = edit(ruleset, request)
         lines = [f"safe ruleset {ruleset.name}: {len(ruleset.facade.leaves)} input leaves, grids "
                  f"{', '.join(g.name for g in ruleset.grids)}; active {', '.join(g.name for g in ruleset.active)}",
@@ -66,6 +73,7 @@ class EditCommand(Command):
         add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        from citygen_safe.generate import edit
         try:
             ruleset = load_ruleset(args.ruleset)
         except CitygenError as exc:
