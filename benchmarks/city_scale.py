@@ -1,10 +1,13 @@
 """Scaling benchmark: a synthetic city of N blocks of row houses, to see how generation grows with city size.
 
-    python benchmarks/city_scale.py [N ...] [--jobs 2] [--tile-layers] [--executor dask [--scheduler ADDRESS]]
+    python benchmarks/city_scale.py [N ...] [--jobs 2] [--one-file] [--executor dask [--scheduler ADDRESS]]
 
 Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide, 3-8 storeys, in blocks that
 share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
-main plus its finished children: the workers), peak memory (main process and largest worker) and stage size per N.
+main plus its finished children: the workers), peak memory (main process, largest worker, and the whole process
+tree: the sum of the RSS of the main process and its children, sampled every 0.1 s) and stage size per N. The
+scene leaves ``tile_layers`` unset (tile layers above 1,000 buildings, the default); ``--one-file`` forces one
+layer.
 ``--executor dask`` runs one task per tile on a local dask cluster of ``--jobs`` workers (or on ``--scheduler``;
 then the workers' CPU and memory are not seen here). Run one N per invocation for a clean peak (ru_maxrss never
 goes down).
@@ -12,13 +15,16 @@ goes down).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import resource
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
+import psutil
 
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
@@ -45,7 +51,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("sizes", nargs="*", type=int, default=[500, 2000])
     parser.add_argument("--jobs", type=int, default=2)
-    parser.add_argument("--tile-layers", action="store_true", help="stream each 250 m tile into its own layer")
+    parser.add_argument("--one-file", action="store_true", help="tile_layers = false: the whole city in one layer")
     parser.add_argument("--executor", choices=("local", "dask"), default="local")
     parser.add_argument("--scheduler", help="with --executor dask: a running scheduler's address")
     args = parser.parse_args()
@@ -58,20 +64,47 @@ def main() -> None:
             (tmp / "scene.toml").write_text(
                 f'[scene]\nseed = 1\n[footprints]\npath = "city.geojson"\ncrs = "EPSG:3067"\n'
                 f'[[assign]]\nruleset = [{rulesets}]\n[output]\npath = "city.usdc"\n'
-                f'tile_layers = {str(args.tile_layers).lower()}\n')
+                + ("tile_layers = false\n" if args.one_file else ""))
             t0, c0, k0 = time.perf_counter(), time.process_time(), _children_cpu()
-            report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs, executor=args.executor,
-                                   scheduler=args.scheduler)
+            with TreePeak() as tree:
+                report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs, executor=args.executor,
+                                       scheduler=args.scheduler)
             elapsed, cpu, children = time.perf_counter() - t0, time.process_time() - c0, _children_cpu() - k0
             main_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
             worker_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
             s = report.stats
-            print(f"N={n} [{args.executor}, {args.jobs} jobs{', tile layers' if args.tile_layers else ''}]: "
+            print(f"N={n} [{args.executor}, {args.jobs} jobs{', one file' if args.one_file else ''}]: "
                   f"{report.written} buildings in {elapsed:.1f} s = {report.written / elapsed:.0f} buildings/s; "
                   f"CPU main {cpu:.1f} s, main+workers {cpu + children:.1f} s; "
-                  f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB; {s.bytes / 1e6:.1f} MB .usdc "
+                  f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB, process tree {tree.peak:.0f} MB; "
+                  f"{s.bytes / 1e6:.1f} MB .usdc "
                   f"({s.bytes / max(report.written, 1) / 1e3:.0f} kB/building); {s.instances} instances of "
                   f"{s.prototypes} prototypes")
+
+
+class TreePeak(threading.Thread):
+    """The peak, in MB, of the summed RSS of this process and all its descendants, sampled every 0.1 s."""
+
+    def __init__(self) -> None:
+        super().__init__(daemon=True)
+        self.peak, self.done = 0.0, threading.Event()
+
+    def __enter__(self) -> TreePeak:
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.done.set()
+        self.join()
+
+    def run(self) -> None:
+        me = psutil.Process()
+        while not self.done.wait(0.1):
+            total = 0
+            for proc in [me, *me.children(recursive=True)]:
+                with contextlib.suppress(psutil.Error):
+                    total += proc.memory_info().rss
+            self.peak = max(self.peak, total / 2 ** 20)
 
 
 def _children_cpu() -> float:

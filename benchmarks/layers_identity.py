@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from citygen_layers.parser import load
-from citygen_layers.plugin import clear_solved, generate
+from citygen_layers.facade import clear_solved, generate
 from layers_solve import CASES
 
 from citygen.request import FacadeRequest

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from citygen.request import FacadeRequest
 from citygen_layers.parser import load
-from citygen_layers.plugin import clear_solved, generate
+from citygen_layers.facade import clear_solved, generate
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = [

@@ -1,37 +1,19 @@
-"""The dask executor: generation on a Dask cluster, one task per tile, each tile written by its worker.
-
-A task builds its tile's buildings (the same per-building seeds and error handling as the local path: a bad
-building skips itself) and writes the tile's layer itself, into the root stage's staging folder on a filesystem the
-workers share, with the same writer the local executor's tile layers use: a complete stage of its own, ``/World``
-with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so it opens alone. Only small results
-travel back (a :class:`TileResult`); the main process payloads the layers, in tile order, from the root. Every tile is
-built from a fresh module cache, so its bytes depend on the seed and its buildings only, never on which worker
-built it or when.
+"""The dask executor: generation on a Dask cluster, one tile task per tile (:mod:`citygen.tiles`), each tile's layer
+written by its worker into the root stage's staging folder on a filesystem the workers share. Only small results
+travel back (a :class:`~citygen.tiles.TileResult`); the main process payloads the layers, in tile order, from the
+root.
 
 ``dask.distributed`` is optional (``pip install 'citygen[distributed]'``) and imported only when used.
 """
 from __future__ import annotations
 
-import hashlib
-import pickle
-import threading
-from collections import Counter
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
-from itertools import groupby
-from pathlib import Path
 from typing import Any
 
-from citygen.builder import Builder
 from citygen.errors import CitygenError
-from citygen.footprints import Skipped
-from citygen.geometry.building import clear_module_cache
-from citygen.geometry.modules import ModuleKey
-from citygen.geometry.prototypes import ProtoKey
-from citygen.registry import load_registry
-from citygen.scene import Scene
-from citygen.usd.writer import StageStats, StageWriter, tile_name
+from citygen.tiles import TileJob, TileResult, build_tile, by_tile
+from citygen.usd.writer import tile_name
 
 EXECUTORS = ("local", "dask")
 INSTALL_HINT = "pip install 'citygen[distributed]'"
@@ -42,79 +24,6 @@ CONNECT_TIMEOUT = "30s"
 #: CPU in 40 s instead of 1.8 s)
 LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s",
                         "distributed.admin.system-monitor.interval": "2s"}
-
-
-@dataclass(frozen=True)
-class TileJob:
-    """What every tile task shares: the scene, seed, how to rebuild the registry, and where layers go."""
-
-    scene: Scene
-    seed: int
-    plugins: tuple[tuple[object, ...], bool] | None
-    staging: Path
-    suffix: str
-    layer_data: Mapping[str, Any]
-
-    @property
-    def token(self) -> str:
-        """Identifies the run's builder configuration in a worker's cache."""
-        return hashlib.sha256(pickle.dumps((self.scene, self.seed, self.plugins))).hexdigest()
-
-
-@dataclass(frozen=True)
-class TileResult:
-    """What a tile task sends back: its layer file (``None`` when no building was written) and its report items."""
-
-    layer: str | None
-    stats: StageStats | None
-    prototypes: tuple[ProtoKey | ModuleKey, ...]
-    skipped: tuple[Skipped, ...]
-    warnings: tuple[str, ...]
-    faces: tuple[tuple[str, int], ...] = ()  # (summed :attr:`BuildingOutcome.faces`)
-
-
-_BUILDERS = threading.local()
-
-
-def _builder(job: TileJob) -> Builder:
-    """The calling worker thread's building builder for this run (registry and rulesets loaded once)."""
-    token = job.token
-    if getattr(_BUILDERS, "token", None) != token:
-        registry = None if job.plugins is None else load_registry(*job.plugins)
-        _BUILDERS.builder, _BUILDERS.token = Builder(job.scene, job.seed, registry), token
-    return _BUILDERS.builder
-
-
-def build_tile(job: TileJob, items: Sequence[tuple]) -> TileResult:
-    """The task: build one tile's buildings (``items`` are the pipeline's work items) and write its layer."""
-    builder = _builder(job)
-    clear_module_cache()
-    tile = items[0][4]
-    layer = f"{tile_name(tile)}{job.suffix}"
-    skipped: list[Skipped] = []
-    warnings: list[str] = []
-    faces: Counter[str] = Counter()
-    writer: StageWriter | None = None
-    stats = None
-    try:
-        for item in items:
-            outcome = builder.build(*item)
-            warnings += outcome.warnings
-            faces.update(dict(outcome.faces))
-            if outcome.record is None:
-                skipped.append(outcome.skipped)
-                continue
-            if writer is None:
-                writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
-                                     layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
-                                     lod=job.scene.output.lod, materials=job.scene.materials)
-            writer.add(outcome.record)
-        if writer is not None:
-            stats = writer.close()
-    finally:
-        clear_module_cache()
-    return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
-                      tuple(skipped), tuple(warnings), tuple(sorted(faces.items())))
 
 
 @contextmanager
@@ -144,10 +53,10 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
         yield client
 
 
-def run_tiles(work: Sequence[tuple], job: TileJob, scheduler: str | None, workers: int,
-              progress: Callable[[int, int], None] | None = None) -> list[TileResult]:
+def run_tiles(work: Sequence[tuple], job: TileJob, workers: int, progress: Callable[[int, int], None] | None = None,
+              *, scheduler: str | None = None) -> list[TileResult]:
     """Submit one task per tile (``work`` sorted by tile) and return their results in tile order."""
-    tiles = [list(items) for _, items in groupby(work, key=lambda w: w[4])]
+    tiles = by_tile(work)
     total, done = len(work), 0
     results: dict[tuple[int, int], TileResult] = {}
     with dask_client(scheduler, workers) as client:

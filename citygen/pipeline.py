@@ -8,6 +8,7 @@ cluster instead (:mod:`citygen.distributed`).
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 from collections import Counter
 import math
@@ -26,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
-from citygen.distributed import EXECUTORS, TileJob, run_tiles
+from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
@@ -36,7 +37,8 @@ from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import plan_mass
-from citygen.scene import Scene, key_line
+from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
+from citygen.tiles import TileJob, TileResult, run_local
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
@@ -142,7 +144,10 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
 
     ``executor`` is ``"local"`` (``jobs`` worker processes) or ``"dask"``: one task per tile on the cluster at
     ``scheduler`` (default: a local cluster of ``jobs`` workers), each tile its own layer whatever the scene's
-    ``tile_layers`` (see :mod:`citygen.distributed`).
+    ``tile_layers`` (see :mod:`citygen.distributed`). With tile layers (``[output] tile_layers``, by default for a
+    city of more than :data:`~citygen.scene.AUTO_TILE_LAYERS` buildings) the local executor runs the same tile tasks
+    (:mod:`citygen.tiles`) -- unless the city has fewer tiles than ``jobs``: then buildings are built in the workers
+    and their tiles written here.
     """
     if executor not in EXECUTORS:
         raise CitygenError(f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
@@ -202,16 +207,20 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         ignored = [key for key in ("tile_layers", "uvs", "lod") if getattr(scene.output, key)]
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
-    if executor == "dask":
-        _generate_on_dask(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs, scheduler, report,
-                          progress, ground)
-        report.timings = {"import": t1 - t0, "masses": t2 - t1, **report.timings,
-                          "total": time.perf_counter() - t0}
-        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **report.cpu, "total": time.process_time() - c0}
+    tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
+    if executor == "dask" or (tiled and (jobs == 1 or len({w[4] for w in work}) >= jobs)):
+        if executor == "dask":
+            runner = functools.partial(run_tiles, scheduler=scheduler)
+        else:
+            runner = functools.partial(run_local, builder=Builder(scene, seed, registry, rulesets))
+        timings, cpu, tasks = _generate_tiles(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
+                                              runner, report, progress, ground)
+        report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0, **tasks}
         return report
     usd = builds = 0.0  # CPU seconds: the writer's add calls (this thread), the builds (wherever they ran)
     with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
-        writer = stack.enter_context(_writer(out, scene, layer_data))
+        writer = stack.enter_context(_writer(out, scene, layer_data, tiled))
         if ground:
             writer.ground(*ground)
         outcomes = stack.enter_context(contextlib.closing(_run(work, scene, seed, jobs, registry, plugins, progress,
@@ -236,14 +245,13 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     return report
 
 
-def _writer(out: Path, scene: Scene, layer_data: dict[str, Any]):
+def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
     """The writer ``out``'s suffix asks for: glTF (trimesh imported only then) or a USD stage."""
     if Path(out).suffix.lower() in GLTF_SUFFIXES:
         from citygen.gltf.writer import GltfWriter
         return GltfWriter(out, layer_data=layer_data, materials=scene.materials)
-    return StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data,
-                       tile_layers=scene.output.tile_layers, uvs=scene.output.uvs, lod=scene.output.lod,
-                       materials=scene.materials)
+    return StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
+                       uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials)
 
 
 def check_stage_path(out: Path) -> None:
@@ -280,18 +288,22 @@ def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
     return float(x0), float(y0), float(x1), float(y1), float(min(m.base for m in masses))
 
 
-def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
-                      out: Path, layer_data: dict[str, Any], jobs: int, scheduler: str | None, report: Report,
-                      progress: Callable[[int, int], None] | None,
-                      ground: tuple[float, float, float, float, float] | None) -> None:
-    """Tiles built and written by dask workers; the root layer listing them (and the ground) written here."""
+def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
+                    out: Path, layer_data: dict[str, Any], jobs: int, runner: Callable[..., list[TileResult]],
+                    report: Report, progress: Callable[[int, int], None] | None,
+                    ground: tuple[float, float, float, float, float] | None
+                    ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """Tiles built and written by tile tasks (:mod:`citygen.tiles`: here, in worker processes or on dask); the root
+    layer payloading them (and the ground) written here. Returns the wall and main-process CPU seconds of the
+    ``buildings`` and ``usd`` phases, and the tasks' CPU: ``builds``, ``tile layers`` (writing them) and the part of
+    both spent in ``workers``."""
     t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
-        results = run_tiles(work, job, scheduler, jobs, progress)
+        results = runner(work, job, jobs, progress)
         t1, c1 = time.perf_counter(), time.process_time()
         for result in results:
             report.warnings += result.warnings
@@ -301,8 +313,11 @@ def _generate_on_dask(work: Sequence[_Work], scene: Scene, seed: int, plugins: t
                 writer.add_tile_layer(result.layer, result.stats, result.prototypes)
                 report.written += result.stats.buildings
         report.stats = writer.close()
-    report.timings = {"tiles (dask)": t1 - t0, "usd": time.perf_counter() - t1}
-    report.cpu = {"tiles (dask)": c1 - c0, "usd": time.process_time() - c1}
+    builds, layers = sum(r.builds for r in results), sum(r.layer_cpu for r in results)
+    elsewhere = runner.func is run_tiles or (jobs > 1 and len(results) > 1)
+    return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
+            {"buildings": c1 - c0, "usd": time.process_time() - c1},
+            {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
 def _in_workers(jobs: int, total: int) -> bool:

@@ -27,6 +27,10 @@ UP_AXES = ("Z", "Y")
 #: (both at once, as a render/proxy pair) or ``none``; ``true``/``false`` (the old switch) mean variants/none.
 LOD_MODES = ("variants", "purpose", "none")
 INSTANCING = ("modules", "elements")
+#: ``[output] tile_layers`` unset: a city of more buildings than this is written as payloaded tile layers, each tile
+#: built and written by one task, so memory stays bounded by a tile (one layer holds ~0.33 MB per building until
+#: it is exported, and exporting doubles it); smaller cities are one file.
+AUTO_TILE_LAYERS = 1000
 FACE_SCOPES = ("all", "street", "courtyard")
 
 
@@ -94,7 +98,7 @@ class Output:
     up_axis: str = "Z"
     tile_size: float = 250.0
     instancing: str = "modules"
-    tile_layers: bool = False
+    tile_layers: bool | None = None  # None: tile layers for a city of more than AUTO_TILE_LAYERS buildings
     uvs: bool = False
     lod: str = "variants"
     ground: bool = False
@@ -260,9 +264,10 @@ def load_scene(path: str | Path, roof_shapes: Collection[str] | None = None,
     instancing = out.get("instancing", "modules")
     if instancing not in INSTANCING:
         r.fail(f"instancing must be one of {', '.join(INSTANCING)}, got {instancing!r}", "instancing", table="output")
-    flags = {key: out.get(key, False) for key in ("tile_layers", "uvs", "ground", "masses")}
+    flags = {key: out.get(key, None if key == "tile_layers" else False)
+             for key in ("tile_layers", "uvs", "ground", "masses")}
     for key, value in flags.items():
-        if not isinstance(value, bool):
+        if not isinstance(value, bool) and not (key == "tile_layers" and value is None):
             r.fail(f"{key} must be true or false, got {value!r}", key, table="output")
     lod = out.get("lod", "variants")
     lod = {True: "variants", False: "none"}.get(lod, lod) if isinstance(lod, bool) else lod

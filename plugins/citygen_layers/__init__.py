@@ -5,8 +5,3 @@ expressions with counters, §3.2--3.4). The solver (§5) instantiates the patter
 the layers by a shortest path through the alignment decision network, and sizes every letter with a constrained
 least-squares problem, separately per direction; the outer product gives the layout.
 """
-from citygen_layers.model import Ruleset
-from citygen_layers.parser import load, parse
-from citygen_layers.solver import solve
-
-__all__ = ["Ruleset", "load", "parse", "solve"]

@@ -30,12 +30,12 @@ from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, 
 from citygen_safe.leaves import EPS, Facade
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.rank import defects, penalty, reference_widths
+from citygen_safe.ruleset import BUDGET_S
 from citygen_safe.tree import Node, decompose
 
 FINALISTS = 3  #: jumps per greedy step scored by the spatial optimisation (the rest by their width mismatch)
 POSITIONS = 4  #: other positions of the winning width change the spatial optimisation compares with it
 NEAR_BEST = 1.05  #: variations within this factor of the least distortion are the generator's choices
-BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
 #: Leaves sized by the spatial optimisation per nominal CPU second (calibrated on the project's 2-core machine):
 #: the budget counts work, not time, so the same request gives the same facade on any machine and under any load.
 LEAVES_PER_SECOND = 12_000

@@ -1,9 +1,12 @@
-"""citygen plugin: the ``safe`` ruleset kind (dang2014) and the ``citygen edit`` command."""
+"""citygen plugin: the ``safe`` ruleset kind (dang2014) and the ``citygen edit`` command. The editing itself (and
+SciPy and DAQP it needs) is imported on first use, so loading the plugin costs a city without SAFE rulesets
+nothing."""
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from citygen.cliargs import add_size_arguments, seed, whole
 from citygen.errors import CitygenError
@@ -13,9 +16,16 @@ from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
-from citygen_safe.edit import Variation
-from citygen_safe.generate import Edit, edit
 from citygen_safe.ruleset import SafeRuleset, load_ruleset, parse_ruleset
+
+if TYPE_CHECKING:
+    from citygen_safe.edit import Variation
+    from citygen_safe.generate import Edit
+
+
+def _edit(ruleset: SafeRuleset, request: FacadeRequest) -> Edit:
+    from citygen_safe.generate import edit
+    return edit(ruleset, request)
 
 
 class SafeKind(RulesetKind):
@@ -24,7 +34,7 @@ class SafeKind(RulesetKind):
     description = "structure-aware facade editing (dang2014): grid row/column jumps + QP on one input layout"
 
     def __init__(self) -> None:
-        self._edit = LastSolve(edit)  # (explain after generate: one edit)
+        self._edit = LastSolve(_edit)  # (explain after generate: one edit)
 
     def load(self, path: Path) -> SafeRuleset:
         return load_ruleset(path)
@@ -70,6 +80,7 @@ class EditCommand(Command):
         add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        from citygen_safe.generate import edit
         try:
             ruleset = load_ruleset(args.ruleset)
         except CitygenError as exc:

@@ -21,9 +21,10 @@ from pathlib import Path
 
 from citygen.errors import CitygenError, ParseError, SourceLocation, read_user_text
 from citygen.layout import FacadeLayout, check_partition
-from citygen_safe.edit import BUDGET_S
 from citygen_safe.grids import GridSpec, auto_specs
 from citygen_safe.leaves import Facade, facade_from_layout
+
+BUDGET_S = 2.0  #: default budget per generated facade, in nominal CPU seconds
 
 _TOKEN = re.compile(r'\s*(?:(#.*)|"([^"]*)"|([^\s"#]+)|(")|$)')
 

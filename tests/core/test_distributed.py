@@ -15,6 +15,7 @@ import pytest
 from pxr import Sdf, Usd, UsdGeom
 
 from citygen import distributed as distributed_executor
+from citygen import tiles as tile_tasks
 from citygen.cli import main
 from citygen.errors import CitygenError
 from citygen.geometry import building
@@ -235,14 +236,14 @@ def test_a_failed_tile_task_stops_the_run_and_keeps_the_old_stage(small_scene, t
     out = Path(scene.output.path)
     before = {p.name: p.read_bytes() for p in [out, *(out.parent / "small_tiles").iterdir()]}
 
-    add = distributed_executor.StageWriter.add
+    add = tile_tasks.StageWriter.add
 
     def disk_gone(self, record):
         if record.tile == (1, 0):
             raise OSError("disk gone")
         add(self, record)
 
-    monkeypatch.setattr(distributed_executor.StageWriter, "add", disk_gone)
+    monkeypatch.setattr(tile_tasks.StageWriter, "add", disk_gone)
     with pytest.raises(CitygenError, match=r"Tile_1_0 failed on its dask worker: OSError: disk gone"):
         generate_city(scene, registry=test_registry, executor="dask", scheduler=cluster.scheduler_address)
     assert {p.name: p.read_bytes() for p in [out, *(out.parent / "small_tiles").iterdir()]} == before

@@ -10,7 +10,7 @@ from citygen_layers.align import Budget, _Words, align
 from citygen_layers.candidates import CandidateGenerator, direction_spec
 from citygen_layers.model import Counter
 from citygen_layers.parser import load, parse
-from citygen_layers.plugin import generate, solve_request
+from citygen_layers.facade import generate, solve_request
 
 RULESETS = Path(__file__).resolve().parents[2] / "rulesets"
 
@@ -96,7 +96,7 @@ def test_regression_solve_leaves_no_reference_cycles():
     import dataclasses
     import gc
 
-    from citygen_layers.plugin import clear_solved
+    from citygen_layers.facade import clear_solved
 
     rs = load(RULESETS / "tenement.layers")
     request = FacadeRequest.preview(16, 15, 3.0, 4.0)

@@ -18,7 +18,7 @@ from citygen.scene import Defaults
 from citygen_layers.alternatives import blamed_axes
 from citygen_layers.compose import conform
 from citygen_layers.parser import load, parse
-from citygen_layers.plugin import clear_solved, generate, solve_request
+from citygen_layers.facade import clear_solved, generate, solve_request
 from tests import sweep
 
 ROOT = Path(__file__).resolve().parents[2]

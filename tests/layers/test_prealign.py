@@ -13,7 +13,7 @@ from citygen_layers.align import Budget
 from citygen_layers.candidates import CandidateGenerator, direction_spec
 from citygen_layers.model import Counter
 from citygen_layers.parser import ParseError, load, parse
-from citygen_layers.plugin import clear_solved, generate, solve_request
+from citygen_layers.facade import clear_solved, generate, solve_request
 from citygen_layers.prealign import Prealigner
 from citygen_layers.solver import align_candidate
 from citygen_layers.words import control_words

@@ -13,7 +13,7 @@ from citygen.registry import load_registry
 from citygen.request import FacadeRequest, check_request
 from citygen_layers.align import _Words
 from citygen_layers.parser import load, parse
-from citygen_layers.plugin import clear_solved, generate, solve_request
+from citygen_layers.facade import clear_solved, generate, solve_request
 from citygen_layers.solver import _above
 
 ROOT = Path(__file__).resolve().parents[2]

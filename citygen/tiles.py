@@ -1,0 +1,151 @@
+"""Tile tasks: one task builds one tile's buildings and writes the tile's layer itself.
+
+This is how a city with tile layers is generated, by either executor: the local one runs the tasks in this process
+(one job) or in worker processes (:func:`run_local`), the dask one on a cluster (:mod:`citygen.distributed`). The
+stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
+time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
+from the root. A task builds its buildings with the same per-building seeds and error handling as the per-building
+path (a bad building skips itself) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
+buildings use, so the layer opens alone and its bytes depend on the seed and its buildings only, never on which
+process built it or when. Only small results travel back (a :class:`TileResult`).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from itertools import groupby
+from pathlib import Path
+from typing import Any
+
+from citygen.builder import Builder
+from citygen.footprints import Skipped
+from citygen.geometry.modules import ModuleKey
+from citygen.geometry.prototypes import ProtoKey
+from citygen.lifeline import stop_workers, tie_to_parent
+from citygen.registry import load_registry
+from citygen.scene import Scene
+from citygen.usd.writer import StageStats, StageWriter, tile_name
+
+
+@dataclass(frozen=True)
+class TileJob:
+    """What every tile task shares: the scene, seed, how to rebuild the registry, and where layers go."""
+
+    scene: Scene
+    seed: int
+    plugins: tuple[tuple[object, ...], bool] | None
+    staging: Path
+    suffix: str
+    layer_data: Mapping[str, Any]
+
+    @property
+    def token(self) -> str:
+        """Identifies the run's builder configuration in a worker's cache."""
+        return hashlib.sha256(pickle.dumps((self.scene, self.seed, self.plugins))).hexdigest()
+
+
+@dataclass(frozen=True)
+class TileResult:
+    """What a tile task sends back: its layer file (``None`` when no building was written), its report items and
+    the CPU seconds it took: ``builds`` for the buildings, ``layer`` for writing its layer."""
+
+    layer: str | None
+    stats: StageStats | None
+    prototypes: tuple[ProtoKey | ModuleKey, ...]
+    skipped: tuple[Skipped, ...]
+    warnings: tuple[str, ...]
+    faces: tuple[tuple[str, int], ...] = ()  # (summed :attr:`BuildingOutcome.faces`)
+    builds: float = 0.0
+    layer_cpu: float = 0.0
+
+
+_BUILDERS = threading.local()
+
+
+def _builder(job: TileJob) -> Builder:
+    """The calling worker thread's building builder for this run (registry and rulesets loaded once)."""
+    token = job.token
+    if getattr(_BUILDERS, "token", None) != token:
+        registry = None if job.plugins is None else load_registry(*job.plugins)
+        _BUILDERS.builder, _BUILDERS.token = Builder(job.scene, job.seed, registry), token
+    return _BUILDERS.builder
+
+
+def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = None) -> TileResult:
+    """The task: build one tile's buildings (``items`` are the pipeline's work items, all of one tile) and write its
+    layer into ``job.staging``; ``builder``: one to use instead of this thread's own (the main process's)."""
+    builder = builder or _builder(job)
+    tile = items[0][4]
+    layer = f"{tile_name(tile)}{job.suffix}"
+    skipped: list[Skipped] = []
+    warnings: list[str] = []
+    faces: Counter[str] = Counter()
+    writer: StageWriter | None = None
+    stats = None
+    builds = 0.0
+    start = time.thread_time()
+    for item in items:
+        outcome = builder.build(*item)
+        builds += outcome.cpu
+        warnings += outcome.warnings
+        faces.update(dict(outcome.faces))
+        if outcome.record is None:
+            skipped.append(outcome.skipped)
+            continue
+        if writer is None:
+            writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
+                                 layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
+                                 lod=job.scene.output.lod, materials=job.scene.materials)
+        writer.add(outcome.record)
+    if writer is not None:
+        stats = writer.close()
+    return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
+                      tuple(skipped), tuple(warnings), tuple(sorted(faces.items())), builds,
+                      time.thread_time() - start - builds)
+
+
+def by_tile(work: Sequence[tuple]) -> list[list[tuple]]:
+    """The work items (sorted by tile) grouped into one list per tile, in tile order."""
+    return [list(items) for _, items in groupby(work, key=lambda w: w[4])]
+
+
+def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
+              *, builder: Builder) -> list[TileResult]:
+    """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes,
+    largest tile first so the last ones to finish are small; results in tile order."""
+    tiles = by_tile(work)
+    total, done = len(work), 0
+    if jobs <= 1 or len(tiles) < 2:
+        results = []
+        for items in tiles:
+            results.append(build_tile(job, items, builder))
+            done += len(items)
+            if progress:
+                progress(done, total)
+        return results
+    order = sorted(range(len(tiles)), key=lambda k: (-len(tiles[k]), k))
+    found: dict[int, TileResult] = {}
+    pool = ProcessPoolExecutor(max_workers=min(jobs, len(tiles)), initializer=tie_to_parent,
+                               initargs=(os.getpid(),))
+    try:
+        pending: dict[Future, int] = {pool.submit(build_tile, job, tiles[k]): k for k in order}
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                k = pending.pop(future)
+                found[k] = future.result()
+                done += len(tiles[k])
+                if progress:
+                    progress(done, total)
+    except BaseException:  # an error, Ctrl-C, SIGTERM: the workers end now
+        stop_workers(pool)
+        raise
+    pool.shutdown()
+    return [found[k] for k in range(len(tiles))]

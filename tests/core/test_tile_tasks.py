@@ -1,0 +1,74 @@
+"""Tile tasks on the local executor (issue 24, streaming): each tile built and written by one task, in worker
+processes; tile layers by default for big cities."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from pxr import Usd
+
+from citygen import pipeline
+from citygen.errors import SceneError
+from citygen.pipeline import generate_city
+from citygen.scene import load_scene
+from tests.usd_util import assert_resolves
+
+PHASES = ["import", "masses", "buildings", "usd", "total"]
+
+
+def _scene(small_scene: Path, output: str):
+    small_scene.write_text(small_scene.read_text().split("[output]")[0] + output)
+    return load_scene(small_scene)
+
+
+def _tiles(scene) -> list[str]:
+    folder = Path(scene.output.path).parent / "small_tiles"
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def test_worker_processes_build_and_write_whole_tiles(small_scene, test_registry):
+    """With tile layers, the tiles' layers are written where their buildings were built: the main process only
+    writes the root (its CPU no longer holds the writer's work)."""
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    report = generate_city(scene, registry=test_registry, jobs=2)
+    assert report.written == 3 and len(_tiles(scene)) == 3
+    assert list(report.cpu) == PHASES + ["builds", "tile layers", "workers"]
+    assert report.cpu["tile layers"] > 0
+    assert report.cpu["workers"] == pytest.approx(report.cpu["builds"] + report.cpu["tile layers"])
+    assert [s.id for s in report.skipped] == ["way/bad"]  # a bad building skips itself inside its tile's task
+    assert_resolves(Usd.Stage.Open(str(report.stats.path)))
+
+
+def test_one_job_runs_the_tile_tasks_here(small_scene, test_registry):
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    report = generate_city(scene, registry=test_registry, jobs=1)
+    assert report.cpu["workers"] == 0.0 and report.cpu["tile layers"] > 0 and report.written == 3
+
+
+def test_a_city_of_fewer_tiles_than_jobs_is_built_building_by_building(small_scene, test_registry):
+    """One tile and two jobs: tile tasks would leave a worker idle, so buildings are built in the workers and the
+    tile written by the main process, as without tile layers."""
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 1000\ntile_layers = true\n')
+    report = generate_city(scene, registry=test_registry, jobs=2)
+    assert list(report.cpu) == PHASES + ["builds", "workers"]
+    assert report.written == 3 and len(_tiles(scene)) == 1
+
+
+def test_tile_layers_are_the_default_for_a_big_city(small_scene, test_registry, monkeypatch):
+    """Unset ``tile_layers``: a city of more than AUTO_TILE_LAYERS buildings streams into tile layers (memory bounded
+    by a tile), a smaller one is one file; ``tile_layers = false`` keeps one file whatever the size."""
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\n')
+    assert scene.output.tile_layers is None
+    generate_city(scene, registry=test_registry)
+    assert _tiles(scene) == []
+    monkeypatch.setattr(pipeline, "AUTO_TILE_LAYERS", 2)
+    generate_city(scene, registry=test_registry)
+    assert len(_tiles(scene)) == 3
+    single = _scene(small_scene, '[output]\npath = "one/small.usdc"\ntile_size = 20\ntile_layers = false\n')
+    generate_city(single, registry=test_registry)
+    assert not (Path(single.output.path).parent / "small_tiles").exists()
+
+
+def test_tile_layers_must_be_true_or_false(small_scene):
+    with pytest.raises(SceneError, match=r"tile_layers must be true or false, got 'auto'"):
+        _scene(small_scene, '[output]\ntile_layers = "auto"\n')
