@@ -10,7 +10,9 @@ on ``PYTHONHASHSEED``, so signatures agree across worker processes. A region bec
 occurs at least twice in the building, it holds some detail (not only flat wall), it saves enough geometry to
 pay for a prototype (``(count - 1) * terminals >= MIN_SAVING`` with at least ``MIN_TERMINALS`` terminals), and
 none of its children repeats more often (then the children are the better modules: a floor of six identical bays
-instances the bay).
+instances the bay). Only *mesh* terminals count (walls, mouldings, cornices...): the stage places a module's
+windows, doors and balconies with the building's own instancer (:mod:`citygen.geometry.lift`), so they are
+instanced whether or not a module holds them.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from citygen.geometry.prototypes import INSTANCED
 from citygen.layout import Region
 
 CM = 100.0
@@ -81,7 +84,8 @@ class Signatures:
         if not children:
             info = (hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM),
                           round(r.w * CM), round(r.h * CM))),
-                    (r.label != "wall" and r.label is not None) or r.depth != 0.0, 1)
+                    (r.label != "wall" and r.label is not None) or r.depth != 0.0,
+                    int(r.label is not None and r.label not in INSTANCED))
         else:
             x, y, visit = r.x, r.y, self._visit
             start = len(self.log)
