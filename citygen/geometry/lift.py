@@ -47,39 +47,45 @@ def lift_module_elements(inst: Instances, modules: Mapping[ModuleKey, ModuleProt
     """``inst`` with the elements of every module instance as instances of their own, after the building's rows
     (module by module in ``inst.protos`` order, each module's rows in order); a module with no meshes of its own
     leaves no instance (and no prototype). Element prototypes new to the building follow its own, in order of
-    first use."""
+    first use. One numpy pass over all module rows."""
     keys: list[ProtoKey | ModuleKey] = []
     index: dict[ProtoKey | ModuleKey, int] = {}
     for key in inst.protos:
         if not isinstance(key, ModuleKey) or has_meshes(modules[key]):
             index[key] = len(keys)
             keys.append(key)
-    remap = np.array([index.get(k, -1) for k in inst.protos], dtype=np.int64)
-    own = remap[inst.proto_indices] if len(inst.proto_indices) else np.zeros(0, np.int64)
+    positions = np.asarray(inst.positions, float).reshape(-1, 3)
+    orientations = np.asarray(inst.orientations, float).reshape(-1, 4)
+    scales = np.asarray(inst.scales, float).reshape(-1, 3)
+    own = np.array([index.get(k, -1) for k in inst.protos], dtype=np.int64)[inst.proto_indices]
     kept = own >= 0
-    rows = [(own[kept], np.asarray(inst.positions, float)[kept], np.asarray(inst.orientations, float)[kept],
-             np.asarray(inst.scales, float)[kept])]
+    # every module's elements, concatenated in protos order: their building prototype index and transforms
+    size = np.zeros(len(inst.protos), np.int64)
+    parts: list[tuple[np.ndarray, Instances]] = []
     for k, key in enumerate(inst.protos):
-        if not isinstance(key, ModuleKey):
-            continue
-        elements = modules[key].elements
-        placed = np.flatnonzero(inst.proto_indices == k)
-        if not len(elements.proto_indices) or not len(placed):
-            continue
-        for e in elements.protos:
-            if e not in index:
-                index[e] = len(keys)
-                keys.append(e)
-        local = np.array([index[e] for e in elements.protos], dtype=np.int64)
-        n, m = len(placed), len(elements.proto_indices)
-        position = np.asarray(inst.positions, float)[placed]
-        rotation = np.asarray(inst.orientations, float)[placed]
-        scale = np.asarray(inst.scales, float)[placed]
-        offset = (scale[:, None, :] * np.asarray(elements.positions, float)[None]).reshape(-1, 3)
-        turn = np.repeat(rotation, m, axis=0)
-        rows.append((np.tile(local[elements.proto_indices], n),
-                     np.repeat(position, m, axis=0) + _rotate(turn, offset),
-                     quaternion_product(turn, np.tile(np.asarray(elements.orientations, float), (n, 1))),
-                     (scale[:, None, :] * np.asarray(elements.scales, float)[None]).reshape(-1, 3)))
-    proto, positions, orientations, scales = (np.concatenate(c) for c in zip(*rows))
-    return Instances(tuple(keys), proto.astype(np.int32), positions, orientations, scales.astype(np.float32))
+        if isinstance(key, ModuleKey) and len(elements := modules[key].elements.proto_indices):
+            for e in modules[key].elements.protos:
+                if e not in index:
+                    index[e] = len(keys)
+                    keys.append(e)
+            size[k] = len(elements)
+            parts.append((np.array([index[e] for e in modules[key].elements.protos])[elements],
+                          modules[key].elements))
+    if not parts:
+        return Instances(tuple(keys), own[kept].astype(np.int32), positions[kept], orientations[kept],
+                         scales[kept].astype(np.float32))
+    start = np.cumsum(size) - size
+    row = np.flatnonzero(size[inst.proto_indices])
+    row = row[np.argsort(inst.proto_indices[row], kind="stable")]  # module by module, each in row order
+    count = size[inst.proto_indices[row]]
+    placed = np.repeat(row, count)
+    element = np.repeat(start[inst.proto_indices[row]] - np.cumsum(count) + count, count) + np.arange(count.sum())
+    proto = np.concatenate([p for p, _ in parts])[element]
+    offset = np.concatenate([e.positions for _, e in parts]).astype(float)[element]
+    turn, scale = orientations[placed], scales[placed]
+    return Instances(
+        tuple(keys), np.concatenate([own[kept], proto]).astype(np.int32),
+        np.concatenate([positions[kept], positions[placed] + _rotate(turn, scale * offset)]),
+        np.concatenate([orientations[kept],
+                        quaternion_product(turn, np.concatenate([e.orientations for _, e in parts])[element])]),
+        np.concatenate([scales[kept], scale * np.concatenate([e.scales for _, e in parts])[element]]).astype(np.float32))
