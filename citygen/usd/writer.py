@@ -7,12 +7,14 @@ Layout of the stage::
       Tile_<i>_<j>              Xform, kind=group, extentsHint (with tile layers: a payload of the tile's layer)
         <building>              Xform, kind=component, translated to its pivot (footprint centroid, ground),
                                 assetInfo, extentsHint, custom citygen:* attributes, primvars:citygen:variation
-          Looks/<material>      Material referencing /Materials/<material>: bindings resolve inside the building
+          Looks                 references its look set /Looks/<materials>: bindings resolve inside the building
           Roof                  Mesh
           variant set LOD       LOD0: Facade/<label>_<mat> meshes and Elements (PointInstancer, with extent)
                                 LOD1: Walls (the mass)       -- or Render/Proxy scopes with lod = "purpose"
     /Materials                  class: UsdPreviewSurface definitions (linear colours from sRGB, once)
-    /Prototypes                 class: one prototype per element kind / module, each with its own Looks
+    /Looks                      class: a look set per combination of materials, its Materials referencing /Materials
+    /Prototypes                 class: one prototype per element kind / module (meshes only: the building places a
+                                module's elements, citygen.geometry.lift), each with its own Looks
 
 A building is an asset: everything it binds and instances is under it or reached through internal references,
 so a reference to it from another stage brings its looks and prototypes along.
