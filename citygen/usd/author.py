@@ -42,6 +42,8 @@ class Author:
         self.library = library or {}
         self.layer_dir = layer_dir
         self.prims = 0
+        self.look_sets: dict[str, Sdf.Path] = {}
+        self.look_root: Sdf.PrimSpec | None = None
 
     def prim(self, parent: Sdf.PrimSpec | Sdf.Layer, name: str, type_name: str = "",
              specifier=Sdf.SpecifierDef) -> Sdf.PrimSpec:
@@ -111,16 +113,32 @@ class Author:
         return bound
 
     def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:
-        """``parent/Looks``: one Material per name referencing the layer's ``/Materials`` definition, so the
-        bindings of everything under ``parent`` resolve inside it (a reference to ``parent`` brings them along).
-        ``Looks`` is typeless, not a Scope: Blender's importer makes an empty object of every Scope (Delft: 278
-        of 2,503 objects), while it reaches materials through the bindings."""
+        """``parent/Looks``: one Material per name, so the bindings of everything under ``parent`` resolve inside it
+        (a reference to ``parent`` brings them along). ``Looks`` is one prim referencing the layer's look set of
+        these names (``/Looks/<name>__<name>...``, a class of Materials each referencing ``/Materials/<name>``,
+        authored once per combination), so a building or prototype costs one spec for its looks, not one per
+        material. Typeless, not a Scope: Blender's importer makes an empty object of every Scope (Delft: 278 of
+        2,503 objects), while it reaches materials through the bindings."""
         scope = self.prim(parent, "Looks", "")
-        for name in names:
-            look = self.prim(scope, look_name(name), "Material")
-            look.referenceList.prependedItems.append(
-                Sdf.Reference(primPath=Sdf.Path("/Materials").AppendChild(look_name(name))))
+        names = list(names)
+        if names:
+            scope.referenceList.prependedItems.append(Sdf.Reference(primPath=self._look_set(names)))
         return scope.path
+
+    def _look_set(self, names: Iterable[str]) -> Sdf.Path:
+        """``/Looks/<set>`` of the material ``names``, authored on first use."""
+        looks = [look_name(name) for name in names]
+        key = "__".join(looks)
+        path = self.look_sets.get(key)
+        if path is None:
+            if self.look_root is None:
+                self.look_root = self.prim(self.layer, "Looks", "", Sdf.SpecifierClass)
+            spec = self.prim(self.look_root, key, "")
+            for name in looks:
+                look = self.prim(spec, name, "Material")
+                look.referenceList.prependedItems.append(Sdf.Reference(primPath=Sdf.Path("/Materials").AppendChild(name)))
+            path = self.look_sets[key] = spec.path
+        return path
 
     def material(self, parent: Sdf.PrimSpec, name: str) -> None:
         """A ``UsdPreviewSurface`` Material ``parent/name`` of the library material ``name`` (linear colour; a

@@ -7,12 +7,14 @@ Layout of the stage::
       Tile_<i>_<j>              Xform, kind=group, extentsHint (with tile layers: a payload of the tile's layer)
         <building>              Xform, kind=component, translated to its pivot (footprint centroid, ground),
                                 assetInfo, extentsHint, custom citygen:* attributes, primvars:citygen:variation
-          Looks/<material>      Material referencing /Materials/<material>: bindings resolve inside the building
+          Looks                 references its look set /Looks/<materials>: bindings resolve inside the building
           Roof                  Mesh
           variant set LOD       LOD0: Facade/<label>_<mat> meshes and Elements (PointInstancer, with extent)
                                 LOD1: Walls (the mass)       -- or Render/Proxy scopes with lod = "purpose"
     /Materials                  class: UsdPreviewSurface definitions (linear colours from sRGB, once)
-    /Prototypes                 class: one prototype per element kind / module, each with its own Looks
+    /Looks                      class: a look set per combination of materials, its Materials referencing /Materials
+    /Prototypes                 class: one prototype per element kind / module (meshes only: the building places a
+                                module's elements, citygen.geometry.lift), each with its own Looks
 
 A building is an asset: everything it binds and instances is under it or reached through internal references,
 so a reference to it from another stage brings its looks and prototypes along.
@@ -42,6 +44,7 @@ from pxr import Gf, Sdf, Tf, Usd, UsdUtils, Vt
 
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
+from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
 from citygen.usd.author import T, Author, bound_value
@@ -138,14 +141,24 @@ def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
 
 
 @dataclass
+class _Element:
+    """An element prototype's prepared geometry (a function of its key and the material library alone), kept by a
+    writer for its tile writers, which would otherwise rebuild it in every tile."""
+
+    meshes: list[tuple[str, str, str | None, MeshData]]
+    bound: np.ndarray | None
+    normals: list[tuple[np.ndarray, np.ndarray]] | None = None
+
+
+@dataclass
 class _Pending:
-    """A prototype whose prim is authored when its layer is finished, with all others in one normals batch."""
+    """A prototype whose prim is authored when its layer is finished, with all others in one normals batch
+    (an element prototype's normals are computed once, in the first layer using it)."""
 
     path: Sdf.Path
     label: str
     meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
-    elements: Instances | None
-    elements_bound: np.ndarray | None
+    element: _Element | None = None
 
 
 class StageWriter:
@@ -188,6 +201,7 @@ class StageWriter:
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
+        self.elements: dict[ProtoKey, _Element] = {}  # shared with the tile writers
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
@@ -229,22 +243,20 @@ class StageWriter:
         if key in self.prototypes:
             return self.prototypes[key]
         path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
-        if isinstance(key, ModuleKey):
-            module = modules[key]
+        if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
             names: set[str] = set()
             meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
-                      for (label, mat), mesh in module.meshes.items()]
-            elements = module.elements if len(module.elements.proto_indices) else None
-            for k in elements.protos if elements is not None else ():
-                self.prototype(k, modules)
-            placed = self._instances_bound(elements) if elements is not None else None
-            bound = union([*(points_bound(m.points) for *_, m in meshes), placed])
-        else:
+                      for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
+            self.pending.append(_Pending(path, key.label, meshes))
+            self.prototypes[key], self.bounds[key] = path, union(points_bound(m.points) for *_, m in meshes)
+            return path
+        element = self.elements.get(key)
+        if element is None:
             parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
             meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
-            elements, placed, bound = None, None, union(points_bound(m.points) for *_, m in meshes)
-        self.pending.append(_Pending(path, key.label, meshes, elements, placed))
-        self.prototypes[key], self.bounds[key] = path, bound
+            element = self.elements[key] = _Element(meshes, union(points_bound(m.points) for *_, m in meshes))
+        self.pending.append(_Pending(path, key.label, element.meshes, element))
+        self.prototypes[key], self.bounds[key] = path, element.bound
         return path
 
     def _instances_bound(self, inst: Instances) -> np.ndarray | None:
@@ -258,9 +270,15 @@ class StageWriter:
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(self.layer, "Prototypes", "", Sdf.SpecifierClass)
-        normals = iter(face_normals([m for p in self.pending for *_, m in p.meshes]))
+        fresh = [p for p in self.pending if p.element is None or p.element.normals is None]
+        batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
+        normals = {id(p): [next(batch) for _ in p.meshes] for p in fresh}
+        for p in fresh:
+            if p.element is not None:
+                p.element.normals = normals[id(p)]
         with Sdf.ChangeBlock():
             for p in self.pending:
+                mesh_normals = iter(normals[id(p)] if id(p) in normals else p.element.normals)
                 proto = author.prim(self.protos_root, p.path.name, "Xform")
                 author.api(proto, "SemanticsLabelsAPI:class")
                 author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([p.label]), uniform=True)
@@ -268,9 +286,7 @@ class StageWriter:
                 self.define(used)
                 looks = author.looks(proto, used) if used else None
                 for name, mat, label, mesh in p.meshes:
-                    author.mesh(proto, name, mesh, looks, mat, label, next(normals))
-                if p.elements is not None:
-                    _instancer(author, proto, p.elements, self.prototypes, p.elements_bound)
+                    author.mesh(proto, name, mesh, looks, mat, label, next(mesh_normals))
         self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
@@ -298,6 +314,7 @@ class StageWriter:
             sub = StageWriter(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
                               layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
                               materials=self.library)
+            sub.elements = self.elements
             self.tile = (tile, sub)
             return sub
         prim = self.author.prim(self.world, name, "Xform")
@@ -482,7 +499,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
                                   normals[len(geo.meshes)], pivot))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
-    inst = geo.instances
+    inst = lift_module_elements(geo.instances, geo.modules)
     if len(inst.proto_indices):
         for key in inst.protos:
             writer.prototype(key, geo.modules)

@@ -44,19 +44,19 @@ def glb_json(path: Path) -> dict:
 
 
 @pytest.fixture(scope="module")
-def city(tmp_path_factory) -> tuple[Path, Path]:
-    """The mini city as a USD stage and as a GLB."""
+def city(tmp_path_factory) -> tuple[Path, Path, int]:
+    """The mini city as a USD stage and as a GLB, and the GLB's count of instances."""
     tmp = tmp_path_factory.mktemp("gltf")
     report, usda = generate_mini_scene(tmp, HOUSES, REPO / "rulesets" / "apartment.grammar", seed=7)
     assert report.written == len(HOUSES) and not report.skipped
     glb = tmp / "mini.glb"
     report = generate_city(load_scene(tmp / "mini.toml"), out=glb)
     assert report.written == len(HOUSES) and report.stats.path == glb
-    return usda, glb
+    return usda, glb, report.stats.instances
 
 
 def test_round_trip_through_trimesh_counts_buildings_instances_and_materials(city):
-    usda, glb = city
+    usda, glb, glb_instances = city
     stage = Usd.Stage.Open(str(usda))
     loaded = trimesh.load(glb, force="scene")
     graph = loaded.graph
@@ -64,15 +64,16 @@ def test_round_trip_through_trimesh_counts_buildings_instances_and_materials(cit
               for node in graph.nodes if node in graph.transforms.parents}
     houses = sorted(e["citygen:sourceId"] for e in extras.values() if "citygen:sourceId" in e)
     assert houses == sorted(p.GetAttribute("citygen:sourceId").Get() for p in buildings(stage))
-    # every instance of the stage is one node sharing its prototype's mesh (a mesh of several primitives loads as
-    # one geometry per primitive, each under the instance's node)
+    # every instance is one node sharing its prototype's mesh (a mesh of several primitives loads as one geometry
+    # per primitive, each under the instance's node); a module's elements are baked into its mesh, where the stage
+    # places them with the building's own instancer (citygen.geometry.lift), so the stage has more rows
     doc = glb_json(glb)
     users = Counter(node["mesh"] for node in instance_nodes(doc))
     instanced = sum(users.values())
     stage_instances = sum(len(UsdGeom.PointInstancer(p).GetProtoIndicesAttr().Get())
-                          for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer)
-                          and not str(p.GetPath()).startswith("/Prototypes"))
-    assert instanced == stage_instances > 20
+                          for p in stage.Traverse() if p.IsA(UsdGeom.PointInstancer))
+    assert instanced == glb_instances > 20 and stage_instances > instanced
+    assert any(name.startswith("module_") for name in (doc["meshes"][m]["name"] for m in users))
     assert max(users.values()) > 10 and len(users) < instanced / 3  # prototypes' meshes are shared
     shared = [g for g, n in Counter(graph[node][1] for node in graph.nodes_geometry).items() if n > 1]
     assert len(shared) >= len([m for m, n in users.items() if n > 1])
@@ -88,7 +89,7 @@ def test_round_trip_through_trimesh_counts_buildings_instances_and_materials(cit
 
 def test_gltf_is_the_stage_turned_y_up(city):
     """World bounds of the GLB (instances placed, Y-up) are the stage's bounds with (x, y, z) -> (x, z, -y)."""
-    usda, glb = city
+    usda, glb, _ = city
     stage = Usd.Stage.Open(str(usda))
     box = UsdGeom.BBoxCache(Usd.TimeCode.Default(), ["default"]).ComputeWorldBound(stage.GetPseudoRoot()).ComputeAlignedRange()
     lo, hi = np.array(box.GetMin()), np.array(box.GetMax())
@@ -97,7 +98,7 @@ def test_gltf_is_the_stage_turned_y_up(city):
 
 
 def test_building_nodes_sit_at_their_pivot_with_local_geometry(city):
-    _, glb = city
+    _, glb, _ = city
     doc = glb_json(glb)
     houses = [n for n in doc["nodes"] if "citygen:sourceId" in n.get("extras", {})]
     for node in houses:
@@ -107,14 +108,14 @@ def test_building_nodes_sit_at_their_pivot_with_local_geometry(city):
 
 
 def test_same_seed_same_bytes(tmp_path, city):
-    _, glb = city
+    _, glb, _ = city
     scene = load_scene(glb.parent / "mini.toml")
     generate_city(scene, out=tmp_path / "again.glb")
     assert (tmp_path / "again.glb").read_bytes() == glb.read_bytes()
 
 
 def test_gltf_json_has_its_buffer_embedded(tmp_path, city):
-    _, glb = city
+    _, glb, _ = city
     out = tmp_path / "city.gltf"
     report = generate_city(load_scene(glb.parent / "mini.toml"), out=out)
     doc = json.loads(out.read_text())
@@ -130,7 +131,7 @@ def test_one_building_glb_is_centred_on_its_pivot(city):
     from citygen.mass import build_mass, neighbour_cover
     from citygen.pipeline import import_footprints
 
-    _, glb = city
+    _, glb, _ = city
     scene = load_scene(glb.parent / "mini.toml")
     footprint = import_footprints(scene).footprints[0]
     mass = build_mass(footprint)
@@ -148,7 +149,7 @@ def test_glb_with_dask_executor_is_an_error(small_scene):
 
 
 def test_usd_only_output_options_are_reported_as_ignored(tmp_path, city):
-    _, glb = city
+    _, glb, _ = city
     scene = load_scene(glb.parent / "mini.toml")
     scene = replace(scene, output=replace(scene.output, lod=True))
     report = generate_city(scene, out=tmp_path / "lod.glb")
@@ -156,7 +157,7 @@ def test_usd_only_output_options_are_reported_as_ignored(tmp_path, city):
 
 
 def test_writing_usd_never_imports_trimesh(city):
-    usda, _ = city
+    usda, _, _ = city
     code = ("import sys; from citygen.pipeline import generate_city; from citygen.scene import load_scene; "
             f"r = generate_city(load_scene({str(usda.parent / 'mini.toml')!r}), out={str(usda.parent / 'c.usda')!r}); "
             "print(r.written, 'trimesh' in sys.modules)")

@@ -293,7 +293,7 @@ def test_every_model_has_extents_hint_and_every_instancer_an_extent(small_scene,
         assert np.allclose(a.GetMin(), b.GetMin(), atol=1e-3) and np.allclose(a.GetMax(), b.GetMax(), atol=1e-3)
     instancers = [p for root in [stage.GetPseudoRoot(), *stage.GetPrototypes()] for p in Usd.PrimRange(root)
                   if p.IsA(UsdGeom.PointInstancer)]  # (not through instance proxies: USD's extent fails there)
-    assert len(instancers) > 3
+    assert len(instancers) == 3  # one per building: module prototypes hold meshes only (citygen.geometry.lift)
     for prim in instancers:
         authored = np.array(UsdGeom.PointInstancer(prim).GetExtentAttr().Get())
         exact = np.array(UsdGeom.PointInstancer(prim).ComputeExtentAtTime(Usd.TimeCode.Default(),
@@ -356,3 +356,27 @@ def test_kept_tags_with_any_characters_become_valid_attribute_names(small_scene,
     assert house.GetAttribute("citygen:tag:ref:bag_id").Get() == "0363"
     assert house.GetAttribute("citygen:tag:addr:street").Get() == "Oude Delft"
     assert house.GetAttribute("citygen:tag:_dr:type").Get() == 1
+
+
+def test_looks_are_one_reference_to_a_look_set_authored_once_per_combination(small_scene, test_registry, tmp_path):
+    """Each building's and prototype's ``Looks`` is one spec referencing ``/Looks/<set>``; the sets' Materials
+    compose under it, so its bindings resolve (the reference test above) and it lists exactly its materials."""
+    report = generate(small_scene, test_registry, tmp_path / "city.usda")
+    layer = Sdf.Layer.FindOrOpen(str(report.stats.path))
+    sets = layer.GetPrimAtPath("/Looks")
+    assert sets.specifier == Sdf.SpecifierClass
+    users = [spec for spec in _specs(layer.pseudoRoot) if spec.name == "Looks" and spec.path != sets.path]
+    assert users and all(not spec.nameChildren for spec in users)
+    targets = [spec.referenceList.prependedItems[0].primPath for spec in users]
+    assert len(set(targets)) == len(sets.nameChildren) < len(users)  # shared, and every set is used
+    stage = Usd.Stage.Open(str(report.stats.path))
+    for spec in users:
+        if not spec.path.ContainsPrimVariantSelection() and not str(spec.path).startswith("/Prototypes"):
+            composed = [c.GetName() for c in stage.GetPrimAtPath(spec.path).GetChildren()]
+            assert composed == str(targets[users.index(spec)].name).split("__")
+
+
+def _specs(spec):
+    yield spec
+    for child in spec.nameChildren:
+        yield from _specs(child)
