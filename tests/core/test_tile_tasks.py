@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from pxr import Usd
 
-from citygen import pipeline
+from citygen import pipeline, tiles
 from citygen.errors import SceneError
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
@@ -72,3 +72,23 @@ def test_tile_layers_are_the_default_for_a_big_city(small_scene, test_registry, 
 def test_tile_layers_must_be_true_or_false(small_scene):
     with pytest.raises(SceneError, match=r"tile_layers must be true or false, got 'auto'"):
         _scene(small_scene, '[output]\ntile_layers = "auto"\n')
+
+
+def test_batches_of_tiles_hold_at_most_the_limit_but_at_least_one_tile():
+    assert list(tiles._batches([2, 0, 1, 3], [5, 1, 9, 2], 8)) == [[2], [0, 1], [3]]
+
+
+def test_fresh_workers_per_batch_write_the_same_stage(small_scene, test_registry, monkeypatch):
+    """Workers are replaced after each batch of tiles (a forked worker's memory grows with what it built): the
+    stage is the same whatever the batches."""
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    out = Path(scene.output.path)
+
+    def files() -> dict[str, bytes]:
+        return {p.name: p.read_bytes() for p in [out, *sorted((out.parent / "small_tiles").iterdir())]}
+
+    generate_city(scene, registry=test_registry, jobs=2)
+    whole = files()
+    monkeypatch.setattr(tiles, "BUILDINGS_PER_WORKER", 1)  # a batch per tile
+    report = generate_city(scene, registry=test_registry, jobs=2)
+    assert files() == whole and report.written == 3
