@@ -75,7 +75,7 @@ def test_tile_layers_must_be_true_or_false(small_scene):
 
 
 def test_batches_of_tiles_hold_at_most_the_limit_but_at_least_one_tile():
-    assert list(tiles._batches([2, 0, 1, 3], [5, 1, 9, 2], 8)) == [[2], [0, 1], [3]]
+    assert list(tiles._batches([2, 0, 1, 3], [5, 1, 9, 2], 7)) == [[2], [0, 1], [3]]
 
 
 def test_fresh_workers_per_batch_write_the_same_stage(small_scene, test_registry, monkeypatch):
