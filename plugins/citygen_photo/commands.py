@@ -8,6 +8,7 @@ from pathlib import Path
 from citygen.errors import CitygenError, LayoutError
 from citygen.registry import LayoutSource
 from citygen_inverse.commands import report, write_text
+from citygen_photo import PARSERS
 
 
 class FromPhoto(LayoutSource):
@@ -15,7 +16,6 @@ class FromPhoto(LayoutSource):
     help = "rectified facade photo -> layout JSON (mueller2007 with a learned facade parser)"
 
     def configure(self, parser: argparse.ArgumentParser) -> None:
-        from citygen_photo.photo import PARSERS  # (here: loading the plugin does not import the analysis)
         parser.add_argument("photo", help="facade photo (JPEG, PNG, ...), rectified")
         scale = parser.add_mutually_exclusive_group()
         scale.add_argument("--width", type=float, help="facade (crop) width in metres")

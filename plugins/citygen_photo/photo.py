@@ -384,15 +384,10 @@ def _layout(floors: np.ndarray, columns: list[np.ndarray], regular: np.ndarray, 
     return FacadeLayout(root.w, root.h, root), elements, paths
 
 
-#: How ``layout_from_photo`` finds elements: ``learned`` (the trained parser, :mod:`citygen_photo.learned`) or
-#: ``contrast`` (this module's intensity contrast test and element library, mueller2007 as published).
-PARSERS = ("learned", "contrast")
-
-
 def layout_from_photo(path: str | Path, *, width: float | None = None, floor_height: float = 3.0,
                       crop: tuple[float, float, float, float] | None = None, parser: str = "learned"
                       ) -> PhotoAnalysis:
-    """Read ``path`` and analyse it with ``parser`` (one of :data:`PARSERS`)."""
+    """Read ``path`` and analyse it with ``parser`` (one of :data:`citygen_photo.PARSERS`)."""
     rgb = load_photo(path, crop)
     meta = {"source": Path(path).name, "image_crop": list(crop) if crop else None}
     if parser == "learned":

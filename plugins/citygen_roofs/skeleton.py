@@ -30,7 +30,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 from shapely.geometry import Polygon
 from shapely.geometry.polygon import orient
 
@@ -244,6 +243,7 @@ class _Wavefront:
         its ``NEAR_EDGES`` nearest edges) bounds how far anything moves before it (``horizon``); a vertex can
         reach an edge by then only if its distance to the edge's midpoint is at most ``horizon`` times its speed
         plus ``horizon`` times the faster end's speed plus half the edge (k-d tree on the midpoints)."""
+        from scipy.spatial import cKDTree  # (only big wavefronts need it: ~0.2 s of import a flat city skips)
         mid = (pos + pos[nxt]) / 2
         tree = cKDTree(mid)
         k = min(NEAR_EDGES, len(pos))

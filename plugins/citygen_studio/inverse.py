@@ -12,7 +12,7 @@ from typing import Any
 
 from citygen.errors import CitygenError, LayoutError, SourceLocation
 from citygen.layout import FacadeLayout, check_partition
-from citygen_photo.photo import PARSERS
+from citygen_photo import PARSERS
 from citygen_studio.confinement import MAX_UPLOAD, StudioError
 from citygen_studio.session import layout_data
 

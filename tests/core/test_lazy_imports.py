@@ -9,7 +9,8 @@ from pathlib import Path
 
 RULESET = Path(__file__).resolve().parents[2] / "rulesets" / "residential_house.layers"
 #: Modules a city without layer stacks or SAFE rulesets never needs (solvers and what they import).
-LAZY = ["citygen_layers.solver", "citygen_layers.sizing", "citygen_safe.generate", "citygen_safe.optimise"]
+LAZY = ["citygen_layers.solver", "citygen_layers.sizing", "citygen_safe.generate", "citygen_safe.optimise",
+        "citygen_photo.photo", "scipy.spatial", "scipy.ndimage"]
 
 
 def _loaded_after(code: str) -> set[str]:
@@ -18,8 +19,9 @@ def _loaded_after(code: str) -> set[str]:
     return set(json.loads(out.splitlines()[-1]))
 
 
-def test_loading_the_registry_imports_no_solver_of_an_unused_kind():
-    loaded = _loaded_after("from citygen.registry import default_registry\ndefault_registry()")
+def test_loading_the_registry_and_the_command_line_imports_no_solver_of_an_unused_kind():
+    loaded = _loaded_after("from citygen.cli import build_parser\nfrom citygen.registry import default_registry\n"
+                           "build_parser(default_registry())")
     assert {"citygen_layers.plugin", "citygen_safe.plugin"} <= loaded
     assert not loaded & set(LAZY)
 
