@@ -142,12 +142,25 @@ def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
 
 @dataclass
 class _Element:
-    """An element prototype's prepared geometry (a function of its key and the material library alone), kept by a
-    writer for its tile writers, which would otherwise rebuild it in every tile."""
+    """An element prototype's prepared geometry (a function of its key and the material library alone), kept for
+    every writer of the process with that library (:func:`_elements`): tile writers would otherwise rebuild it in
+    every tile."""
 
     meshes: list[tuple[str, str, str | None, MeshData]]
     bound: np.ndarray | None
     normals: list[tuple[np.ndarray, np.ndarray]] | None = None
+
+
+#: Element prototypes kept per material library (at most this many in all; then the memory starts over).
+ELEMENTS_KEPT = 8192
+_ELEMENTS: dict[tuple, dict[ProtoKey, _Element]] = {}
+
+
+def _elements(library: Mapping[str, Material]) -> dict[ProtoKey, _Element]:
+    """This process's prepared element prototypes for ``library``."""
+    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
+        _ELEMENTS.clear()
+    return _ELEMENTS.setdefault(tuple(sorted(library.items())), {})
 
 
 @dataclass
@@ -201,7 +214,7 @@ class StageWriter:
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
-        self.elements: dict[ProtoKey, _Element] = {}  # shared with the tile writers
+        self.elements = _elements(self.library)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
@@ -314,7 +327,6 @@ class StageWriter:
             sub = StageWriter(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
                               layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
                               materials=self.library)
-            sub.elements = self.elements
             self.tile = (tile, sub)
             return sub
         prim = self.author.prim(self.world, name, "Xform")
