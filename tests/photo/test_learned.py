@@ -174,3 +174,34 @@ def test_a_sliver_of_door_probability_beside_the_lowest_windows_is_no_door():
     facade_ = regular_facade(prob)
     assert not any(label == "door" for _, label in facade_.elements)
     assert sum(label == "window" for _, label in facade_.elements) == 20
+
+
+def test_a_floor_line_lies_in_the_wall_band_not_in_a_railing():
+    """Regression (round 2): the floor line between two rows of windows was the middle of the gap between them,
+    which a railing below the upper row fills; it now sits in the wall band the window, balcony and door
+    probabilities leave between the railing and the next row."""
+    prob = probabilities(floors=4, jitter=0.0)
+    balcony = CMP_LABELS.index("balcony")
+    for i in range(3):  # a railing over the upper 10 of the 16 wall rows below every window row but the last
+        prob[i * 30 + 22:i * 30 + 32, :] = np.eye(len(CMP_LABELS))[balcony]
+    lines = regular_facade(prob).floor_lines
+    assert len(lines) == 5
+    for k, y in enumerate(lines[1:-1]):  # the wall band of floor k: rows 32..38 below its top
+        assert k * 30 + 32 <= y <= k * 30 + 38
+        assert prob[int(y), :, [WINDOW, balcony]].sum() == 0
+
+
+def test_a_window_off_its_column_moves_to_its_glass_keeping_the_group_size():
+    """Synchronised sizes (wu2014 §3.3) with positions per element: a window 3 px right of its column keeps the
+    group's size and moves onto its glass."""
+    prob = probabilities(floors=3, jitter=0.0)
+    n = len(CMP_LABELS)
+    r0, c0 = 30 + 8, 2 * 24 + 7  # the middle floor's third window
+    prob[r0:r0 + 14, c0:c0 + 10] = np.eye(n)[CMP_LABELS.index("facade")]
+    prob[r0:r0 + 14, c0 + 3:c0 + 13] = np.eye(n)[WINDOW]
+    windows = [b for b, label in regular_facade(prob).elements if label == "window"]
+    assert len(windows) == 15 and len({(round(b[2] - b[0], 6), round(b[3] - b[1], 6)) for b in windows}) == 1
+    moved = [b for b in windows if r0 - 2 <= b[1] <= r0 + 2 and c0 - 2 <= b[0] <= c0 + 6]
+    assert len(moved) == 1 and moved[0][0] == pytest.approx(c0 + 3, abs=0.5)
+    others = [b for b in windows if b is not moved[0]]
+    assert all(abs(b[0] - (round((b[0] - 7) / 24) * 24 + 7)) <= 0.5 for b in others)
