@@ -59,9 +59,11 @@ ATTIC_GAP = 0.6
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
 BALCONY_VOTE = 0.15
-#: Each window of a tile group keeps the group's size and moves, by at most this share of its size, to where it
-#: holds the most glass probability (wu2014 §3.3: sizes synchronised, positions per element).
+#: Each window of a tile group keeps the group's size and moves, by at most ``FIT_REACH`` of its size, to where it
+#: holds the most glass probability, when that is at least ``FIT_GAIN`` more than where it is (wu2014 §3.3: sizes
+#: synchronised, positions per element).
 FIT_REACH = 0.5
+FIT_GAIN = 0.1
 #: Samples of a window's height in the balcony group's mean profile.
 PROFILE = 32
 #: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
@@ -185,8 +187,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             box = _clip((c, a, d, b), w, h)
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
-    elements = _fitted(glass, elements)
-    elements = _with_balconies(prob, elements)
+    elements = _with_balconies(prob, _fitted(glass, elements))
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
     elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
@@ -212,7 +213,7 @@ def _wall_line(openings: np.ndarray, upper: Span, lower: Span) -> float:
 
 def _fitted(glass: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple[Box, str]]:
     """Every window box moved (same size) to the integer shift within ``FIT_REACH`` of its size where the glass
-    probability inside it is largest (ties: the smallest move)."""
+    probability inside it is largest (ties: the smallest move), if that holds ``FIT_GAIN`` more than no move."""
     h, w = glass.shape
     table = np.zeros((h + 1, w + 1))
     table[1:, 1:] = glass.cumsum(0).cumsum(1)
@@ -228,6 +229,9 @@ def _fitted(glass: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple[Bo
         mass = table[b1, a1] - table[b0, a1] - table[b1, a0] + table[b0, a0]
         best = np.flatnonzero(mass >= mass.max() - 1e-9)
         k = best[np.argmin(np.abs(dx[best]) + np.abs(dy[best]))]
+        here = int(np.flatnonzero((dx == 0) & (dy == 0))[0])
+        if mass[k] < (1 + FIT_GAIN) * mass[here]:
+            k = here
         box = _clip((x0 + dx[k], y0 + dy[k], x1 + dx[k], y1 + dy[k]), w, h)
         out.append((box or (x0, y0, x1, y1), label))
     return out
