@@ -8,7 +8,9 @@ without windows such as a shop ground floor or an attic, and whether every row o
 own; and with the annotated floors: the rows plus a ground floor of doors or shops below them), tiles with the
 columns of windows,
 detected windows and doors with annotated ones (one-to-one, box IoU >= 0.5); windows both as the reported element
-boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes). The summary
+boxes and as the window terminals of the FacadeLayout (what ``citygen layout from-photo`` writes); the layout's
+window pixels against the label map's, with the annotated labels under them, and the annotated windows a floor
+line crosses. The summary
 is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
 (cmp_b0021-0040) and all. Timings are CPU seconds (process_time). The learned parser is trained on
 cmp_b0061-0300, so for it all of cmp_b0001-0040 is held out: its choices are made on cmp_b0261-0300
@@ -26,6 +28,7 @@ import numpy as np
 from citygen.errors import CitygenError
 from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
+from citygen_photo.labels import CMP_LABELS
 from citygen_photo.learned import analyse_learned
 from citygen_photo.parser import load_parser
 from citygen_photo.photo import PARSERS, analyse, load_photo
@@ -62,6 +65,7 @@ def evaluate(jpg: Path, parser: str = "learned", model=None) -> dict:
     terminals = layout_boxes(result.layout)
     door_pred = result.boxes("door")
     return {**row, "floors": len(result.floor_lines) - 1, "rows_ok": rows_in_floors(result.floor_lines, ref),
+            "cut": windows_cut(result.floor_lines, ref),
             "tiles": len(result.tile_lines) - 1, "pred": len(pred),
             "tp": tp, "lay_pred": len(terminals), "lay_tp": matches(terminals, ref), "door_pred": len(door_pred),
             "door_tp": matches(door_pred, doors), "cpu": time.process_time() - start,
@@ -70,17 +74,20 @@ def evaluate(jpg: Path, parser: str = "learned", model=None) -> dict:
 
 
 def window_pixels(jpg: Path, crop: tuple[int, int, int, int], layout) -> dict:
-    """Pixel counts of the layout's window terminals against the label map's window pixels in the crop."""
+    """Pixel counts of the layout's window terminals against the label map's window pixels in the crop, and the
+    annotated labels under the layout's window pixels (``px_labels``, by CMP label id; 0: unlabelled)."""
     from PIL import Image
     with Image.open(jpg.with_suffix(".png")) as image:
-        truth = np.asarray(image)[crop[1]:crop[3], crop[0]:crop[2]] == 3  # CMP label 3: window
+        labels = np.asarray(image)[crop[1]:crop[3], crop[0]:crop[2]]
+    truth = labels == 3  # CMP label 3: window
     mine = np.zeros_like(truth)
     s = layout.meta["metres_per_pixel"]
     H = truth.shape[0]
     for r in layout.leaves:
         if r.label == "window":
             mine[max(round(H - (r.y + r.h) / s), 0):round(H - r.y / s), round(r.x / s):round((r.x + r.w) / s)] = True
-    return {"px_tp": int((mine & truth).sum()), "px_pred": int(mine.sum()), "px_ref": int(truth.sum())}
+    return {"px_tp": int((mine & truth).sum()), "px_pred": int(mine.sum()), "px_ref": int(truth.sum()),
+            "px_labels": np.bincount(labels[mine].ravel(), minlength=13)[:13]}
 
 
 def grammar_costs(jpg: Path, layout) -> dict:
@@ -102,6 +109,11 @@ def ground_without_windows(windows: list[tuple[float, ...]], ground: list[tuple[
     lowest = max((b[1] + b[3]) / 2 for b in windows)
     return int(any((b[1] + b[3]) / 2 > lowest and all(w[3] <= b[1] or w[1] >= b[3] for w in windows)
                    for b in ground))
+
+
+def windows_cut(floor_lines: list[float], ref: list[tuple[float, ...]]) -> int:
+    """How many annotated windows a floor line crosses (inside the window by more than a tenth of its height)."""
+    return sum(any(b[1] + 0.1 * (b[3] - b[1]) < y < b[3] - 0.1 * (b[3] - b[1]) for y in floor_lines) for b in ref)
 
 
 def rows_in_floors(floor_lines: list[float], ref: list[tuple[float, ...]]) -> int:
@@ -196,6 +208,11 @@ def summary(name: str, rows: list[dict]) -> None:
     print(f"cpu per photo: median {cpu[len(cpu) // 2]:.2f} s, max {cpu[-1]:.2f} s")
     ptp, ppred, pref = (sum(r.get(k, 0) for r in ok) for k in ("px_tp", "px_pred", "px_ref"))
     print(f"window pixels of the layout: precision {ptp / max(ppred, 1):.3f}, recall {ptp / max(pref, 1):.3f}")
+    spread = sum(r["px_labels"] for r in ok if "px_labels" in r)
+    if ppred:
+        print("their annotated labels: " + ", ".join(f"{name} {n / ppred:.3f}" for name, n in
+                                                      zip(("unlabelled", *CMP_LABELS), spread) if n))
+    print(f"annotated windows cut by a floor line: {sum(r['cut'] for r in ok)}/{ref}")
     costed = [r for r in ok if "cost" in r]
     if costed:
         ratio = np.array([r["cost"] / max(r["cost_ref"], 1e-9) for r in costed])

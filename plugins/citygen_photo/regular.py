@@ -10,13 +10,15 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
    few. An attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
    shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
-   lowest row at least half a floor tall is.
+   lowest row at least half a floor tall is. A floor line between two rows sits in the wall band between them,
+   the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
 2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
    upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
    voted per tile (the mean probability in its window box).
 3. **Synchronised sizes** (§3.2, wu2014 §3.3): windows share their row's height and their column's width; rows
-   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size. The
-   windows behind railings (the balcony group) stop at one railing height, a balcony below them.
+   and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size;
+   each window then moves (its size kept) to where it holds the most glass probability. The windows behind
+   railings (the balcony group) stop at one railing height, a balcony below them.
 4. **Ground floor**: shops and the entrance door from their own probabilities and their own columns (the upper
    floors' tile lines do not cut a shop window); the door stands on the ground. Without a ground floor of its
    own the door is looked for in the lowest floor and replaces the windows it overlaps.
@@ -57,6 +59,11 @@ ATTIC_GAP = 0.6
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
 BALCONY_VOTE = 0.15
+#: Each window of a tile group keeps the group's size and moves, by at most ``FIT_REACH`` of its size, to where it
+#: holds the most glass probability, when that is at least ``FIT_GAIN`` more than where it is (wu2014 §3.3: sizes
+#: synchronised, positions per element).
+FIT_REACH = 0.5
+FIT_GAIN = 0.1
 #: Samples of a window's height in the balcony group's mean profile.
 PROFILE = 32
 #: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
@@ -148,11 +155,9 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     if shops is not None:
         rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
     pitch = _pitch(rows, period)
-    rows = synchronised(_with_missing_rows(rows, pitch))
-    rows = _with_attic(window, rows, pitch)
-    lines = [0.0]
-    for (_, b), (a, _) in zip(rows, rows[1:]):
-        lines.append((b + a) / 2)
+    rows = _with_attic(window, synchronised(_with_missing_rows(rows, pitch)), pitch)
+    openings = gaussian_filter1d((window + prob[..., BALCONY] + prob[..., DOOR]).mean(axis=1), 1.0)
+    lines = [0.0, *(_wall_line(openings, upper, lower) for upper, lower in zip(rows, rows[1:]))]
     ground_top = None
     if rows and shops is not None:
         ground_top = max((rows[-1][1] + shops) / 2, rows[-1][1])
@@ -182,7 +187,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             box = _clip((c, a, d, b), w, h)
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
-    elements = _with_balconies(prob, elements)
+    elements = _with_balconies(prob, _fitted(glass, elements))
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
     elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
@@ -192,6 +197,44 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             elements = [(box, label) for box, label in elements if not _overlap(box, found)] + [(found, "door")]
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
+
+
+def _wall_line(openings: np.ndarray, upper: Span, lower: Span) -> float:
+    """The floor line between two rows of windows: the least open row (window, blind, balcony and door
+    probability) of the wall band between them, the middle of that band's least open stretch; the middle of
+    the gap when the rows touch."""
+    a, b = int(np.ceil(upper[1])), int(lower[0])
+    if b - a < 2:
+        return (upper[1] + lower[0]) / 2
+    band = openings[a:b]
+    low = np.flatnonzero(band <= band.min() + 0.1 * (band.max() - band.min()))
+    return float(a + (low[0] + low[-1] + 1) / 2)
+
+
+def _fitted(glass: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple[Box, str]]:
+    """Every window box moved (same size) to the integer shift within ``FIT_REACH`` of its size where the glass
+    probability inside it is largest (ties: the smallest move), if that holds ``FIT_GAIN`` more than no move."""
+    h, w = glass.shape
+    table = np.zeros((h + 1, w + 1))
+    table[1:, 1:] = glass.cumsum(0).cumsum(1)
+    out = []
+    for (x0, y0, x1, y1), label in elements:
+        rx, ry = int(FIT_REACH * (x1 - x0)), int(FIT_REACH * (y1 - y0))
+        dx, dy = np.meshgrid(np.arange(-rx, rx + 1), np.arange(-ry, ry + 1))
+        dx, dy = dx.ravel(), dy.ravel()
+        a0 = np.clip(np.round(x0 + dx).astype(int), 0, w)
+        a1 = np.clip(np.round(x1 + dx).astype(int), 0, w)
+        b0 = np.clip(np.round(y0 + dy).astype(int), 0, h)
+        b1 = np.clip(np.round(y1 + dy).astype(int), 0, h)
+        mass = table[b1, a1] - table[b0, a1] - table[b1, a0] + table[b0, a0]
+        best = np.flatnonzero(mass >= mass.max() - 1e-9)
+        k = best[np.argmin(np.abs(dx[best]) + np.abs(dy[best]))]
+        here = int(np.flatnonzero((dx == 0) & (dy == 0))[0])
+        if mass[k] < (1 + FIT_GAIN) * mass[here]:
+            k = here
+        box = _clip((x0 + dx[k], y0 + dy[k], x1 + dx[k], y1 + dy[k]), w, h)
+        out.append((box or (x0, y0, x1, y1), label))
+    return out
 
 
 def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
