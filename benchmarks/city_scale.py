@@ -5,7 +5,8 @@
 Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide, 3-8 storeys, in blocks that
 share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
 main plus its finished children: the workers), peak memory (main process, largest worker, and the whole process
-tree: the sum of the RSS of the main process and its children, sampled every 0.1 s) and stage size per N. The
+tree: the sums of the RSS -- which counts pages a forked worker shares with the main process twice -- and of the
+PSS -- which shares them out -- of the main process and its children, sampled every 0.2 s) and stage size per N. The
 scene leaves ``tile_layers`` unset (tile layers above 1,000 buildings, the default); ``--one-file`` forces one
 layer.
 ``--executor dask`` runs one task per tile on a local dask cluster of ``--jobs`` workers (or on ``--scheduler``;
@@ -76,18 +77,20 @@ def main() -> None:
             print(f"N={n} [{args.executor}, {args.jobs} jobs{', one file' if args.one_file else ''}]: "
                   f"{report.written} buildings in {elapsed:.1f} s = {report.written / elapsed:.0f} buildings/s; "
                   f"CPU main {cpu:.1f} s, main+workers {cpu + children:.1f} s; "
-                  f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB, process tree {tree.peak:.0f} MB; "
+                  f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB, process tree {tree.peak:.0f} MB "
+                  f"(PSS {tree.pss:.0f} MB); "
                   f"{s.bytes / 1e6:.1f} MB .usdc "
                   f"({s.bytes / max(report.written, 1) / 1e3:.0f} kB/building); {s.instances} instances of "
                   f"{s.prototypes} prototypes")
 
 
 class TreePeak(threading.Thread):
-    """The peak, in MB, of the summed RSS of this process and all its descendants, sampled every 0.1 s."""
+    """The peaks, in MB, of the summed RSS and PSS of this process and all its descendants, sampled every 0.2 s."""
 
     def __init__(self) -> None:
         super().__init__(daemon=True)
-        self.peak, self.done = 0.0, threading.Event()
+        self.peak = self.pss = 0.0
+        self.done = threading.Event()
 
     def __enter__(self) -> TreePeak:
         self.start()
@@ -99,12 +102,13 @@ class TreePeak(threading.Thread):
 
     def run(self) -> None:
         me = psutil.Process()
-        while not self.done.wait(0.1):
-            total = 0
+        while not self.done.wait(0.2):
+            rss = pss = 0
             for proc in [me, *me.children(recursive=True)]:
                 with contextlib.suppress(psutil.Error):
-                    total += proc.memory_info().rss
-            self.peak = max(self.peak, total / 2 ** 20)
+                    info = proc.memory_full_info()
+                    rss, pss = rss + info.rss, pss + info.pss
+            self.peak, self.pss = max(self.peak, rss / 2 ** 20), max(self.pss, pss / 2 ** 20)
 
 
 def _children_cpu() -> float:
