@@ -78,3 +78,16 @@ def test_a_neighbour_along_part_of_a_wall_covers_only_those_bins():
     cw, _ = neighbour_cover([wide, short])
     east = cw[1]  # runs from y = 0 to 20: the neighbour stands along its first 8 m
     assert east.tolist() == [12.0] * 4 + [0.0] * 6
+
+
+def test_neighbour_cover_queried_in_chunks_is_the_same(monkeypatch):
+    """The sample points are made into geometries a chunk at a time (memory of big cities): any chunk size gives
+    the same cover."""
+    from citygen import mass as mass_module
+    masses = [build_mass(fp([(x, y), (x + 10, y), (x + 10, y + 8), (x, y + 8)], id=f"{x}-{y}", height=6.0 + x / 5))
+              for x in (0, 10, 20) for y in (0, 8)]
+    whole = neighbour_cover(masses)
+    monkeypatch.setattr(mass_module, "COVER_CHUNK", 7)
+    for a, b in zip(whole, neighbour_cover(masses)):
+        assert np.array_equal(a, b)
+    assert any(c.max() > 0 for c in whole)
