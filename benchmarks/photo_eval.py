@@ -31,7 +31,8 @@ from citygen_inverse.extract import extract_grammar
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.learned import analyse_learned
 from citygen_photo.parser import load_parser
-from citygen_photo.photo import PARSERS, analyse, load_photo
+from citygen_photo import PARSERS
+from citygen_photo.photo import analyse, load_photo
 from citygen_inverse.cmp import count_groups
 from citygen_photo.score import cmp_boxes, facade_box, layout_boxes, matches
 
