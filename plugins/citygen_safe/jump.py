@@ -180,12 +180,13 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
         if node.split == GROUP:
             first = len(out)
             out.extend(facade.leaves[i] for i in node.leaves)
-            return replace(node, leaves=tuple(range(first, len(out))))
+            return Node(node.x, node.y, node.w, node.h, GROUP, (), tuple(range(first, len(out))))
         items = runs(node)
         if len(items) == 1 and isinstance(items[0], Leaf):
             return items[0]
         children = tuple(_numbered(item, out) for item in items)
-        return replace(node, children=children, leaves=tuple(i for c in children for i in c.leaves))
+        return Node(node.x, node.y, node.w, node.h, node.split, children,  # (not replace(): it was a tenth
+                    tuple(i for c in children for i in c.leaves))        # of the merge's time)
 
     root = _numbered(visit(decompose(facade)), out)
     return replace(facade, leaves=tuple(out)), root

@@ -271,9 +271,9 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     """``x`` and multipliers ``y`` of ``min 1/2 x'Px + q'x s.t. A x = b`` (``P`` diagonal) from the sparse KKT
     system with a small dual regularisation, refined against the exact system (so redundant rows are harmless
     and the rows hold to rounding); None when the rows are inconsistent."""
-    n, m = P.size, A.shape[0]
+    n = P.size
     As = sp.csr_matrix(A)
-    K = sp.bmat([[sp.diags(P + KKT_REG), As.T], [As, -KKT_REG * sp.identity(m)]], format="csc")
+    K = kkt_matrix(P, As)
     try:
         lu = spla.splu(K)
     except RuntimeError:
@@ -290,6 +290,19 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     if not np.all(np.isfinite(sol)) or np.max(np.abs(As @ x - b), initial=0.0) > 1e-7 * scale:
         return None
     return x, sol[n:]
+
+
+def kkt_matrix(P: np.ndarray, A: sp.csr_matrix) -> sp.csc_matrix:
+    """The regularised KKT matrix ``[[diag(P) + r, A'], [A, -r I]]`` (r = ``KKT_REG``) in canonical CSC form,
+    assembled from one list of entries (``sp.bmat`` built and converted each block: it cost as much as the
+    factorisation at the QP's sizes)."""
+    n, m = P.size, A.shape[0]
+    coo = A.tocoo()
+    diag, dual = np.arange(n), np.arange(n, n + m)
+    rows = np.concatenate([diag, coo.col, n + coo.row, dual])
+    cols = np.concatenate([diag, n + coo.row, coo.col, dual])
+    data = np.concatenate([P + KKT_REG, coo.data, coo.data, np.full(m, -KKT_REG)])
+    return sp.csc_matrix((data, (rows, cols)), shape=(n + m, n + m))
 
 
 def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float, least: dict[int, float]

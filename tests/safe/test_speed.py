@@ -1,0 +1,55 @@
+"""The preview-speed changes keep results: remembered decomposition trees and the directly assembled KKT matrix."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from citygen_safe import tree
+from citygen_safe.leaves import facade_from_layout, transpose
+from citygen_safe.optimise import KKT_REG, kkt_matrix
+from citygen_safe.tree import TREE_CACHE_SIZE, decompose
+
+from .conftest import regular
+
+
+def _shape(node):
+    return node.x, node.y, node.w, node.h, node.split, node.leaves, tuple(_shape(c) for c in node.children)
+
+
+def test_remembered_tree_is_the_tree_of_equal_rectangles(cmp_facade):
+    tree._TREES.clear()
+    first = decompose(cmp_facade)
+    relabelled = replace(cmp_facade, leaves=tuple(replace(f, region=replace(f.region, label="wall"))
+                                                  for f in cmp_facade.leaves))
+    assert decompose(relabelled) is first  # the tree depends on the rectangles only
+    tree._TREES.clear()
+    assert _shape(decompose(cmp_facade)) == _shape(first)
+    assert first.split == "y" and sorted(first.leaves) == list(range(len(cmp_facade.leaves)))
+
+
+def test_tree_memory_is_bounded():
+    tree._TREES.clear()
+    first = facade_from_layout(regular(1, 1))
+    decompose(first)
+    for k in range(TREE_CACHE_SIZE + 5):
+        decompose(transpose(facade_from_layout(regular(k % 7 + 1, k // 7 + 1))))
+    assert len(tree._TREES) == TREE_CACHE_SIZE
+    assert tuple((f.x, f.y, f.right, f.top) for f in first.leaves) not in tree._TREES  # first in, first out
+
+
+def test_kkt_matrix_equals_the_block_assembly():
+    """Regression: the KKT matrix was built by ``sp.bmat``, which cost as much as its factorisation; the direct
+    assembly must give the same canonical arrays (unsorted rows and explicit zeros included) so the LU, and so
+    every layout, is unchanged to the bit."""
+    P = np.array([2.0, 0.5, 8.0, 1.0])
+    rows = [{2: 1.0, 0: -1.0}, {1: 0.0, 3: 2.5}, {3: 1.0, 0: 1.0, 2: -0.25}]
+    data = [a for r in rows for a in r.values()]
+    cols = [k for r in rows for k in r]
+    A = sp.csr_matrix((data, cols, [0, 2, 4, 7]), shape=(3, 4))
+    ref = sp.bmat([[sp.diags(P + KKT_REG), A.T], [A, -KKT_REG * sp.identity(3)]], format="csc")
+    new = kkt_matrix(P, A)
+    assert new.has_canonical_format and new.shape == (7, 7)
+    for field in ("indptr", "indices", "data"):
+        assert np.array_equal(getattr(new, field), getattr(ref, field)), field
