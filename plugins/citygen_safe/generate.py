@@ -109,21 +109,24 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIM
 
 
 def _floors(ruleset: SafeRuleset, settings: Settings, floor_lines: tuple[float, ...], deadline: float):
-    """:func:`fit_floors`, remembered per ruleset and floor lines: the faces of a building share their floor lines
-    (and floors ignore the corner strips), so only the first face computes the row jumps. A remembered result
-    still charges the work it took, so a face's budget for column jumps does not depend on which faces the
-    process (one of several workers) saw before."""
-    key = (id(ruleset), floor_lines)
+    """:func:`fit_floors`, remembered by what it depends on (the input facade, the settings that reach the height
+    problem, the floor lines): the faces of a building share their floor lines (and floors ignore the corner
+    strips), so only the first face computes the row jumps, and a ruleset text edited in the studio without
+    touching its layout or grids parses to an equal facade and finds them too. A remembered result still charges
+    the work it took, so a face's budget for column jumps does not depend on which faces the process (one of
+    several workers) saw before."""
+    key = (ruleset.facade, settings.active, settings.alignment, settings.symmetry, settings.keep, settings.centre,
+           settings.budget, id(settings.rules), floor_lines)  # (the rules: always the module's DEFAULT_RULES)
     hit = _FLOOR_CACHE.get(key)
-    if hit is not None and hit[0] is ruleset:
-        settings.work.spent += hit[4]
-        return hit[1:4]
+    if hit is not None:
+        settings.work.spent += hit[3]
+        return hit[:3]
     notes: list[str] = []
     before = settings.work.spent
     path, heights = fit_floors(ruleset.facade, settings, floor_lines, deadline, notes)
     if len(_FLOOR_CACHE) >= FLOOR_CACHE_SIZE:
         _FLOOR_CACHE.pop(next(iter(_FLOOR_CACHE)))
-    _FLOOR_CACHE[key] = (ruleset, path, heights, tuple(notes), settings.work.spent - before)
+    _FLOOR_CACHE[key] = (path, heights, tuple(notes), settings.work.spent - before)
     return path, heights, tuple(notes)
 
 

@@ -59,9 +59,14 @@ Vec = dict[int, float]  #: a sparse row over the reduced variables (index -> coe
 def _comb(*terms: tuple[float, Vec]) -> Vec:
     """The linear combination of sparse rows ``sum(c * v)``."""
     out: Vec = {}
+    get = out.get
     for c, vec in terms:
-        for k, a in vec.items():
-            out[k] = out.get(k, 0.0) + c * a
+        if c == 1.0:  # (the common term; 1.0 * a is a)
+            for k, a in vec.items():
+                out[k] = get(k, 0.0) + a
+        else:
+            for k, a in vec.items():
+                out[k] = get(k, 0.0) + c * a
     return out
 
 

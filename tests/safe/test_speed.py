@@ -53,3 +53,27 @@ def test_kkt_matrix_equals_the_block_assembly():
     assert new.has_canonical_format and new.shape == (7, 7)
     for field in ("indptr", "indices", "data"):
         assert np.array_equal(getattr(new, field), getattr(ref, field)), field
+
+
+def test_floors_are_remembered_for_an_equal_ruleset_text(monkeypatch):
+    """A ruleset text edited in the studio (a comment added) parses to an equal facade: its floors are the
+    remembered ones, charged at the work they took; a changed switch computes them again."""
+    from citygen.request import FacadeRequest
+    from citygen_safe import generate
+    from citygen_safe.ruleset import parse_ruleset
+
+    from .conftest import ROOT
+
+    path = ROOT / "rulesets" / "cmp_b0035.safe"
+    text = path.read_text(encoding="utf-8")
+    calls = []
+    real = generate.fit_floors
+    monkeypatch.setattr(generate, "fit_floors", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(generate, "_FLOOR_CACHE", {})
+    request = FacadeRequest.preview(20.0, 15.0, 3.3)
+    first = generate.edit(parse_ruleset(text, str(path), base=path.parent), request)
+    again = generate.edit(parse_ruleset(text + "\n# edited\n", str(path), base=path.parent), request)
+    assert len(calls) == 1
+    assert again.layout.dumps() == first.layout.dumps() and again.work == first.work
+    generate.edit(parse_ruleset(text.replace("symmetry on", "symmetry off"), str(path), base=path.parent), request)
+    assert len(calls) == 2
