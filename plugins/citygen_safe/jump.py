@@ -22,7 +22,11 @@ from dataclasses import dataclass, replace
 
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.memory import Memory
 from citygen_safe.tree import GROUP, X, Node, decompose
+
+JUMPS: Memory[Facade] = Memory(512)  #: facades after a slab insertion or removal, by facade and slab
+MERGED: Memory[tuple[Facade, Node]] = Memory(512)  #: merged facades and their trees, by facade and fixed labels
 
 
 @dataclass(frozen=True)
@@ -68,7 +72,12 @@ def insert_column(facade: Facade, grid: FacadeGrid, source: int, position: int) 
 
 def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int = 1) -> Facade:
     """Open a band at ``gap[0]`` holding a copy of ``gap`` followed by a copy of ``slab``, ``copies`` times (the
-    same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy)."""
+    same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy). Remembered
+    (:mod:`citygen_safe.memory`)."""
+    return JUMPS.get(("insert", facade, gap, slab, copies), lambda: _inserted(facade, gap, slab, copies))
+
+
+def _inserted(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int) -> Facade:
     c0, c1 = gap
     s0, s1 = slab
     width_gap, pitch = c1 - c0, (c1 - c0) + (s1 - s0)
@@ -128,6 +137,11 @@ def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | Non
 
 
 def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
+    """``facade`` without ``slab`` (remembered)."""
+    return JUMPS.get(("remove", facade, slab), lambda: _removed(facade, slab))
+
+
+def _removed(facade: Facade, slab: tuple[float, float]) -> Facade:
     a, b = slab
     cut = b - a
 
@@ -147,7 +161,11 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     material, ...) merged into one leaf, except labels in ``fixed`` (grid elements, floor-bound openings), and the
     tree of the result. Jumps cut leaves at the copied slabs' edges; merging the pieces back keeps the leaf count
     growing only with the copied content. Siblings only, so the partition stays guillotine (merging arbitrary
-    neighbours could close a pinwheel); leaves come in tree order."""
+    neighbours could close a pinwheel); leaves come in tree order. Remembered (:mod:`citygen_safe.memory`)."""
+    return MERGED.get((facade, fixed), lambda: _merged(facade, fixed))
+
+
+def _merged(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     out: list[Leaf] = []
 
     keys: dict[int, object] = {}

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from citygen_safe.leaves import EPS, Facade
+from citygen_safe.memory import Memory
 
 X, Y, GROUP = "x", "y", "group"
 
@@ -44,17 +45,10 @@ def decompose(facade: Facade) -> Node:
     rectangles: the tree depends on nothing else, and the same facades recur (the input layout of every edit of a
     ruleset's text, the states its jumps reach)."""
     boxes = tuple((f.x, f.y, f.right, f.top) for f in facade.leaves)
-    root = _TREES.get(boxes)
-    if root is None:
-        root = _Splitter(boxes).node(list(range(len(boxes))))
-        if len(_TREES) >= TREE_CACHE_SIZE:
-            _TREES.pop(next(iter(_TREES)))
-        _TREES[boxes] = root
-    return root
+    return TREES.get(boxes, lambda: _Splitter(boxes).node(list(range(len(boxes)))))
 
 
-TREE_CACHE_SIZE = 256  #: decomposition trees remembered (first in, first out)
-_TREES: dict[tuple[tuple[float, float, float, float], ...], Node] = {}
+TREES: Memory[Node] = Memory(256)  #: decomposition trees by their leaves' rectangles
 
 
 class _Splitter:

@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from citygen_safe import tree
 from citygen_safe.leaves import facade_from_layout, transpose
 from citygen_safe.optimise import KKT_REG, kkt_matrix
-from citygen_safe.tree import TREE_CACHE_SIZE, decompose
+from citygen_safe.tree import decompose
 
 from .conftest import regular
 
@@ -19,24 +19,24 @@ def _shape(node):
 
 
 def test_remembered_tree_is_the_tree_of_equal_rectangles(cmp_facade):
-    tree._TREES.clear()
+    tree.TREES.clear()
     first = decompose(cmp_facade)
     relabelled = replace(cmp_facade, leaves=tuple(replace(f, region=replace(f.region, label="wall"))
                                                   for f in cmp_facade.leaves))
     assert decompose(relabelled) is first  # the tree depends on the rectangles only
-    tree._TREES.clear()
+    tree.TREES.clear()
     assert _shape(decompose(cmp_facade)) == _shape(first)
     assert first.split == "y" and sorted(first.leaves) == list(range(len(cmp_facade.leaves)))
 
 
 def test_tree_memory_is_bounded():
-    tree._TREES.clear()
+    tree.TREES.clear()
     first = facade_from_layout(regular(1, 1))
     decompose(first)
-    for k in range(TREE_CACHE_SIZE + 5):
+    for k in range(tree.TREES.size + 5):
         decompose(transpose(facade_from_layout(regular(k % 7 + 1, k // 7 + 1))))
-    assert len(tree._TREES) == TREE_CACHE_SIZE
-    assert tuple((f.x, f.y, f.right, f.top) for f in first.leaves) not in tree._TREES  # first in, first out
+    assert len(tree.TREES) == tree.TREES.size
+    assert tuple((f.x, f.y, f.right, f.top) for f in first.leaves) not in tree.TREES  # first in, first out
 
 
 def test_kkt_matrix_equals_the_block_assembly():
@@ -77,3 +77,27 @@ def test_floors_are_remembered_for_an_equal_ruleset_text(monkeypatch):
     assert again.layout.dumps() == first.layout.dumps() and again.work == first.work
     generate.edit(parse_ruleset(text.replace("symmetry on", "symmetry off"), str(path), base=path.parent), request)
     assert len(calls) == 2
+
+
+def test_jumps_and_merges_are_remembered_by_value(cmp_facade):
+    """An equal facade (another parse of the same layout) finds the remembered jump and merge; a facade that
+    differs only in a label does not, and its result carries its own label."""
+    from citygen.layout import FacadeLayout
+    from citygen_safe.jump import JUMPS, MERGED, insert_slab, merge_leaves
+
+    from .conftest import ROOT
+
+    fixed = frozenset({"window", "door"})
+    JUMPS.clear()
+    MERGED.clear()
+    jumped = insert_slab(cmp_facade, (5.0, 6.0), (6.0, 8.0))
+    merged, root = merge_leaves(jumped, fixed)
+    again = facade_from_layout(FacadeLayout.loads((ROOT / "rulesets" / "cmp_b0035.layout.json").read_text()))
+    assert again is not cmp_facade and insert_slab(again, (5.0, 6.0), (6.0, 8.0)) is jumped
+    assert merge_leaves(jumped, fixed)[0] is merged and sorted(root.leaves) == list(range(len(merged.leaves)))
+    first = cmp_facade.leaves[0]
+    other = replace(cmp_facade, leaves=(replace(first, region=replace(first.region, label="deco")),
+                                        *cmp_facade.leaves[1:]))
+    moved = insert_slab(other, (5.0, 6.0), (6.0, 8.0))
+    assert moved is not jumped and moved != jumped
+    assert {f.label for f in moved.leaves if f.origin == first.origin} == {"deco"}
