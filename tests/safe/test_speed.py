@@ -69,7 +69,7 @@ def test_floors_are_remembered_for_an_equal_ruleset_text(monkeypatch):
     calls = []
     real = generate.fit_floors
     monkeypatch.setattr(generate, "fit_floors", lambda *a, **k: calls.append(1) or real(*a, **k))
-    monkeypatch.setattr(generate, "_FLOOR_CACHE", {})
+    generate.FLOORS.clear()
     request = FacadeRequest.preview(20.0, 15.0, 3.3)
     first = generate.edit(parse_ruleset(text, str(path), base=path.parent), request)
     again = generate.edit(parse_ruleset(text + "\n# edited\n", str(path), base=path.parent), request)
@@ -101,3 +101,8 @@ def test_jumps_and_merges_are_remembered_by_value(cmp_facade):
     moved = insert_slab(other, (5.0, 6.0), (6.0, 8.0))
     assert moved is not jumped and moved != jumped
     assert {f.label for f in moved.leaves if f.origin == first.origin} == {"deco"}
+    from citygen_safe.generate import FLOORS
+    from citygen_safe.memory import forget
+
+    forget()
+    assert len(JUMPS) == len(MERGED) == len(tree.TREES) == len(FLOORS) == 0
