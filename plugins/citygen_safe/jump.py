@@ -152,7 +152,7 @@ def _removed(facade: Facade, slab: tuple[float, float]) -> Facade:
     for f in facade.leaves:
         x0, x1 = shift(f.x), shift(f.right)
         if x1 - x0 > EPS:
-            leaves.append(Leaf(x0, f.y, x1 - x0, f.h, f.region, f.origin))
+            leaves.append(Leaf.fast(x0, f.y, x1 - x0, f.h, f.region, f.origin))
     return replace(facade, width=facade.width - cut, leaves=tuple(leaves))
 
 
@@ -186,8 +186,8 @@ def _merged(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
             item = visit(child)
             if isinstance(item, Leaf) and items and isinstance(items[-1], Leaf) and same(items[-1], item):
                 a = items[-1]
-                items[-1] = (Leaf(a.x, a.y, item.right - a.x, a.h, a.region, a.origin) if node.split == X
-                             else Leaf(a.x, a.y, a.w, item.top - a.y, a.region, a.origin))
+                items[-1] = (Leaf.fast(a.x, a.y, item.right - a.x, a.h, a.region, a.origin) if node.split == X
+                             else Leaf.fast(a.x, a.y, a.w, item.top - a.y, a.region, a.origin))
             else:
                 items.append(item)
         return items
@@ -238,4 +238,4 @@ def _merge(facade: Facade, pieces: list[tuple[float, float, int]]) -> tuple[Leaf
 
 def _leaf(facade: Facade, run: list) -> Leaf:
     f = facade.leaves[run[2]]
-    return Leaf(run[0], f.y, run[1] - run[0], f.h, f.region, f.origin)
+    return Leaf.fast(run[0], f.y, run[1] - run[0], f.h, f.region, f.origin)

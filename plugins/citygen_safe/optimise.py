@@ -355,5 +355,6 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
                 place(c, left, w, collapsed)
 
     place(root, 0.0, target)
-    leaves = tuple(Leaf(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin) for i, f in enumerate(facade.leaves))
+    leaves = tuple(Leaf.fast(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin)
+                   for i, f in enumerate(facade.leaves))
     return replace(facade, width=target, leaves=leaves)
