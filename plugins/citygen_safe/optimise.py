@@ -280,6 +280,7 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     and the rows hold to rounding); None when the rows are inconsistent."""
     n = P.size
     As = sp.csr_matrix(A)
+    AsT = As.T
     K = kkt_matrix(P, As)
     try:
         lu = spla.splu(K)
@@ -289,7 +290,7 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     sol = lu.solve(rhs)
     for _ in range(REFINEMENTS):
         x, y = sol[:n], sol[n:]
-        residual = rhs - np.concatenate([P * x + As.T @ y, As @ x])
+        residual = rhs - np.concatenate([P * x + AsT @ y, As @ x])
         if np.max(np.abs(residual)) <= 1e-12 * scale:
             break
         sol = sol + lu.solve(residual)
@@ -327,11 +328,13 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
     var_width = {id(v): float(x[k]) for k, v in enumerate(sys_.var_nodes)}
     lefts: dict[int, tuple[float, float]] = {}
 
+    known = dict(var_width)  # widths of nodes worked out so far (place asks again at every level below)
+
     def width(node: Node) -> float:
-        if id(node) in var_width:
-            return var_width[id(node)]
-        ws = [width(c) for c in node.children]
-        return sum(ws) if node.split == X else ws[0]
+        if id(node) not in known:
+            ws = [width(c) for c in node.children]
+            known[id(node)] = sum(ws) if node.split == X else ws[0]
+        return known[id(node)]
 
     def place(node: Node, left: float, w: float, collapsed: bool = False) -> None:
         collapsed = collapsed or id(node) in var_width
