@@ -19,6 +19,7 @@ import scipy.sparse.linalg as spla
 from citygen_safe.bounds import MIN_SIZE, collapse, node_minimum, share
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.memory import Memory
 from citygen_safe.tree import GROUP, X, Node
 
 WEIGHT_CAP = 10.0
@@ -171,6 +172,63 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     the variable nodes by their subtrees' least widths; slabs of walls thinner than ``collapse_below`` are then
     removed (:func:`citygen_safe.bounds.collapse`). ``centred``: leaves whose centre is pinned to the facade's
     middle (a centred door; with ``symmetry``), the first constraint group dropped when infeasible."""
+    centred = tuple(centred)
+    key = None if lines is not None else (id(facade), id(root), tuple(grids), corners, corner_labels, alignment,
+                                          symmetry, None if minimum is None else minimum.tobytes(), centred)
+    problem = PROBLEMS.lookup(key) if key is not None else None
+    if problem is None or problem.facade is not facade or problem.root is not root:
+        problem = _prepare(facade, root, grids, lines, corners, corner_labels, alignment, symmetry, minimum, centred)
+        if key is not None:
+            PROBLEMS.remember(key, problem)
+    n = len(problem.var_nodes)
+    rhs_of = {**problem.rhs, "size": [target, *(lines.at if lines is not None else ())],
+              "centring": [0.5 * target] * problem.centred}
+    h = np.asarray(problem.h + [-corners[0], target - corners[1]] * problem.cornered, dtype=float)
+    dropped: list[str] = []
+    for drop in ((), ("centring",), ("centring", "symmetry"), ("centring", "symmetry", "alignment")):
+        rows = [r for k, rs in problem.rows.items() if k not in drop for r in rs]
+        rhs = [v for k in problem.rows if k not in drop for v in rhs_of[k]]
+        x = _solve(problem.weight, problem.x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), problem.G, h)
+        if x is not None:
+            objective = float(np.sum((problem.weight * (x - problem.x_star)) ** 2))
+            placed = _place(facade, root, problem.var_nodes, x, target, problem.least)
+            if collapse_below > 0:
+                placed = collapse(placed, root, collapse_below)
+            return SpatialResult(placed, True, objective, n, tuple(drop))
+        dropped = list(drop) or ["(inconsistent)"]
+    return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """The part of Eq. 1 that does not depend on the target width, for one facade and tree: the variable nodes,
+    each constraint group's rows (``rhs``: right-hand sides of the groups without the target in them), the
+    weights, the nodes' least widths, the bound rows ``G`` with the right-hand sides ``h`` of the variables' bounds
+    and how many ``cornered`` (two rows each) and ``centred`` leaves add rows whose sides use the target."""
+
+    facade: Facade
+    root: Node
+    var_nodes: tuple[Node, ...]
+    rows: dict[str, list[Vec]]
+    rhs: dict[str, list[float]]
+    x_star: np.ndarray
+    weight: np.ndarray
+    least: dict[int, float]
+    G: sp.csr_matrix
+    h: list[float]
+    cornered: int
+    centred: int
+
+
+#: prepared problems by facade and tree (identity: the remembered jumps and merges give the same objects again;
+#: each entry holds both, so their ids stay theirs), grids and switches; the same states are sized at other
+#: targets by other faces of a city and by the studio's keystrokes
+PROBLEMS: Memory[_Problem] = Memory(128)
+
+
+def _prepare(facade: Facade, root: Node, grids: Sequence[FacadeGrid], lines: Lines | None,
+             corners: tuple[float, float], corner_labels: frozenset[str], alignment: bool, symmetry: bool,
+             minimum: np.ndarray | None, centred: tuple[int, ...]) -> _Problem:
     leaf_node = {n.leaves[0]: n for n in root.walk() if n.split is None}
     columns = [[i for i in grid.column(c) if i is not None and i in leaf_node]
                for grid in grids for c in range(len(grid.columns))] if alignment else []
@@ -186,13 +244,9 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     n = len(sys_.var_nodes)
     alpha = lambda i: sys_.alpha[id(leaf_node[i])]  # noqa: E731
     beta = lambda i: sys_.beta[id(leaf_node[i])]  # noqa: E731
-    groups: dict[str, tuple[list[Vec], list[float]]] = {"hierarchy": (sys_.hierarchy, [0.0] * len(sys_.hierarchy))}
-    size_rows = [sys_.alpha[id(root)]]
-    size_rhs = [target]
-    if lines is not None:
-        size_rows += [sys_.beta[id(node)] for node in lines.nodes]
-        size_rhs += list(lines.at)
-    groups["size"] = (size_rows, size_rhs)
+    rows: dict[str, list[Vec]] = {"hierarchy": sys_.hierarchy}
+    rhs: dict[str, list[float]] = {"hierarchy": [0.0] * len(sys_.hierarchy)}
+    rows["size"] = [sys_.alpha[id(root)]] + [sys_.beta[id(node)] for node in (lines.nodes if lines else ())]
     rows_a, rhs_a = [], []
     for col in (c for c in columns if len(c) > 1):
         eps = _anchor_eps(facade, col)
@@ -200,9 +254,9 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
             fa, fb = facade.leaves[a], facade.leaves[b]
             rows_a.append(_comb((1.0, beta(a)), (eps, alpha(a)), (-1.0, beta(b)), (-eps, alpha(b))))
             rhs_a.append((fa.x + eps * fa.w) - (fb.x + eps * fb.w))
-    groups["alignment"] = (rows_a, rhs_a)
-    groups["symmetry"] = ([_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs))
-    groups["centring"] = ([_comb((1.0, beta(i)), (0.5, alpha(i))) for i in centred], [0.5 * target] * len(centred))
+    rows["alignment"], rhs["alignment"] = rows_a, rhs_a
+    rows["symmetry"], rhs["symmetry"] = [_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs)
+    rows["centring"] = [_comb((1.0, beta(i)), (0.5, alpha(i))) for i in centred]
     x_star = np.array([v.w for v in sys_.var_nodes])
     area = np.array([v.w * v.h for v in sys_.var_nodes])
     weight = np.minimum(facade.width * facade.height / np.maximum(area, EPS), WEIGHT_CAP)
@@ -212,21 +266,8 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     h_rows = [-max(MIN_SIZE, least[id(v)]) for v in sys_.var_nodes]
     for i in cornered:
         G_rows += [_comb((-1.0, beta(i))), _comb((1.0, beta(i)), (1.0, alpha(i)))]
-        h_rows += [-corners[0], target - corners[1]]
-    G, h = _matrix(G_rows, n), np.asarray(h_rows, dtype=float)
-    dropped: list[str] = []
-    for drop in ((), ("centring",), ("centring", "symmetry"), ("centring", "symmetry", "alignment")):
-        rows = [r for k, (rs, _) in groups.items() if k not in drop for r in rs]
-        rhs = [v for k, (_, vs) in groups.items() if k not in drop for v in vs]
-        x = _solve(weight, x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), G, h)
-        if x is not None:
-            objective = float(np.sum((weight * (x - x_star)) ** 2))
-            placed = _place(facade, root, sys_, x, target, least)
-            if collapse_below > 0:
-                placed = collapse(placed, root, collapse_below)
-            return SpatialResult(placed, True, objective, n, tuple(drop))
-        dropped = list(drop) or ["(inconsistent)"]
-    return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
+    return _Problem(facade, root, tuple(sys_.var_nodes), rows, rhs, x_star, weight, least, _matrix(G_rows, n), h_rows,
+                    len(cornered), len(centred))
 
 
 def _solve(weight: np.ndarray, x_star: np.ndarray, A: sp.spmatrix, b: np.ndarray, G: sp.spmatrix,
@@ -321,11 +362,11 @@ def kkt_matrix(P: np.ndarray, A: sp.csr_matrix) -> sp.csc_matrix:
     return sp.csc_matrix((data, indices, indptr), shape=(n + m, n + m))
 
 
-def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float, least: dict[int, float]
-           ) -> Facade:
+def _place(facade: Facade, root: Node, var_nodes: Sequence[Node], x: np.ndarray, target: float,
+           least: dict[int, float]) -> Facade:
     """Leaf x and w from the solution: variable nodes get their width; collapsed subtrees share the change (each
     child kept at its least width ``least``)."""
-    var_width = {id(v): float(x[k]) for k, v in enumerate(sys_.var_nodes)}
+    var_width = {id(v): float(x[k]) for k, v in enumerate(var_nodes)}
     lefts: dict[int, tuple[float, float]] = {}
 
     known = dict(var_width)  # widths of nodes worked out so far (place asks again at every level below)

@@ -106,3 +106,24 @@ def test_jumps_and_merges_are_remembered_by_value(cmp_facade):
 
     forget()
     assert len(JUMPS) == len(MERGED) == len(tree.TREES) == len(FLOORS) == 0
+
+
+def test_prepared_problem_is_reused_across_targets_with_the_same_results(cmp_facade):
+    """The target-independent part of Eq. 1 is prepared once per facade and tree; sizing at another target with
+    it gives exactly what a fresh preparation gives (corner strips included: their rows' sides use the target)."""
+    from citygen_safe.grids import auto_specs, detect_grid
+    from citygen_safe.optimise import PROBLEMS, optimise_widths
+
+    root = decompose(cmp_facade)
+    grids = [g for g in (detect_grid(cmp_facade, s) for s in auto_specs(cmp_facade)) if g]
+    corner = {"corners": (0.5, 0.5), "corner_labels": frozenset({"window", "door"})}
+    PROBLEMS.clear()
+    first = optimise_widths(cmp_facade, root, grids, 18.0, **corner)
+    assert len(PROBLEMS) == 1
+    again = optimise_widths(cmp_facade, root, grids, 21.0, **corner)
+    assert len(PROBLEMS) == 1
+    PROBLEMS.clear()
+    fresh = optimise_widths(cmp_facade, root, grids, 21.0, **corner)
+    assert first.success and again.success and again.facade.width == 21.0
+    assert (again.objective, again.facade.leaves, again.dropped) == (fresh.objective, fresh.facade.leaves, fresh.dropped)
+    assert min(f.x for f in again.facade.leaves if f.label == "window") >= 0.5 - 1e-6
