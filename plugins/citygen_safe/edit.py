@@ -144,7 +144,7 @@ def size(facade: Facade, settings: Settings, target: float, lines: Lines | None 
     known = SIZED.lookup(key)
     if known is None or known[0] is not facade or known[1] is not root:
         known = (facade, root, grids_of(facade, settings.active), minimum_extents(facade, root, settings.rules))
-        SIZED.remember(key, known)
+        SIZED.remember(key, known, len(facade.leaves))
     return optimise_widths(facade, root, known[2], target, lines=lines,
                            corners=settings.corners, corner_labels=settings.corner_labels,
                            alignment=settings.alignment, symmetry=settings.symmetry, minimum=known[3],
@@ -153,7 +153,7 @@ def size(facade: Facade, settings: Settings, target: float, lines: Lines | None 
 
 #: the grids and least leaf extents of facades sized before, by facade and tree (identity: remembered jumps and
 #: merges give the same objects again; each entry holds both, so their ids stay theirs), active grids and rules
-SIZED: Memory[tuple] = Memory(128)
+SIZED: Memory[tuple] = Memory(100_000)  #: (capacity in leaves)
 
 
 def kept(facade: Facade, labels: frozenset[str]) -> int:

@@ -34,7 +34,8 @@ PLUGIN_ID = "safe"
 FLOORS_SHARE, JUMPS_SHARE = 0.4, 0.8  #: budget shares by which floor and column jumps stop (the rest: final QPs)
 GENERATE_LIMIT = 4  #: variations wanted by the generator (column counts within 2 of the pitch's, see spread)
 CENTRE = frozenset({"door"})  #: labels kept centred when the input has them centred (with ``symmetry on``)
-FLOORS: Memory[tuple] = Memory(32)  #: floor jumps and height QP results with the work they took, by what they use
+#: floor jumps and height QP results with the work they took, by what they use (32 of them)
+FLOORS: Memory[tuple] = Memory(32)
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ def _floors(ruleset: SafeRuleset, settings: Settings, floor_lines: tuple[float, 
     notes: list[str] = []
     before = settings.work.spent
     path, heights = fit_floors(ruleset.facade, settings, floor_lines, deadline, notes)
-    FLOORS.remember(key, (path, heights, tuple(notes), settings.work.spent - before))
+    FLOORS.remember(key, (path, heights, tuple(notes), settings.work.spent - before), 1)
     return path, heights, tuple(notes)
 
 

@@ -25,8 +25,14 @@ from citygen_safe.leaves import EPS, Facade, Leaf
 from citygen_safe.memory import Memory
 from citygen_safe.tree import GROUP, X, Node, decompose
 
-JUMPS: Memory[Facade] = Memory(512)  #: facades after a slab insertion or removal, by facade and slab
-MERGED: Memory[tuple[Facade, Node]] = Memory(512)  #: merged facades and their trees, by facade and fixed labels
+#: facades after a slab insertion or removal, by facade and slab; merged facades and their trees, by facade and
+#: fixed labels (capacities in leaves)
+JUMPS: Memory[Facade] = Memory(200_000)
+MERGED: Memory[tuple[Facade, Node]] = Memory(200_000)
+
+
+def _leaves(facade: Facade) -> int:
+    return len(facade.leaves)
 
 
 @dataclass(frozen=True)
@@ -74,7 +80,7 @@ def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, flo
     """Open a band at ``gap[0]`` holding a copy of ``gap`` followed by a copy of ``slab``, ``copies`` times (the
     same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy). Remembered
     (:mod:`citygen_safe.memory`)."""
-    return JUMPS.get(("insert", facade, gap, slab, copies), lambda: _inserted(facade, gap, slab, copies))
+    return JUMPS.get(("insert", facade, gap, slab, copies), lambda: _inserted(facade, gap, slab, copies), _leaves)
 
 
 def _inserted(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int) -> Facade:
@@ -138,7 +144,7 @@ def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | Non
 
 def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
     """``facade`` without ``slab`` (remembered)."""
-    return JUMPS.get(("remove", facade, slab), lambda: _removed(facade, slab))
+    return JUMPS.get(("remove", facade, slab), lambda: _removed(facade, slab), _leaves)
 
 
 def _removed(facade: Facade, slab: tuple[float, float]) -> Facade:
@@ -162,7 +168,7 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     tree of the result. Jumps cut leaves at the copied slabs' edges; merging the pieces back keeps the leaf count
     growing only with the copied content. Siblings only, so the partition stays guillotine (merging arbitrary
     neighbours could close a pinwheel); leaves come in tree order. Remembered (:mod:`citygen_safe.memory`)."""
-    return MERGED.get((facade, fixed), lambda: _merged(facade, fixed))
+    return MERGED.get((facade, fixed), lambda: _merged(facade, fixed), lambda merged: _leaves(merged[0]))
 
 
 def _merged(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:

@@ -18,11 +18,14 @@ Result = TypeVar("Result")
 
 
 class Memory(Generic[Result]):
-    """At most ``size`` results by key, the first remembered forgotten first; safe to share between threads."""
+    """Results by key, the first remembered forgotten first once their total ``cost`` (leaves: what their size grows
+    with) would exceed ``capacity``; a result costing more than a quarter of it is not remembered (a 100 m face
+    would push out everything for one use). Safe to share between threads."""
 
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self._items: dict[Hashable, Result] = {}
+    def __init__(self, capacity: int) -> None:
+        self.capacity = capacity
+        self._items: dict[Hashable, tuple[Result, int]] = {}
+        self._spent = 0
         self._lock = threading.Lock()
         _MEMORIES.append(self)
 
@@ -33,25 +36,33 @@ class Memory(Generic[Result]):
         return key in self._items
 
     def lookup(self, key: Hashable) -> Result | None:
-        return self._items.get(key)
-
-    def remember(self, key: Hashable, result: Result) -> None:
-        with self._lock:
-            if len(self._items) >= self.size:
-                self._items.pop(next(iter(self._items)))
-            self._items[key] = result
-
-    def get(self, key: Hashable, compute: Callable[[], Result]) -> Result:
-        """The result remembered for ``key``, else ``compute()`` remembered."""
         hit = self._items.get(key)
-        if hit is None:
-            hit = compute()
-            self.remember(key, hit)
-        return hit
+        return None if hit is None else hit[0]
+
+    def remember(self, key: Hashable, result: Result, cost: int) -> None:
+        if 4 * cost > self.capacity:
+            return
+        with self._lock:
+            if key in self._items:
+                return
+            while self._items and self._spent + cost > self.capacity:
+                self._spent -= self._items.pop(next(iter(self._items)))[1]
+            self._items[key] = (result, cost)
+            self._spent += cost
+
+    def get(self, key: Hashable, compute: Callable[[], Result], cost: Callable[[Result], int]) -> Result:
+        """The result remembered for ``key``, else ``compute()`` remembered at ``cost(result)``."""
+        hit = self._items.get(key)
+        if hit is not None:
+            return hit[0]
+        result = compute()
+        self.remember(key, result, cost(result))
+        return result
 
     def clear(self) -> None:
         with self._lock:
             self._items.clear()
+            self._spent = 0
 
 
 _MEMORIES: list[Memory] = []

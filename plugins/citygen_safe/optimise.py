@@ -179,7 +179,7 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     if problem is None or problem.facade is not facade or problem.root is not root:
         problem = _prepare(facade, root, grids, lines, corners, corner_labels, alignment, symmetry, minimum, centred)
         if key is not None:
-            PROBLEMS.remember(key, problem)
+            PROBLEMS.remember(key, problem, len(facade.leaves))
     n = len(problem.var_nodes)
     rhs_of = {**problem.rhs, "size": [target, *(lines.at if lines is not None else ())],
               "centring": [0.5 * target] * problem.centred}
@@ -223,7 +223,7 @@ class _Problem:
 #: prepared problems by facade and tree (identity: the remembered jumps and merges give the same objects again;
 #: each entry holds both, so their ids stay theirs), grids and switches; the same states are sized at other
 #: targets by other faces of a city and by the studio's keystrokes
-PROBLEMS: Memory[_Problem] = Memory(128)
+PROBLEMS: Memory[_Problem] = Memory(100_000)  #: (capacity in leaves)
 
 
 def _prepare(facade: Facade, root: Node, grids: Sequence[FacadeGrid], lines: Lines | None,

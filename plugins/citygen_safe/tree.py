@@ -45,10 +45,10 @@ def decompose(facade: Facade) -> Node:
     rectangles: the tree depends on nothing else, and the same facades recur (the input layout of every edit of a
     ruleset's text, the states its jumps reach)."""
     boxes = tuple((f.x, f.y, f.right, f.top) for f in facade.leaves)
-    return TREES.get(boxes, lambda: _Splitter(boxes).node(list(range(len(boxes)))))
+    return TREES.get(boxes, lambda: _Splitter(boxes).node(list(range(len(boxes)))), lambda _: len(boxes))
 
 
-TREES: Memory[Node] = Memory(256)  #: decomposition trees by their leaves' rectangles
+TREES: Memory[Node] = Memory(200_000)  #: decomposition trees by their leaves' rectangles (capacity in leaves)
 
 
 class _Splitter:

@@ -7,11 +7,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from citygen_safe import tree
-from citygen_safe.leaves import facade_from_layout, transpose
+from citygen_safe.leaves import facade_from_layout
 from citygen_safe.optimise import KKT_REG, kkt_matrix
 from citygen_safe.tree import decompose
 
-from .conftest import regular
 
 
 def _shape(node):
@@ -29,14 +28,18 @@ def test_remembered_tree_is_the_tree_of_equal_rectangles(cmp_facade):
     assert first.split == "y" and sorted(first.leaves) == list(range(len(cmp_facade.leaves)))
 
 
-def test_tree_memory_is_bounded():
-    tree.TREES.clear()
-    first = facade_from_layout(regular(1, 1))
-    decompose(first)
-    for k in range(tree.TREES.size + 5):
-        decompose(transpose(facade_from_layout(regular(k % 7 + 1, k // 7 + 1))))
-    assert len(tree.TREES) == tree.TREES.size
-    assert tuple((f.x, f.y, f.right, f.top) for f in first.leaves) not in tree.TREES  # first in, first out
+def test_memory_is_bounded_by_cost_first_in_first_out():
+    from citygen_safe.memory import Memory
+
+    memory = Memory(12)
+    for key in "abcd":
+        memory.remember(key, key.upper(), 3)
+    memory.remember("e", "E", 3)
+    assert "a" not in memory and memory.lookup("e") == "E" and len(memory) == 4
+    memory.remember("huge", "H", 4)  # more than a quarter of the capacity: one use would push out the rest
+    assert "huge" not in memory and len(memory) == 4
+    assert memory.get("b", lambda: "other", len) == "B" and memory.get("f", lambda: "FF", len) == "FF"
+    assert "b" not in memory and "c" in memory  # FF costs 2: the oldest, b (3), went to make room
 
 
 def test_kkt_matrix_equals_the_block_assembly():
