@@ -153,7 +153,7 @@ def size(facade: Facade, settings: Settings, target: float, lines: Lines | None 
 
 #: the grids and least leaf extents of facades sized before, by facade and tree (identity: remembered jumps and
 #: merges give the same objects again; each entry holds both, so their ids stay theirs), active grids and rules
-SIZED: Memory[tuple] = Memory(100_000)  #: (capacity in leaves)
+SIZED: Memory[tuple] = Memory(25_000)  #: (capacity in leaves)
 
 
 def kept(facade: Facade, labels: frozenset[str]) -> int:

@@ -27,8 +27,8 @@ from citygen_safe.tree import GROUP, X, Node, decompose
 
 #: facades after a slab insertion or removal, by facade and slab; merged facades and their trees, by facade and
 #: fixed labels (capacities in leaves)
-JUMPS: Memory[Facade] = Memory(200_000)
-MERGED: Memory[tuple[Facade, Node]] = Memory(200_000)
+JUMPS: Memory[Facade] = Memory(50_000)
+MERGED: Memory[tuple[Facade, Node]] = Memory(50_000)
 
 
 def _leaves(facade: Facade) -> int:

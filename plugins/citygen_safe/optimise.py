@@ -223,7 +223,7 @@ class _Problem:
 #: prepared problems by facade and tree (identity: the remembered jumps and merges give the same objects again;
 #: each entry holds both, so their ids stay theirs), grids and switches; the same states are sized at other
 #: targets by other faces of a city and by the studio's keystrokes
-PROBLEMS: Memory[_Problem] = Memory(100_000)  #: (capacity in leaves)
+PROBLEMS: Memory[_Problem] = Memory(25_000)  #: (capacity in leaves)
 
 
 def _prepare(facade: Facade, root: Node, grids: Sequence[FacadeGrid], lines: Lines | None,

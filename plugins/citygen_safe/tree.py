@@ -48,7 +48,7 @@ def decompose(facade: Facade) -> Node:
     return TREES.get(boxes, lambda: _Splitter(boxes).node(list(range(len(boxes)))), lambda _: len(boxes))
 
 
-TREES: Memory[Node] = Memory(200_000)  #: decomposition trees by their leaves' rectangles (capacity in leaves)
+TREES: Memory[Node] = Memory(50_000)  #: decomposition trees by their leaves' rectangles (capacity in leaves)
 
 
 class _Splitter:
