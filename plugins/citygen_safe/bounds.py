@@ -115,8 +115,8 @@ def collapse(facade: Facade, root: Node, threshold: float) -> Facade:
             return
         kids = list(node.children)
         if node.split == X:
-            tiny = [k for k, c in enumerate(kids) if extent(c)[1] - extent(c)[0] < threshold
-                    and all(leaves[i].label in COLLAPSIBLE for i in c.leaves)]
+            tiny = [k for k, c in enumerate(kids) if all(leaves[i].label in COLLAPSIBLE for i in c.leaves)
+                    and extent(c)[1] - extent(c)[0] < threshold]  # (labels first: they rule out most slabs)
             if tiny and len(tiny) < len(kids):
                 first = next(k for k in range(len(kids)) if k not in tiny)
                 for k in [k for k in tiny if k > first] + [k for k in reversed(tiny) if k < first]:

@@ -28,6 +28,7 @@ from citygen_safe.grids import FacadeGrid, GridSpec, detect_grid
 from citygen_safe.jump import (Jump, boundary_gaps, insert_slab, insertion_gap, merge_leaves, remove_slab,
                                removal_slab, source_columns)
 from citygen_safe.leaves import EPS, Facade
+from citygen_safe.memory import Memory
 from citygen_safe.optimise import Lines, SpatialResult, optimise_widths
 from citygen_safe.rank import defects, penalty, reference_widths
 from citygen_safe.ruleset import BUDGET_S
@@ -139,11 +140,20 @@ def size(facade: Facade, settings: Settings, target: float, lines: Lines | None 
     settings.work.spent += len(facade.leaves)
     root = root or decompose(facade)
     centred = () if facade.transposed else [i for i, f in enumerate(facade.leaves) if f.label in settings.centre]
-    return optimise_widths(facade, root, grids_of(facade, settings.active), target, lines=lines,
+    key = (id(facade), id(root), settings.active, id(settings.rules))
+    known = SIZED.lookup(key)
+    if known is None or known[0] is not facade or known[1] is not root:
+        known = (facade, root, grids_of(facade, settings.active), minimum_extents(facade, root, settings.rules))
+        SIZED.remember(key, known, len(facade.leaves))
+    return optimise_widths(facade, root, known[2], target, lines=lines,
                            corners=settings.corners, corner_labels=settings.corner_labels,
-                           alignment=settings.alignment, symmetry=settings.symmetry,
-                           minimum=minimum_extents(facade, root, settings.rules),
+                           alignment=settings.alignment, symmetry=settings.symmetry, minimum=known[3],
                            collapse_below=settings.rules.sliver + MARGIN, centred=centred)
+
+
+#: the grids and least leaf extents of facades sized before, by facade and tree (identity: remembered jumps and
+#: merges give the same objects again; each entry holds both, so their ids stay theirs), active grids and rules
+SIZED: Memory[tuple] = Memory(25_000)  #: (capacity in leaves)
 
 
 def kept(facade: Facade, labels: frozenset[str]) -> int:

@@ -26,6 +26,7 @@ from citygen_safe.compose import to_layout
 from citygen_safe.edit import NEAR_BEST, Settings, Variation, pick, width_variations
 from citygen_safe.floors import fit_floors
 from citygen_safe.leaves import Facade
+from citygen_safe.memory import Memory
 from citygen_safe.rank import is_centred
 from citygen_safe.ruleset import SafeRuleset
 
@@ -33,8 +34,8 @@ PLUGIN_ID = "safe"
 FLOORS_SHARE, JUMPS_SHARE = 0.4, 0.8  #: budget shares by which floor and column jumps stop (the rest: final QPs)
 GENERATE_LIMIT = 4  #: variations wanted by the generator (column counts within 2 of the pitch's, see spread)
 CENTRE = frozenset({"door"})  #: labels kept centred when the input has them centred (with ``symmetry on``)
-FLOOR_CACHE_SIZE = 32
-_FLOOR_CACHE: dict[tuple, tuple] = {}
+#: floor jumps and height QP results with the work they took, by what they use (32 of them)
+FLOORS: Memory[tuple] = Memory(32)
 
 
 @dataclass(frozen=True)
@@ -109,21 +110,22 @@ def edit(ruleset: SafeRuleset, request: FacadeRequest, limit: int = GENERATE_LIM
 
 
 def _floors(ruleset: SafeRuleset, settings: Settings, floor_lines: tuple[float, ...], deadline: float):
-    """:func:`fit_floors`, remembered per ruleset and floor lines: the faces of a building share their floor lines
-    (and floors ignore the corner strips), so only the first face computes the row jumps. A remembered result
-    still charges the work it took, so a face's budget for column jumps does not depend on which faces the
-    process (one of several workers) saw before."""
-    key = (id(ruleset), floor_lines)
-    hit = _FLOOR_CACHE.get(key)
-    if hit is not None and hit[0] is ruleset:
-        settings.work.spent += hit[4]
-        return hit[1:4]
+    """:func:`fit_floors`, remembered by what it depends on (the input facade, the settings that reach the height
+    problem, the floor lines): the faces of a building share their floor lines (and floors ignore the corner
+    strips), so only the first face computes the row jumps, and a ruleset text edited in the studio without
+    touching its layout or grids parses to an equal facade and finds them too. A remembered result still charges
+    the work it took, so a face's budget for column jumps does not depend on which faces the process (one of
+    several workers) saw before."""
+    key = (ruleset.facade, settings.active, settings.alignment, settings.symmetry, settings.keep, settings.centre,
+           settings.budget, id(settings.rules), floor_lines)  # (the rules: always the module's DEFAULT_RULES)
+    hit = FLOORS.lookup(key)
+    if hit is not None:
+        settings.work.spent += hit[3]
+        return hit[:3]
     notes: list[str] = []
     before = settings.work.spent
     path, heights = fit_floors(ruleset.facade, settings, floor_lines, deadline, notes)
-    if len(_FLOOR_CACHE) >= FLOOR_CACHE_SIZE:
-        _FLOOR_CACHE.pop(next(iter(_FLOOR_CACHE)))
-    _FLOOR_CACHE[key] = (ruleset, path, heights, tuple(notes), settings.work.spent - before)
+    FLOORS.remember(key, (path, heights, tuple(notes), settings.work.spent - before), 1)
     return path, heights, tuple(notes)
 
 

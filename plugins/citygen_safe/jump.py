@@ -22,7 +22,17 @@ from dataclasses import dataclass, replace
 
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.memory import Memory
 from citygen_safe.tree import GROUP, X, Node, decompose
+
+#: facades after a slab insertion or removal, by facade and slab; merged facades and their trees, by facade and
+#: fixed labels (capacities in leaves)
+JUMPS: Memory[Facade] = Memory(50_000)
+MERGED: Memory[tuple[Facade, Node]] = Memory(50_000)
+
+
+def _leaves(facade: Facade) -> int:
+    return len(facade.leaves)
 
 
 @dataclass(frozen=True)
@@ -68,7 +78,12 @@ def insert_column(facade: Facade, grid: FacadeGrid, source: int, position: int) 
 
 def insert_slab(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int = 1) -> Facade:
     """Open a band at ``gap[0]`` holding a copy of ``gap`` followed by a copy of ``slab``, ``copies`` times (the
-    same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy)."""
+    same insertion repeated: each repeat opens its band between ``A_l`` and the previous copy). Remembered
+    (:mod:`citygen_safe.memory`)."""
+    return JUMPS.get(("insert", facade, gap, slab, copies), lambda: _inserted(facade, gap, slab, copies), _leaves)
+
+
+def _inserted(facade: Facade, gap: tuple[float, float], slab: tuple[float, float], copies: int) -> Facade:
     c0, c1 = gap
     s0, s1 = slab
     width_gap, pitch = c1 - c0, (c1 - c0) + (s1 - s0)
@@ -128,6 +143,11 @@ def remove_column(facade: Facade, grid: FacadeGrid, column: int) -> Facade | Non
 
 
 def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
+    """``facade`` without ``slab`` (remembered)."""
+    return JUMPS.get(("remove", facade, slab), lambda: _removed(facade, slab), _leaves)
+
+
+def _removed(facade: Facade, slab: tuple[float, float]) -> Facade:
     a, b = slab
     cut = b - a
 
@@ -138,7 +158,7 @@ def remove_slab(facade: Facade, slab: tuple[float, float]) -> Facade:
     for f in facade.leaves:
         x0, x1 = shift(f.x), shift(f.right)
         if x1 - x0 > EPS:
-            leaves.append(Leaf(x0, f.y, x1 - x0, f.h, f.region, f.origin))
+            leaves.append(Leaf.fast(x0, f.y, x1 - x0, f.h, f.region, f.origin))
     return replace(facade, width=facade.width - cut, leaves=tuple(leaves))
 
 
@@ -147,7 +167,11 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     material, ...) merged into one leaf, except labels in ``fixed`` (grid elements, floor-bound openings), and the
     tree of the result. Jumps cut leaves at the copied slabs' edges; merging the pieces back keeps the leaf count
     growing only with the copied content. Siblings only, so the partition stays guillotine (merging arbitrary
-    neighbours could close a pinwheel); leaves come in tree order."""
+    neighbours could close a pinwheel); leaves come in tree order. Remembered (:mod:`citygen_safe.memory`)."""
+    return MERGED.get((facade, fixed), lambda: _merged(facade, fixed), lambda merged: _leaves(merged[0]))
+
+
+def _merged(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
     out: list[Leaf] = []
 
     keys: dict[int, object] = {}
@@ -168,8 +192,8 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
             item = visit(child)
             if isinstance(item, Leaf) and items and isinstance(items[-1], Leaf) and same(items[-1], item):
                 a = items[-1]
-                items[-1] = (Leaf(a.x, a.y, item.right - a.x, a.h, a.region, a.origin) if node.split == X
-                             else Leaf(a.x, a.y, a.w, item.top - a.y, a.region, a.origin))
+                items[-1] = (Leaf.fast(a.x, a.y, item.right - a.x, a.h, a.region, a.origin) if node.split == X
+                             else Leaf.fast(a.x, a.y, a.w, item.top - a.y, a.region, a.origin))
             else:
                 items.append(item)
         return items
@@ -180,12 +204,13 @@ def merge_leaves(facade: Facade, fixed: frozenset[str]) -> tuple[Facade, Node]:
         if node.split == GROUP:
             first = len(out)
             out.extend(facade.leaves[i] for i in node.leaves)
-            return replace(node, leaves=tuple(range(first, len(out))))
+            return Node(node.x, node.y, node.w, node.h, GROUP, (), tuple(range(first, len(out))))
         items = runs(node)
         if len(items) == 1 and isinstance(items[0], Leaf):
             return items[0]
         children = tuple(_numbered(item, out) for item in items)
-        return replace(node, children=children, leaves=tuple(i for c in children for i in c.leaves))
+        return Node(node.x, node.y, node.w, node.h, node.split, children,  # (not replace(): it was a tenth
+                    tuple(i for c in children for i in c.leaves))        # of the merge's time)
 
     root = _numbered(visit(decompose(facade)), out)
     return replace(facade, leaves=tuple(out)), root
@@ -219,4 +244,4 @@ def _merge(facade: Facade, pieces: list[tuple[float, float, int]]) -> tuple[Leaf
 
 def _leaf(facade: Facade, run: list) -> Leaf:
     f = facade.leaves[run[2]]
-    return Leaf(run[0], f.y, run[1] - run[0], f.h, f.region, f.origin)
+    return Leaf.fast(run[0], f.y, run[1] - run[0], f.h, f.region, f.origin)

@@ -19,6 +19,7 @@ import scipy.sparse.linalg as spla
 from citygen_safe.bounds import MIN_SIZE, collapse, node_minimum, share
 from citygen_safe.grids import FacadeGrid
 from citygen_safe.leaves import EPS, Facade, Leaf
+from citygen_safe.memory import Memory
 from citygen_safe.tree import GROUP, X, Node
 
 WEIGHT_CAP = 10.0
@@ -29,6 +30,7 @@ ACTIVE_SET_ROUNDS = 12  #: KKT solves before the DAQP fallback
 DENSE_LIMIT = 2000
 DAQP_EQUALITY = 5  #: DAQP constraint sense ACTIVE | IMMUTABLE
 KKT_REG = 1e-9
+ANCHORS = np.array([0.0, 0.5, 1.0])  #: anchor points of a column: left, centre, right (epsilon)
 REFINEMENTS = 4  #: iterative refinement steps of the regularised KKT solve
 
 
@@ -59,9 +61,14 @@ Vec = dict[int, float]  #: a sparse row over the reduced variables (index -> coe
 def _comb(*terms: tuple[float, Vec]) -> Vec:
     """The linear combination of sparse rows ``sum(c * v)``."""
     out: Vec = {}
+    get = out.get
     for c, vec in terms:
-        for k, a in vec.items():
-            out[k] = out.get(k, 0.0) + c * a
+        if c == 1.0:  # (the common term; 1.0 * a is a)
+            for k, a in vec.items():
+                out[k] = get(k, 0.0) + a
+        else:
+            for k, a in vec.items():
+                out[k] = get(k, 0.0) + c * a
     return out
 
 
@@ -135,7 +142,8 @@ def _anchor_eps(facade: Facade, column: Sequence[int]) -> float:
     """epsilon of the anchor point set (left 0, centre 0.5, right 1) of least x variance in a column."""
     lefts = np.array([facade.leaves[i].x for i in column])
     widths = np.array([facade.leaves[i].w for i in column])
-    return min((0.0, 0.5, 1.0), key=lambda e: (float(np.var(lefts + e * widths)), abs(e - 0.5)))
+    spread = np.var(lefts + ANCHORS[:, None] * widths, axis=1)  # (one call for the three: rows reduce as 1-D)
+    return min(zip(ANCHORS.tolist(), spread.tolist()), key=lambda a: (a[1], abs(a[0] - 0.5)))[0]
 
 
 def _same_size_pairs(facade: Facade, grids: Sequence[FacadeGrid]) -> list[tuple[int, int]]:
@@ -164,6 +172,63 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     the variable nodes by their subtrees' least widths; slabs of walls thinner than ``collapse_below`` are then
     removed (:func:`citygen_safe.bounds.collapse`). ``centred``: leaves whose centre is pinned to the facade's
     middle (a centred door; with ``symmetry``), the first constraint group dropped when infeasible."""
+    centred = tuple(centred)
+    key = None if lines is not None else (id(facade), id(root), tuple(grids), corners, corner_labels, alignment,
+                                          symmetry, None if minimum is None else minimum.tobytes(), centred)
+    problem = PROBLEMS.lookup(key) if key is not None else None
+    if problem is None or problem.facade is not facade or problem.root is not root:
+        problem = _prepare(facade, root, grids, lines, corners, corner_labels, alignment, symmetry, minimum, centred)
+        if key is not None:
+            PROBLEMS.remember(key, problem, len(facade.leaves))
+    n = len(problem.var_nodes)
+    rhs_of = {**problem.rhs, "size": [target, *(lines.at if lines is not None else ())],
+              "centring": [0.5 * target] * problem.centred}
+    h = np.asarray(problem.h + [-corners[0], target - corners[1]] * problem.cornered, dtype=float)
+    dropped: list[str] = []
+    for drop in ((), ("centring",), ("centring", "symmetry"), ("centring", "symmetry", "alignment")):
+        rows = [r for k, rs in problem.rows.items() if k not in drop for r in rs]
+        rhs = [v for k in problem.rows if k not in drop for v in rhs_of[k]]
+        x = _solve(problem.weight, problem.x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), problem.G, h)
+        if x is not None:
+            objective = float(np.sum((problem.weight * (x - problem.x_star)) ** 2))
+            placed = _place(facade, root, problem.var_nodes, x, target, problem.least)
+            if collapse_below > 0:
+                placed = collapse(placed, root, collapse_below)
+            return SpatialResult(placed, True, objective, n, tuple(drop))
+        dropped = list(drop) or ["(inconsistent)"]
+    return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """The part of Eq. 1 that does not depend on the target width, for one facade and tree: the variable nodes,
+    each constraint group's rows (``rhs``: right-hand sides of the groups without the target in them), the
+    weights, the nodes' least widths, the bound rows ``G`` with the right-hand sides ``h`` of the variables' bounds
+    and how many ``cornered`` (two rows each) and ``centred`` leaves add rows whose sides use the target."""
+
+    facade: Facade
+    root: Node
+    var_nodes: tuple[Node, ...]
+    rows: dict[str, list[Vec]]
+    rhs: dict[str, list[float]]
+    x_star: np.ndarray
+    weight: np.ndarray
+    least: dict[int, float]
+    G: sp.csr_matrix
+    h: list[float]
+    cornered: int
+    centred: int
+
+
+#: prepared problems by facade and tree (identity: the remembered jumps and merges give the same objects again;
+#: each entry holds both, so their ids stay theirs), grids and switches; the same states are sized at other
+#: targets by other faces of a city and by the studio's keystrokes
+PROBLEMS: Memory[_Problem] = Memory(25_000)  #: (capacity in leaves)
+
+
+def _prepare(facade: Facade, root: Node, grids: Sequence[FacadeGrid], lines: Lines | None,
+             corners: tuple[float, float], corner_labels: frozenset[str], alignment: bool, symmetry: bool,
+             minimum: np.ndarray | None, centred: tuple[int, ...]) -> _Problem:
     leaf_node = {n.leaves[0]: n for n in root.walk() if n.split is None}
     columns = [[i for i in grid.column(c) if i is not None and i in leaf_node]
                for grid in grids for c in range(len(grid.columns))] if alignment else []
@@ -179,13 +244,9 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     n = len(sys_.var_nodes)
     alpha = lambda i: sys_.alpha[id(leaf_node[i])]  # noqa: E731
     beta = lambda i: sys_.beta[id(leaf_node[i])]  # noqa: E731
-    groups: dict[str, tuple[list[Vec], list[float]]] = {"hierarchy": (sys_.hierarchy, [0.0] * len(sys_.hierarchy))}
-    size_rows = [sys_.alpha[id(root)]]
-    size_rhs = [target]
-    if lines is not None:
-        size_rows += [sys_.beta[id(node)] for node in lines.nodes]
-        size_rhs += list(lines.at)
-    groups["size"] = (size_rows, size_rhs)
+    rows: dict[str, list[Vec]] = {"hierarchy": sys_.hierarchy}
+    rhs: dict[str, list[float]] = {"hierarchy": [0.0] * len(sys_.hierarchy)}
+    rows["size"] = [sys_.alpha[id(root)]] + [sys_.beta[id(node)] for node in (lines.nodes if lines else ())]
     rows_a, rhs_a = [], []
     for col in (c for c in columns if len(c) > 1):
         eps = _anchor_eps(facade, col)
@@ -193,9 +254,9 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
             fa, fb = facade.leaves[a], facade.leaves[b]
             rows_a.append(_comb((1.0, beta(a)), (eps, alpha(a)), (-1.0, beta(b)), (-eps, alpha(b))))
             rhs_a.append((fa.x + eps * fa.w) - (fb.x + eps * fb.w))
-    groups["alignment"] = (rows_a, rhs_a)
-    groups["symmetry"] = ([_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs))
-    groups["centring"] = ([_comb((1.0, beta(i)), (0.5, alpha(i))) for i in centred], [0.5 * target] * len(centred))
+    rows["alignment"], rhs["alignment"] = rows_a, rhs_a
+    rows["symmetry"], rhs["symmetry"] = [_comb((1.0, alpha(a)), (-1.0, alpha(b))) for a, b in pairs], [0.0] * len(pairs)
+    rows["centring"] = [_comb((1.0, beta(i)), (0.5, alpha(i))) for i in centred]
     x_star = np.array([v.w for v in sys_.var_nodes])
     area = np.array([v.w * v.h for v in sys_.var_nodes])
     weight = np.minimum(facade.width * facade.height / np.maximum(area, EPS), WEIGHT_CAP)
@@ -205,21 +266,8 @@ def optimise_widths(facade: Facade, root: Node, grids: Sequence[FacadeGrid], tar
     h_rows = [-max(MIN_SIZE, least[id(v)]) for v in sys_.var_nodes]
     for i in cornered:
         G_rows += [_comb((-1.0, beta(i))), _comb((1.0, beta(i)), (1.0, alpha(i)))]
-        h_rows += [-corners[0], target - corners[1]]
-    G, h = _matrix(G_rows, n), np.asarray(h_rows, dtype=float)
-    dropped: list[str] = []
-    for drop in ((), ("centring",), ("centring", "symmetry"), ("centring", "symmetry", "alignment")):
-        rows = [r for k, (rs, _) in groups.items() if k not in drop for r in rs]
-        rhs = [v for k, (_, vs) in groups.items() if k not in drop for v in vs]
-        x = _solve(weight, x_star, _matrix(rows, n), np.asarray(rhs, dtype=float), G, h)
-        if x is not None:
-            objective = float(np.sum((weight * (x - x_star)) ** 2))
-            placed = _place(facade, root, sys_, x, target, least)
-            if collapse_below > 0:
-                placed = collapse(placed, root, collapse_below)
-            return SpatialResult(placed, True, objective, n, tuple(drop))
-        dropped = list(drop) or ["(inconsistent)"]
-    return SpatialResult(facade, False, float("inf"), n, tuple(dropped), "no feasible sizing")
+    return _Problem(facade, root, tuple(sys_.var_nodes), rows, rhs, x_star, weight, least, _matrix(G_rows, n), h_rows,
+                    len(cornered), len(centred))
 
 
 def _solve(weight: np.ndarray, x_star: np.ndarray, A: sp.spmatrix, b: np.ndarray, G: sp.spmatrix,
@@ -271,9 +319,10 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     """``x`` and multipliers ``y`` of ``min 1/2 x'Px + q'x s.t. A x = b`` (``P`` diagonal) from the sparse KKT
     system with a small dual regularisation, refined against the exact system (so redundant rows are harmless
     and the rows hold to rounding); None when the rows are inconsistent."""
-    n, m = P.size, A.shape[0]
+    n = P.size
     As = sp.csr_matrix(A)
-    K = sp.bmat([[sp.diags(P + KKT_REG), As.T], [As, -KKT_REG * sp.identity(m)]], format="csc")
+    AsT = As.T
+    K = kkt_matrix(P, As)
     try:
         lu = spla.splu(K)
     except RuntimeError:
@@ -282,7 +331,7 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     sol = lu.solve(rhs)
     for _ in range(REFINEMENTS):
         x, y = sol[:n], sol[n:]
-        residual = rhs - np.concatenate([P * x + As.T @ y, As @ x])
+        residual = rhs - np.concatenate([P * x + AsT @ y, As @ x])
         if np.max(np.abs(residual)) <= 1e-12 * scale:
             break
         sol = sol + lu.solve(residual)
@@ -292,18 +341,41 @@ def _kkt(P: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray, scale: flo
     return x, sol[n:]
 
 
-def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: float, least: dict[int, float]
-           ) -> Facade:
+def kkt_matrix(P: np.ndarray, A: sp.csr_matrix) -> sp.csc_matrix:
+    """The regularised KKT matrix ``[[diag(P) + r, A'], [A, -r I]]`` (r = ``KKT_REG``) in canonical CSC form
+    (``A``'s explicit zeros kept), its arrays written directly: column ``j < n`` holds the diagonal then ``A``'s
+    column ``j``, column ``n + i`` holds ``A``'s row ``i`` then ``-r`` (``sp.bmat`` built and converted each block:
+    it cost as much as the factorisation at the QP's sizes)."""
+    n, m = P.size, A.shape[0]
+    rows, cols = A.sorted_indices(), A.tocsc()
+    counts = np.concatenate([np.diff(cols.indptr) + 1, np.diff(rows.indptr) + 1])
+    indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    fixed = np.concatenate([indptr[:n], indptr[n + 1:] - 1])  # the diagonal entries' places
+    rest = np.ones(indptr[-1], dtype=bool)
+    rest[fixed] = False
+    indices = np.empty(indptr[-1], dtype=np.int32)
+    indices[fixed] = np.arange(n + m)
+    indices[rest] = np.concatenate([n + cols.indices, rows.indices])
+    data = np.empty(indptr[-1])
+    data[fixed] = np.concatenate([P + KKT_REG, np.full(m, -KKT_REG)])
+    data[rest] = np.concatenate([cols.data, rows.data])
+    return sp.csc_matrix((data, indices, indptr), shape=(n + m, n + m))
+
+
+def _place(facade: Facade, root: Node, var_nodes: Sequence[Node], x: np.ndarray, target: float,
+           least: dict[int, float]) -> Facade:
     """Leaf x and w from the solution: variable nodes get their width; collapsed subtrees share the change (each
     child kept at its least width ``least``)."""
-    var_width = {id(v): float(x[k]) for k, v in enumerate(sys_.var_nodes)}
+    var_width = {id(v): float(x[k]) for k, v in enumerate(var_nodes)}
     lefts: dict[int, tuple[float, float]] = {}
 
+    known = dict(var_width)  # widths of nodes worked out so far (place asks again at every level below)
+
     def width(node: Node) -> float:
-        if id(node) in var_width:
-            return var_width[id(node)]
-        ws = [width(c) for c in node.children]
-        return sum(ws) if node.split == X else ws[0]
+        if id(node) not in known:
+            ws = [width(c) for c in node.children]
+            known[id(node)] = sum(ws) if node.split == X else ws[0]
+        return known[id(node)]
 
     def place(node: Node, left: float, w: float, collapsed: bool = False) -> None:
         collapsed = collapsed or id(node) in var_width
@@ -327,5 +399,6 @@ def _place(facade: Facade, root: Node, sys_: _System, x: np.ndarray, target: flo
                 place(c, left, w, collapsed)
 
     place(root, 0.0, target)
-    leaves = tuple(Leaf(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin) for i, f in enumerate(facade.leaves))
+    leaves = tuple(Leaf.fast(lefts[i][0], f.y, lefts[i][1], f.h, f.region, f.origin)
+                   for i, f in enumerate(facade.leaves))
     return replace(facade, width=target, leaves=leaves)

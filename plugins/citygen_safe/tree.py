@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from citygen_safe.leaves import EPS, Facade
+from citygen_safe.memory import Memory
 
 X, Y, GROUP = "x", "y", "group"
 
@@ -40,37 +41,50 @@ class Node:
 
 
 def decompose(facade: Facade) -> Node:
-    """The decomposition tree of ``facade`` (y cuts tried before x cuts at every node)."""
-    boxes = [(f.x, f.y, f.right, f.top) for f in facade.leaves]
-    return _node(boxes, list(range(len(boxes))))
+    """The decomposition tree of ``facade`` (y cuts tried before x cuts at every node), remembered by the leaves'
+    rectangles: the tree depends on nothing else, and the same facades recur (the input layout of every edit of a
+    ruleset's text, the states its jumps reach)."""
+    boxes = tuple((f.x, f.y, f.right, f.top) for f in facade.leaves)
+    return TREES.get(boxes, lambda: _Splitter(boxes).node(list(range(len(boxes)))), lambda _: len(boxes))
 
 
-def _cuts(boxes: list[tuple[float, float, float, float]], idx: list[int], axis: int) -> list[list[int]]:
-    """Groups of ``idx`` separated by lines across ``axis`` that no box crosses, in increasing order (plain
-    Python: the nodes are small, numpy's per-call cost dominated)."""
-    groups: list[list[int]] = []
-    reach = float("-inf")
-    for i in sorted(idx, key=lambda i: boxes[i][axis]):
-        if not groups or boxes[i][axis] >= reach - EPS:
-            groups.append([])
-        groups[-1].append(i)
-        reach = max(reach, boxes[i][axis + 2])
-    return groups
+TREES: Memory[Node] = Memory(50_000)  #: decomposition trees by their leaves' rectangles (capacity in leaves)
 
 
-def _node(boxes: list[tuple[float, float, float, float]], idx: list[int]) -> Node:
-    x0 = min(boxes[i][0] for i in idx)
-    y0 = min(boxes[i][1] for i in idx)
-    x1 = max(boxes[i][2] for i in idx)
-    y1 = max(boxes[i][3] for i in idx)
-    if len(idx) == 1:
-        return Node(x0, y0, x1 - x0, y1 - y0, None, (), (idx[0],))
-    for split, axis in ((Y, 1), (X, 0)):
-        groups = _cuts(boxes, idx, axis)
-        if len(groups) > 1:
-            children = tuple(_node(boxes, sorted(g)) for g in groups)
-            return Node(x0, y0, x1 - x0, y1 - y0, split, children, tuple(i for c in children for i in c.leaves))
-    return Node(x0, y0, x1 - x0, y1 - y0, GROUP, (), tuple(idx))
+class _Splitter:
+    """The top-down recovery of guillotine cuts over fixed rectangles (columns of their edges, looked up by leaf
+    index; plain Python: the nodes are small, numpy's per-call cost dominated)."""
+
+    def __init__(self, boxes: tuple[tuple[float, float, float, float], ...]) -> None:
+        self.lo = ([b[0] for b in boxes], [b[1] for b in boxes])
+        self.hi = ([b[2] for b in boxes], [b[3] for b in boxes])
+
+    def cuts(self, idx: list[int], axis: int) -> list[list[int]]:
+        """Groups of ``idx`` separated by lines across ``axis`` that no box crosses, in increasing order."""
+        lo, hi = self.lo[axis], self.hi[axis]
+        groups: list[list[int]] = []
+        reach = float("-inf")
+        for i in sorted(idx, key=lo.__getitem__):
+            if not groups or lo[i] >= reach - EPS:
+                groups.append([])
+            groups[-1].append(i)
+            if hi[i] > reach:
+                reach = hi[i]
+        return groups
+
+    def node(self, idx: list[int]) -> Node:
+        (xl, yl), (xh, yh) = self.lo, self.hi
+        if len(idx) == 1:
+            i = idx[0]
+            return Node(xl[i], yl[i], xh[i] - xl[i], yh[i] - yl[i], None, (), (i,))
+        x0, y0 = min(map(xl.__getitem__, idx)), min(map(yl.__getitem__, idx))
+        x1, y1 = max(map(xh.__getitem__, idx)), max(map(yh.__getitem__, idx))
+        for split, axis in ((Y, 1), (X, 0)):
+            groups = self.cuts(idx, axis)
+            if len(groups) > 1:
+                children = tuple(self.node(sorted(g)) for g in groups)
+                return Node(x0, y0, x1 - x0, y1 - y0, split, children, tuple(i for c in children for i in c.leaves))
+        return Node(x0, y0, x1 - x0, y1 - y0, GROUP, (), tuple(idx))
 
 
 def common_parent(root: Node, members: set[int]) -> Node:
