@@ -12,6 +12,7 @@ process built it or when. Only small results travel back (a :class:`TileResult`)
 from __future__ import annotations
 
 import hashlib
+import itertools
 import os
 import pickle
 import threading
@@ -144,12 +145,17 @@ def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable
     for batch in _batches(order, [len(t) for t in tiles], workers * BUILDINGS_PER_WORKER):
         pool = ProcessPoolExecutor(max_workers=workers, initializer=tie_to_parent, initargs=(os.getpid(),))
         try:
-            pending: dict[Future, int] = {pool.submit(build_tile, job, tiles[k]): k for k in batch}
+            queue = iter(batch)  # (a few tiles in flight: an interrupted run has little queued to drop)
+            pending: dict[Future, int] = {pool.submit(build_tile, job, tiles[k]): k
+                                          for k in itertools.islice(queue, 2 * workers)}
             while pending:
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in finished:
                     k = pending.pop(future)
                     found[k] = future.result()
+                    following = next(queue, None)
+                    if following is not None:
+                        pending[pool.submit(build_tile, job, tiles[following])] = following
                     done += len(tiles[k])
                     if progress:
                         progress(done, total)
