@@ -21,7 +21,6 @@ from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
-from itertools import groupby
 from pathlib import Path
 from typing import Any
 
@@ -55,7 +54,7 @@ class TileJob:
 @dataclass(frozen=True)
 class TileResult:
     """What a tile task sends back: its layer file (``None`` when no building was written), its report items and
-    the CPU seconds it took: ``builds`` for the buildings, ``layer`` for writing its layer."""
+    the CPU seconds it took: ``builds`` for the buildings, ``layer_cpu`` for writing its layer."""
 
     layer: str | None
     stats: StageStats | None
@@ -121,7 +120,7 @@ def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = N
 
 def by_tile(work: Sequence[tuple]) -> list[list[tuple]]:
     """The work items (sorted by tile) grouped into one list per tile, in tile order."""
-    return [list(items) for _, items in groupby(work, key=lambda w: w[4])]
+    return [list(items) for _, items in itertools.groupby(work, key=lambda w: w[4])]
 
 
 def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
