@@ -145,7 +145,7 @@ def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable
         pool = ProcessPoolExecutor(max_workers=workers, initializer=tie_to_parent, initargs=(os.getpid(),))
         try:
             queue = iter(batch)  # (a few tiles in flight: an interrupted run has little queued to drop)
-            pending: dict[Future, int] = {pool.submit(_build_tile_file, job, _items_file(job, tiles[k], k)): k
+            pending: dict[Future, int] = {pool.submit(build_tile, job, tiles[k]): k
                                           for k in itertools.islice(queue, 2 * workers)}
             while pending:
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -154,8 +154,7 @@ def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable
                     found[k] = future.result()
                     following = next(queue, None)
                     if following is not None:
-                        pending[pool.submit(_build_tile_file, job, _items_file(job, tiles[following], following))] = \
-                            following
+                        pending[pool.submit(build_tile, job, tiles[following])] = following
                     done += len(tiles[k])
                     if progress:
                         progress(done, total)
@@ -164,22 +163,6 @@ def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable
             raise
         pool.shutdown()
     return [found[k] for k in range(len(tiles))]
-
-
-def _items_file(job: TileJob, items: Sequence[tuple], k: int) -> Path:
-    """A tile's work items pickled into the staging folder: a worker reads them from there, so the pool's pipe
-    carries a file name, not hundreds of kilobytes a killed worker would leave half-written (the run's exit then
-    waited on the pool's feeder thread: an interrupted demo took ~10 s to end)."""
-    path = job.staging / f".items-{k}.pickle"
-    path.write_bytes(pickle.dumps(list(items), protocol=pickle.HIGHEST_PROTOCOL))
-    return path
-
-
-def _build_tile_file(job: TileJob, path: Path) -> TileResult:
-    """:func:`build_tile` of the items :func:`_items_file` wrote (the file is removed once read)."""
-    items = pickle.loads(path.read_bytes())
-    path.unlink()
-    return build_tile(job, items)
 
 
 def _batches(order: Sequence[int], sizes: Sequence[int], limit: int) -> Iterator[list[int]]:
