@@ -45,16 +45,16 @@ def _watch(parent: int) -> None:
 
 
 def stop_workers(pool: ProcessPoolExecutor, grace: float = 2.0) -> None:
-    """End ``pool``'s worker processes now (SIGKILL: they hold nothing to save, a tile's partial layer is in the
-    staging folder the run removes; waiting up to ``grace`` seconds for each to go) and drop its queued work: what an
-    interrupted run does instead of waiting for the work in flight. (Was SIGTERM first, then SIGKILL after
-    ``grace``: an interrupted demo run in CI took 10.6-11.3 s to end twice, about the time of two graces per worker
-    that SIGTERM did not end; not reproduced outside the full suite.)"""
+    """End ``pool``'s worker processes now (SIGTERM, then SIGKILL after ``grace`` seconds) and drop its queued
+    work: what an interrupted run does instead of waiting for the chunks in flight."""
     processes = list((getattr(pool, "_processes", None) or {}).values())
     for process in processes:
         with contextlib.suppress(OSError, ValueError):
-            process.kill()
+            process.terminate()
     for process in processes:
         with contextlib.suppress(OSError, ValueError):
             process.join(grace)
+            if process.is_alive():
+                process.kill()
+                process.join(grace)
     pool.shutdown(wait=False, cancel_futures=True)
