@@ -38,7 +38,10 @@ def _running(pid: int) -> bool:
 def _generating(tmp_path: Path) -> tuple[subprocess.Popen, list[int], Path]:
     """The Helsinki demo with two workers, once both are busy building."""
     out = tmp_path / "out" / "helsinki.usdc"
-    proc = citygen_process("generate", "scenes/helsinki.toml", "-q", "--jobs", "2", "-o", str(out))
+    # (Ctrl-C as at a terminal: a process started in the background of a non-interactive shell inherits SIGINT
+    # ignored, and then Python never raises KeyboardInterrupt -- three CI runs launched that way failed here)
+    proc = citygen_process("generate", "scenes/helsinki.toml", "-q", "--jobs", "2", "-o", str(out),
+                           preexec=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while len(workers := _children(proc.pid)) < 2:
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
