@@ -266,9 +266,12 @@ class FacadeLayout:
     def loads(cls, text: str, source: str = "<layout>") -> FacadeLayout:
         try:
             data = json.loads(text)
+            return cls.from_json(data, source)
         except json.JSONDecodeError as exc:
             raise LayoutError(f"not JSON: {exc.msg}", where=f"{source}:{exc.lineno}:{exc.colno}") from exc
-        return cls.from_json(data, source)
+        except RecursionError:  # (a mutated or generated file: json and the region tree recurse per level)
+            raise LayoutError("layout JSON nested too deeply", where=source,
+                              hint="a facade's regions nest a few levels deep; check the file") from None
 
 
 def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:

@@ -110,3 +110,13 @@ def test_an_error_about_a_key_in_two_tables_names_the_right_line(tmp_path, text,
     with pytest.raises(SceneError) as info:
         load_scene(tmp_path / "scene.toml")
     assert str(info.value).startswith(f"{tmp_path / 'scene.toml'}:{line}: ")
+
+
+def test_deeply_nested_layout_json_is_a_layout_error():
+    """Regression (hypothesis example cmp_b0035.layout.json, seed 8920906): a mutation nesting arrays past
+    Python's recursion limit made ``FacadeLayout.loads`` raise RecursionError instead of a LayoutError."""
+    with pytest.raises(LayoutError, match="nested too deeply"):
+        FacadeLayout.loads('{"size": [1, 1], "root": ' + "[" * 5000 + "]" * 5000 + "}", "deep.layout.json")
+    text = mutate((REPO / "rulesets" / "cmp_b0035.layout.json").read_text(), "json", random.Random(8920906))
+    with pytest.raises(LayoutError):
+        FacadeLayout.loads(text, "cmp_b0035.layout.json")
