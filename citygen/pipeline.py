@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
+from citygen.attributes import condition_warnings
+from citygen.builder import Builder, BuildingOutcome, load_rulesets
 from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
@@ -208,6 +209,12 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
     tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
+    if scene.output.masses and not gltf and executor == "local":
+        timings, cpu = _generate_masses(work, scene, seed, roofs, Path(out), layer_data, tiled, report, progress,
+                                        ground)
+        report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0}
+        return report
     if executor == "dask" or (tiled and (jobs == 1 or len({w[4] for w in work}) >= jobs)):
         if executor == "dask":
             runner = functools.partial(run_tiles, scheduler=scheduler)
@@ -318,6 +325,40 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
     return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
             {"buildings": c1 - c0, "usd": time.process_time() - c1},
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
+
+
+def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], out: Path,
+                     layer_data: dict[str, Any], tiled: bool, report: Report,
+                     progress: Callable[[int, int], None] | None,
+                     ground: tuple[float, float, float, float, float] | None
+                     ) -> tuple[dict[str, float], dict[str, float]]:
+    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`), built and written in this process: a
+    mass-only building costs about a millisecond, less than a worker process takes to start. Returns the wall and
+    CPU seconds of the ``buildings`` and ``usd`` phases and the ``builds`` CPU (all of it in this process)."""
+    from citygen.lod1 import mass_outcomes
+    from citygen.lod1stage import MassWriter
+    t0, c0 = time.perf_counter(), time.process_time()
+    usd = 0.0
+    with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
+                    uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
+        if ground:
+            writer.ground(*ground)
+        for k, outcome in enumerate(mass_outcomes(work, scene, seed, roofs)):
+            report.warnings += outcome.warnings
+            if outcome.record is None:
+                report.skipped.append(outcome.skipped)
+            else:
+                tw = time.process_time()
+                writer.add(outcome.record)
+                usd += time.process_time() - tw
+                report.written += 1
+            if progress:
+                progress(k + 1, len(work))
+        t1, c1 = time.perf_counter(), time.process_time()
+        report.stats = writer.close()
+    builds = c1 - c0 - usd
+    return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
+            {"buildings": builds, "usd": usd + time.process_time() - c1, "builds": builds, "workers": 0.0})
 
 
 def _in_workers(jobs: int, total: int) -> bool:

@@ -324,7 +324,7 @@ class StageWriter:
         self.seen_tiles.add(tile)
         name = tile_name(tile)
         if self.tiles_dir is not None:
-            sub = StageWriter(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
+            sub = type(self)(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
                               layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
                               materials=self.library)
             self.tile = (tile, sub)
