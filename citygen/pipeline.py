@@ -22,12 +22,11 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from citygen.attributes import condition_warnings
-from citygen.builder import Builder, BuildingOutcome, load_rulesets
 from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
@@ -39,8 +38,11 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import plan_mass
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tiles import TileJob, TileResult, run_local
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
+
+if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
+    from citygen.builder import Builder, BuildingOutcome
+    from citygen.tiles import TileResult
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
 GROUND_MARGIN = 20.0
@@ -117,6 +119,7 @@ _WORKER: Builder | None = None
 
 def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None, parent: int) -> None:
     global _WORKER
+    from citygen.builder import Builder
     tie_to_parent(parent)
     _WORKER = Builder(scene, seed, None if plugins is None else load_registry(*plugins))
 
@@ -165,7 +168,11 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report = Report()
     t0, c0 = time.perf_counter(), time.process_time()
     # a ruleset that does not load stops the run before any building (masses only: none is used)
-    rulesets = {} if scene.output.masses else load_rulesets(scene, registry)
+    if scene.output.masses:
+        rulesets = {}
+    else:
+        from citygen.builder import load_rulesets
+        rulesets = load_rulesets(scene, registry)
     imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
@@ -219,6 +226,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         if executor == "dask":
             runner = functools.partial(run_tiles, scheduler=scheduler)
         else:
+            from citygen.builder import Builder
+            from citygen.tiles import run_local
             runner = functools.partial(run_local, builder=Builder(scene, seed, registry, rulesets))
         timings, cpu, tasks = _generate_tiles(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
                                               runner, report, progress, ground)
@@ -304,6 +313,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
     layer payloading them (and the ground) written here. Returns the wall and main-process CPU seconds of the
     ``buildings`` and ``usd`` phases, and the tasks' CPU: ``builds``, ``tile layers`` (writing them) and the part of
     both spent in ``workers``."""
+    from citygen.tiles import TileJob
     t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
@@ -372,6 +382,7 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
     buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
     already loaded (worker processes load their own)."""
+    from citygen.builder import Builder
     total = len(work)
     if not _in_workers(jobs, total):
         builder = Builder(scene, seed, registry, rulesets)
