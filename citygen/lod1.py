@@ -20,7 +20,6 @@ from citygen.coordinator import face_roles
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.building import MeshData
-from citygen.geometry.quads import weld_many
 from citygen.mass import Mass
 from citygen.registry import RoofBuilder
 from citygen.roofmesh import build_roof
