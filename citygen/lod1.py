@@ -72,12 +72,12 @@ class _Planned:
     warnings: tuple[str, ...]
 
 
-def mass_outcomes(work: Sequence[tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]], scene: Scene, seed: int,
-                  roofs: Mapping[str, RoofBuilder]) -> Iterator[MassOutcome]:
-    """The outcome of every work item (footprint, mass, neighbour cover, prim name, tile), in order, built
-    :data:`BATCH` buildings at a time."""
+def mass_batches(work: Sequence[tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]], scene: Scene, seed: int,
+                 roofs: Mapping[str, RoofBuilder]) -> Iterator[list[MassOutcome]]:
+    """The outcome of every work item (footprint, mass, neighbour cover, prim name, tile), in order, in lists of
+    :data:`BATCH` buildings built together."""
     for start in range(0, len(work), BATCH):
-        yield from _batch(work[start:start + BATCH], scene, seed, roofs)
+        yield _batch(work[start:start + BATCH], scene, seed, roofs)
 
 
 def _plan(footprint: Footprint, mass: Mass, cover: np.ndarray, name: str, tile: tuple[int, int], scene: Scene,
@@ -88,7 +88,12 @@ def _plan(footprint: Footprint, mass: Mass, cover: np.ndarray, name: str, tile: 
     roles = face_roles(footprint, mass, cover, scene.defaults)
     party = tuple(int(i) for i in np.flatnonzero(roles.party))
     roof, shape = build_roof(footprint, mass, party, roofs, warnings)
-    roof, gables = roof.split_vertical() if roof is not None else (None, None)
+    if roof is None:
+        gables = None
+    elif shape == "flat":  # (no vertical face: split_vertical would keep every face, and only the points they use)
+        roof, gables = roof.subset(np.ones(len(roof.counts), dtype=bool)), None
+    else:
+        roof, gables = roof.split_vertical()
     attributes = building_attributes(footprint, mass, levels=roles.levels, entrance=roles.entrance, ruleset="none",
                                      seed=seed, roof_shape=shape, keep_tags=scene.output.keep_tags)
     return _Planned(footprint, mass, name, tile, roof, gables, building_materials(seed, footprint), attributes,

@@ -345,25 +345,27 @@ def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict
     """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`), built and written in this process: a
     mass-only building costs about a millisecond, less than a worker process takes to start. Returns the wall and
     CPU seconds of the ``buildings`` and ``usd`` phases and the ``builds`` CPU (all of it in this process)."""
-    from citygen.lod1 import mass_outcomes
+    from citygen.lod1 import mass_batches
     from citygen.lod1stage import MassWriter
     t0, c0 = time.perf_counter(), time.process_time()
-    usd = 0.0
+    usd, done = 0.0, 0
     with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
-        for k, outcome in enumerate(mass_outcomes(work, scene, seed, roofs)):
-            report.warnings += outcome.warnings
-            if outcome.record is None:
-                report.skipped.append(outcome.skipped)
-            else:
-                tw = time.process_time()
+        for outcomes in mass_batches(work, scene, seed, roofs):
+            tw = time.process_time()
+            for outcome in outcomes:
+                report.warnings += outcome.warnings
+                if outcome.record is None:
+                    report.skipped.append(outcome.skipped)
+                    continue
                 writer.add(outcome.record)
-                usd += time.process_time() - tw
                 report.written += 1
+            usd += time.process_time() - tw
+            done += len(outcomes)
             if progress:
-                progress(k + 1, len(work))
+                progress(done, len(work))
         t1, c1 = time.perf_counter(), time.process_time()
         report.stats = writer.close()
     builds = c1 - c0 - usd

@@ -14,7 +14,7 @@ import pytest
 from pxr import Usd
 
 from citygen.builder import Builder
-from citygen.lod1 import mass_outcomes
+from citygen.lod1 import mass_batches
 from citygen.mass import neighbour_cover
 from citygen.pipeline import generate_city, import_footprints
 from citygen.registry import default_registry
@@ -47,7 +47,7 @@ def test_mass_records_equal_the_mass_level_of_detail_of_the_detailed_builder(roo
     work = [(fp, m, c, f"b{k}", (0, 0)) for k, (fp, m, c) in enumerate(zip(footprints, masses, cover))]
     builder = Builder(scene, scene.seed)
     shapes = set()
-    for item, fast in zip(work, mass_outcomes(work, scene, scene.seed, roofs)):
+    for item, fast in zip(work, [o for b in mass_batches(work, scene, scene.seed, roofs) for o in b]):
         old = builder.build(*item).record
         new = fast.record
         assert old is not None and new is not None
