@@ -217,8 +217,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
     tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
     if scene.output.masses and not gltf and executor == "local":
-        timings, cpu = _generate_masses(work, scene, seed, roofs, Path(out), layer_data, tiled, report, progress,
-                                        ground)
+        timings, cpu = _generate_masses(work, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
+                                        progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
         report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0}
         return report
@@ -337,23 +337,26 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
-def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], out: Path,
-                     layer_data: dict[str, Any], tiled: bool, report: Report,
+def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
+                     plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
+                     tiled: bool, report: Report,
                      progress: Callable[[int, int], None] | None,
                      ground: tuple[float, float, float, float, float] | None
                      ) -> tuple[dict[str, float], dict[str, float]]:
-    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`), built and written in this process: a
-    mass-only building costs about a millisecond, less than a worker process takes to start. Returns the wall and
-    CPU seconds of the ``buildings`` and ``usd`` phases and the ``builds`` CPU (all of it in this process)."""
-    from citygen.lod1 import mass_batches
+    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`), written in this process and built here
+    or, where its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), in ``jobs`` worker
+    processes. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
+    ``builds`` CPU, with the part of it spent in ``workers``."""
+    from citygen.lod1 import in_workers, mass_batches
     from citygen.lod1stage import MassWriter
     t0, c0 = time.perf_counter(), time.process_time()
-    usd, done = 0.0, 0
+    usd, builds, done = 0.0, 0.0, 0
     with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
-        for outcomes in mass_batches(work, scene, seed, roofs):
+        for outcomes, cpu in mass_batches(work, scene, seed, roofs, jobs, plugins):
+            builds += cpu
             tw = time.process_time()
             for outcome in outcomes:
                 report.warnings += outcome.warnings
@@ -368,9 +371,10 @@ def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict
                 progress(done, len(work))
         t1, c1 = time.perf_counter(), time.process_time()
         report.stats = writer.close()
-    builds = c1 - c0 - usd
+    elsewhere = in_workers(work, jobs)
     return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
-            {"buildings": builds, "usd": usd + time.process_time() - c1, "builds": builds, "workers": 0.0})
+            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds,
+             "workers": builds if elsewhere else 0.0})
 
 
 def _in_workers(jobs: int, total: int) -> bool:

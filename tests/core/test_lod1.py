@@ -47,7 +47,7 @@ def test_mass_records_equal_the_mass_level_of_detail_of_the_detailed_builder(roo
     work = [(fp, m, c, f"b{k}", (0, 0)) for k, (fp, m, c) in enumerate(zip(footprints, masses, cover))]
     builder = Builder(scene, scene.seed)
     shapes = set()
-    for item, fast in zip(work, [o for b in mass_batches(work, scene, scene.seed, roofs) for o in b]):
+    for item, fast in zip(work, [o for b, _ in mass_batches(work, scene, scene.seed, roofs) for o in b]):
         old = builder.build(*item).record
         new = fast.record
         assert old is not None and new is not None
@@ -129,3 +129,29 @@ def test_a_mass_only_run_imports_no_facade_machinery(tmp_path):
     assert status == 0
     facade = {"citygen.builder", "citygen.tiles", "citygen_layers.solver", "citygen_safe.generate", "scipy"}
     assert not facade & set(loaded)
+
+
+def test_workers_build_a_mass_only_city_only_when_its_roofs_pay_for_them(small_scene, test_registry, tmp_path,
+                                                                          monkeypatch):
+    """Flat roofs cost too little for worker processes to pay off (the rule: estimated build CPU against
+    ``WORKERS_FROM``); where workers build the city, its stage is the same bytes."""
+    import citygen.lod1 as lod1
+    scene = _masses_scene(small_scene)
+    here = generate_city(scene, registry=test_registry, out=tmp_path / "here.usda", jobs=2)
+    assert here.cpu["workers"] == 0.0
+    monkeypatch.setattr(lod1, "WORKERS_FROM", 0.0)
+    there = generate_city(scene, registry=test_registry, out=tmp_path / "there.usda", jobs=2)
+    assert there.cpu["workers"] > 0.0 and there.written == here.written == 3
+    assert (tmp_path / "here.usda").read_bytes().replace(b"here", b"") == \
+        (tmp_path / "there.usda").read_bytes().replace(b"there", b"")
+
+
+def test_the_demo_scenes_flat_roofs_are_built_in_process_and_its_hipped_roofs_in_workers():
+    scene = load_scene(REPO / "scenes" / "helsinki.toml")
+    roofs = default_registry().roof_builders
+    footprints = import_footprints(scene).footprints
+    hipped = [(fp, plan_mass(fp, scene, roofs)[0]) for fp in footprints]
+    flat_scene = replace(scene, defaults=replace(scene.defaults, roof_shape="flat"))
+    flat = [(fp, plan_mass(fp, flat_scene, roofs)[0]) for fp in footprints]
+    from citygen.lod1 import in_workers
+    assert not in_workers(flat, 2) and in_workers(hipped, 2) and not in_workers(hipped, 1)
