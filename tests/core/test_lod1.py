@@ -127,7 +127,8 @@ def test_a_mass_only_run_imports_no_facade_machinery(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     status, loaded = json.loads(out.stdout.splitlines()[-1])
     assert status == 0
-    facade = {"citygen.builder", "citygen.tiles", "citygen_layers.solver", "citygen_safe.generate", "scipy"}
+    facade = {"citygen.builder", "citygen.tiles", "citygen_relayout.search", "citygen_relayout.api",
+              "citygen_layers.solver", "citygen_safe.generate", "scipy", "PIL"}
     assert not facade & set(loaded)
 
 
