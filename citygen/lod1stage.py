@@ -8,13 +8,18 @@ detailed building's ``LOD1`` variant holds the same ``Walls``).
 """
 from __future__ import annotations
 
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
 from pxr import Gf, Sdf, Vt
 
-from citygen.lod1 import MassRecord
+from citygen.footprints import Skipped
+from citygen.lod1 import MassOutcome, MassRecord
 from citygen.usd.author import T
 from citygen.usd.bounds import union
-from citygen.usd.writer import StageWriter, _model_bound, _value, attribute_name, variation
+from citygen.usd.writer import StageStats, StageWriter, _model_bound, _value, attribute_name, variation
 
 
 class MassWriter(StageWriter):
@@ -29,6 +34,12 @@ class MassWriter(StageWriter):
             bound = _write_mass(self, target, record)
         if bound is not None:
             self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
+
+    def add_layer(self, name: str, stats: StageStats) -> None:
+        """Payload the tile layer ``name`` another process wrote into :meth:`staging_folder`, after the tile open
+        here (tiles come in tile order)."""
+        self._flush_tile()
+        self.add_tile_layer(name, stats, ())
 
 
 def _write_mass(writer: StageWriter, parent: Sdf.PrimSpec, record: MassRecord) -> np.ndarray | None:
@@ -62,3 +73,28 @@ def _write_mass(writer: StageWriter, parent: Sdf.PrimSpec, record: MassRecord) -
     building = union(bounds)
     _model_bound(prim, building)
     return building
+
+
+@dataclass(frozen=True)
+class Part:
+    """Part of a mass-only city done: its skipped buildings, warnings and buildings written, and the CPU seconds
+    of its builds and of writing it (``here``: in this process, else in a helper, :mod:`citygen.lod1tiles`)."""
+
+    skipped: tuple[Skipped, ...]
+    warnings: tuple[str, ...]
+    written: int
+    builds: float
+    usd: float
+    here: bool = True
+
+
+def write_outcomes(writer: StageWriter, outcomes: Sequence[MassOutcome], builds: float) -> Part:
+    """``outcomes``' records added to ``writer`` (``builds``: the CPU seconds they took to build)."""
+    start = time.process_time()
+    written = 0
+    for outcome in outcomes:
+        if outcome.record is not None:
+            writer.add(outcome.record)
+            written += 1
+    return Part(tuple(o.skipped for o in outcomes if o.record is None), tuple(w for o in outcomes for w in o.warnings),
+                written, builds, time.process_time() - start)

@@ -348,33 +348,34 @@ def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict
     processes. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
     ``builds`` CPU, with the part of it spent in ``workers``."""
     from citygen.lod1 import in_workers, mass_batches
-    from citygen.lod1stage import MassWriter
+    from citygen.lod1stage import MassWriter, write_outcomes
+    from citygen.lod1tiles import run_with_helper, with_helper
     t0, c0 = time.perf_counter(), time.process_time()
-    usd, builds, done = 0.0, 0.0, 0
+    usd = builds = helper = 0.0  # CPU seconds: writing here, the builds (wherever), the helper's (builds and layers)
+    done = 0
     with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
-        for outcomes, cpu in mass_batches(work, scene, seed, roofs, jobs, plugins):
-            builds += cpu
-            tw = time.process_time()
-            for outcome in outcomes:
-                report.warnings += outcome.warnings
-                if outcome.record is None:
-                    report.skipped.append(outcome.skipped)
-                    continue
-                writer.add(outcome.record)
-                report.written += 1
-            usd += time.process_time() - tw
-            done += len(outcomes)
+        helped = with_helper(work, jobs, tiled) and not in_workers(work, jobs)
+        parts = (run_with_helper(work, scene, seed, roofs, writer) if helped else
+                 (write_outcomes(writer, outcomes, cpu) for outcomes, cpu in mass_batches(work, scene, seed, roofs,
+                                                                                            jobs, plugins)))
+        for part in parts:
+            report.skipped += part.skipped
+            report.warnings += part.warnings
+            report.written += part.written
+            builds += part.builds
+            usd += part.usd if part.here else 0.0
+            helper += 0.0 if part.here else part.builds + part.usd
+            done += part.written + len(part.skipped)
             if progress:
                 progress(done, len(work))
         t1, c1 = time.perf_counter(), time.process_time()
         report.stats = writer.close()
-    elsewhere = in_workers(work, jobs)
+    workers = builds if in_workers(work, jobs) else helper
     return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
-            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds,
-             "workers": builds if elsewhere else 0.0})
+            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds, "workers": workers})
 
 
 def _in_workers(jobs: int, total: int) -> bool:

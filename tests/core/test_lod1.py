@@ -156,3 +156,27 @@ def test_the_demo_scenes_flat_roofs_are_built_in_process_and_its_hipped_roofs_in
     flat = [(fp, plan_mass(fp, flat_scene, roofs)[0]) for fp in footprints]
     from citygen.lod1 import in_workers
     assert not in_workers(flat, 2) and in_workers(hipped, 2) and not in_workers(hipped, 1)
+
+
+def test_a_forked_helper_writes_half_of_the_tile_layers_and_the_stage_is_the_same_bytes(small_scene, test_registry,
+                                                                                          tmp_path, monkeypatch):
+    import citygen.lod1tiles as lod1tiles
+    scene = _masses_scene(small_scene)
+    scene = replace(scene, output=replace(scene.output, tile_layers=True, tile_size=20.0))
+    alone = generate_city(scene, registry=test_registry, out=tmp_path / "a" / "city.usdc", jobs=2)
+    assert alone.cpu["workers"] == 0.0  # (3 buildings: below HELPER_FROM)
+    monkeypatch.setattr(lod1tiles, "HELPER_FROM", 0)
+    helped = generate_city(scene, registry=test_registry, out=tmp_path / "b" / "city.usdc", jobs=2)
+    assert helped.cpu["workers"] > 0.0
+    assert (helped.written, [s.id for s in helped.skipped]) == (alone.written, [s.id for s in alone.skipped])
+    files = lambda root: {p.relative_to(root): p.read_bytes() for p in root.rglob("*") if p.is_file()}  # noqa: E731
+    assert files(tmp_path / "a") == files(tmp_path / "b")
+    assert len(list((tmp_path / "b" / "city_tiles").iterdir())) > 1
+
+
+def test_tiles_are_dealt_to_balance_the_buildings():
+    from citygen.lod1tiles import deal
+    tiles = [[0] * n for n in (5, 40, 12, 30, 3)]
+    taken = deal(tiles)
+    assert taken == {2, 3, 4}  # 40 here; 30 there; 12 there; 5 here; 3 there: 45 against 45
+    assert sum(len(tiles[k]) for k in taken) == 45
