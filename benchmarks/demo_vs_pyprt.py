@@ -17,8 +17,9 @@ PyPRT's figures were measured on this machine for issue 24 (its rule packages ar
 bytecode is compiled first, as a pip install does: a checkout run with ``PYTHONDONTWRITEBYTECODE`` set would compile
 its ~100 modules from source on every start (about 0.4 s of CPU here). ``--cases mass`` runs the two mass-only cases.
 
-Figures (3 Dec 2026, median of 5, 2 jobs; the machine shared, load average 7-8): mass-only with flat roofs
-1.87 s CPU (was 3.43 s), mass-only with the demo's roofs 4.63 s CPU (was 5.71 s); see docs/performance.md.
+Figures (3 Dec 2026, ``--runs 5 --cases mass``, 2 jobs, load average 5-6): mass-only with flat roofs 1.71 s wall,
+1.84 s CPU (0.90x PyPRT's extrusion; before the fast path 3.2 s CPU), mass-only with the demo's roofs 4.40 s wall,
+4.15 s CPU (before: 5.6 s CPU); see docs/performance.md.
 """
 from __future__ import annotations
 
