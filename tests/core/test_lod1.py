@@ -180,3 +180,13 @@ def test_tiles_are_dealt_to_balance_the_buildings():
     taken = deal(tiles)
     assert taken == {2, 3, 4}  # 40 here; 30 there; 12 there; 5 here; 3 there: 45 against 45
     assert sum(len(tiles[k]) for k in taken) == 45
+
+
+def test_a_mass_only_city_with_uvs_gives_every_mesh_texture_coordinates(small_scene, test_registry, tmp_path):
+    scene = _masses_scene(small_scene)
+    report = generate_city(replace(scene, output=replace(scene.output, uvs=True)), registry=test_registry,
+                           out=tmp_path / "uv.usda")
+    stage = Usd.Stage.Open(str(report.stats.path))
+    meshes = [p for p in stage.Traverse() if p.GetTypeName() == "Mesh"]
+    assert len(meshes) == 6 and all(len(p.GetAttribute("primvars:st").Get()) for p in meshes)
+    assert [f for f in validate_stage(report.stats.path) if f.severity == "error"] == []
