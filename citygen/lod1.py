@@ -136,10 +136,9 @@ def _timed(work: Sequence[tuple], scene: Scene, seed: int, roofs: Mapping[str, R
 
 
 def _plan(footprint: Footprint, mass: Mass, cover: np.ndarray, name: str, tile: tuple[int, int], scene: Scene,
-          seed: int, roofs: Mapping[str, RoofBuilder]) -> _Planned:
+          seed: int, roofs: Mapping[str, RoofBuilder], warnings: list[str]) -> _Planned:
     """A building's per-building part: its face roles (levels, entrance, party walls), its roof split into roof
-    and gables (vertical faces: walls), materials and attributes."""
-    warnings: list[str] = []
+    and gables (vertical faces: walls), materials and attributes; the warnings met go to ``warnings``."""
     roles = face_roles(footprint, mass, cover, scene.defaults)
     party = tuple(int(i) for i in np.flatnonzero(roles.party))
     roof, shape = build_roof(footprint, mass, party, roofs, warnings)
@@ -158,13 +157,14 @@ def _plan(footprint: Footprint, mass: Mass, cover: np.ndarray, name: str, tile: 
 def _batch(work: Sequence[tuple], scene: Scene, seed: int, roofs: Mapping[str, RoofBuilder]) -> list[MassOutcome]:
     planned: list[_Planned | MassOutcome] = []
     for footprint, mass, cover, name, tile in work:
+        warnings: list[str] = []
         try:
-            planned.append(_plan(footprint, mass, cover, name, tile, scene, seed, roofs))
+            planned.append(_plan(footprint, mass, cover, name, tile, scene, seed, roofs, warnings))
         except CitygenError as exc:
-            planned.append(MassOutcome(None, Skipped(footprint.id, str(exc), footprint.source), ()))
+            planned.append(MassOutcome(None, Skipped(footprint.id, str(exc), footprint.source), tuple(warnings)))
         except Exception as exc:  # a bug skips one building, not the city, and says it is one
             planned.append(MassOutcome(None, Skipped(footprint.id, f"internal error {type(exc).__name__}: {exc}",
-                                                     footprint.source), ()))
+                                                     footprint.source), tuple(warnings)))
     built = [p for p in planned if isinstance(p, _Planned)]
     walls = _walls([p.mass for p in built])
     walls = [MeshData.concat([w, p.gables]) if p.gables is not None else w for w, p in zip(walls, built)]

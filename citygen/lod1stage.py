@@ -8,6 +8,7 @@ detailed building's ``LOD1`` variant holds the same ``Walls``).
 """
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -20,6 +21,10 @@ from citygen.lod1 import MassOutcome, MassRecord
 from citygen.usd.author import T
 from citygen.usd.bounds import union
 from citygen.usd.writer import StageStats, StageWriter, _model_bound, _value, attribute_name, variation
+
+
+#: ``citygen:<key>`` attribute names, made once per key (every building has the same dozen).
+_attribute_name = functools.lru_cache(maxsize=4096)(attribute_name)
 
 
 class MassWriter(StageWriter):
@@ -54,7 +59,7 @@ def _write_mass(writer: StageWriter, parent: Sdf.PrimSpec, record: MassRecord) -
     author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
-        author.attr(prim, attribute_name(key), vtype, v, custom=True)
+        author.attr(prim, _attribute_name(key), vtype, v, custom=True)
     tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(record.name))
     tint.SetInfo("interpolation", "constant")
     roof = record.roof

@@ -190,3 +190,25 @@ def test_a_mass_only_city_with_uvs_gives_every_mesh_texture_coordinates(small_sc
     meshes = [p for p in stage.Traverse() if p.GetTypeName() == "Mesh"]
     assert len(meshes) == 6 and all(len(p.GetAttribute("primvars:st").Get()) for p in meshes)
     assert [f for f in validate_stage(report.stats.path) if f.severity == "error"] == []
+
+
+def test_a_bug_building_one_mass_only_building_skips_it_and_keeps_its_warnings(small_scene, test_registry,
+                                                                               monkeypatch):
+    """One bad building never aborts a mass-only city: it is skipped as an internal error, with the warnings met
+    before the error, and the rest is written."""
+    import citygen.lod1 as lod1
+    original = lod1.building_attributes
+
+    def broken(footprint, mass, **kw):
+        if footprint.id == "way/2":
+            raise ZeroDivisionError("float division by zero")
+        return original(footprint, mass, **kw)
+
+    monkeypatch.setattr(lod1, "building_attributes", broken)
+    monkeypatch.setattr(lod1, "build_roof", lambda fp, mass, party, roofs, warnings: (
+        warnings.append(f"{fp.id}: a roof note") or (None, "flat")))
+    report = generate_city(_masses_scene(small_scene), registry=test_registry)
+    assert report.written == 2
+    skipped = {s.id: s.reason for s in report.skipped}
+    assert skipped["way/2"] == "internal error ZeroDivisionError: float division by zero"
+    assert "way/2: a roof note" in report.warnings
