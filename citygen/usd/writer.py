@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pxr import Gf, Sdf, Tf, Usd, UsdUtils, Vt
+from pxr import Gf, Sdf, Tf, Usd, Vt
 
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
@@ -561,6 +561,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
     tmp = Path(tmp_name)
     try:
         if suffix == ".usdz":
+            from pxr import UsdUtils  # (with UsdShade and UsdGeom: only a .usdz needs them)
             inner = tmp.with_suffix(".usdc")
             _export(layer, inner)
             os.utime(inner, (PACKED_MTIME, PACKED_MTIME))

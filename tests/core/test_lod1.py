@@ -112,8 +112,8 @@ def test_a_mass_only_city_with_tile_layers_writes_the_same_meshes(small_scene, t
 
 
 def test_a_mass_only_run_imports_no_facade_machinery(tmp_path):
-    """``citygen generate --masses`` builds no facade: the builder, the tile tasks, the geometry of facade
-    modules and element prototypes, and the ruleset kinds' generators stay unimported."""
+    """``citygen generate --masses`` builds no facade: the builder, the tile tasks and the ruleset kinds'
+    generators stay unimported, and so do the USD schemas an Sdf-authored ``.usdc`` does not need."""
     scene = tmp_path / "city.toml"
     ring = [[24.9400, 60.1700], [24.9404, 60.1700], [24.9404, 60.1701], [24.9400, 60.1701], [24.9400, 60.1700]]
     (tmp_path / "city.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": [
@@ -128,7 +128,7 @@ def test_a_mass_only_run_imports_no_facade_machinery(tmp_path):
     status, loaded = json.loads(out.stdout.splitlines()[-1])
     assert status == 0
     facade = {"citygen.builder", "citygen.tiles", "citygen_relayout.search", "citygen_relayout.api",
-              "citygen_layers.solver", "citygen_safe.generate", "scipy", "PIL"}
+              "citygen_layers.solver", "citygen_safe.generate", "scipy", "PIL", "pxr.UsdShade", "pxr.UsdGeom"}
     assert not facade & set(loaded)
 
 
