@@ -343,10 +343,11 @@ def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict
                      progress: Callable[[int, int], None] | None,
                      ground: tuple[float, float, float, float, float] | None
                      ) -> tuple[dict[str, float], dict[str, float]]:
-    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`), written in this process and built here
-    or, where its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), in ``jobs`` worker
-    processes. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
-    ``builds`` CPU, with the part of it spent in ``workers``."""
+    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`): built in ``jobs`` worker processes where
+    its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), else here; a tiled one of that kind
+    written half here, half by a forked helper where it is big enough (:func:`citygen.lod1tiles.with_helper`), else
+    all here. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
+    ``builds`` CPU, with the part of it spent in ``workers`` (or the helper's builds and tile layers)."""
     from citygen.lod1 import in_workers, mass_batches
     from citygen.lod1stage import MassWriter, write_outcomes
     from citygen.lod1tiles import run_with_helper, with_helper
