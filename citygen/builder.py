@@ -7,35 +7,33 @@ dask executor one per worker thread. Any error while building one building becom
 """
 from __future__ import annotations
 
-import difflib
 import operator
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from shapely.geometry import MultiPolygon
 
+from citygen.attributes import assign_attributes, building_attributes, building_materials, building_pivot
 from citygen.coordinator import face_bins, plan_building
 from citygen.entrance import enforce_entrance
 from citygen.errors import CitygenError, SceneError, SourceLocation
 from citygen.footprints import Footprint, Skipped
 from citygen.gcpause import cyclic_gc_paused
-from citygen.geometry.building import MeshData, build_geometry, clear_module_cache
+from citygen.geometry.building import build_geometry, clear_module_cache
 from citygen.layout import FacadeLayout, Region, check_partition, hidden_behind
 from citygen.mass import Mass
 from citygen.plausible import check_plausible, plain_wall, summary
 from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
-from citygen.roof import ROOF_BUDGET, rectangle_like, roof_budget, roof_notes
+from citygen.roofmesh import build_roof
 from citygen.scene import Assignment, Scene
 from citygen.geometry.building import BUILDING_RENDER, LABEL_MATERIAL
-from citygen.usd.materials import WALL_PALETTE, colour_material, resolve
+from citygen.usd.materials import resolve
 from citygen.usd.writer import BuildingRecord
 
 
@@ -67,12 +65,6 @@ def face_tally(layouts: Sequence[FacadeLayout]) -> Counter[str]:
     return tally
 
 
-def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
-    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height (the data's: a total,
-    roof included, or for level counts the walls') and area."""
-    return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
-
-
 def load_rulesets(scene: Scene, registry: Registry | None = None) -> dict[tuple[str, Path], Any]:
     """Every ruleset the scene's ``[[assign]]`` rules name, and their fallbacks, loaded by its kind (keyed by kind
     id and path), so a ruleset that does not load stops the run before any building is generated: a
@@ -96,45 +88,6 @@ def load_rulesets(scene: Scene, registry: Registry | None = None) -> dict[tuple[
                                  f"{type(exc).__name__}: {exc}", where=where, plugin=kind.id,
                                  hint="this is a bug in the ruleset kind; please report it with the ruleset") from exc
     return loaded
-
-
-def condition_warnings(scene: Scene, footprints: Sequence[Footprint], masses: Sequence[Mass]) -> list[str]:
-    """What is wrong with the scene's ``when`` tests against these footprints, as warnings: an attribute no
-    footprint has (a misspelling, with the nearest names), and text compared with an attribute that is a number
-    on every footprint that has it (never equal)."""
-    if not footprints:
-        return []
-    seen: dict[str, list[Any]] = {}
-    for footprint, mass in zip(footprints, masses):
-        for key, value in assign_attributes(footprint, mass).items():
-            if value is not None:
-                seen.setdefault(key, []).append(value)
-    found = []
-    for number, assignment in enumerate(scene.assignments, 1):
-        where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
-        for condition in assignment.conditions:
-            values = seen.get(condition.key)
-            if values is None:
-                near = difflib.get_close_matches(condition.key, list(seen), n=3)
-                found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
-                             + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
-            elif condition.op == "in" and all(_is_number(v) for v in values) and not any(
-                    _is_number(v) or _numeric_text(v) for v in condition.values):
-                found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
-                             f"{condition.key}, a number on every footprint: it never matches")
-    return found
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-
-
-def _numeric_text(value: Any) -> bool:
-    try:
-        float(value)
-    except (TypeError, ValueError):
-        return False
-    return True
 
 
 class Builder:
@@ -219,9 +172,9 @@ class Builder:
                     layouts[face] = hidden_behind(self._checked(layout, request, kind.id, warnings), bins[face])
                 if outside:
                     warnings.append(_outside_range(footprint.id, kind.id, outside))
-            wall, roof_material = self._materials(footprint)
+            wall, roof_material = building_materials(self.seed, footprint)
             faces = [(f, layouts.get(f.index)) for f in mass.faces]
-            roof, roof_shape = self._roof(footprint, mass, plan.party_faces, warnings)
+            roof, roof_shape = build_roof(footprint, mass, plan.party_faces, self.roofs, warnings)
             geometry = build_geometry(mass, faces, wall, roof, modules=self.scene.output.instancing == "modules",
                                       roof_material=roof_material, walls=self.scene.output.lod != "none")
         except CitygenError as exc:
@@ -229,28 +182,12 @@ class Builder:
         except (Exception, SystemExit) as exc:  # a plugin bug (or exit) must skip one building, not the city
             reason = f"internal error {type(exc).__name__}: {exc}"
             return BuildingOutcome(None, Skipped(footprint.id, reason, footprint.source), tuple(warnings))
-        attributes = {"sourceId": footprint.id, "height": mass.top - mass.base, "wallHeight": mass.height,
-                      "roofHeight": mass.roof.height or 0.0, "roofHeightSource": mass.roof_source,
-                      "heightSource": footprint.height_source, "levels": plan.levels, "base": float(footprint.base),
-                      "ruleset": ", ".join(dict.fromkeys(used)) or "none", "seed": self.seed,
-                      "entranceFace": -1 if plan.entrance_face is None else plan.entrance_face,
-                      "buildingType": str(footprint.attributes.get("building", "yes")), "roofShape": roof_shape,
-                      "footprintArea": round(float(mass.outline.area), 3),
-                      **kept_tags(footprint.attributes, self.scene.output.keep_tags)}
-        centroid = mass.outline.centroid
-        pivot = (float(centroid.x), float(centroid.y), float(footprint.base - footprint.lift))
+        attributes = building_attributes(footprint, mass, levels=plan.levels, entrance=plan.entrance_face,
+                                         ruleset=", ".join(dict.fromkeys(used)) or "none", seed=self.seed,
+                                         roof_shape=roof_shape, keep_tags=self.scene.output.keep_tags)
+        pivot = building_pivot(footprint, mass)
         return BuildingOutcome(BuildingRecord(name, tile, geometry, attributes, pivot), None, tuple(warnings),
                                tuple(sorted(tally.items())), layouts if self.keep_layouts else None)
-
-    def _materials(self, footprint: Footprint) -> tuple[str, str]:
-        """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for
-        ``building:material = brick``, else a wall drawn from the palette (per building seed) and a dark roof."""
-        attrs = footprint.attributes
-        wall = colour_material(attrs.get("building:colour"))
-        if wall is None:
-            palette = derive_rng(self.seed, footprint.id, "palette").integers(len(WALL_PALETTE))
-            wall = "brick" if attrs.get("building:material") == "brick" else WALL_PALETTE[palette]
-        return wall, colour_material(attrs.get("roof:colour")) or "roof_dark"
 
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
@@ -267,33 +204,6 @@ class Builder:
                                 f"regions use {fallback} instead (define it in the scene's [materials] or in "
                                 f"{ruleset.name.split('.')[0]}.materials.toml)")
         return replace(layout, root=_without(layout.root, undefined))
-
-    def _roof(self, footprint: Footprint, mass: Mass, party: tuple[int, ...], warnings: list[str]
-              ) -> tuple[MeshData | None, str]:
-        """The roof the mass carries (``mass.roof``: shape and height decided with the walls,
-        :mod:`citygen.roofplan`) and the shape built; an unknown shape or a failing builder gives a flat roof (with
-        a warning). The faces the coordinator found to be party walls (``party``) are passed on in the spec."""
-        spec = replace(mass.roof, party=party)
-        flat = self.roofs.get("flat")
-        builder = self.roofs.get(spec.shape, flat)
-        if spec.shape not in self.roofs:
-            warnings.append(f"{footprint.id}: flat roof instead of roof:shape={spec.shape!r}, which no roof builder "
-                            f"makes (known: {', '.join(sorted(self.roofs))})")
-        parts = mass.outline.geoms if isinstance(mass.outline, MultiPolygon) else [mass.outline]
-        if spec.orientation and getattr(builder, "oriented", False) and not all(map(rectangle_like, parts)):
-            warnings.append(f"{footprint.id}: roof:orientation={spec.orientation} ignored where the outline is not "
-                            f"rectangle-like; the ridge follows the straight skeleton")
-        top = mass.base + mass.height
-        if builder is None or builder is flat:
-            return (flat.build(mass.outline, top, spec) if flat else None), "flat"
-        try:
-            with roof_notes() as notes, roof_budget(ROOF_BUDGET):  # what the builder reports: the building's warning
-                roof = builder.build(mass.outline, top, spec)
-            warnings.extend(f"{footprint.id}: {spec.shape} roof: {n}" for n in notes)
-            return roof, spec.shape
-        except (Exception, SystemExit) as exc:  # degenerate outline or a builder bug: a flat roof
-            warnings.append(f"{footprint.id}: flat roof instead of {spec.shape}: {type(exc).__name__}: {exc}")
-            return (flat.build(mass.outline, top, spec) if flat else None), "flat"
 
     @staticmethod
     def _generate(kind: RulesetKind, ruleset: Any, requests: list[FacadeRequest],
@@ -374,13 +284,6 @@ class Builder:
 
 
 _MATERIAL = operator.attrgetter("material")
-
-
-def kept_tags(attributes: Mapping[str, Any], patterns: Sequence[str]) -> dict[str, Any]:
-    """The source tags the scene keeps (``[output] keep_tags``: names or ``fnmatch`` patterns such as ``addr:*``)
-    as ``tag:<name>`` attributes, in name order."""
-    return {f"tag:{key}": value for key, value in sorted(attributes.items())
-            if any(fnmatchcase(key, p) for p in patterns) and isinstance(value, (str, int, float))}
 
 
 def _without(region: Region, names: set[str]) -> Region:

@@ -23,7 +23,6 @@ from citygen.pipeline import generate_city, terminal_progress
 from citygen.registry import Registry, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.scene import load_scene
-from citygen.usd.validate import validate_stage
 
 
 def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
@@ -51,6 +50,7 @@ def _cmd_generate(args: argparse.Namespace, registry: Registry) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace, registry: Registry) -> int:
+    from citygen.usd.validate import validate_stage  # (UsdValidation and UsdGeom: only validating needs them)
     status = 0
     for stage in args.stages:
         findings = validate_stage(stage)

@@ -82,11 +82,26 @@ def face_bins(cover: np.ndarray) -> np.ndarray:
     return cover[:, None] if cover.ndim == 1 else cover
 
 
-def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults,
-                  seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
-    """Decide floor lines, entrance face and corner strips; build one request per facade face. ``cover`` is per
-    face (and bin across its width) the height up to which neighbours stand against it
-    (``citygen.mass.neighbour_cover``)."""
+@dataclass(frozen=True)
+class FaceRoles:
+    """What each face of a building is, decided before any request: the building's ``floor_lines``, and per face
+    (bool arrays) a ``party`` wall, a ``facade`` face (neither a party wall nor too narrow), a ``street`` face
+    (a facade face, not a courtyard's, whose foot is free); the ``entrance`` face (None: no door)."""
+
+    floor_lines: tuple[float, ...]
+    party: np.ndarray
+    facade: np.ndarray
+    street: np.ndarray
+    entrance: int | None
+
+    @property
+    def levels(self) -> int:
+        return len(self.floor_lines) - 1
+
+
+def face_roles(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults) -> FaceRoles:
+    """The :class:`FaceRoles` of a building; ``cover`` is per face (and bin across its width) the height up to
+    which neighbours stand against it (``citygen.mass.neighbour_cover``)."""
     lifted = footprint.lift > 0.0
     floor_lines = plan_floor_lines(mass.height, footprint.levels, defaults, lifted)
     faces = mass.faces
@@ -100,6 +115,18 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
     if door_candidates.size == 0:
         door_candidates = np.flatnonzero(facade & free_foot & (widths >= 1.5))
     entrance = int(door_candidates[np.argmax(widths[door_candidates])]) if door_candidates.size else None
+    return FaceRoles(floor_lines, party, facade, street, entrance)
+
+
+def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults,
+                  seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
+    """Decide floor lines, entrance face and corner strips (:func:`face_roles`); build one request per facade
+    face. ``cover`` is per face (and bin across its width) the height up to which neighbours stand against it
+    (``citygen.mass.neighbour_cover``)."""
+    roles = face_roles(footprint, mass, cover, defaults)
+    floor_lines, facade, street, entrance = roles.floor_lines, roles.facade, roles.street, roles.entrance
+    faces = mass.faces
+    widths = np.array([f.width for f in faces])
     corner = _corner_strips(mass, widths, facade, defaults.corner_width)
     attrs = dict(attributes if attributes is not None else footprint.attributes)
     requests = []
@@ -116,7 +143,7 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
     return BuildingPlan(building_id=footprint.id, levels=len(floor_lines) - 1, floor_lines=floor_lines,
                         entrance_face=entrance, requests=tuple(requests),
                         plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)),
-                        party_faces=tuple(int(i) for i in np.flatnonzero(party)))
+                        party_faces=tuple(int(i) for i in np.flatnonzero(roles.party)))
 
 
 def _corner_strips(mass: Mass, widths: np.ndarray, facade: np.ndarray, corner_width: float) -> np.ndarray:

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from citygen.errors import CitygenError
-from citygen.tiles import TileJob, TileResult, build_tile, by_tile
 from citygen.usd.writer import tile_name
+
+if TYPE_CHECKING:
+    from citygen.tiles import TileJob, TileResult
 
 EXECUTORS = ("local", "dask")
 INSTALL_HINT = "pip install 'citygen[distributed]'"
@@ -56,6 +58,7 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
 def run_tiles(work: Sequence[tuple], job: TileJob, workers: int, progress: Callable[[int, int], None] | None = None,
               *, scheduler: str | None = None) -> list[TileResult]:
     """Submit one task per tile (``work`` sorted by tile) and return their results in tile order."""
+    from citygen.tiles import build_tile, by_tile  # (the facade machinery: imported when a run needs it)
     tiles = by_tile(work)
     total, done = len(work), 0
     results: dict[tuple[int, int], TileResult] = {}

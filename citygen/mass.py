@@ -7,7 +7,7 @@ shorter than the tolerance are absorbed into their neighbours instead of becomin
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -66,11 +66,6 @@ class Mass:
         """The highest point: base, walls and roof."""
         return self.base + self.height + (self.roof.height or 0.0)
 
-    def with_walls(self, height: float, roof: RoofSpec, roof_source: str) -> Mass:
-        """This mass with walls ``height`` tall carrying ``roof``."""
-        faces = tuple(replace(f, height=float(height)) for f in self.faces)
-        return replace(self, height=float(height), faces=faces, roof=roof, roof_source=roof_source)
-
 
 def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.ndarray:
     """Remove near-collinear vertices (deviation < ``collinear_tol``) and collapse edges < ``min_edge``.
@@ -81,10 +76,10 @@ def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.
     pts = np.asarray(coords, dtype=float)
     keep = np.r_[True, np.any(np.abs(np.diff(pts, axis=0)) > 1e-9, axis=1)]
     pts = pts[keep]
-    if len(pts) > 1 and np.allclose(pts[0], pts[-1]):
+    if len(pts) > 1 and _close(pts[0], pts[-1]):
         pts = pts[:-1]
     while len(pts) > 3:
-        prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
+        prev, nxt = np.concatenate((pts[-1:], pts[:-1])), np.concatenate((pts[1:], pts[:1]))
         chord = nxt - prev
         length = np.hypot(chord[:, 0], chord[:, 1])
         cross = np.abs(chord[:, 0] * (pts[:, 1] - prev[:, 1]) - chord[:, 1] * (pts[:, 0] - prev[:, 0]))
@@ -93,7 +88,7 @@ def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.
         if deviation[i] < collinear_tol:
             pts = np.delete(pts, i, axis=0)
             continue
-        edges = np.roll(pts, -1, axis=0) - pts
+        edges = nxt - pts
         elen = np.hypot(edges[:, 0], edges[:, 1])
         j = int(np.argmin(elen))
         if elen[j] >= min_edge:
@@ -102,6 +97,11 @@ def clean_ring(coords: np.ndarray, collinear_tol: float, min_edge: float) -> np.
         pts[j] = (pts[j] + pts[k]) / 2
         pts = np.delete(pts, k, axis=0)
     return pts
+
+
+def _close(a: np.ndarray, b: np.ndarray) -> bool:
+    """``np.allclose(a, b)`` of two points (its tolerances and arithmetic, without its cost on tiny arrays)."""
+    return all(abs(x - y) <= 1e-08 + 1e-05 * abs(y) for x, y in zip(a.tolist(), b.tolist()))
 
 
 def _clean_polygon(poly: Polygon, collinear_tol: float, min_edge: float) -> Polygon:
@@ -127,35 +127,32 @@ def _ring_faces(coords: np.ndarray, ring: int, first_index: int, base: float, he
                 is_courtyard: bool) -> list[Face]:
     pts = np.asarray(coords, dtype=float)[:-1, :2]
     n = len(pts)
-    d = np.roll(pts, -1, axis=0) - pts
+    d = np.concatenate((pts[1:], pts[:1])) - pts
     width = np.hypot(d[:, 0], d[:, 1])
     u = d / width[:, None]
-    turn = np.degrees(np.arctan2(np.roll(u, 1, axis=0)[:, 0] * u[:, 1] - np.roll(u, 1, axis=0)[:, 1] * u[:, 0],
-                                 np.sum(np.roll(u, 1, axis=0) * u, axis=1)))
-    interior = 180.0 - turn  # interior angle of the building at the start vertex of each edge
-    faces = []
-    for i in range(n):
-        faces.append(Face(index=first_index + i, ring=ring,
-                          origin=(float(pts[i, 0]), float(pts[i, 1]), float(base)),
-                          u=(float(u[i, 0]), float(u[i, 1]), 0.0),
-                          normal=(float(u[i, 1]), float(-u[i, 0]), 0.0),
-                          width=float(width[i]), height=float(height),
-                          corner_angles=(float(interior[i]), float(interior[(i + 1) % n])),
-                          neighbours=(first_index + (i - 1) % n, first_index + (i + 1) % n),
-                          is_courtyard=is_courtyard))
-    return faces
+    before = np.concatenate((u[-1:], u[:-1]))
+    turn = np.degrees(np.arctan2(before[:, 0] * u[:, 1] - before[:, 1] * u[:, 0], np.sum(before * u, axis=1)))
+    interior = (180.0 - turn).tolist()  # interior angle of the building at the start vertex of each edge
+    base, height = float(base), float(height)
+    return [Face(index=first_index + i, ring=ring, origin=(x, y, base), u=(ux, uy, 0.0), normal=(uy, -ux, 0.0),
+                 width=w, height=height, corner_angles=(interior[i], interior[(i + 1) % n]),
+                 neighbours=(first_index + (i - 1) % n, first_index + (i + 1) % n), is_courtyard=is_courtyard)
+            for i, ((x, y), (ux, uy), w) in enumerate(zip(pts.tolist(), u.tolist(), width.tolist()))]
 
 
-def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float = 0.8) -> Mass:
-    """Extrude ``footprint`` to its height; faces for every exterior and courtyard edge."""
-    outline = clean_outline(footprint.polygon, collinear_tol, min_edge)
+def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float = 0.8, *,
+               outline: Polygon | MultiPolygon | None = None, height: float | None = None) -> Mass:
+    """Extrude ``footprint`` to its height (or ``height``); faces for every exterior and courtyard edge of its
+    cleaned outline (or ``outline``, already cleaned)."""
+    outline = clean_outline(footprint.polygon, collinear_tol, min_edge) if outline is None else outline
+    height = footprint.height if height is None else height
     faces: list[Face] = []
     ring = 0
     for part in (outline.geoms if isinstance(outline, MultiPolygon) else [outline]):
         for k, r in enumerate((part.exterior, *part.interiors)):
-            faces += _ring_faces(np.asarray(r.coords), ring, len(faces), footprint.base, footprint.height, k > 0)
+            faces += _ring_faces(np.asarray(r.coords), ring, len(faces), footprint.base, height, k > 0)
             ring += 1
-    return Mass(outline=outline, base=footprint.base, height=footprint.height, faces=tuple(faces))
+    return Mass(outline=outline, base=footprint.base, height=height, faces=tuple(faces))
 
 
 #: Equal parts of a face's width in which the neighbour cover is measured (one sample each).
@@ -178,15 +175,12 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, bins: int = COVER_B
     outlines = [m.outline for m in masses]
     tree = shapely.STRtree(outlines)
     fractions = (np.arange(bins) + 0.5) / bins
-    owner, samples = [], []
-    for mi, mass in enumerate(masses):
-        for face in mass.faces:
-            o, u, n = np.asarray(face.origin[:2]), np.asarray(face.u[:2]), np.asarray(face.normal[:2])
-            samples.append(o + np.outer(fractions * face.width, u) + n * offset)
-            owner.append(mi)
-    if not samples:
+    owner = [mi for mi, mass in enumerate(masses) for _ in mass.faces]
+    if not owner:
         return [np.zeros((0, bins)) for _ in masses]
-    pts = np.concatenate(samples)
+    frames = np.array([(*f.origin[:2], *f.u[:2], *f.normal[:2], f.width) for m in masses for f in m.faces])
+    o, u, n, width = frames[:, None, 0:2], frames[:, None, 2:4], frames[:, None, 4:6], frames[:, 6]
+    pts = (o + (fractions[None, :] * width[:, None])[:, :, None] * u + n * offset).reshape(-1, 2)
     point_owner = np.repeat(np.asarray(owner), bins)
     hits = [tree.query(shapely.points(pts[k:k + COVER_CHUNK]), predicate="within") + np.array([[k], [0]])
             for k in range(0, len(pts), COVER_CHUNK)]

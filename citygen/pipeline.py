@@ -22,11 +22,11 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from citygen.builder import Builder, BuildingOutcome, condition_warnings, load_rulesets
+from citygen.attributes import condition_warnings
 from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
@@ -38,8 +38,11 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import plan_mass
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tiles import TileJob, TileResult, run_local
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
+
+if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
+    from citygen.builder import Builder, BuildingOutcome
+    from citygen.tiles import TileResult
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
 GROUND_MARGIN = 20.0
@@ -116,6 +119,7 @@ _WORKER: Builder | None = None
 
 def _init_worker(scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None, parent: int) -> None:
     global _WORKER
+    from citygen.builder import Builder
     tie_to_parent(parent)
     _WORKER = Builder(scene, seed, None if plugins is None else load_registry(*plugins))
 
@@ -164,7 +168,11 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report = Report()
     t0, c0 = time.perf_counter(), time.process_time()
     # a ruleset that does not load stops the run before any building (masses only: none is used)
-    rulesets = {} if scene.output.masses else load_rulesets(scene, registry)
+    if scene.output.masses:
+        rulesets = {}
+    else:
+        from citygen.builder import load_rulesets
+        rulesets = load_rulesets(scene, registry)
     imported = import_footprints(scene, registry)
     report.skipped += imported.skipped
     report.warnings += imported.warnings
@@ -208,10 +216,18 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
     tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
+    if scene.output.masses and not gltf and executor == "local":
+        timings, cpu = _generate_masses(work, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
+                                        progress, ground)
+        report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0}
+        return report
     if executor == "dask" or (tiled and (jobs == 1 or len({w[4] for w in work}) >= jobs)):
         if executor == "dask":
             runner = functools.partial(run_tiles, scheduler=scheduler)
         else:
+            from citygen.builder import Builder
+            from citygen.tiles import run_local
             runner = functools.partial(run_local, builder=Builder(scene, seed, registry, rulesets))
         timings, cpu, tasks = _generate_tiles(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
                                               runner, report, progress, ground)
@@ -297,6 +313,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
     layer payloading them (and the ground) written here. Returns the wall and main-process CPU seconds of the
     ``buildings`` and ``usd`` phases, and the tasks' CPU: ``builds``, ``tile layers`` (writing them) and the part of
     both spent in ``workers``."""
+    from citygen.tiles import TileJob
     t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
@@ -320,6 +337,48 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
+def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
+                     plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
+                     tiled: bool, report: Report,
+                     progress: Callable[[int, int], None] | None,
+                     ground: tuple[float, float, float, float, float] | None
+                     ) -> tuple[dict[str, float], dict[str, float]]:
+    """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`): built in ``jobs`` worker processes where
+    its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), else here; a tiled one of that kind
+    written half here, half by a forked helper where it is big enough (:func:`citygen.lod1tiles.with_helper`), else
+    all here. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
+    ``builds`` CPU, with the part of it spent in ``workers`` (or the helper's builds and tile layers)."""
+    from citygen.lod1 import in_workers, mass_batches
+    from citygen.lod1stage import MassWriter, write_outcomes
+    from citygen.lod1tiles import run_with_helper, with_helper
+    t0, c0 = time.perf_counter(), time.process_time()
+    usd = builds = helper = 0.0  # CPU seconds: writing here, the builds (wherever), the helper's (builds and layers)
+    done = 0
+    with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
+                    uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
+        if ground:
+            writer.ground(*ground)
+        helped = with_helper(work, jobs, tiled) and not in_workers(work, jobs)
+        parts = (run_with_helper(work, scene, seed, roofs, writer) if helped else
+                 (write_outcomes(writer, outcomes, cpu) for outcomes, cpu in mass_batches(work, scene, seed, roofs,
+                                                                                            jobs, plugins)))
+        for part in parts:
+            report.skipped += part.skipped
+            report.warnings += part.warnings
+            report.written += part.written
+            builds += part.builds
+            usd += part.usd if part.here else 0.0
+            helper += 0.0 if part.here else part.builds + part.usd
+            done += part.written + len(part.skipped)
+            if progress:
+                progress(done, len(work))
+        t1, c1 = time.perf_counter(), time.process_time()
+        report.stats = writer.close()
+    workers = builds if in_workers(work, jobs) else helper
+    return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
+            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds, "workers": workers})
+
+
 def _in_workers(jobs: int, total: int) -> bool:
     """Whether :func:`_run` builds ``total`` buildings in worker processes (else in this one)."""
     return jobs > 1 and total >= 2 * jobs
@@ -331,6 +390,7 @@ def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Re
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished
     buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
     already loaded (worker processes load their own)."""
+    from citygen.builder import Builder
     total = len(work)
     if not _in_workers(jobs, total):
         builder = Builder(scene, seed, registry, rulesets)

@@ -9,11 +9,13 @@ import argparse
 import json
 from collections.abc import Sequence
 from pathlib import Path
-
-from PIL import Image, ImageDraw
+from typing import TYPE_CHECKING
 
 from citygen.layout import FacadeLayout, Region
 from citygen.outpaths import write_png
+
+if TYPE_CHECKING:  # (Pillow is imported when a preview is drawn: a plugin importing this module pays nothing)
+    from PIL import Image
 
 COLOURS = {"wall": (222, 205, 170), "window": (70, 110, 160), "door": (120, 70, 40), "balcony": (90, 90, 100),
            "sill": (240, 240, 235), "cornice": (250, 250, 245), "pillar": (190, 180, 160), "shop": (40, 70, 110),
@@ -33,6 +35,7 @@ def draw_layout(layout: FacadeLayout, px_per_m: float = 40.0, margin: int = 10,
     """An image of ``layout``; ``lines`` adds guides (``("x", 3.2)`` vertical, ``("y", 4.0)`` horizontal)."""
     width = max(1, round(layout.width * px_per_m)) + 2 * margin
     height = max(1, round(layout.height * px_per_m)) + 2 * margin
+    from PIL import Image, ImageDraw
     img = Image.new("RGB", (width, height), (255, 255, 255))
     draw = ImageDraw.Draw(img)
 
@@ -71,6 +74,7 @@ def contact_sheet(images: Sequence[Image.Image], columns: int = 4, gap: int = 8)
     rows = -(-len(images) // columns)
     cw = max(i.width for i in images)
     ch = max(i.height for i in images)
+    from PIL import Image
     sheet = Image.new("RGB", (columns * (cw + gap) + gap, rows * (ch + gap) + gap), (255, 255, 255))
     for k, img in enumerate(images):
         sheet.paste(img, (gap + (k % columns) * (cw + gap), gap + (k // columns) * (ch + gap)))

@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.footprints import Footprint
-from citygen.mass import Mass, build_mass
+from citygen.mass import Mass, build_mass, clean_outline
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec, roof_angle, roof_levels, roof_spec
 from citygen.scene import Scene
@@ -115,6 +115,7 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
 def plan_mass(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilder]) -> tuple[Mass, tuple[str, ...]]:
     """The building's mass with walls to their height and the roof it carries (:func:`split_height`), and the
     warnings met."""
-    mass = build_mass(footprint)
-    split = split_height(footprint, mass.outline, scene, roofs)
-    return mass.with_walls(split.walls, split.roof, split.source), split.warnings
+    outline = clean_outline(footprint.polygon)
+    split = split_height(footprint, outline, scene, roofs)
+    mass = build_mass(footprint, outline=outline, height=float(split.walls))
+    return replace(mass, roof=split.roof, roof_source=split.source), split.warnings

@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pxr import Gf, Sdf, Tf, Usd, UsdUtils, Vt
+from pxr import Gf, Sdf, Tf, Usd, Vt
 
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
@@ -324,7 +324,7 @@ class StageWriter:
         self.seen_tiles.add(tile)
         name = tile_name(tile)
         if self.tiles_dir is not None:
-            sub = StageWriter(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
+            sub = type(self)(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
                               layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
                               materials=self.library)
             self.tile = (tile, sub)
@@ -561,6 +561,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
     tmp = Path(tmp_name)
     try:
         if suffix == ".usdz":
+            from pxr import UsdUtils  # (with UsdShade and UsdGeom: only a .usdz needs them)
             inner = tmp.with_suffix(".usdc")
             _export(layer, inner)
             os.utime(inner, (PACKED_MTIME, PACKED_MTIME))

@@ -5,6 +5,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from citygen.cliargs import add_size_arguments, seconds, seed, whole
 from citygen.errors import CitygenError
@@ -14,11 +15,15 @@ from citygen.layout import FacadeLayout
 from citygen.preview import add_output_arguments, write_layouts
 from citygen.registry import Command, Registry, RulesetKind
 from citygen.request import FacadeRequest
-from citygen_relayout import building
-from citygen_relayout.api import variations
-from citygen_relayout.listing import symbol_lines
-from citygen_relayout.model import Model
-from citygen_relayout.parser import load_model, parse_model
+
+if TYPE_CHECKING:  # (the models, their parser and search are imported on first use)
+    from citygen_relayout.model import Model
+    from citygen_relayout.search import RelayoutResult
+
+
+def _solve_face(ruleset: Model, request: FacadeRequest) -> RelayoutResult:
+    from citygen_relayout.building import solve_face
+    return solve_face(ruleset, request)
 
 
 class RelayoutKind(RulesetKind):
@@ -27,19 +32,23 @@ class RelayoutKind(RulesetKind):
     description = "relayout model (bao2013): constrained variations of one facade layout"
 
     def __init__(self) -> None:
-        self._solve = LastSolve(building.solve_face)  # (explain after generate: one solve)
+        self._solve = LastSolve(_solve_face)  # (explain after generate: one solve)
 
     def load(self, path: Path) -> Model:
+        from citygen_relayout.parser import load_model
         return load_model(path)
 
     def loads(self, text: str, path: Path) -> Model:
+        from citygen_relayout.parser import parse_model
         return parse_model(text, str(path), base=path.parent)
 
     def generate(self, ruleset: Model, request: FacadeRequest) -> FacadeLayout:
-        return building.face_layout(self._solve(ruleset, request), request)
+        from citygen_relayout.building import face_layout
+        return face_layout(self._solve(ruleset, request), request)
 
     def generate_building(self, ruleset: Model, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
-        return building.generate_building(ruleset, requests)
+        from citygen_relayout.building import generate_building
+        return generate_building(ruleset, requests)
 
     def explain(self, ruleset: Model, request: FacadeRequest) -> str:
         result = self._solve(ruleset, request)
@@ -72,6 +81,9 @@ class RelayoutCommand(Command):
         add_output_arguments(parser)
 
     def run(self, args: argparse.Namespace, registry: Registry) -> int:
+        from citygen_relayout.api import variations
+        from citygen_relayout.listing import symbol_lines
+        from citygen_relayout.parser import load_model
         try:
             model = load_model(args.model)
         except CitygenError as exc:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from shapely.geometry.polygon import orient
 
-import citygen.builder
+import citygen.roofmesh
 import citygen_roofs.skeleton as skeleton
 from citygen.pipeline import generate_city
 from citygen.roof import RoofBudgetExceeded, check_budget, roof_budget
@@ -41,7 +41,7 @@ def test_check_budget_raises_only_inside_an_exhausted_budget():
 
 def test_a_roof_over_its_time_budget_is_built_flat_with_a_warning(small_scene, test_registry, monkeypatch):
     small_scene.write_text(small_scene.read_text().replace("[defaults]\n", '[defaults]\nroof_shape = "hipped"\n'))
-    monkeypatch.setattr(citygen.builder, "ROOF_BUDGET", 0.0)
+    monkeypatch.setattr(citygen.roofmesh, "ROOF_BUDGET", 0.0)
     report = generate_city(load_scene(small_scene), registry=test_registry)
     assert report.written == 3
     flat = [w for w in report.warnings if "flat roof instead of hipped: RoofBudgetExceeded: over the roof time "

@@ -1,0 +1,99 @@
+"""What a building carries besides its geometry, the same for detailed and mass-only buildings: the attributes
+``[[assign]]`` tests see, its materials (the OSM colours or a palette pick), its ``citygen:*`` attributes and its
+pivot; and the warnings about ``when`` tests the footprints can never satisfy."""
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping, Sequence
+from fnmatch import fnmatchcase
+from typing import Any
+
+import numpy as np
+
+from citygen.footprints import Footprint
+from citygen.mass import Mass
+from citygen.rng import derive_rng
+from citygen.scene import Scene
+from citygen.usd.materials import WALL_PALETTE, colour_material
+
+
+def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
+    """What ``[[assign]] when`` tests see: the footprint's attributes plus levels, height (the data's: a total,
+    roof included, or for level counts the walls') and area."""
+    return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
+
+
+def condition_warnings(scene: Scene, footprints: Sequence[Footprint], masses: Sequence[Mass]) -> list[str]:
+    """What is wrong with the scene's ``when`` tests against these footprints, as warnings: an attribute no
+    footprint has (a misspelling, with the nearest names), and text compared with an attribute that is a number
+    on every footprint that has it (never equal)."""
+    if not footprints:
+        return []
+    seen: dict[str, list[Any]] = {}
+    for footprint, mass in zip(footprints, masses):
+        for key, value in assign_attributes(footprint, mass).items():
+            if value is not None:
+                seen.setdefault(key, []).append(value)
+    found = []
+    for number, assignment in enumerate(scene.assignments, 1):
+        where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
+        for condition in assignment.conditions:
+            values = seen.get(condition.key)
+            if values is None:
+                near = difflib.get_close_matches(condition.key, list(seen), n=3)
+                found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
+                             + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
+            elif condition.op == "in" and all(_is_number(v) for v in values) and not any(
+                    _is_number(v) or _numeric_text(v) for v in condition.values):
+                found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
+                             f"{condition.key}, a number on every footprint: it never matches")
+    return found
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _numeric_text(value: Any) -> bool:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def kept_tags(attributes: Mapping[str, Any], patterns: Sequence[str]) -> dict[str, Any]:
+    """The source tags the scene keeps (``[output] keep_tags``: names or ``fnmatch`` patterns such as ``addr:*``)
+    as ``tag:<name>`` attributes, in name order."""
+    return {f"tag:{key}": value for key, value in sorted(attributes.items())
+            if any(fnmatchcase(key, p) for p in patterns) and isinstance(value, (str, int, float))}
+
+
+def building_materials(seed: int, footprint: Footprint) -> tuple[str, str]:
+    """Wall and roof materials: the OSM ``building:colour`` / ``roof:colour`` where given, a brick wall for
+    ``building:material = brick``, else a wall drawn from the palette (per building seed) and a dark roof."""
+    attrs = footprint.attributes
+    wall = colour_material(attrs.get("building:colour"))
+    if wall is None:
+        palette = derive_rng(seed, footprint.id, "palette").integers(len(WALL_PALETTE))
+        wall = "brick" if attrs.get("building:material") == "brick" else WALL_PALETTE[palette]
+    return wall, colour_material(attrs.get("roof:colour")) or "roof_dark"
+
+
+def building_attributes(footprint: Footprint, mass: Mass, *, levels: int, entrance: int | None, ruleset: str,
+                        seed: int, roof_shape: str, keep_tags: Sequence[str]) -> dict[str, Any]:
+    """The building's ``citygen:*`` attributes (docs/dcc.md): its source, heights, levels, ruleset(s), seed,
+    entrance face (-1: none), type, the roof shape built, footprint area and the source tags the scene keeps."""
+    return {"sourceId": footprint.id, "height": mass.top - mass.base, "wallHeight": mass.height,
+            "roofHeight": mass.roof.height or 0.0, "roofHeightSource": mass.roof_source,
+            "heightSource": footprint.height_source, "levels": levels, "base": float(footprint.base),
+            "ruleset": ruleset, "seed": seed, "entranceFace": -1 if entrance is None else entrance,
+            "buildingType": str(footprint.attributes.get("building", "yes")), "roofShape": roof_shape,
+            "footprintArea": round(float(mass.outline.area), 3), **kept_tags(footprint.attributes, keep_tags)}
+
+
+def building_pivot(footprint: Footprint, mass: Mass) -> tuple[float, float, float]:
+    """Where the building's transform puts its local origin: the centroid of its outline, on the ground (its base
+    less the lift of a part that starts above the ground)."""
+    centroid = mass.outline.centroid
+    return float(centroid.x), float(centroid.y), float(footprint.base - footprint.lift)
