@@ -17,6 +17,7 @@ import gc
 import hashlib
 import pickle
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
@@ -55,8 +56,9 @@ def record_calls(scene_path: Path) -> list[tuple[tuple, dict]]:
     original_build, original_writer = citygen.builder.build_geometry, citygen.pipeline._writer
     citygen.builder.build_geometry = recording
     citygen.pipeline._writer = lambda *args: contextlib.nullcontext(_NoStage())
-    try:
-        citygen.pipeline.generate_city(scene, out=Path("unwritten.usdc"), jobs=1)
+    try:  # (in a scratch folder: a scene with tile layers still writes them)
+        with tempfile.TemporaryDirectory() as scratch:
+            citygen.pipeline.generate_city(scene, out=Path(scratch) / "unwritten.usdc", jobs=1)
     finally:
         citygen.builder.build_geometry, citygen.pipeline._writer = original_build, original_writer
     return calls

@@ -13,6 +13,7 @@ All per-region work is numpy over the regions of a face; Python loops run per fa
 """
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -65,9 +66,10 @@ class MeshData:
         return cls(points, np.full(int(ok.sum()), 4, np.int32), idx[ok].reshape(-1))
 
     @classmethod
-    def many_from_quads(cls, quads: Sequence[np.ndarray]) -> list[MeshData]:
-        """:meth:`from_quads` of each ``(m, 4, 3)`` array, welded in one batch."""
-        points, indices, pb, ib = weld_many(list(quads))
+    def many_from_quads(cls, quads: Sequence[np.ndarray], parts: Sequence[int] | None = None) -> list[MeshData]:
+        """:meth:`from_quads` of each ``(m, 4, 3)`` array (with ``parts``: of each run of ``parts[k]`` arrays
+        joined), welded in one batch."""
+        points, indices, pb, ib = weld_many(list(quads), parts=parts)
         idx = indices.reshape(-1, 4)
         ok = _proper(idx)
         kept = np.concatenate([[0], np.cumsum(ok)])[ib // 4].tolist()
@@ -86,9 +88,11 @@ class MeshData:
 
     def subset(self, faces: np.ndarray) -> MeshData:
         """The faces selected by the boolean mask ``faces``, with only the points they use."""
-        corner = np.repeat(faces, self.counts)
-        used, indices = np.unique(self.indices[corner], return_inverse=True)
-        return MeshData(self.points[used], self.counts[faces], indices.astype(np.int32).ravel())
+        picked = self.indices[np.repeat(faces, self.counts)]
+        kept = np.zeros(len(self.points), dtype=bool)
+        kept[picked] = True
+        number = np.cumsum(kept) - 1  # (each kept point's number among them, in point order)
+        return MeshData(self.points[kept], self.counts[faces], number[picked].astype(np.int32))
 
     def split_vertical(self, tol: float = VERTICAL_TOL) -> tuple[MeshData | None, MeshData | None]:
         """(the faces that are not vertical, the vertical ones): the gables and steps of a roof are walls.
@@ -199,21 +203,21 @@ def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
     styles: dict[tuple[str, str], int] = {}
     looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
     rows: list[float] = []  # x0, y0, x1, y1, depth, style code per terminal
-    extend = rows.extend
+    extend, known = rows.extend, looks.get
     sizes = []
     for unit in units:
         start = len(rows)
         for r in unit.regions:
-            label = r.label
-            if label is None or r.w <= 1e-6 or r.h <= 1e-6:
+            label, w, h = r.label, r.w, r.h
+            if label is None or w <= 1e-6 or h <= 1e-6:
                 continue
-            look = looks.get((label, r.material, r.depth))
+            look = known((label, r.material, r.depth))
             if look is None:
                 look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
             x, y = r.x, r.y
-            extend((x, y, x + r.w, y + r.h, *look))
+            extend((x, y, x + w, y + h, *look))
         sizes.append((len(rows) - start) // 6)
-    table = np.array(rows, dtype=float).reshape(-1, 6)
+    table = np.fromiter(rows, float, len(rows)).reshape(-1, 6)
     unit_of = np.repeat(np.arange(len(units)), sizes)
     frame = np.array([(u.dx, u.dy, u.sx, u.sy) for u in units], dtype=float).reshape(-1, 4)[unit_of]
     rects = (table[:, :4] - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
@@ -245,24 +249,25 @@ def _look(label: str, material: str | None, depth: float, wall_material: str,
 def _meshes(sinks: Sequence[_Sink]) -> list[dict[tuple[str, str], MeshData]]:
     """Every sink's facade meshes (per (label, material), sorted), welded in one batch."""
     keys = [sorted(sink.quads) for sink in sinks]
-    welded = iter(MeshData.many_from_quads([np.concatenate(sink.quads[k]) for sink, ks in zip(sinks, keys)
-                                            for k in ks]))
+    lists = [sink.quads[k] for sink, ks in zip(sinks, keys) for k in ks]
+    welded = iter(MeshData.many_from_quads([q for quads in lists for q in quads], [len(quads) for quads in lists]))
     return [{k: next(welded) for k in ks} for ks in keys]
 
 
 def face_quaternion(matrix: np.ndarray) -> np.ndarray:
     """Quaternion ``(x, y, z, w)`` of the rotation in a row-vector 4x4 transform (Shepperd's method)."""
-    m = matrix[:3, :3].T
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    m = matrix[:3, :3].T.tolist()  # (Python floats: the same IEEE arithmetic without numpy's per-scalar cost)
+    trace = m[0][0] + m[1][1] + m[2][2]
     if trace > 0:
-        t = 2.0 * np.sqrt(1.0 + trace)
-        q = ((m[2, 1] - m[1, 2]) / t, (m[0, 2] - m[2, 0]) / t, (m[1, 0] - m[0, 1]) / t, 0.25 * t)
+        t = 2.0 * math.sqrt(1.0 + trace)
+        q = ((m[2][1] - m[1][2]) / t, (m[0][2] - m[2][0]) / t, (m[1][0] - m[0][1]) / t, 0.25 * t)
     else:
-        i = int(np.argmax(np.diag(m)))
+        diagonal = (m[0][0], m[1][1], m[2][2])
+        i = diagonal.index(max(diagonal))
         j, k = (i + 1) % 3, (i + 2) % 3
-        t = 2.0 * np.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k])
-        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / t]
-        q[i], q[j], q[k] = 0.25 * t, (m[j, i] + m[i, j]) / t, (m[k, i] + m[i, k]) / t
+        t = 2.0 * math.sqrt(1.0 + m[i][i] - m[j][j] - m[k][k])
+        q = [0.0, 0.0, 0.0, (m[k][j] - m[j][k]) / t]
+        q[i], q[j], q[k] = 0.25 * t, (m[j][i] + m[i][j]) / t, (m[k][i] + m[i][k]) / t
     return np.asarray(q, dtype=float)
 
 
@@ -432,10 +437,11 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     for own, (_, unit) in zip(sinks, built):
         own.take(emitted[unit])
     sink = _Sink()
-    flat = _plain_quads(faces)
+    flat = _plain_quads(faces) if walls or any(unit is None for _, _, unit, _ in faces) else None
+    plain = [to_world(q[None], m) for q, (_, m, _, _) in zip(flat, faces)] if walls else None
     for k, (face, m, unit, keyed) in enumerate(faces):
         if unit is None:
-            sink.add_quads(("wall", wall_material), to_world(flat[k][None], m))
+            sink.add_quads(("wall", wall_material), plain[k] if plain is not None else to_world(flat[k][None], m))
             continue
         sink.take(emitted[unit])
         if keyed:
@@ -448,7 +454,6 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         if len(cache) >= _MODULE_CACHE_SIZE:
             cache.clear()
         protos[key] = cache[key] = ModuleProto(own_meshes, own.instances())
-    plain = [to_world(q[None], m) for q, (_, m, _, _) in zip(_plain_quads(faces), faces)] if walls else []
     mass_walls = MeshData.from_quads(np.concatenate(plain)) if plain else None
     roof, gables = roof.split_vertical() if roof is not None else (None, None)
     if gables is not None:  # the roof's vertical faces are wall: in the walls of both levels of detail

@@ -60,12 +60,22 @@ def _code(text: str | None) -> int:
     return zlib.crc32((text or "").encode("utf-8"))
 
 
-def _leaf(r: Region) -> tuple[int, bool, int]:
-    """Signature, detail flag and mesh-terminal count (1, or 0 for an instanced element) of a terminal region."""
-    return (hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
-                  round(r.h * CM))),
-            (r.label != "wall" and r.label is not None) or r.depth != 0.0,
-            int(r.label is not None and r.label not in INSTANCED))
+#: :func:`_leaf_of` by (label, material, layer, depth, w, h): a building's terminals come in a few dozen kinds.
+_LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], tuple[int, bool, int]] = {}
+_LEAVES_SIZE = 1 << 16
+
+
+def _leaf_of(r: Region) -> tuple[int, bool, int]:
+    """Signature, detail flag and mesh-terminal count (1, or 0 for an instanced element) of a terminal region
+    (remembered in ``_LEAVES``)."""
+    if len(_LEAVES) >= _LEAVES_SIZE:
+        _LEAVES.clear()
+    result = _LEAVES[r.label, r.material, r.layer, r.depth, r.w, r.h] = (
+        hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
+              round(r.h * CM))),
+        (r.label != "wall" and r.label is not None) or r.depth != 0.0,
+        int(r.label is not None and r.label not in INSTANCED))
+    return result
 
 
 class Signatures:
@@ -80,44 +90,50 @@ class Signatures:
         self.info: dict[int, tuple[int, bool, int]] = {}
         self.log: list[int] = []  # signature of every inner region visited or reused, in order
         self.first: dict[int, Region] = {}
-        self.inner: dict[int, list[int]] = {}
+        self._keyed: dict[int, tuple[tuple[int, bool, int], list[int]]] = {}  # key -> first copy's info, log part
         self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
         for root in roots:
             key = root.key
-            if key is not None and key in self.first:
-                self.log.extend(self.inner[key])
+            done = self._keyed.get(key)
+            if done is not None:
+                self.log.extend(done[1])
             elif root.children:
                 self._visit(root)
             elif key is not None:
-                self.first[key], self.inner[key], self.info[id(root)] = root, [], _leaf(root)
+                self.first[key], self.info[id(root)] = root, _leaf_of(root)
+                self._keyed[key] = (self.info[id(root)], [])
         self.counts: Counter[int] = Counter(self.log)
 
     def _visit(self, r: Region) -> tuple[int, bool, int]:
         """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
-        first, inner, info, log = self.first, self.inner, self.info, self.log
+        keyed, info, log = self._keyed, self.info, self.log
         x, y = r.x, r.y
         start = len(log)
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
+        append = content.append
         detail, terminals = False, 0
         for c in r.children:
             key = c.key
-            if key is not None and key in first:
-                sig, more, n = info[id(first[key])]
-                log.extend(inner[key])
+            done = keyed.get(key)  # (None is never a key of it)
+            if done is not None:
+                result, below = done
+                log.extend(below)
             elif c.children:
-                sig, more, n = self._visit(c)
+                result = self._visit(c)
             else:
-                sig, more, n = _leaf(c)
+                result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
                 if key is not None:
-                    first[key], inner[key], info[id(c)] = c, [], (sig, more, n)
-            content.append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
-            detail = detail or more
+                    self.first[key], keyed[key], info[id(c)] = c, (result, []), result
+            sig, more, n = result
+            append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
+            if more:
+                detail = True
             terminals += n
         result = (hash(tuple(content)), detail, terminals)
         log.append(result[0])
         key = r.key
         if key is not None:
-            first[key], inner[key] = r, log[start:]
+            self.first[key], keyed[key] = r, (result, log[start:])
         info[id(r)] = result
         return result
 
@@ -148,6 +164,7 @@ class Signatures:
         modules: list[Region] = []
         loose: list[Region] = []
         stack = [(root, root)]
+        modules_get = self._modules.get
         while stack:
             r, twin = stack.pop()
             if not r.children:
@@ -155,7 +172,10 @@ class Signatures:
                 continue
             if twin.key is not None:
                 twin = self.first.get(twin.key, twin)
-            if self._module(twin):
+            decided = modules_get(id(twin))
+            if decided is None:
+                decided = self._module(twin)
+            if decided:
                 modules.append(r)
             else:
                 stack.extend(reversed(list(zip(r.children, twin.children))))

@@ -6,6 +6,8 @@ the same vertex order serves both, which keeps the code branch-free.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 # Quad corners as indices into a rect's x0, y0, x1, y1 columns plus a flag for z (0 = wall plane, 1 = depth).
@@ -115,32 +117,50 @@ def weld(quads: np.ndarray, decimals: int = 3) -> tuple[np.ndarray, np.ndarray]:
     return points.astype(np.float32), inverse.reshape(-1).astype(np.int32)
 
 
-def weld_many(quads: list[np.ndarray], decimals: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def weld_many(quads: list[np.ndarray], decimals: int = 3, parts: Sequence[int] | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`weld` of each ``(m, 4, 3)`` array of ``quads`` (vertices merge only within their array) in one batch:
     ``(points, indices, point bounds, index bounds)``, array ``k``'s points ``points[pb[k]:pb[k + 1]]`` and indices
-    (into them) ``indices[ib[k]:ib[k + 1]]`` being exactly those ``weld`` gives for it alone."""
-    sizes = [4 * len(q) for q in quads]
+    (into them) ``indices[ib[k]:ib[k + 1]]`` being exactly those ``weld`` gives for it alone.
+
+    With ``parts``, mesh ``k`` is the next ``parts[k]`` arrays of ``quads`` joined (not concatenated first)."""
+    parts = [1] * len(quads) if parts is None else list(parts)
+    bounds = np.cumsum([0, *parts]).tolist()
+    pieces = [4 * len(q) for q in quads]
+    sizes = [sum(pieces[bounds[k]:bounds[k + 1]]) for k in range(len(parts))]
     index_bounds = np.cumsum([0, *sizes])
     step = 10.0 ** -decimals
     flat = np.concatenate(quads).reshape(-1, 3) if quads else np.zeros((0, 3))
-    mesh = np.repeat(np.arange(len(quads)), sizes)
+    mesh = np.repeat(np.arange(len(parts)), sizes)
     starts = index_bounds[:-1][np.asarray(sizes, dtype=np.int64) > 0]
-    origin = np.zeros((len(quads), 3))
+    origin = np.zeros((len(parts), 3))
     if len(flat):
         origin[mesh[starts]] = np.minimum.reduceat(flat, starts, axis=0)
     grid = np.rint((flat - origin[mesh]) / step).astype(np.int64)
-    if len(grid) and np.max(grid) >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
-        alone = [weld(q, decimals) for q in quads]
+    top = int(np.max(grid, initial=0))
+    if top >= 1 << 21:  # (a mesh too large for one int64 key per vertex: each on its own)
+        alone = [weld(flat[index_bounds[k]:index_bounds[k + 1]].reshape(-1, 4, 3), decimals)
+                 for k in range(len(parts))]
         return (np.concatenate([p for p, _ in alone]), np.concatenate([i for _, i in alone]),
                 np.cumsum([0, *(len(p) for p, _ in alone)]), index_bounds)
-    key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
-    order = np.lexsort((key, mesh))
-    sorted_key, sorted_mesh = key[order], mesh[order]
-    new = np.ones(len(order), dtype=bool)
-    new[1:] = (sorted_key[1:] != sorted_key[:-1]) | (sorted_mesh[1:] != sorted_mesh[:-1])
+    # one int64 key per vertex ordered by (mesh, x, y, z): the axes packed in as few bits as the largest grid
+    # value needs, the mesh above them (else the axes' 21-bit key, sorted by mesh then key)
+    bits = top.bit_length()
+    if 3 * bits + max(len(parts) - 1, 0).bit_length() <= 63:
+        key = (((mesh << bits) | grid[:, 0]) << bits | grid[:, 1]) << bits | grid[:, 2]
+        order = np.argsort(key, kind="stable")
+        sorted_key = key[order]
+        new = np.ones(len(order), dtype=bool)
+        new[1:] = sorted_key[1:] != sorted_key[:-1]
+    else:
+        key = (grid[:, 0] << 42) | (grid[:, 1] << 21) | grid[:, 2]
+        order = np.lexsort((key, mesh))
+        sorted_key, sorted_mesh = key[order], mesh[order]
+        new = np.ones(len(order), dtype=bool)
+        new[1:] = (sorted_key[1:] != sorted_key[:-1]) | (sorted_mesh[1:] != sorted_mesh[:-1])
     first = order[new]
     inverse = np.empty(len(order), np.int64)
     inverse[order] = np.cumsum(new) - 1
-    point_bounds = np.searchsorted(mesh[first], np.arange(len(quads) + 1))
+    point_bounds = np.searchsorted(mesh[first], np.arange(len(parts) + 1))
     points = (origin[mesh[first]] + grid[first] * step).astype(np.float32)
     return points, (inverse - point_bounds[mesh]).astype(np.int32), point_bounds, index_bounds

@@ -1,3 +1,5 @@
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -233,3 +235,80 @@ def test_a_buildings_faces_built_together_match_each_face_built_alone(modules):
     assert np.array_equal(together.instances.positions, np.concatenate([r.positions for r in rows]))
     assert [together.instances.protos[k] for k in together.instances.proto_indices] == [
         r.protos[k] for r in rows for k in r.proto_indices]
+
+
+def test_signatures_do_not_depend_on_the_remembered_terminals():
+    """Terminal signatures are remembered across buildings (``_LEAVES``): a cold and a warm memo, and a memo
+    filled by other terminals, give the same signatures and counts."""
+    from citygen.geometry import modules
+    from citygen.layout import Region
+    facade = _facade(False)
+    modules._LEAVES.clear()
+    cold = modules.Signatures([facade])
+    warm = modules.Signatures([facade])
+    modules._LEAVES.clear()
+    modules.Signatures([Region(0, 0, 2.2, 3, "Other", children=(Region(0, 0, 1, 3, "W", "wall", depth=-0.0),
+                                                                Region(1, 0, 1.2, 1.5, "Win", "window")))])
+    other = modules.Signatures([facade])
+    assert cold.info == warm.info == other.info
+    assert cold.log == warm.log == other.log and cold.counts == warm.counts == other.counts
+
+
+@pytest.mark.parametrize("extent, meshes", [(30.0, 3), (30.0, 300), (600.0, 2), (600.0, 20)])
+def test_weld_many_packs_the_mesh_into_the_key_only_when_it_fits(extent, meshes):
+    """One int64 key per vertex holds the mesh above the three axes when they leave it room (a building's tens of
+    metres), else the mesh is a second sort key (600 m at 1 mm takes 20 bits per axis: 60 bits, room for 8
+    meshes): either way each mesh comes out as ``weld`` makes it alone."""
+    from citygen.geometry.quads import weld_many
+    rng = np.random.default_rng(7)
+    arrays = []
+    for _ in range(meshes):
+        corner = rng.uniform(0, extent * 0.9, (6, 2))
+        rects = np.column_stack([corner, corner + rng.uniform(0.5, extent * 0.1, (6, 2))])
+        arrays.append(box_quads(np.vstack([rects, rects[:2]]), rng.choice([0.0, 0.15, -0.2], 8)))
+    arrays[0] = np.concatenate([arrays[0], box_quads(np.array([[0.0, 0.0, extent, extent]]), np.zeros(1))])
+    points, indices, pb, ib = weld_many(arrays)
+    for k, (alone_points, alone_indices) in enumerate(map(weld, arrays)):
+        assert points[pb[k]:pb[k + 1]].tobytes() == alone_points.tobytes()
+        assert indices[ib[k]:ib[k + 1]].tobytes() == alone_indices.tobytes()
+
+
+def test_weld_many_of_parts_welds_each_run_of_arrays_joined():
+    from citygen.geometry.quads import weld_many
+    rng = np.random.default_rng(3)
+    arrays = [box_quads(rng.uniform(0, 5, (n, 4)).cumsum(axis=1), rng.choice([0.0, 0.1], n)) for n in (3, 1, 4, 2, 5)]
+    joined = weld_many([np.concatenate(arrays[:2]), arrays[2], np.concatenate(arrays[3:])])
+    in_parts = weld_many(arrays, parts=[2, 1, 2])
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(joined, in_parts))
+
+
+def test_subset_keeps_the_used_points_in_order_and_the_faces_corners():
+    from citygen.geometry.building import MeshData
+    rng = np.random.default_rng(5)
+    points = rng.uniform(-50, 50, (40, 3)).astype(np.float32)
+    counts = rng.integers(3, 6, 25).astype(np.int32)
+    mesh = MeshData(points, counts, rng.integers(0, 30, int(counts.sum())).astype(np.int32))
+    faces = rng.random(25) < 0.4
+    part = mesh.subset(faces)
+    corners = mesh.indices[np.repeat(faces, counts)]
+    assert part.points.tobytes() == points[np.unique(corners)].tobytes()
+    assert part.indices.dtype == np.int32 and np.array_equal(part.points[part.indices], points[corners])
+    assert np.array_equal(part.counts, counts[faces])
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7, 1.9, math.pi, -2.4, -math.pi / 2])
+@pytest.mark.parametrize("tilt", [0.0, 0.5, -1.2, math.pi])
+def test_face_quaternion_rotates_as_the_faces_matrix(angle, tilt):
+    """Every branch (positive trace, and each largest diagonal entry): the quaternion turns the face's axes where its
+    matrix does (row vectors: ``v @ m``)."""
+    from citygen.geometry.building import face_quaternion
+    c, s, ct, st = math.cos(angle), math.sin(angle), math.cos(tilt), math.sin(tilt)
+    yaw = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+    pitch = np.array([[1, 0, 0], [0, ct, st], [0, -st, ct]])
+    matrix = np.eye(4)
+    matrix[:3, :3] = pitch @ yaw
+    x, y, z, w = face_quaternion(matrix)
+    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    assert np.allclose(np.eye(3) @ matrix[:3, :3], (rotation @ np.eye(3)).T, atol=1e-12)
