@@ -47,7 +47,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
-from citygen.usd.author import T, Author, bound_value
+from citygen.usd.author import T, Author, MeshArrays, bound_value
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -141,37 +141,28 @@ def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
 
 
 @dataclass
-class _Element:
-    """An element prototype's prepared geometry (a function of its key and the material library alone), kept for
-    every writer of the process with that library (:func:`_elements`): tile writers would otherwise rebuild it in
-    every tile."""
+class _Prototype:
+    """A prototype's meshes, bound and, once a layer authors it, its meshes' :class:`MeshArrays` (prepared in one
+    normals batch with the layer's other new prototypes). An element prototype's are a function of its key, the
+    material library and ``uvs`` alone, kept for every writer of the process with those (:func:`_elements`): tile
+    writers would otherwise prepare the same elements again in every tile."""
 
-    meshes: list[tuple[str, str, str | None, MeshData]]
-    bound: np.ndarray | None
-    normals: list[tuple[np.ndarray, np.ndarray]] | None = None
-
-
-#: Element prototypes kept per material library (at most this many in all; then the memory starts over).
-ELEMENTS_KEPT = 8192
-_ELEMENTS: dict[tuple, dict[ProtoKey, _Element]] = {}
-
-
-def _elements(library: Mapping[str, Material]) -> dict[ProtoKey, _Element]:
-    """This process's prepared element prototypes for ``library``."""
-    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
-        _ELEMENTS.clear()
-    return _ELEMENTS.setdefault(tuple(sorted(library.items())), {})
-
-
-@dataclass
-class _Pending:
-    """A prototype whose prim is authored when its layer is finished, with all others in one normals batch
-    (an element prototype's normals are computed once, in the first layer using it)."""
-
-    path: Sdf.Path
     label: str
     meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
-    element: _Element | None = None
+    bound: np.ndarray | None
+    arrays: list[MeshArrays] | None = None
+
+
+#: Element prototypes kept per material library and ``uvs`` (at most this many in all; then the memory starts over).
+ELEMENTS_KEPT = 8192
+_ELEMENTS: dict[tuple, dict[ProtoKey, _Prototype]] = {}
+
+
+def _elements(library: Mapping[str, Material], uvs: bool) -> dict[ProtoKey, _Prototype]:
+    """This process's prepared element prototypes for ``library`` and ``uvs``."""
+    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
+        _ELEMENTS.clear()
+    return _ELEMENTS.setdefault((tuple(sorted(library.items())), uvs), {})
 
 
 class StageWriter:
@@ -207,14 +198,14 @@ class StageWriter:
         self.defined: set[str] = set()  # materials under /Materials
         self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
         self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
-        self.pending: list[_Pending] = []
+        self.pending: list[tuple[Sdf.Path, _Prototype]] = []  # prototypes to author, in order of first use
         self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
         self.tile_bound: np.ndarray | None = None
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
-        self.elements = _elements(self.library)
+        self.elements = _elements(self.library, uvs)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
@@ -257,19 +248,21 @@ class StageWriter:
             return self.prototypes[key]
         path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
         if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
+            # (a module's key leaves sub-millimetre details open: a layer takes its first building's module, so a
+            # tile's bytes never depend on the tiles its process wrote before)
             names: set[str] = set()
             meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                       for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
-            self.pending.append(_Pending(path, key.label, meshes))
-            self.prototypes[key], self.bounds[key] = path, union(points_bound(m.points) for *_, m in meshes)
-            return path
-        element = self.elements.get(key)
-        if element is None:
-            parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
-            meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
-            element = self.elements[key] = _Element(meshes, union(points_bound(m.points) for *_, m in meshes))
-        self.pending.append(_Pending(path, key.label, element.meshes, element))
-        self.prototypes[key], self.bounds[key] = path, element.bound
+            proto = _Prototype(key.label, meshes, union(points_bound(m.points) for *_, m in meshes))
+        else:
+            proto = self.elements.get(key)
+            if proto is None:
+                parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
+                meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
+                proto = self.elements[key] = _Prototype(key.label, meshes,
+                                                        union(points_bound(m.points) for *_, m in meshes))
+        self.pending.append((path, proto))
+        self.prototypes[key], self.bounds[key] = path, proto.bound
         return path
 
     def _instances_bound(self, inst: Instances) -> np.ndarray | None:
@@ -277,29 +270,29 @@ class StageWriter:
                                inst.orientations, inst.scales)
 
     def _author_pending(self) -> None:
-        """Author the prototypes prepared since the last call, their face normals in one batch."""
+        """Author the prototypes prepared since the last call (the arrays of those new to the process prepared
+        first, their face normals in one batch)."""
         if not self.pending:
             return
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(self.layer, "Prototypes", "", Sdf.SpecifierClass)
-        fresh = [p for p in self.pending if p.element is None or p.element.normals is None]
+        fresh = [p for _, p in self.pending if p.arrays is None]
         batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
-        normals = {id(p): [next(batch) for _ in p.meshes] for p in fresh}
         for p in fresh:
-            if p.element is not None:
-                p.element.normals = normals[id(p)]
+            p.arrays = [author.arrays(m, mat, next(batch)) for _, mat, _, m in p.meshes if len(m.counts)]
         with Sdf.ChangeBlock():
-            for p in self.pending:
-                mesh_normals = iter(normals[id(p)] if id(p) in normals else p.element.normals)
-                proto = author.prim(self.protos_root, p.path.name, "Xform")
+            for path, p in self.pending:
+                proto = author.prim(self.protos_root, path.name, "Xform")
                 author.api(proto, "SemanticsLabelsAPI:class")
                 author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([p.label]), uniform=True)
                 used = sorted({mat for _, mat, _, _ in p.meshes})
                 self.define(used)
                 looks = author.looks(proto, used) if used else None
+                arrays = iter(p.arrays)
                 for name, mat, label, mesh in p.meshes:
-                    author.mesh(proto, name, mesh, looks, mat, label, next(mesh_normals))
+                    if len(mesh.counts):
+                        author.mesh(proto, name, next(arrays), looks, mat, label)
         self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
