@@ -6,7 +6,7 @@ Authoring goes through the Sdf API in change blocks (no composed stage while wri
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,17 +45,29 @@ class MeshArrays:
     st: Vt.Vec2fArray | None  # face-varying texture coordinates in metres (of the points before ``offset``)
 
 
-def mesh_arrays(mesh: MeshData, normals: tuple[np.ndarray, np.ndarray], offset: np.ndarray | None = None,
-                st: bool = False) -> MeshArrays:
-    """The :class:`MeshArrays` of ``mesh`` with its :func:`face_normals`, ``offset`` subtracted from its points."""
-    pts = mesh.points if offset is None else np.asarray(mesh.points, dtype=float) - offset
+def mesh_arrays(meshes: Sequence[MeshData], normals: Sequence[tuple[np.ndarray, np.ndarray]],
+                offset: np.ndarray | None = None, st: Sequence[bool] | None = None) -> list[MeshArrays]:
+    """The :class:`MeshArrays` of non-empty ``meshes`` with their :func:`face_normals`, ``offset`` subtracted from
+    their points (all points offset and bounded in one numpy pass); ``st``: which get texture coordinates."""
+    if not meshes:
+        return []
+    sizes = [len(m.points) for m in meshes]
+    pts = np.concatenate([m.points for m in meshes])
+    if offset is not None:
+        pts = np.asarray(pts, dtype=float) - offset
     pts = np.ascontiguousarray(pts, dtype=np.float32)
-    bound = np.array([pts.min(axis=0), pts.max(axis=0)])
-    values, index = normals
-    return MeshArrays(Vt.Vec3fArray.FromNumpy(pts), Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)),
-                      Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)), bound_value(bound), bound,
-                      Vt.Vec3fArray.FromNumpy(values), Vt.IntArray.FromNumpy(index),
-                      Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)) if st else None)
+    ends = np.cumsum(sizes)
+    starts = ends - sizes
+    low, high = np.minimum.reduceat(pts, starts), np.maximum.reduceat(pts, starts)
+    out = []
+    for k, (mesh, (values, index)) in enumerate(zip(meshes, normals)):
+        bound = np.array([low[k], high[k]])
+        out.append(MeshArrays(
+            Vt.Vec3fArray.FromNumpy(pts[starts[k]:ends[k]]), Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)),
+            Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)), bound_value(bound), bound,
+            Vt.Vec3fArray.FromNumpy(values), Vt.IntArray.FromNumpy(index),
+            Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)) if st and st[k] else None))
+    return out
 
 
 class Author:
@@ -108,11 +120,14 @@ class Author:
             found = self._textured[name] = material(name, self.library).texture is not None
         return found
 
-    def arrays(self, mesh: MeshData, mat: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
-               offset: np.ndarray | None = None) -> MeshArrays:
-        """The attribute values of ``mesh`` (``offset`` subtracted from its points), for :meth:`mesh`."""
-        st = self.uvs or (mat is not None and self.textured(mat))
-        return mesh_arrays(mesh, normals or face_normals([mesh])[0], offset, st)
+    def arrays(self, meshes: Sequence[tuple[MeshData, str | None]],
+               normals: Sequence[tuple[np.ndarray, np.ndarray]] | None = None,
+               offset: np.ndarray | None = None) -> list[MeshArrays]:
+        """The attribute values of non-empty ``meshes`` (each with its material; ``offset`` subtracted from their
+        points), for :meth:`mesh`; ``normals``: their :func:`face_normals` if computed in a batch before."""
+        meshes = list(meshes)
+        st = [self.uvs or (mat is not None and self.textured(mat)) for _, mat in meshes]
+        return mesh_arrays([m for m, _ in meshes], normals or face_normals([m for m, _ in meshes]), offset, st)
 
     def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData | MeshArrays, looks: Sdf.Path | None,
              mat: str | None, label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
@@ -124,7 +139,7 @@ class Author:
         if isinstance(mesh, MeshData):
             if not len(mesh.counts):
                 return None
-            mesh = self.arrays(mesh, mat, normals, offset)
+            mesh = self.arrays([(mesh, mat)], normals and [normals], offset)[0]
         attr = self.attr
         prim = self.prim(parent, name, "Mesh")
         attr(prim, "points", T.Point3fArray, mesh.points)

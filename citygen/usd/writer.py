@@ -280,7 +280,9 @@ class StageWriter:
         fresh = [p for _, p in self.pending if p.arrays is None]
         batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
         for p in fresh:
-            p.arrays = [author.arrays(m, mat, next(batch)) for _, mat, _, m in p.meshes if len(m.counts)]
+            normals = [next(batch) for _ in p.meshes]
+            kept = [k for k, (*_, m) in enumerate(p.meshes) if len(m.counts)]
+            p.arrays = author.arrays([(p.meshes[k][3], p.meshes[k][1]) for k in kept], [normals[k] for k in kept])
         with Sdf.ChangeBlock():
             for path, p in self.pending:
                 proto = author.prim(self.protos_root, path.name, "Xform")
@@ -475,7 +477,13 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     writer.define(used)
     looks = author.looks(prim, used)
     batch = [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
+    mats = [*(mat for _, mat in geo.meshes), *([geo.roof_material] if geo.roof is not None else []),
+            *([wall] if walls is not None else [])]
     normals = face_normals(batch)  # one batch per building, in this order
+    kept = [k for k, mesh in enumerate(batch) if len(mesh.counts)]
+    arrays: list[MeshArrays | MeshData] = list(batch)  # (an empty mesh stays MeshData: Author.mesh skips it)
+    for k, a in zip(kept, author.arrays([(batch[k], mats[k]) for k in kept], [normals[k] for k in kept], pivot)):
+        arrays[k] = a
     body = mass = prim
     if walls is not None and writer.lod == "variants":
         lods = Sdf.VariantSetSpec(prim, LOD_SET)
@@ -488,20 +496,18 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
         author.attr(mass, "purpose", T.Token, "proxy", uniform=True)
     bounds = []  # local
     if walls is not None:
-        bounds.append(author.mesh(mass, "Walls", walls, looks, wall, "wall", normals[-1], pivot))
+        bounds.append(author.mesh(mass, "Walls", arrays[-1], looks, wall, "wall"))
         counts["meshes"] += 1
         counts["polygons"] += len(walls.counts)
     if geo.meshes:
         facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
-        for ((label, mat), mesh), mesh_normals in zip(geo.meshes.items(), normals):
-            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, looks, mat, label,
-                                      mesh_normals, pivot))
+        for ((label, mat), mesh), prepared in zip(geo.meshes.items(), arrays):
+            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), prepared, looks, mat, label))
             counts["meshes"] += bounds[-1] is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        bounds.append(author.mesh(prim, "Roof", geo.roof, looks, geo.roof_material, "roof",
-                                  normals[len(geo.meshes)], pivot))
+        bounds.append(author.mesh(prim, "Roof", arrays[len(geo.meshes)], looks, geo.roof_material, "roof"))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = lift_module_elements(geo.instances, geo.modules)
