@@ -5,6 +5,7 @@ Authoring goes through the Sdf API in change blocks (no composed stage while wri
 """
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -25,6 +26,18 @@ _UNIFORM, _VARYING = Sdf.VariabilityUniform, Sdf.VariabilityVarying
 def look_name(name: str) -> str:
     """The prim name of a material name (a scene may name one ``brick-red``)."""
     return Tf.MakeValidIdentifier(name)
+
+
+@functools.lru_cache(maxsize=256)
+def _schemas(names: tuple[str, ...]) -> Sdf.TokenListOp:
+    """The ``apiSchemas`` list op prepending ``names`` (made once: a mesh's and a building's are all alike)."""
+    return Sdf.TokenListOp.Create(prependedItems=list(names))
+
+
+@functools.lru_cache(maxsize=1024)
+def tokens(*values: str) -> Vt.TokenArray:
+    """A token array value (made once per distinct one: labels and op orders repeat on every mesh and building)."""
+    return Vt.TokenArray(list(values))
 
 
 def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
@@ -107,7 +120,7 @@ class Author:
 
     @staticmethod
     def api(prim: Sdf.PrimSpec, *schemas: str) -> None:
-        prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
+        prim.SetInfo("apiSchemas", _schemas(schemas))
 
     @staticmethod
     def connect(prim: Sdf.PrimSpec, name: str, vtype, source: Sdf.Path) -> None:
@@ -157,7 +170,7 @@ class Author:
             self.rel(prim, "material:binding", [looks.AppendChild(look_name(mat))])
         if label is not None:
             schemas.append("SemanticsLabelsAPI:class")
-            attr(prim, "semantics:labels:class", T.TokenArray, Vt.TokenArray([label]), True)
+            attr(prim, "semantics:labels:class", T.TokenArray, tokens(label), True)
         if schemas:
             self.api(prim, *schemas)
         return mesh.bound

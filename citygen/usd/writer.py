@@ -47,7 +47,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
-from citygen.usd.author import T, Author, MeshArrays, bound_value
+from citygen.usd.author import T, Author, MeshArrays, bound_value, tokens
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -287,7 +287,7 @@ class StageWriter:
             for path, p in self.pending:
                 proto = author.prim(self.protos_root, path.name, "Xform")
                 author.api(proto, "SemanticsLabelsAPI:class")
-                author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([p.label]), uniform=True)
+                author.attr(proto, "semantics:labels:class", T.TokenArray, tokens(p.label), uniform=True)
                 used = sorted({mat for _, mat, _, _ in p.meshes})
                 self.define(used)
                 looks = author.looks(proto, used) if used else None
@@ -464,7 +464,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     prim.SetInfo("assetInfo", {"name": record.name})
     author.api(prim, "GeomModelAPI")
     author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*map(float, pivot)))
-    author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
+    author.attr(prim, "xformOpOrder", T.TokenArray, tokens("xformOp:translate"), uniform=True)
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
         author.attr(prim, attribute_name(key), vtype, v, custom=True)
