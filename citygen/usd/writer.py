@@ -198,6 +198,7 @@ class StageWriter:
         self.defined: set[str] = set()  # materials under /Materials
         self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
         self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
+        self.queued: list[BuildingRecord] = []  # the open tile's buildings, authored when it is finished
         self.pending: list[tuple[Sdf.Path, _Prototype]] = []  # prototypes to author, in order of first use
         self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
         self.tile_bound: np.ndarray | None = None
@@ -303,10 +304,18 @@ class StageWriter:
         if isinstance(target, StageWriter):
             target.add(record)
             return
+        self.queued.append(record)
+
+    def _write_queued(self, target: Sdf.PrimSpec) -> None:
+        """Author the open tile's buildings, in the order added, their face normals in one batch."""
+        batches = [_mesh_batch(record.geometry, self.lod) for record in self.queued]
+        normals = iter(face_normals([mesh for batch in batches for mesh in batch]))
         with Sdf.ChangeBlock():
-            bound = _write_building(self, target, record)
-        if bound is not None:
-            self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
+            for record, batch in zip(self.queued, batches):
+                bound = _write_building(self, target, record, batch, [next(normals) for _ in batch])
+                if bound is not None:
+                    self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
+        self.queued = []
 
     def _tile(self, tile: tuple[int, int]) -> Sdf.PrimSpec | StageWriter:
         """The open tile's prim (or, with tile layers, its writer), opening ``tile`` after closing the last."""
@@ -339,6 +348,7 @@ class StageWriter:
             stats = target.close()
             self.add_tile_layer(stats.path.name, stats, target.prototypes)
             return
+        self._write_queued(target)
         self._author_pending()
         with Sdf.ChangeBlock():
             _model_bound(target, self.tile_bound)
@@ -453,10 +463,18 @@ def _world(author: Author, layer: Sdf.Layer, up_axis: str) -> Sdf.PrimSpec:
     return world
 
 
-def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord) -> np.ndarray | None:
+def _mesh_batch(geo: BuildingGeometry, lod: str) -> list[MeshData]:
+    """A building's meshes in the order :func:`_write_building` takes their normals: facades, roof, walls."""
+    walls = geo.walls if lod != "none" else None
+    return [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
+
+
+def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord, batch: list[MeshData],
+                    normals: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray | None:
     """One building prim at its pivot, its geometry in local coordinates; returns its local bound. Its level of
     detail follows ``writer.lod``: the facades and elements (``LOD0``) and the plain walls of its mass (``LOD1``)
-    as variants or as a render/proxy pair; the roof is shared by both."""
+    as variants or as a render/proxy pair; the roof is shared by both. ``batch``: its :func:`_mesh_batch`,
+    ``normals`` their :func:`face_normals`."""
     author, counts, geo = writer.author, writer.counts, record.geometry
     pivot = np.asarray(record.pivot, dtype=float)
     prim = author.prim(parent, record.name, "Xform")
@@ -476,10 +494,8 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
                   | ({wall} if walls is not None else set()))
     writer.define(used)
     looks = author.looks(prim, used)
-    batch = [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
     mats = [*(mat for _, mat in geo.meshes), *([geo.roof_material] if geo.roof is not None else []),
             *([wall] if walls is not None else [])]
-    normals = face_normals(batch)  # one batch per building, in this order
     kept = [k for k, mesh in enumerate(batch) if len(mesh.counts)]
     arrays: list[MeshArrays | MeshData] = list(batch)  # (an empty mesh stays MeshData: Author.mesh skips it)
     for k, a in zip(kept, author.arrays([(batch[k], mats[k]) for k in kept], [normals[k] for k in kept], pivot)):
