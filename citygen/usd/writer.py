@@ -299,7 +299,8 @@ class StageWriter:
         self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
-        """Author one building; records must come grouped by tile (a tile cannot be reopened)."""
+        """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
+        records must come grouped by tile (a tile cannot be reopened)."""
         target = self._tile(record.tile)
         if isinstance(target, StageWriter):
             target.add(record)
