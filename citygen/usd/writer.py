@@ -467,7 +467,8 @@ def _world(author: Author, layer: Sdf.Layer, up_axis: str) -> Sdf.PrimSpec:
 def _mesh_batch(geo: BuildingGeometry, lod: str) -> list[MeshData]:
     """A building's meshes in the order :func:`_write_building` takes their normals: facades, roof, walls."""
     walls = geo.walls if lod != "none" else None
-    return [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
+    return [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []),
+            *([walls] if walls is not None else [])]
 
 
 def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord, batch: list[MeshData],
