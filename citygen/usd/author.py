@@ -5,8 +5,10 @@ Authoring goes through the Sdf API in change blocks (no composed stage while wri
 """
 from __future__ import annotations
 
+import functools
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +20,7 @@ from citygen.usd.normals import face_normals
 from citygen.usd.uv import planar_st
 
 T = Sdf.ValueTypeNames
+_UNIFORM, _VARYING = Sdf.VariabilityUniform, Sdf.VariabilityVarying
 
 
 def look_name(name: str) -> str:
@@ -25,8 +28,59 @@ def look_name(name: str) -> str:
     return Tf.MakeValidIdentifier(name)
 
 
+@functools.lru_cache(maxsize=256)
+def _schemas(names: tuple[str, ...]) -> Sdf.TokenListOp:
+    """The ``apiSchemas`` list op prepending ``names`` (made once: a mesh's and a building's are all alike)."""
+    return Sdf.TokenListOp.Create(prependedItems=list(names))
+
+
+@functools.lru_cache(maxsize=1024)
+def tokens(*values: str) -> Vt.TokenArray:
+    """A token array value (made once per distinct one: labels and op orders repeat on every mesh and building)."""
+    return Vt.TokenArray(list(values))
+
+
 def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
     return Vt.Vec3fArray.FromNumpy(np.asarray(bound, dtype=np.float32))
+
+
+@dataclass(frozen=True)
+class MeshArrays:
+    """A non-empty mesh's attribute values as USD arrays, and its bound: what :meth:`Author.mesh` authors."""
+
+    points: Vt.Vec3fArray
+    counts: Vt.IntArray
+    indices: Vt.IntArray
+    extent: Vt.Vec3fArray
+    bound: np.ndarray
+    normals: Vt.Vec3fArray
+    normal_indices: Vt.IntArray
+    st: Vt.Vec2fArray | None  # face-varying texture coordinates in metres (of the points before ``offset``)
+
+
+def mesh_arrays(meshes: Sequence[MeshData], normals: Sequence[tuple[np.ndarray, np.ndarray]],
+                offset: np.ndarray | None = None, st: Sequence[bool] | None = None) -> list[MeshArrays]:
+    """The :class:`MeshArrays` of non-empty ``meshes`` with their :func:`face_normals`, ``offset`` subtracted from
+    their points (all points offset and bounded in one numpy pass); ``st``: which get texture coordinates."""
+    if not meshes:
+        return []
+    sizes = [len(m.points) for m in meshes]
+    pts = np.concatenate([m.points for m in meshes])
+    if offset is not None:
+        pts = np.asarray(pts, dtype=float) - offset
+    pts = np.ascontiguousarray(pts, dtype=np.float32)
+    ends = np.cumsum(sizes)
+    starts = ends - sizes
+    low, high = np.minimum.reduceat(pts, starts), np.maximum.reduceat(pts, starts)
+    out = []
+    for k, (mesh, (values, index)) in enumerate(zip(meshes, normals)):
+        bound = np.array([low[k], high[k]])
+        out.append(MeshArrays(
+            Vt.Vec3fArray.FromNumpy(pts[starts[k]:ends[k]]), Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)),
+            Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)), bound_value(bound), bound,
+            Vt.Vec3fArray.FromNumpy(values), Vt.IntArray.FromNumpy(index),
+            Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)) if st and st[k] else None))
+    return out
 
 
 class Author:
@@ -44,6 +98,7 @@ class Author:
         self.prims = 0
         self.look_sets: dict[str, Sdf.Path] = {}
         self.look_root: Sdf.PrimSpec | None = None
+        self._textured: dict[str, bool] = {}
 
     def prim(self, parent: Sdf.PrimSpec | Sdf.Layer, name: str, type_name: str = "",
              specifier=Sdf.SpecifierDef) -> Sdf.PrimSpec:
@@ -53,8 +108,7 @@ class Author:
     @staticmethod
     def attr(prim: Sdf.PrimSpec, name: str, vtype, value, uniform: bool = False,
              custom: bool = False) -> Sdf.AttributeSpec:
-        spec = Sdf.AttributeSpec(prim, name, vtype, Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying,
-                                 custom)
+        spec = Sdf.AttributeSpec(prim, name, vtype, _UNIFORM if uniform else _VARYING, custom)
         spec.default = value
         return spec
 
@@ -66,7 +120,7 @@ class Author:
 
     @staticmethod
     def api(prim: Sdf.PrimSpec, *schemas: str) -> None:
-        prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=list(schemas)))
+        prim.SetInfo("apiSchemas", _schemas(schemas))
 
     @staticmethod
     def connect(prim: Sdf.PrimSpec, name: str, vtype, source: Sdf.Path) -> None:
@@ -74,43 +128,52 @@ class Author:
         spec.connectionPathList.explicitItems.append(source)
 
     def textured(self, name: str) -> bool:
-        return material(name, self.library).texture is not None
+        found = self._textured.get(name)
+        if found is None:
+            found = self._textured[name] = material(name, self.library).texture is not None
+        return found
 
-    def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData, looks: Sdf.Path | None, mat: str | None,
-             label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
+    def arrays(self, meshes: Sequence[tuple[MeshData, str | None]],
+               normals: Sequence[tuple[np.ndarray, np.ndarray]] | None = None,
+               offset: np.ndarray | None = None) -> list[MeshArrays]:
+        """The attribute values of non-empty ``meshes`` (each with its material; ``offset`` subtracted from their
+        points), for :meth:`mesh`; ``normals``: their :func:`face_normals` if computed in a batch before."""
+        meshes = list(meshes)
+        st = [self.uvs or (mat is not None and self.textured(mat)) for _, mat in meshes]
+        return mesh_arrays([m for m, _ in meshes], normals or face_normals([m for m, _ in meshes]), offset, st)
+
+    def mesh(self, parent: Sdf.PrimSpec, name: str, mesh: MeshData | MeshArrays, looks: Sdf.Path | None,
+             mat: str | None, label: str | None, normals: tuple[np.ndarray, np.ndarray] | None = None,
              offset: np.ndarray | None = None) -> np.ndarray | None:
         """A Mesh prim bound to ``looks/<mat>``, none for an empty mesh; returns its bound (its ``extent``).
+        ``mesh``: its data, or its :meth:`arrays` prepared before (a prototype's, once for every layer using it);
         ``normals``: its :func:`face_normals` when already computed in a batch with other meshes; ``offset`` is
         subtracted from its points (the building's pivot)."""
-        if not len(mesh.counts):
-            return None
+        if isinstance(mesh, MeshData):
+            if not len(mesh.counts):
+                return None
+            mesh = self.arrays([(mesh, mat)], normals and [normals], offset)[0]
+        attr = self.attr
         prim = self.prim(parent, name, "Mesh")
-        pts = mesh.points if offset is None else np.asarray(mesh.points, dtype=float) - offset
-        pts = np.ascontiguousarray(pts, dtype=np.float32)
-        self.attr(prim, "points", T.Point3fArray, Vt.Vec3fArray.FromNumpy(pts))
-        self.attr(prim, "faceVertexCounts", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)))
-        self.attr(prim, "faceVertexIndices", T.IntArray, Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)))
-        bound = np.array([pts.min(axis=0), pts.max(axis=0)])
-        self.attr(prim, "extent", T.Float3Array, bound_value(bound))
-        self.attr(prim, "subdivisionScheme", T.Token, "none", uniform=True)
-        values, index = normals or face_normals([mesh])[0]
-        spec = self.attr(prim, "primvars:normals", T.Normal3fArray, Vt.Vec3fArray.FromNumpy(values))
-        spec.SetInfo("interpolation", "uniform")
-        self.attr(prim, "primvars:normals:indices", T.IntArray, Vt.IntArray.FromNumpy(index))
-        if self.uvs or (mat is not None and self.textured(mat)):
-            st = self.attr(prim, "primvars:st", T.TexCoord2fArray,
-                           Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)))
-            st.SetInfo("interpolation", "faceVarying")
+        attr(prim, "points", T.Point3fArray, mesh.points)
+        attr(prim, "faceVertexCounts", T.IntArray, mesh.counts)
+        attr(prim, "faceVertexIndices", T.IntArray, mesh.indices)
+        attr(prim, "extent", T.Float3Array, mesh.extent)
+        attr(prim, "subdivisionScheme", T.Token, "none", True)
+        attr(prim, "primvars:normals", T.Normal3fArray, mesh.normals).SetInfo("interpolation", "uniform")
+        attr(prim, "primvars:normals:indices", T.IntArray, mesh.normal_indices)
+        if mesh.st is not None:
+            attr(prim, "primvars:st", T.TexCoord2fArray, mesh.st).SetInfo("interpolation", "faceVarying")
         schemas = []
         if looks is not None and mat is not None:
             schemas.append("MaterialBindingAPI")
             self.rel(prim, "material:binding", [looks.AppendChild(look_name(mat))])
         if label is not None:
             schemas.append("SemanticsLabelsAPI:class")
-            self.attr(prim, "semantics:labels:class", T.TokenArray, Vt.TokenArray([label]), uniform=True)
+            attr(prim, "semantics:labels:class", T.TokenArray, tokens(label), True)
         if schemas:
             self.api(prim, *schemas)
-        return bound
+        return mesh.bound
 
     def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:
         """``parent/Looks``: one Material per name, so the bindings of everything under ``parent`` resolve inside it

@@ -22,31 +22,50 @@ _CORNERS = np.arange(4)
 def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """``(len(counts), 3)`` unit normals following the polygons' winding, ``(0, 0, 1)`` for a polygon of no area.
     Triangles and quads (all the walls and nearly all roofs) take the cross product of the diagonals (a triangle as a
-    quad with its last corner twice), which equals Newell's normal for a planar quad; other polygons Newell's."""
+    quad with its last corner twice), which equals Newell's normal for a planar quad; other polygons Newell's (only
+    they: a batch of many meshes with a few such polygons keeps the fast path for the rest)."""
     counts = np.asarray(counts, dtype=np.int64)
     if not counts.size:
         return np.zeros((0, 3))
     pts = np.asarray(points, dtype=float)
+    indices = np.asarray(indices)
     start = np.cumsum(counts) - counts
     low, high = counts.min(), counts.max()
     if low >= 3 and high <= 4:
-        corners = np.asarray(indices).reshape(-1, 4) if low == 4 else \
-            np.asarray(indices)[start[:, None] + np.minimum(_CORNERS, counts[:, None] - 1)]
-        p = pts[corners]
-        a, b = p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]
-        normal = a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]  # a x b (np.cross is slow on small arrays)
+        normal = _diagonal_normals(pts, counts, indices, start, low == 4)
     else:
-        p = pts[indices]
-        poly = np.repeat(np.arange(counts.size), counts)
-        q = p[start[poly] + (np.arange(len(indices)) - start[poly] + 1) % counts[poly]]
-        normal = np.add.reduceat(np.column_stack([(p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2]),
-                                                  (p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0]),
-                                                  (p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])]), start, axis=0)
+        normal = np.empty((counts.size, 3))
+        small = (counts >= 3) & (counts <= 4)
+        normal[small] = _diagonal_normals(pts, counts[small], indices, start[small], False)
+        other = np.flatnonzero(~small)
+        corner = np.repeat(start[other] - np.cumsum(counts[other]) + counts[other], counts[other]) + \
+            np.arange(counts[other].sum())
+        normal[other] = _newell_normals(pts, counts[other], indices[corner])
     length = np.sqrt(np.einsum("ij,ij->i", normal, normal))
     flat = length <= 1e-12
     normal[flat] = (0.0, 0.0, 1.0)
     length[flat] = 1.0
     return normal / length[:, None]
+
+
+def _diagonal_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray, start: np.ndarray,
+                      quads: bool) -> np.ndarray:
+    """Unnormalised normals of triangles and quads (``start``: each one's first corner in ``indices``)."""
+    corners = indices.reshape(-1, 4) if quads else indices[start[:, None] + np.minimum(_CORNERS, counts[:, None] - 1)]
+    p = pts[corners]
+    a, b = p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]
+    return a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]  # a x b (np.cross is slow on small arrays)
+
+
+def _newell_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Unnormalised Newell normals of polygons whose corners are ``indices``, one polygon after the other."""
+    start = np.cumsum(counts) - counts
+    p = pts[indices]
+    poly = np.repeat(np.arange(counts.size), counts)
+    q = p[start[poly] + (np.arange(len(indices)) - start[poly] + 1) % counts[poly]]
+    return np.add.reduceat(np.column_stack([(p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2]),
+                                            (p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0]),
+                                            (p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])]), start, axis=0)
 
 
 def face_normals(meshes: Sequence[MeshData]) -> list[tuple[np.ndarray, np.ndarray]]:

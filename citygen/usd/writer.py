@@ -47,7 +47,7 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
-from citygen.usd.author import T, Author, bound_value
+from citygen.usd.author import T, Author, MeshArrays, bound_value, tokens
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -141,37 +141,28 @@ def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
 
 
 @dataclass
-class _Element:
-    """An element prototype's prepared geometry (a function of its key and the material library alone), kept for
-    every writer of the process with that library (:func:`_elements`): tile writers would otherwise rebuild it in
-    every tile."""
+class _Prototype:
+    """A prototype's meshes, bound and, once a layer authors it, its meshes' :class:`MeshArrays` (prepared in one
+    normals batch with the layer's other new prototypes). An element prototype's are a function of its key, the
+    material library and ``uvs`` alone, kept for every writer of the process with those (:func:`_elements`): tile
+    writers would otherwise prepare the same elements again in every tile."""
 
-    meshes: list[tuple[str, str, str | None, MeshData]]
-    bound: np.ndarray | None
-    normals: list[tuple[np.ndarray, np.ndarray]] | None = None
-
-
-#: Element prototypes kept per material library (at most this many in all; then the memory starts over).
-ELEMENTS_KEPT = 8192
-_ELEMENTS: dict[tuple, dict[ProtoKey, _Element]] = {}
-
-
-def _elements(library: Mapping[str, Material]) -> dict[ProtoKey, _Element]:
-    """This process's prepared element prototypes for ``library``."""
-    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
-        _ELEMENTS.clear()
-    return _ELEMENTS.setdefault(tuple(sorted(library.items())), {})
-
-
-@dataclass
-class _Pending:
-    """A prototype whose prim is authored when its layer is finished, with all others in one normals batch
-    (an element prototype's normals are computed once, in the first layer using it)."""
-
-    path: Sdf.Path
     label: str
     meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
-    element: _Element | None = None
+    bound: np.ndarray | None
+    arrays: list[MeshArrays] | None = None
+
+
+#: Element prototypes kept per material library and ``uvs`` (at most this many in all; then the memory starts over).
+ELEMENTS_KEPT = 8192
+_ELEMENTS: dict[tuple, dict[ProtoKey, _Prototype]] = {}
+
+
+def _elements(library: Mapping[str, Material], uvs: bool) -> dict[ProtoKey, _Prototype]:
+    """This process's prepared element prototypes for ``library`` and ``uvs``."""
+    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
+        _ELEMENTS.clear()
+    return _ELEMENTS.setdefault((tuple(sorted(library.items())), uvs), {})
 
 
 class StageWriter:
@@ -207,14 +198,15 @@ class StageWriter:
         self.defined: set[str] = set()  # materials under /Materials
         self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
         self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
-        self.pending: list[_Pending] = []
+        self.queued: list[BuildingRecord] = []  # the open tile's buildings, authored when it is finished
+        self.pending: list[tuple[Sdf.Path, _Prototype]] = []  # prototypes to author, in order of first use
         self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
         self.tile_bound: np.ndarray | None = None
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
-        self.elements = _elements(self.library)
+        self.elements = _elements(self.library, uvs)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
@@ -257,19 +249,21 @@ class StageWriter:
             return self.prototypes[key]
         path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
         if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
+            # (a module's key leaves sub-millimetre details open: a layer takes its first building's module, so a
+            # tile's bytes never depend on the tiles its process wrote before)
             names: set[str] = set()
             meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                       for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
-            self.pending.append(_Pending(path, key.label, meshes))
-            self.prototypes[key], self.bounds[key] = path, union(points_bound(m.points) for *_, m in meshes)
-            return path
-        element = self.elements.get(key)
-        if element is None:
-            parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
-            meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
-            element = self.elements[key] = _Element(meshes, union(points_bound(m.points) for *_, m in meshes))
-        self.pending.append(_Pending(path, key.label, element.meshes, element))
-        self.prototypes[key], self.bounds[key] = path, element.bound
+            proto = _Prototype(key.label, meshes, union(points_bound(m.points) for *_, m in meshes))
+        else:
+            proto = self.elements.get(key)
+            if proto is None:
+                parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
+                meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
+                proto = self.elements[key] = _Prototype(key.label, meshes,
+                                                        union(points_bound(m.points) for *_, m in meshes))
+        self.pending.append((path, proto))
+        self.prototypes[key], self.bounds[key] = path, proto.bound
         return path
 
     def _instances_bound(self, inst: Instances) -> np.ndarray | None:
@@ -277,41 +271,52 @@ class StageWriter:
                                inst.orientations, inst.scales)
 
     def _author_pending(self) -> None:
-        """Author the prototypes prepared since the last call, their face normals in one batch."""
+        """Author the prototypes prepared since the last call (the arrays of those new to the process prepared
+        first, their face normals in one batch)."""
         if not self.pending:
             return
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(self.layer, "Prototypes", "", Sdf.SpecifierClass)
-        fresh = [p for p in self.pending if p.element is None or p.element.normals is None]
+        fresh = [p for _, p in self.pending if p.arrays is None]
         batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
-        normals = {id(p): [next(batch) for _ in p.meshes] for p in fresh}
         for p in fresh:
-            if p.element is not None:
-                p.element.normals = normals[id(p)]
+            normals = [next(batch) for _ in p.meshes]
+            kept = [k for k, (*_, m) in enumerate(p.meshes) if len(m.counts)]
+            p.arrays = author.arrays([(p.meshes[k][3], p.meshes[k][1]) for k in kept], [normals[k] for k in kept])
         with Sdf.ChangeBlock():
-            for p in self.pending:
-                mesh_normals = iter(normals[id(p)] if id(p) in normals else p.element.normals)
-                proto = author.prim(self.protos_root, p.path.name, "Xform")
+            for path, p in self.pending:
+                proto = author.prim(self.protos_root, path.name, "Xform")
                 author.api(proto, "SemanticsLabelsAPI:class")
-                author.attr(proto, "semantics:labels:class", T.TokenArray, Vt.TokenArray([p.label]), uniform=True)
+                author.attr(proto, "semantics:labels:class", T.TokenArray, tokens(p.label), uniform=True)
                 used = sorted({mat for _, mat, _, _ in p.meshes})
                 self.define(used)
                 looks = author.looks(proto, used) if used else None
+                arrays = iter(p.arrays)
                 for name, mat, label, mesh in p.meshes:
-                    author.mesh(proto, name, mesh, looks, mat, label, next(mesh_normals))
+                    if len(mesh.counts):
+                        author.mesh(proto, name, next(arrays), looks, mat, label)
         self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
-        """Author one building; records must come grouped by tile (a tile cannot be reopened)."""
+        """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
+        records must come grouped by tile (a tile cannot be reopened)."""
         target = self._tile(record.tile)
         if isinstance(target, StageWriter):
             target.add(record)
             return
+        self.queued.append(record)
+
+    def _write_queued(self, target: Sdf.PrimSpec) -> None:
+        """Author the open tile's buildings, in the order added, their face normals in one batch."""
+        batches = [_mesh_batch(record.geometry, self.lod) for record in self.queued]
+        normals = iter(face_normals([mesh for batch in batches for mesh in batch]))
         with Sdf.ChangeBlock():
-            bound = _write_building(self, target, record)
-        if bound is not None:
-            self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
+            for record, batch in zip(self.queued, batches):
+                bound = _write_building(self, target, record, batch, [next(normals) for _ in batch])
+                if bound is not None:
+                    self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
+        self.queued = []
 
     def _tile(self, tile: tuple[int, int]) -> Sdf.PrimSpec | StageWriter:
         """The open tile's prim (or, with tile layers, its writer), opening ``tile`` after closing the last."""
@@ -344,6 +349,7 @@ class StageWriter:
             stats = target.close()
             self.add_tile_layer(stats.path.name, stats, target.prototypes)
             return
+        self._write_queued(target)
         self._author_pending()
         with Sdf.ChangeBlock():
             _model_bound(target, self.tile_bound)
@@ -458,10 +464,19 @@ def _world(author: Author, layer: Sdf.Layer, up_axis: str) -> Sdf.PrimSpec:
     return world
 
 
-def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord) -> np.ndarray | None:
+def _mesh_batch(geo: BuildingGeometry, lod: str) -> list[MeshData]:
+    """A building's meshes in the order :func:`_write_building` takes their normals: facades, roof, walls."""
+    walls = geo.walls if lod != "none" else None
+    return [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []),
+            *([walls] if walls is not None else [])]
+
+
+def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord, batch: list[MeshData],
+                    normals: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray | None:
     """One building prim at its pivot, its geometry in local coordinates; returns its local bound. Its level of
     detail follows ``writer.lod``: the facades and elements (``LOD0``) and the plain walls of its mass (``LOD1``)
-    as variants or as a render/proxy pair; the roof is shared by both."""
+    as variants or as a render/proxy pair; the roof is shared by both. ``batch``: its :func:`_mesh_batch`,
+    ``normals`` their :func:`face_normals`."""
     author, counts, geo = writer.author, writer.counts, record.geometry
     pivot = np.asarray(record.pivot, dtype=float)
     prim = author.prim(parent, record.name, "Xform")
@@ -469,7 +484,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     prim.SetInfo("assetInfo", {"name": record.name})
     author.api(prim, "GeomModelAPI")
     author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*map(float, pivot)))
-    author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
+    author.attr(prim, "xformOpOrder", T.TokenArray, tokens("xformOp:translate"), uniform=True)
     for key, value in sorted(record.attributes.items()):
         vtype, v = _value(value)
         author.attr(prim, attribute_name(key), vtype, v, custom=True)
@@ -481,8 +496,12 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
                   | ({wall} if walls is not None else set()))
     writer.define(used)
     looks = author.looks(prim, used)
-    batch = [*geo.meshes.values(), *([geo.roof] if geo.roof is not None else []), *([walls] if walls is not None else [])]
-    normals = face_normals(batch)  # one batch per building, in this order
+    mats = [*(mat for _, mat in geo.meshes), *([geo.roof_material] if geo.roof is not None else []),
+            *([wall] if walls is not None else [])]
+    kept = [k for k, mesh in enumerate(batch) if len(mesh.counts)]
+    arrays: list[MeshArrays | MeshData] = list(batch)  # (an empty mesh stays MeshData: Author.mesh skips it)
+    for k, a in zip(kept, author.arrays([(batch[k], mats[k]) for k in kept], [normals[k] for k in kept], pivot)):
+        arrays[k] = a
     body = mass = prim
     if walls is not None and writer.lod == "variants":
         lods = Sdf.VariantSetSpec(prim, LOD_SET)
@@ -495,20 +514,18 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
         author.attr(mass, "purpose", T.Token, "proxy", uniform=True)
     bounds = []  # local
     if walls is not None:
-        bounds.append(author.mesh(mass, "Walls", walls, looks, wall, "wall", normals[-1], pivot))
+        bounds.append(author.mesh(mass, "Walls", arrays[-1], looks, wall, "wall"))
         counts["meshes"] += 1
         counts["polygons"] += len(walls.counts)
     if geo.meshes:
         facade = author.prim(body, "Facade", "Scope")
         names: set[str] = set()
-        for ((label, mat), mesh), mesh_normals in zip(geo.meshes.items(), normals):
-            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), mesh, looks, mat, label,
-                                      mesh_normals, pivot))
+        for ((label, mat), mesh), prepared in zip(geo.meshes.items(), arrays):
+            bounds.append(author.mesh(facade, prim_name(f"{label}_{mat}", names), prepared, looks, mat, label))
             counts["meshes"] += bounds[-1] is not None
             counts["polygons"] += len(mesh.counts)
     if geo.roof is not None:
-        bounds.append(author.mesh(prim, "Roof", geo.roof, looks, geo.roof_material, "roof",
-                                  normals[len(geo.meshes)], pivot))
+        bounds.append(author.mesh(prim, "Roof", arrays[len(geo.meshes)], looks, geo.roof_material, "roof"))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
     inst = lift_module_elements(geo.instances, geo.modules)

@@ -108,3 +108,16 @@ def test_every_written_mesh_has_outward_face_normals(small_scene, test_registry,
                 assert per_face[k] @ n / np.linalg.norm(n) > 0.9999
         if mesh.GetPrim().GetName() == "Roof":
             assert np.all(per_face[:, 2] > -1e-6)  # roofs face up (flat here) or out, never down
+
+
+def test_a_batch_with_other_polygons_gives_each_polygon_its_own_normal():
+    """Triangles and quads take the diagonals' normal and other polygons Newell's, polygon by polygon: a batch of
+    many meshes (a whole tile's) with one pentagon gets the normals each polygon has alone."""
+    rng = np.random.default_rng(1)
+    points = rng.random((40, 3))
+    counts = np.array([4, 3, 5, 4, 6, 3, 4])
+    indices = rng.integers(0, 40, counts.sum())
+    ends = np.cumsum(counts)
+    alone = np.concatenate([polygon_normals(points, counts[k:k + 1], indices[ends[k] - counts[k]:ends[k]])
+                            for k in range(len(counts))])
+    np.testing.assert_array_equal(polygon_normals(points, counts, indices), alone)

@@ -146,3 +146,40 @@ def test_usdz_with_tile_layers_is_byte_reproducible(small_scene, test_registry):
     first = generate_city(scene, registry=test_registry).stats.path.read_bytes()
     time.sleep(2.1)  # (the zip records file times in 2 s steps)
     assert generate_city(scene, registry=test_registry).stats.path.read_bytes() == first
+
+
+def _bay_building(name: str, tile: tuple[int, int], wall_x: float) -> BuildingRecord:
+    """A building of one module instance (key ``BAY``; its wall quad ends at ``wall_x``) holding one window."""
+    from citygen.geometry.building import MeshData, ModuleProto
+    from citygen.geometry.modules import ModuleKey
+    from citygen.geometry.prototypes import ProtoKey
+
+    window, bay = ProtoKey("window", "glass", 11, 15, -25), ModuleKey(7, 300, 300, "brick")
+    wall = MeshData(np.array([[0, 0, 0], [wall_x, 0, 0], [wall_x, 3, 0], [0, 3, 0]], np.float32),
+                    np.array([4], np.int32), np.arange(4, dtype=np.int32))
+    one = (np.zeros(1, np.int32), np.array([[1.0, 1.0, 0.0]]), np.array([[0.0, 0.0, 0.0, 1.0]]),
+           np.ones((1, 3), np.float32))
+    geometry = BuildingGeometry({}, Instances((bay,), *one), {bay: ModuleProto({("wall", "brick"): wall},
+                                                                               Instances((window,), *one))}, None)
+    return BuildingRecord(name, tile, geometry, {"height": 3.0})
+
+
+def test_a_tile_layers_bytes_do_not_depend_on_the_tiles_its_process_wrote_before(tmp_path):
+    """Prototypes are prepared once per process for elements only: a module's key leaves sub-millimetre details of
+    its meshes open, so a process that wrote a tile with another version of the same module before (a worker
+    writes many tiles) must still write the module of this tile's own first building."""
+    def tile(path: Path, wall_x: float) -> bytes:
+        with StageWriter(path) as writer:
+            writer.add(_bay_building("b", (0, 0), wall_x))
+            writer.close()
+        return path.read_bytes()
+
+    def wall_end(path: Path) -> float:
+        layer = Sdf.Layer.OpenAsAnonymous(str(path))
+        return max(p[0] for p in layer.GetAttributeAtPath(
+            "/Prototypes/module_000000000007_300x300_brick/wall_brick.points").default)
+
+    first = tile(tmp_path / "first.usdc", 3.0)
+    tile(tmp_path / "other.usdc", 3.0004)
+    assert wall_end(tmp_path / "other.usdc") == pytest.approx(3.0004)
+    assert tile(tmp_path / "again.usdc", 3.0) == first
