@@ -83,8 +83,8 @@ class _Derivation:
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
-        #: :meth:`terminal`), filled as they are met.
-        self.terminals: dict[str, dict[str, Any] | None] = {}
+        #: :meth:`terminal`; none when tracing, which derives every region).
+        self.terminals = {} if trace else _terminal_fields(grammar, self.asset)
         #: The terminal regions made, in tree order (regions are made depth first, children in order).
         self.leaves: list[Region] = []
         self.alternatives = alternatives or {}
@@ -183,15 +183,6 @@ class _Derivation:
             self.cache[key] = (region, 1)
         self.leaves.append(region)
         return region
-
-    def terminal_fields(self, symbol: str) -> dict[str, Any] | None:
-        """The region fields of ``symbol`` for :meth:`terminal`, None when it takes the general path."""
-        rule = self.table.get(symbol)
-        fields_ = None
-        if rule is not None and isinstance(rule.body, Terminal) and symbol in self.reusable:
-            fields_ = self.template(symbol, rule.body)
-        self.terminals[symbol] = fields_
-        return fields_
 
     def template(self, symbol: str, body: Terminal) -> dict[str, Any]:
         """The fields of ``symbol``'s terminal regions (:meth:`Region.template`), made once per symbol and body."""
@@ -304,7 +295,7 @@ class _Derivation:
         out = []
         region = self.region
         terminal = self.terminal
-        terminals = self.terminals
+        terminals = self.terminals.get
         end = start + length
         pos = start
         last = len(extents) - 1
@@ -314,7 +305,7 @@ class _Derivation:
                 extent = max(end - pos, 0.0)
             if extent > 0:
                 symbol = items[i].symbol
-                fields_ = terminals[symbol] if symbol in terminals else self.terminal_fields(symbol)
+                fields_ = terminals(symbol)
                 if fields_ is not None:
                     if axis == "x":
                         out.append(terminal(symbol, fields_, pos, y, extent, h, floor, depth))
@@ -342,7 +333,7 @@ class _Derivation:
         for symbol, c0, r0, c1, r1 in body.regions:
             rw, rh = xs[c1] - xs[c0], ys[r1] - ys[r0]
             if rw > 0 and rh > 0:
-                fields_ = self.terminals[symbol] if symbol in self.terminals else self.terminal_fields(symbol)
+                fields_ = self.terminals.get(symbol)
                 if fields_ is not None:
                     out.append(self.terminal(symbol, fields_, xs[c0], ys[r0], rw, rh, floor, depth))
                 else:
@@ -405,6 +396,25 @@ def _moved(region: Region, dx: float, dy: float, add: Callable[[Region], None]) 
 
 _new = object.__new__
 _set = object.__setattr__
+
+
+def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:
+    """Per reusable symbol whose rule is a plain terminal, its regions' fields (:meth:`Region.template`), made
+    once per grammar (``asset`` resolves the grammar's asset paths)."""
+    made = _TERMINALS.get(id(grammar))
+    if made is None or made[0] is not grammar:
+        if len(_TERMINALS) > 256:
+            _TERMINALS.clear()
+        fields_ = {rule.symbol: Region.template(rule.symbol, label=rule.body.label, depth=rule.body.depth,
+                                                material=rule.body.material, asset=asset(rule.body.asset))
+                   for rule in grammar.table.values()
+                   if isinstance(rule.body, Terminal) and rule.symbol in grammar.translation_invariant}
+        made = _TERMINALS[id(grammar)] = (grammar, fields_)
+    return made[1]
+
+
+#: ``id(grammar) -> (grammar, fields)`` of :func:`_terminal_fields`.
+_TERMINALS: dict[int, tuple[Grammar, dict[str, dict[str, Any]]]] = {}
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:
