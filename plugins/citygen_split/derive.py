@@ -160,16 +160,19 @@ class _Derivation:
                  floor: int, depth: int) -> Region:
         """``region(symbol, ...)`` for a reusable ``symbol`` whose rule is a plain terminal with the region fields
         ``fields_``: the same regions, keys and counts without the general path's dispatch."""
-        if depth > MAX_DEPTH or self.count >= MAX_REGIONS:  # (the general path raises the error)
+        count = self.count
+        if depth > MAX_DEPTH or count >= MAX_REGIONS:  # (the general path raises the error)
             return self.region(symbol, x, y, w, h, floor, depth, ())
-        self.count += 1
+        self.count = count + 1
         key = (symbol, w, h, floor)
         done = self.cache.get(key)
+        region = _new(Region)
         if done is not None:  # (:func:`_moved` of a terminal)
             original = done[0]
             copied = original.__dict__.copy()
             copied["x"] = original.x + (x - original.x)
             copied["y"] = original.y + (y - original.y)
+            _set(region, "__dict__", copied)
         else:
             copied = fields_.copy()
             copied["x"] = x
@@ -177,9 +180,7 @@ class _Derivation:
             copied["w"] = w
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
-        region = _new(Region)
-        _set(region, "__dict__", copied)
-        if done is None:
+            _set(region, "__dict__", copied)
             self.cache[key] = (region, 1)
         self.leaves.append(region)
         return region
@@ -291,7 +292,8 @@ class _Derivation:
             assert isinstance(body, SymSplit)
             items = body.mirrored.items
             extents = resolve(body.mirrored.sizes, length, body.mirrored.totals)
-        # (place(extents, start, length), inlined: the same arithmetic)
+        # (place(extents, start, length), inlined: the same arithmetic; ``if e < 0.0: e = 0.0`` is ``max(e, 0.0)``
+        # bit for bit, -0.0 and NaN included)
         out = []
         region = self.region
         terminal = self.terminal
@@ -300,9 +302,12 @@ class _Derivation:
         pos = start
         last = len(extents) - 1
         for i, extent in enumerate(extents):
-            extent = max(extent, 0.0)
+            if extent < 0.0:
+                extent = 0.0
             if i == last or pos + extent > end:
-                extent = max(end - pos, 0.0)
+                extent = end - pos
+                if extent < 0.0:
+                    extent = 0.0
             if extent > 0:
                 symbol = items[i].symbol
                 fields_ = terminals(symbol)
