@@ -172,6 +172,7 @@ def _as_float(value: int | float) -> float:
 #: A region's rectangle ``(x, y, w, h)``.
 _XYWH = operator.attrgetter("x", "y", "w", "h")
 _LABEL = operator.attrgetter("label")
+_LAYER = operator.attrgetter("layer")
 
 _REGION_DEFAULTS = {f.name: f.default for f in fields(Region) if f.default is not MISSING}
 
@@ -285,55 +286,70 @@ def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
     problems: list[str] = []
     eps = tol * max(layout.width, layout.height, 1e-9)
     leaves, all_rects = layout.leaves, layout.leaf_rects
-    layers = [r.layer for r in leaves]
+    layers = list(map(_LAYER, leaves))
+    if layers.count(layers[0]) == len(layers):  # (one layer: most layouts)
+        return _layer_partition(layout, layers[0], leaves, all_rects, eps)
     by_layer: dict[str | None, list[int]] = {layer: [] for layer in layers}
-    if len(by_layer) > 1:
-        for i, layer in enumerate(layers):
-            by_layer[layer].append(i)
+    for i, layer in enumerate(layers):
+        by_layer[layer].append(i)
     for layer, members in by_layer.items():
-        regions = [leaves[i] for i in members] if len(by_layer) > 1 else leaves
-        rects = all_rects[members] if len(by_layer) > 1 else all_rects
-        name = f"layer {layer!r}" if layer is not None else "layout"
-        if not np.all(np.isfinite(rects)):
-            problems.append(f"{name}: non-finite coordinates")
-            continue
-        bad = np.flatnonzero((rects[:, 2] < -eps) | (rects[:, 3] < -eps))
-        problems += [f"{name}: region {regions[i].symbol} has negative size {rects[i, 2:]}" for i in bad[:5]]
-        x0, y0 = rects[:, 0], rects[:, 1]
-        x1, y1 = x0 + rects[:, 2], y0 + rects[:, 3]
-        outside = np.flatnonzero((x0 < -eps) | (y0 < -eps) | (x1 > layout.width + eps) | (y1 > layout.height + eps))
-        problems += [f"{name}: region {regions[i].symbol} at {rects[i]} leaves the rectangle" for i in outside[:5]]
-        if bad.size or outside.size:
-            continue
-        problems += _coverage(name, regions, x0, y0, x1, y1, layout.width, layout.height, eps)
+        problems += _layer_partition(layout, layer, [leaves[i] for i in members], all_rects[members], eps)
     return problems
 
 
-def _cluster(values: np.ndarray, bounds: tuple[float, float], eps: float) -> tuple[np.ndarray, np.ndarray]:
+def _layer_partition(layout: FacadeLayout, layer: str | None, regions: Sequence[Region], rects: np.ndarray,
+                     eps: float) -> list[str]:
+    """:func:`check_partition` of one layer's terminals ``regions`` and their rectangles ``rects``."""
+    name = f"layer {layer!r}" if layer is not None else "layout"
+    x0, y0 = rects[:, 0], rects[:, 1]
+    x1, y1 = x0 + rects[:, 2], y0 + rects[:, 3]
+    if rects.min() >= -eps and x1.max() <= layout.width + eps and y1.max() <= layout.height + eps:
+        # (finite -- a NaN fails every comparison, an infinity one of them --, no negative size, none outside)
+        return _coverage(name, regions, x0, y0, x1, y1, layout.width, layout.height, eps)
+    if not np.all(np.isfinite(rects)):
+        return [f"{name}: non-finite coordinates"]
+    bad = np.flatnonzero((rects[:, 2] < -eps) | (rects[:, 3] < -eps))
+    problems = [f"{name}: region {regions[i].symbol} has negative size {rects[i, 2:]}" for i in bad[:5]]
+    outside = np.flatnonzero((x0 < -eps) | (y0 < -eps) | (x1 > layout.width + eps) | (y1 > layout.height + eps))
+    problems += [f"{name}: region {regions[i].symbol} at {rects[i]} leaves the rectangle" for i in outside[:5]]
+    if bad.size or outside.size:
+        return problems
+    return _coverage(name, regions, x0, y0, x1, y1, layout.width, layout.height, eps)
+
+
+def _cluster(starts: np.ndarray, ends: np.ndarray, bounds: tuple[float, float],
+             eps: float) -> tuple[np.ndarray, np.ndarray]:
     """Snap coordinates to clusters (sorted values, a new cluster after every gap above ``eps``): (cluster
-    positions, cluster index of every value). Every value gets the cluster it was sorted into (looking up
-    ``value + eps`` instead put a value exactly ``eps`` below the next cluster into that one)."""
-    allv = np.concatenate([values.ravel(), bounds])
-    order = np.argsort(allv, kind="stable")
+    positions, cluster index of every value as a ``(2, n)`` array: ``starts`` then ``ends``). Every value gets the
+    cluster it was sorted into (looking up ``value + eps`` instead put a value exactly ``eps`` below the next
+    cluster into that one)."""
+    allv = np.concatenate((starts, ends, bounds))
+    order = allv.argsort(kind="stable")
     ordered = allv[order]
-    starts = np.concatenate([[True], np.diff(ordered) > eps])
+    new = np.empty(allv.size, dtype=bool)
+    new[0] = True
+    np.greater(ordered[1:] - ordered[:-1], eps, out=new[1:])
     index = np.empty(allv.size, dtype=np.int64)
-    index[order] = np.cumsum(starts) - 1
-    return ordered[starts], index[: values.size].reshape(values.shape)
+    index[order] = new.astype(np.int64).cumsum()
+    index -= 1
+    return ordered[new], index[: 2 * starts.size].reshape(2, -1)
 
 
-def _coverage(name: str, regions: list[Region], x0: np.ndarray, y0: np.ndarray, x1: np.ndarray, y1: np.ndarray,
-              width: float, height: float, eps: float) -> list[str]:
-    xs, ix = _cluster(np.stack([x0, x1]), (0.0, width), eps)
-    ys, iy = _cluster(np.stack([y0, y1]), (0.0, height), eps)
+def _coverage(name: str, regions: Sequence[Region], x0: np.ndarray, y0: np.ndarray, x1: np.ndarray,
+              y1: np.ndarray, width: float, height: float, eps: float) -> list[str]:
+    xs, ix = _cluster(x0, x1, (0.0, width), eps)
+    ys, iy = _cluster(y0, y1, (0.0, height), eps)
     nx, ny = len(xs), len(ys)
     if nx * ny > 25_000_000:
         return [f"{name}: {len(regions)} regions on a {nx}x{ny} grid are too irregular to check"]
     stride = ny + 1
     cells = (nx + 1) * stride
-    diff = (np.bincount(np.concatenate([ix[0] * stride + iy[0], ix[1] * stride + iy[1]]), minlength=cells)
-            - np.bincount(np.concatenate([ix[1] * stride + iy[0], ix[0] * stride + iy[1]]), minlength=cells))
-    cover = diff.reshape(nx + 1, stride).cumsum(axis=0).cumsum(axis=1)[: nx - 1, : ny - 1]
+    # +1 at each rectangle's (x0, y0) and (x1, y1) corner, -1 at (x1, y0) and (x0, y1)
+    diff = (np.bincount((ix * stride + iy).ravel(), minlength=cells)
+            - np.bincount((ix[::-1] * stride + iy).ravel(), minlength=cells))
+    # (the prefix sums along x summed on the transpose: numpy's cumsum across rows is twice as slow)
+    along_y = np.ascontiguousarray(diff.reshape(nx + 1, stride).cumsum(axis=1).T)
+    cover = along_y.cumsum(axis=1).T[: nx - 1, : ny - 1]
     if not cover.size or cover.min() == cover.max() == 1:  # (integer counts: exact)
         return []
     problems = []

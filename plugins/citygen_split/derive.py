@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import os
 from bisect import bisect_right
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -82,6 +82,11 @@ class _Derivation:
         self.reusable = frozenset() if trace else grammar.translation_invariant
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
+        #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
+        #: :meth:`terminal`; none when tracing, which derives every region).
+        self.terminals = {} if trace else _terminal_fields(grammar, self.asset)
+        #: The terminal regions made, in tree order (regions are made depth first, children in order).
+        self.leaves: list[Region] = []
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
         self.points: dict[PointKey, int] = {}
@@ -89,8 +94,10 @@ class _Derivation:
     def run(self) -> FacadeLayout:
         r = self.request
         root = self.region(self.grammar.start, 0.0, 0.0, float(r.width), float(r.height), 0, 0, ())
-        return FacadeLayout(width=float(r.width), height=float(r.height), root=root,
-                            meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
+        layout = FacadeLayout(width=float(r.width), height=float(r.height), root=root,
+                              meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
+        layout.__dict__["leaves"] = tuple(self.leaves)  # (FacadeLayout.leaves, already known)
+        return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
     def region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
@@ -105,7 +112,7 @@ class _Derivation:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
                                        plugin=PLUGIN_ID, where=self.grammar.source,
                                        hint="the face is too large for this grammar's sizes")
-                return _moved(original, x - original.x, y - original.y)
+                return _moved(original, x - original.x, y - original.y, self.leaves.append)
             before = self.count
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
@@ -124,7 +131,7 @@ class _Derivation:
                                hint="a rule probably splits into itself without its region getting smaller")
         if rule is None:  # the built-in Corner strip
             self.note(depth, symbol, x, y, w, h, "corner strip, wall")
-            return Region.fast(x, y, w, h, symbol, label="wall")
+            return self.leaf(Region.fast(x, y, w, h, symbol, label="wall"))
         body = rule.body
         if isinstance(body, (Case, Choice)):
             body, how = self.select(rule, w, h, floor)
@@ -133,7 +140,7 @@ class _Derivation:
         elif self.tracing:
             self.note(depth, symbol, x, y, w, h, _describe(body))
         if isinstance(body, Terminal):
-            return Region.stamped(self.template(symbol, body), x, y, w, h)
+            return self.leaf(Region.stamped(self.template(symbol, body), x, y, w, h))
         if isinstance(body, Rename):
             if body.symbol in chain or body.symbol == symbol:
                 cycle = " --> ".join((*chain, symbol, body.symbol))
@@ -143,6 +150,40 @@ class _Derivation:
             return Region.fast(x, y, w, h, symbol, children=(child,))
         children = self.children(body, x, y, w, h, floor, depth + 1, rule)
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
+
+    def leaf(self, region: Region) -> Region:
+        """``region``, a terminal, noted in :attr:`leaves`."""
+        self.leaves.append(region)
+        return region
+
+    def terminal(self, symbol: str, fields_: dict[str, Any], x: float, y: float, w: float, h: float,
+                 floor: int, depth: int) -> Region:
+        """``region(symbol, ...)`` for a reusable ``symbol`` whose rule is a plain terminal with the region fields
+        ``fields_``: the same regions, keys and counts without the general path's dispatch."""
+        count = self.count
+        if depth > MAX_DEPTH or count >= MAX_REGIONS:  # (the general path raises the error)
+            return self.region(symbol, x, y, w, h, floor, depth, ())
+        self.count = count + 1
+        key = (symbol, w, h, floor)
+        done = self.cache.get(key)
+        region = _new(Region)
+        if done is not None:  # (:func:`_moved` of a terminal)
+            original = done[0]
+            copied = original.__dict__.copy()
+            copied["x"] = original.x + (x - original.x)
+            copied["y"] = original.y + (y - original.y)
+            _set(region, "__dict__", copied)
+        else:
+            copied = fields_.copy()
+            copied["x"] = x
+            copied["y"] = y
+            copied["w"] = w
+            copied["h"] = h
+            copied["key"] = hash((self.request.seed, key))
+            _set(region, "__dict__", copied)
+            self.cache[key] = (region, 1)
+        self.leaves.append(region)
+        return region
 
     def template(self, symbol: str, body: Terminal) -> dict[str, Any]:
         """The fields of ``symbol``'s terminal regions (:meth:`Region.template`), made once per symbol and body."""
@@ -251,21 +292,34 @@ class _Derivation:
             assert isinstance(body, SymSplit)
             items = body.mirrored.items
             extents = resolve(body.mirrored.sizes, length, body.mirrored.totals)
-        # (place(extents, start, length), inlined: the same arithmetic)
+        # (place(extents, start, length), inlined: the same arithmetic; ``if e < 0.0: e = 0.0`` is ``max(e, 0.0)``
+        # bit for bit, -0.0 and NaN included)
         out = []
         region = self.region
+        terminal = self.terminal
+        terminals = self.terminals.get
         end = start + length
         pos = start
         last = len(extents) - 1
         for i, extent in enumerate(extents):
-            extent = max(extent, 0.0)
+            if extent < 0.0:
+                extent = 0.0
             if i == last or pos + extent > end:
-                extent = max(end - pos, 0.0)
+                extent = end - pos
+                if extent < 0.0:
+                    extent = 0.0
             if extent > 0:
-                if axis == "x":
-                    out.append(region(items[i].symbol, pos, y, extent, h, floor, depth, ()))
+                symbol = items[i].symbol
+                fields_ = terminals(symbol)
+                if fields_ is not None:
+                    if axis == "x":
+                        out.append(terminal(symbol, fields_, pos, y, extent, h, floor, depth))
+                    else:
+                        out.append(terminal(symbol, fields_, x, pos, w, extent, floor, depth))
+                elif axis == "x":
+                    out.append(region(symbol, pos, y, extent, h, floor, depth, ()))
                 else:
-                    out.append(region(items[i].symbol, x, pos, w, extent, floor, depth, ()))
+                    out.append(region(symbol, x, pos, w, extent, floor, depth, ()))
             pos = pos + extent
         return out
 
@@ -284,7 +338,11 @@ class _Derivation:
         for symbol, c0, r0, c1, r1 in body.regions:
             rw, rh = xs[c1] - xs[c0], ys[r1] - ys[r0]
             if rw > 0 and rh > 0:
-                out.append(self.region(symbol, xs[c0], ys[r0], rw, rh, floor, depth, ()))
+                fields_ = self.terminals.get(symbol)
+                if fields_ is not None:
+                    out.append(self.terminal(symbol, fields_, xs[c0], ys[r0], rw, rh, floor, depth))
+                else:
+                    out.append(self.region(symbol, xs[c0], ys[r0], rw, rh, floor, depth, ()))
         return out
 
     def floors(self, body: Floors, x: float, y: float, w: float, h: float, depth: int) -> list[Region]:
@@ -313,18 +371,55 @@ class _Derivation:
         return out
 
 
-def _moved(region: Region, dx: float, dy: float, new=object.__new__) -> Region:
-    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (as :meth:`Region.fast`: no
-    per-field ``object.__setattr__``)."""
-    copy = new(Region)
-    fields_ = copy.__dict__
-    fields_.update(region.__dict__)
+def _moved(region: Region, dx: float, dy: float, add: Callable[[Region], None]) -> Region:
+    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (a new field dict per region, as
+    :meth:`Region.fast`: no per-field ``object.__setattr__``); ``add`` is given each terminal copy in tree order."""
+    fields_ = region.__dict__.copy()
     fields_["x"] = region.x + dx
     fields_["y"] = region.y + dy
     children = region.children
+    copy = _new(Region)
     if children:
-        fields_["children"] = tuple([_moved(c, dx, dy) for c in children])
+        out = []
+        for child in children:
+            if child.children:
+                out.append(_moved(child, dx, dy, add))
+                continue
+            leaf = child.__dict__.copy()
+            leaf["x"] = child.x + dx
+            leaf["y"] = child.y + dy
+            moved = _new(Region)
+            _set(moved, "__dict__", leaf)
+            add(moved)
+            out.append(moved)
+        fields_["children"] = tuple(out)
+    else:
+        add(copy)
+    _set(copy, "__dict__", fields_)
     return copy
+
+
+_new = object.__new__
+_set = object.__setattr__
+
+
+def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:
+    """Per reusable symbol whose rule is a plain terminal, its regions' fields (:meth:`Region.template`), made
+    once per grammar (``asset`` resolves the grammar's asset paths)."""
+    made = _TERMINALS.get(id(grammar))
+    if made is None or made[0] is not grammar:
+        if len(_TERMINALS) > 256:
+            _TERMINALS.clear()
+        fields_ = {rule.symbol: Region.template(rule.symbol, label=rule.body.label, depth=rule.body.depth,
+                                                material=rule.body.material, asset=asset(rule.body.asset))
+                   for rule in grammar.table.values()
+                   if isinstance(rule.body, Terminal) and rule.symbol in grammar.translation_invariant}
+        made = _TERMINALS[id(grammar)] = (grammar, fields_)
+    return made[1]
+
+
+#: ``id(grammar) -> (grammar, fields)`` of :func:`_terminal_fields`.
+_TERMINALS: dict[int, tuple[Grammar, dict[str, dict[str, Any]]]] = {}
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:

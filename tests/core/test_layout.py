@@ -20,8 +20,11 @@ def test_valid_partition_has_no_problems():
 
 @pytest.mark.parametrize("override, word", [
     ({"x": 1.5}, "overlap"), ({"w": 1.5}, "cover"), ({"x": 2.5}, "leaves"), ({"w": -2.0}, "negative"),
-    ({"x": float("nan")}, "non-finite")])
+    ({"x": float("nan")}, "non-finite"), ({"w": float("inf")}, "non-finite"), ({"x": float("-inf")}, "non-finite"),
+    ({"h": float("nan")}, "non-finite")])
 def test_partition_problems_are_named(override, word):
+    """(Infinities and NaNs in any field are named too: the valid case is decided by one comparison of the
+    smallest value and of the largest right and top edges, which every non-finite value must fail.)"""
     problems = check_partition(two_by_one(**override))
     assert any(word in p for p in problems), problems
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import importlib
+import operator
 from dataclasses import replace
 
 import pytest
@@ -298,3 +299,21 @@ def test_place_keeps_equal_tiles_bit_identical():
     g = grammar("X --> repeat(x) { 0.7: A | '1: B }")
     widths = {t.w for t in derive(g, request(23.9, 3)).terminals()[:-2]}
     assert len(widths) == 2
+
+
+def test_leaves_noted_while_deriving_are_the_trees_terminals():
+    """The derivation hands the layout its terminals (fresh, copied, corner strips, dropped empty items); they
+    are the very regions of the tree, in tree order, for every shipped grammar and a tricky one."""
+    from citygen.layout import _collect_leaves
+    from .conftest import RULESETS
+    tricky = grammar("X --> floors { 0: E | *: Bays }\nE --> split(x) { 5: A | '1: B }\n"
+                     "Bays --> repeat(x) { ~2: Bay }\nBay --> split(x) { '1: A | 1: Win | '1: A }\n"
+                     "Win --> split(y) { 1: C | '1: Window }")
+    for g in [tricky, *map(load, RULESETS)]:
+        r = request(23.3, 12.5, (0.0, 3.5, 6.5, 9.5, 12.5), entrance=True, corner_widths=(0.4, 0.7), seed=(3,))
+        layout = derive(g, r)
+        walked: list = []
+        _collect_leaves(layout.root, walked.append)
+        assert len(layout.leaves) == len(walked) and all(map(operator.is_, layout.leaves, walked)), g.source
+    layout = derive(grammar("X --> terminal(wall)"), request(4, 3))
+    assert layout.leaves == (layout.root,)
