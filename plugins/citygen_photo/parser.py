@@ -18,6 +18,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter, zoom
 
 from citygen.errors import LayoutError
+from citygen_photo.fcn import FacadeFCN
 from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 
@@ -105,14 +106,17 @@ class FacadeParser:
 
 
 @functools.lru_cache(maxsize=4)
-def load_parser(path: Path = MODEL_PATH) -> FacadeParser:
-    """The parser whose weights are in ``path`` (the shipped model by default)."""
+def load_parser(path: Path = MODEL_PATH) -> FacadeParser | FacadeFCN:
+    """The parser whose weights are in ``path`` (the shipped model by default): the convolutional network
+    (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context perceptrons."""
     try:
         with np.load(path) as data:
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
                           hint="reinstall citygen, or train a model with python -m citygen_photo.train") from None
+    if "kind" in arrays and str(arrays["kind"]) == "fcn":
+        return FacadeFCN.from_arrays(arrays)
     count = sum(1 for key in arrays if key.endswith("_mean"))
     return FacadeParser(tuple(Stage.from_arrays(arrays, f"s{k}") for k in range(1, count + 1)), arrays["prior"])
 
