@@ -139,10 +139,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--last", type=int, default=40)
     parser.add_argument("--parser", choices=PARSERS, default="learned",
                         help="learned (default): the trained parser; contrast: mueller2007's contrast test")
-    parser.add_argument("--model", type=Path, help="the learned parser's weights (default: the shipped model)")
+    parser.add_argument("--model", type=Path, nargs="+", default=[],
+                        help="the learned parser's weights, several for their ensemble (default: the shipped parser)")
     args = parser.parse_args(argv)
     data = Path(args.data)
-    model = load_parser(args.model) if args.model else None
+    model = load_parser(*args.model) if args.model else None
     photos = [data / f"cmp_b{i:04d}.jpg" for i in range(args.first, args.last + 1)]
     photos = [p for p in photos if p.is_file()]
     if not photos:

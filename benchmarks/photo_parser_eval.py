@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.parser import MODEL_PATH, load_labels, load_parser
+from citygen_photo.parser import load_labels, load_parser
 from citygen_photo.train import _resized_labels
 
 DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_facade" / "base"
@@ -26,11 +26,12 @@ DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmp_
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="?", type=Path, default=DEFAULT)
-    parser.add_argument("--model", type=Path, default=MODEL_PATH)
+    parser.add_argument("--model", type=Path, nargs="+", default=[],
+                        help="the parser's weights, several for their ensemble (default: the shipped parser)")
     parser.add_argument("--first", type=int, default=1)
     parser.add_argument("--last", type=int, default=40)
     args = parser.parse_args(argv)
-    model = load_parser(args.model)
+    model = load_parser(*args.model)
     n = len(CMP_LABELS)
     confusion = np.zeros((n, n), dtype=np.int64)
     cpu = []

@@ -23,6 +23,9 @@ from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
+FCN_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
+#: The shipped parser: the ensemble of these models.
+SHIPPED = (MODEL_PATH, FCN_PATH)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
 CONTEXT = (7, 21)
 #: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.
@@ -105,10 +108,28 @@ class FacadeParser:
         return prob / prob.sum(axis=-1, keepdims=True)
 
 
+@dataclass(frozen=True)
+class Ensemble:
+    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the convolutional
+    network, which err on different pixels)."""
+
+    members: tuple[FacadeParser | FacadeFCN, ...]
+
+    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+        """The members' mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1."""
+        return sum(m.probabilities(rgb) for m in self.members) / len(self.members)
+
+
 @functools.lru_cache(maxsize=4)
-def load_parser(path: Path = MODEL_PATH) -> FacadeParser | FacadeFCN:
-    """The parser whose weights are in ``path`` (the shipped model by default): the convolutional network
-    (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context perceptrons."""
+def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | Ensemble:
+    """The parser whose weights are in ``paths`` (several: their ensemble; none: the shipped one, ``SHIPPED``)."""
+    models = tuple(_load_one(path) for path in (paths or SHIPPED))
+    return models[0] if len(models) == 1 else Ensemble(models)
+
+
+def _load_one(path: Path) -> FacadeParser | FacadeFCN:
+    """The convolutional network (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context
+    perceptrons."""
     try:
         with np.load(path) as data:
             arrays = {k: data[k] for k in data.files}

@@ -25,12 +25,12 @@ import numpy as np
 from citygen_photo.fcn import DILATIONS, FacadeFCN
 from citygen_photo.features import FEATURES, pixel_features
 from citygen_photo.labels import CMP_LABELS
+from citygen_photo.parser import FCN_PATH
 from citygen_photo.train import DEFAULT_DATA, TRAIN, VALIDATION, confusion, facade_examples, report
 
-MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
 #: Defaults of the shipped model: channels, steps, crops per step, crop side (working pixels), label weights.
-WIDTH = 32
-STEPS = 3000
+WIDTH = 24
+STEPS = 1500
 BATCH = 4
 CROP = 96
 WEIGHT_POWER = 0.5
@@ -114,7 +114,7 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, width: int = WIDTH, st
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA)
-    parser.add_argument("-o", "--output", type=Path, default=MODEL_PATH)
+    parser.add_argument("-o", "--output", type=Path, default=FCN_PATH)
     parser.add_argument("--width", type=int, default=WIDTH, help="channels of the hidden layers")
     parser.add_argument("--steps", type=int, default=STEPS)
     parser.add_argument("--batch", type=int, default=BATCH)
