@@ -6,7 +6,8 @@ previous stage's probabilities averaged over two neighbourhoods, at a few offset
 the pixel, and profiled along the pixel's row and column, so a pixel learns from the labels around it (a window
 pane between window frames, a door below a window column, a row of windows at the pitch above). Weights ship in ``model/facade_parser.npz`` (trained by
 :mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
-is numpy only and nothing is downloaded.
+is numpy only and nothing is downloaded. The shipped parser (``SHIPPED``, :class:`Ensemble`) averages these
+probabilities with those of the convolutional network of :mod:`citygen_photo.fcn`.
 """
 from __future__ import annotations
 
