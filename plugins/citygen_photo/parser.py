@@ -136,7 +136,8 @@ def _load_one(path: Path) -> FacadeParser | FacadeFCN:
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
-                          hint="reinstall citygen, or train a model with python -m citygen_photo.train") from None
+                          hint="reinstall citygen, or train the models with python -m citygen_photo.train and "
+                               "python -m citygen_photo.train_fcn") from None
     if "kind" in arrays and str(arrays["kind"]) == "fcn":
         return FacadeFCN.from_arrays(arrays)
     count = sum(1 for key in arrays if key.endswith("_mean"))
