@@ -1,6 +1,6 @@
 """Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
 
-    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40] [--parser learned|contrast] [--model M.npz]
+    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40] [--parser learned|contrast] [--model M.npz ...]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors
@@ -14,7 +14,8 @@ line crosses. The summary
 is given for the development half (cmp_b0001-0020, the only photos to tune on), the held-out half
 (cmp_b0021-0040) and all. Timings are CPU seconds (process_time). The learned parser is trained on
 cmp_b0061-0300, so for it all of cmp_b0001-0040 is held out: its choices are made on cmp_b0261-0300
-(``--first 261 --last 300``) with a model trained by ``python -m citygen_photo.train --validate -o M.npz``.
+(``--first 261 --last 300``) with models trained by ``python -m citygen_photo.train --validate -o M.npz`` and
+``python -m citygen_photo.train_fcn --validate -o F.npz`` (``--model M.npz F.npz``: their mean, as shipped).
 """
 from __future__ import annotations
 
@@ -139,10 +140,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--last", type=int, default=40)
     parser.add_argument("--parser", choices=PARSERS, default="learned",
                         help="learned (default): the trained parser; contrast: mueller2007's contrast test")
-    parser.add_argument("--model", type=Path, help="the learned parser's weights (default: the shipped model)")
+    parser.add_argument("--model", type=Path, nargs="+", default=[],
+                        help="the learned parser's weights, several for their ensemble (default: the shipped parser)")
     args = parser.parse_args(argv)
     data = Path(args.data)
-    model = load_parser(args.model) if args.model else None
+    model = load_parser(*args.model) if args.model else None
     photos = [data / f"cmp_b{i:04d}.jpg" for i in range(args.first, args.last + 1)]
     photos = [p for p in photos if p.is_file()]
     if not photos:

@@ -7,7 +7,8 @@ import numpy as np
 
 from citygen.errors import LayoutError
 from citygen.layout import check_partition
-from citygen_photo.parser import FacadeParser, load_parser
+from citygen_photo.parser import Ensemble, FacadeParser, load_parser
+from citygen_photo.fcn import FacadeFCN
 from citygen_photo.doors import axis_door, mirror_axis, repeats_floor_above
 from citygen_photo.photo import FLOOR_RANGE, MI_WORK, WORK, PhotoAnalysis, _work, luminance
 from citygen_photo.regular import Box
@@ -20,7 +21,7 @@ LEAST = 48
 
 def analyse_learned(image: np.ndarray, source: str = "<photo>", *, width: float | None = None,
                     floor_height: float = 3.0, meta: dict | None = None,
-                    model: FacadeParser | None = None) -> PhotoAnalysis:
+                    model: FacadeParser | FacadeFCN | Ensemble | None = None) -> PhotoAnalysis:
     """The layout of an RGB ``(H, W, 3)`` crop of the facade (0..1); ``width`` metres for the crop, else
     ``floor_height`` metres per floor pitch; ``model``: the parser (the shipped one by default)."""
     if image.ndim == 2:

@@ -6,7 +6,8 @@ previous stage's probabilities averaged over two neighbourhoods, at a few offset
 the pixel, and profiled along the pixel's row and column, so a pixel learns from the labels around it (a window
 pane between window frames, a door below a window column, a row of windows at the pitch above). Weights ship in ``model/facade_parser.npz`` (trained by
 :mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
-is numpy only and nothing is downloaded.
+is numpy only and nothing is downloaded. The shipped parser (``SHIPPED``, :class:`Ensemble`) averages these
+probabilities with those of the convolutional network of :mod:`citygen_photo.fcn`.
 """
 from __future__ import annotations
 
@@ -18,10 +19,14 @@ import numpy as np
 from scipy.ndimage import uniform_filter, zoom
 
 from citygen.errors import LayoutError
+from citygen_photo.fcn import FacadeFCN
 from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
+FCN_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
+#: The shipped parser: the ensemble of these models.
+SHIPPED = (MODEL_PATH, FCN_PATH)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
 CONTEXT = (7, 21)
 #: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.
@@ -104,15 +109,37 @@ class FacadeParser:
         return prob / prob.sum(axis=-1, keepdims=True)
 
 
+@dataclass(frozen=True)
+class Ensemble:
+    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the convolutional
+    network, which err on different pixels)."""
+
+    members: tuple[FacadeParser | FacadeFCN, ...]
+
+    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+        """The members' mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1."""
+        return sum(m.probabilities(rgb) for m in self.members) / len(self.members)
+
+
 @functools.lru_cache(maxsize=4)
-def load_parser(path: Path = MODEL_PATH) -> FacadeParser:
-    """The parser whose weights are in ``path`` (the shipped model by default)."""
+def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | Ensemble:
+    """The parser whose weights are in ``paths`` (several: their ensemble; none: the shipped one, ``SHIPPED``)."""
+    models = tuple(_load_one(path) for path in (paths or SHIPPED))
+    return models[0] if len(models) == 1 else Ensemble(models)
+
+
+def _load_one(path: Path) -> FacadeParser | FacadeFCN:
+    """The convolutional network (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context
+    perceptrons."""
     try:
         with np.load(path) as data:
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
-                          hint="reinstall citygen, or train a model with python -m citygen_photo.train") from None
+                          hint="reinstall citygen, or train the models with python -m citygen_photo.train and "
+                               "python -m citygen_photo.train_fcn") from None
+    if "kind" in arrays and str(arrays["kind"]) == "fcn":
+        return FacadeFCN.from_arrays(arrays)
     count = sum(1 for key in arrays if key.endswith("_mean"))
     return FacadeParser(tuple(Stage.from_arrays(arrays, f"s{k}") for k in range(1, count + 1)), arrays["prior"])
 

@@ -66,6 +66,9 @@ FIT_REACH = 0.5
 FIT_GAIN = 0.1
 #: Samples of a window's height in the balcony group's mean profile.
 PROFILE = 32
+#: A door found by its probability stands on the ground: its run of rows ends at most this share of the floor's
+#: height above the bottom.
+GROUNDED = 0.2
 #: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
 #: probability there are frames or gaps between windows).
 DOOR_WIDTH = 0.6
@@ -335,7 +338,8 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
 
 def _door(prob: np.ndarray, top: float, door: Box | None = None) -> Box | None:
     """The entrance door of the floor ``top``..h standing on the ground: ``door`` when given (found by other
-    means), else the door probability's most probable run of columns (mean >= 0.15 there)."""
+    means), else the door probability's most probable run of columns (mean >= 0.15 there), if its rows reach the
+    ground (within ``GROUNDED`` of the floor's height: a dark window above a wall band is not a door)."""
     if door is not None:
         return door
     h, w, _ = prob.shape
@@ -345,7 +349,8 @@ def _door(prob: np.ndarray, top: float, door: Box | None = None) -> Box | None:
         return None
     c, d = max(columns, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1]))].sum())
     rows = runs(band[:, int(c):int(np.ceil(d))].mean(axis=1), share=0.5)
-    if rows and band[:, int(c):int(np.ceil(d))].mean() >= 0.15:
+    if rows and band[:, int(c):int(np.ceil(d))].mean() >= 0.15 and \
+            rows[-1][1] >= band.shape[0] - max(2.0, GROUNDED * band.shape[0]):
         return _clip((c, top + rows[0][0], d, float(h)), w, h)
     return None
 

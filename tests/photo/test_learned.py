@@ -218,3 +218,15 @@ def test_a_window_stays_in_its_column_for_a_small_gain_of_glass():
     assert _fitted(glass, [(box, "window")]) == [(box, "window")]
     glass[10:20, 10:12] = 0.0  # 25 % more: moved onto the glass, its size kept
     assert _fitted(glass, [(box, "window")]) == [((12.0, 10.0, 22.0, 20.0), "window")]
+
+
+def test_a_dark_window_above_a_wall_band_is_not_the_door():
+    """Regression (round 3): the ensemble parser gives the dark windows of a synthetic facade's lowest row some door
+    probability, and the door looked for in the lowest floor replaced one of them, though wall lies below it."""
+    eye = np.eye(len(CMP_LABELS))
+    prob = probabilities(floors=4)
+    prob[98:112, 31:41] = 0.6 * eye[WINDOW] + 0.4 * eye[DOOR]  # the lowest row's second window, 8 px of wall below
+    assert [label for _, label in regular_facade(prob).elements].count("door") == 0
+    prob[98:, 31:41] = 0.6 * eye[WINDOW] + 0.4 * eye[DOOR]  # reaching the ground: the entrance
+    door = [box for box, label in regular_facade(prob).elements if label == "door"]
+    assert len(door) == 1 and door[0][3] == prob.shape[0]
