@@ -6,7 +6,9 @@ Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide
 share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
 main plus its finished children: the workers), peak memory (main process, largest worker, and the whole process
 tree: the sums of the RSS -- which counts pages a forked worker shares with the main process twice -- and of the
-PSS -- which shares them out -- of the main process and its children, sampled every 0.2 s) and stage size per N. The
+PSS -- which shares them out -- of the main process and its children, sampled every second by a thread whose own
+CPU is left out of the main process's: reading a process's smaps costs ~4 ms, so sampling three processes five
+times a second took ~70 s of the main process's CPU in a 20-minute run) and stage size per N. The
 scene leaves ``tile_layers`` unset (tile layers above 1,000 buildings, the default); ``--one-file`` forces one
 layer.
 ``--executor dask`` runs one task per tile on a local dask cluster of ``--jobs`` workers (or on ``--scheduler``;
@@ -70,7 +72,7 @@ def main() -> None:
             with TreePeak() as tree:
                 report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs, executor=args.executor,
                                        scheduler=args.scheduler)
-            elapsed, cpu, children = time.perf_counter() - t0, time.process_time() - c0, _children_cpu() - k0
+            elapsed, cpu, children = time.perf_counter() - t0, time.process_time() - c0 - tree.cpu, _children_cpu() - k0
             main_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
             worker_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
             s = report.stats
@@ -85,11 +87,12 @@ def main() -> None:
 
 
 class TreePeak(threading.Thread):
-    """The peaks, in MB, of the summed RSS and PSS of this process and all its descendants, sampled every 0.2 s."""
+    """The peaks, in MB, of the summed RSS and PSS of this process and all its descendants, sampled every second;
+    ``cpu``: the CPU seconds the sampling took (this thread's)."""
 
     def __init__(self) -> None:
         super().__init__(daemon=True)
-        self.peak = self.pss = 0.0
+        self.peak = self.pss = self.cpu = 0.0
         self.done = threading.Event()
 
     def __enter__(self) -> TreePeak:
@@ -102,13 +105,14 @@ class TreePeak(threading.Thread):
 
     def run(self) -> None:
         me = psutil.Process()
-        while not self.done.wait(0.2):
+        while not self.done.wait(1.0):
             rss = pss = 0
             for proc in [me, *me.children(recursive=True)]:
                 with contextlib.suppress(psutil.Error):
                     info = proc.memory_full_info()
                     rss, pss = rss + info.rss, pss + info.pss
             self.peak, self.pss = max(self.peak, rss / 2 ** 20), max(self.pss, pss / 2 ** 20)
+            self.cpu = time.thread_time()
 
 
 def _children_cpu() -> float:
