@@ -149,10 +149,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"no CMP photos cmp_b{numbers.start:04d}-{numbers.stop - 1:04d} in {args.data}", file=sys.stderr)
         return 2
     model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
     arrays = {"prior": model.prior}
     for k, stage in enumerate(model.stages, start=1):
         arrays.update(stage.arrays(f"s{k}"))
+    return save(model, arrays, args)
+
+
+def save(model: FacadeParser, arrays: dict[str, np.ndarray], args: argparse.Namespace) -> int:
+    """Write a trained model's ``arrays`` to ``args.output`` and, with ``args.validate``, print its confusion on
+    the validation photos; the training scripts' exit status."""
+    args.output.parent.mkdir(parents=True, exist_ok=True)
     with open(args.output, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     print(f"wrote {args.output} ({args.output.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)

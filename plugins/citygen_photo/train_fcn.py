@@ -26,7 +26,7 @@ from citygen_photo.fcn import DILATIONS, FacadeFCN
 from citygen_photo.features import FEATURES, pixel_features
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.parser import FCN_PATH
-from citygen_photo.train import DEFAULT_DATA, TRAIN, VALIDATION, confusion, facade_examples, report
+from citygen_photo.train import DEFAULT_DATA, TRAIN, VALIDATION, facade_examples, save
 
 #: Defaults of the shipped model: channels, steps, crops per step, crop side (working pixels), label weights.
 WIDTH = 24
@@ -134,13 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     model = train(photos, width=args.width, steps=args.steps, batch=args.batch, crop=args.crop,
                   power=args.power, seed=args.seed)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    with open(args.output, "wb") as fh:
-        np.savez_compressed(fh, **model.arrays())
-    print(f"wrote {args.output} ({args.output.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)
-    if args.validate:
-        print(report(confusion(model, facade_examples(args.data, VALIDATION))))
-    return 0
+    return save(model, model.arrays(), args)
 
 
 if __name__ == "__main__":

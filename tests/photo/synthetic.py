@@ -31,3 +31,21 @@ def facade(floors: int = 5, cols: int = 6, floor_h: int = 60, tile_w: int = 50, 
     gray = np.clip(wall + noise * rng.standard_normal((H, W)), 0, 1)
     tint = np.array([1.0, 0.92, 0.85])
     return np.clip(gray[..., None] * tint, 0, 1), boxes, door
+
+
+def labelled_photos(count: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``count`` synthetic facades at the parser's working size with their label maps (wall and windows), as
+    the training scripts take them."""
+    from citygen_photo.features import working_image
+
+    photos = []
+    for seed in range(count):
+        rgb, boxes, _ = facade(floors=3, cols=4, seed=seed)
+        lab = np.full(rgb.shape[:2], 2, dtype=np.uint8)  # facade
+        for x0, y0, x1, y1 in boxes:
+            lab[y0:y1, x0:x1] = 3  # window
+        work = working_image(rgb)
+        rows = (np.arange(work.shape[0]) * rgb.shape[0] / work.shape[0]).astype(int)
+        cols = (np.arange(work.shape[1]) * rgb.shape[1] / work.shape[1]).astype(int)
+        photos.append((work, lab[np.ix_(rows, cols)]))
+    return photos

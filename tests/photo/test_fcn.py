@@ -7,8 +7,8 @@ import pytest
 from scipy.ndimage import correlate
 
 from citygen_photo.fcn import FacadeFCN, conv3x3
-from citygen_photo.features import pixel_features, working_image
-from tests.photo.synthetic import facade
+from citygen_photo.features import pixel_features
+from tests.photo.synthetic import labelled_photos
 
 
 def test_dilated_convolution_is_torch_cross_correlation_with_zero_padding():
@@ -29,26 +29,12 @@ def test_column_channel_is_the_column_position():
     assert np.allclose(features[0, :, COLUMN], np.linspace(0, 1, 30), atol=1e-6)
 
 
-def _synthetic_photos(count: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    photos = []
-    for seed in range(count):
-        rgb, boxes, _ = facade(floors=3, cols=4, seed=seed)
-        lab = np.full(rgb.shape[:2], 2, dtype=np.uint8)  # facade
-        for x0, y0, x1, y1 in boxes:
-            lab[y0:y1, x0:x1] = 3  # window
-        work = working_image(rgb)
-        rows = (np.arange(work.shape[0]) * rgb.shape[0] / work.shape[0]).astype(int)
-        cols = (np.arange(work.shape[1]) * rgb.shape[1] / work.shape[1]).astype(int)
-        photos.append((work, lab[np.ix_(rows, cols)]))
-    return photos
-
-
 def test_training_is_reproducible_exports_what_numpy_runs_and_learns_windows(tmp_path):
     pytest.importorskip("torch")
     from citygen_photo.parser import load_parser
     from citygen_photo.train import confusion
     from citygen_photo.train_fcn import train
-    photos = _synthetic_photos(3)
+    photos = labelled_photos(3)
     a = train(photos, width=8, steps=120, batch=2, crop=48, seed=3)
     b = train(photos, width=8, steps=120, batch=2, crop=48, seed=3)
     assert all(np.array_equal(wa, wb) for (wa, _), (wb, _) in zip(a.layers, b.layers))

@@ -10,7 +10,7 @@ import pytest
 from citygen_photo.features import FEATURES, pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.parser import CONTEXT_FEATURES, OFFSETS, context_features, load_parser
-from tests.photo.synthetic import facade
+from tests.photo.synthetic import facade, labelled_photos
 
 CMP = Path(__file__).parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
@@ -68,16 +68,7 @@ def test_training_is_reproducible_and_learns_two_labels():
     label columns, so every pixel got the label the prior favours (the synthetic windows were all wall)."""
     pytest.importorskip("sklearn")
     from citygen_photo.train import confusion, train
-    photos = []
-    for seed in range(3):
-        rgb, boxes, _ = facade(floors=3, cols=4, seed=seed)
-        lab = np.full(rgb.shape[:2], 2, dtype=np.uint8)  # facade
-        for x0, y0, x1, y1 in boxes:
-            lab[y0:y1, x0:x1] = 3  # window
-        work = working_image(rgb)
-        rows = (np.arange(work.shape[0]) * rgb.shape[0] / work.shape[0]).astype(int)
-        cols = (np.arange(work.shape[1]) * rgb.shape[1] / work.shape[1]).astype(int)
-        photos.append((work, lab[np.ix_(rows, cols)]))
+    photos = labelled_photos(3)
     a = train(photos, 3000, 2, (16,), seed=3)
     b = train(photos, 3000, 2, (16,), seed=3)
     assert len(a.stages) == 2
