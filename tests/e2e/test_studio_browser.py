@@ -3,6 +3,7 @@ edit its grammar, see the SVG and the 3D view change, break the grammar and see 
 test's temporary directory. Skipped where there is no Chromium (``CITYGEN_CHROMIUM`` names another binary)."""
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import shutil
@@ -43,19 +44,31 @@ def studio(tmp_path):
     thread.join(10)
 
 
+@contextlib.contextmanager
+def opened(url: str, errors: list[str] | None = None):
+    """A headless Chromium page on the studio at ``url``, once the studio says it is ready; page errors are
+    appended to ``errors``."""
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        if errors is not None:
+            page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+        try:
+            yield page
+        finally:
+            browser.close()
+
+
 def canvas(page) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(page.locator("#view3d canvas").screenshot())).convert("RGB"), dtype=int)
 
 
 def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
     url, scene = studio
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        errors: list[str] = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(url)
-        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+    errors: list[str] = []
+    with opened(url, errors) as page:
         assert page.locator("#map path").count() == 2
 
         page.locator("#map path").first.click()
@@ -109,16 +122,11 @@ def test_edit_a_grammar_live_on_a_building(studio, tmp_path):
         assert (scene.parent / "house.grammar").read_text() == (Path(__file__).parents[2] / "rulesets" /
                                                                 "house.grammar").read_text()  # nothing saved
         assert errors == []
-        browser.close()
 
 
 def test_extract_a_grammar_from_a_dropped_layout(studio, tmp_path):
     url, _ = studio
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(url)
-        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+    with opened(url) as page:
         page.locator("#inverse-panel summary").click()
         page.locator("#drop").set_input_files(str(Path(__file__).parents[2] / "rulesets" / "cmp_b0035.layout.json"))
         page.wait_for_selector("#facade rect[data-label=door]", timeout=30_000)
@@ -133,31 +141,21 @@ def test_extract_a_grammar_from_a_dropped_layout(studio, tmp_path):
         assert "Facade" in page.locator("#explain").inner_text() and "rules" in page.locator("#import-summary").inner_text()
         assert not page.locator("#save").is_disabled()  # not saved yet
         page.screenshot(path=tmp_path / "extracted.png")
-        browser.close()
 
 
 def test_a_layer_stack_shows_its_account_and_alignment_columns(studio, tmp_path):
     url, scene = studio
     shutil.copy(Path(__file__).parents[2] / "rulesets" / "tenement.layers", scene.parent / "tenement.layers")
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(url)
-        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+    with opened(url) as page:
         page.locator("#ruleset").select_option("tenement.layers")
         page.wait_for_selector("#facade line.column", state="attached", timeout=30_000)
         assert page.locator("#explain").inner_text().startswith("layers ruleset tenement")
         page.screenshot(path=tmp_path / "layers.png")
-        browser.close()
 
 
 def test_generate_the_scene_and_see_the_report(studio, tmp_path):
     url, scene = studio
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(url)
-        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+    with opened(url) as page:
         assert page.locator("#ruleset").input_value() == "../shared/apartment.grammar"
         page.evaluate("""() => { const cm = document.querySelector('.CodeMirror').CodeMirror;
                                  cm.setValue(cm.getValue().replace('terminal(window', 'terminal(blind')); }""")
@@ -168,7 +166,6 @@ def test_generate_the_scene_and_see_the_report(studio, tmp_path):
         assert "written 2 buildings" in report and "unsaved edits of ../shared/apartment.grammar" in report
         assert page.locator("#download").get_attribute("href").endswith("studio-out%2Fscene.glb")
         page.screenshot(path=tmp_path / "generated.png")
-        browser.close()
     assert (scene.parent / "studio-out" / "scene.glb").is_file()
     shared = scene.parent.parent / "shared" / "apartment.grammar"
     assert shared.read_text() == (Path(__file__).parents[2] / "rulesets" / "apartment.grammar").read_text()
@@ -180,11 +177,7 @@ SHARED = Path(__file__).parents[2].parent / "shared" / "data" / "cmp_facade" / "
 @pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP facade data")
 def test_import_options_cmp_tolerances_and_a_photo_crop(studio, tmp_path):
     url, _ = studio
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(url)
-        page.wait_for_selector("body[data-ready=true]", timeout=30_000)
+    with opened(url) as page:
         page.locator("#inverse-panel summary").click()
         page.locator("#photo-width").fill("10")
         page.locator("#drop").set_input_files([str(SHARED / "cmp_b0001.xml"), str(SHARED / "cmp_b0001.png")])
@@ -212,4 +205,3 @@ def test_import_options_cmp_tolerances_and_a_photo_crop(studio, tmp_path):
                                 "document.getElementById('photo').naturalHeight]")
         assert crop[0] == pytest.approx(0.2 * natural[0], abs=3) and crop[3] == pytest.approx(0.9 * natural[1], abs=3)
         page.screenshot(path=tmp_path / "crop.png")
-        browser.close()
