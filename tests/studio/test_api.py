@@ -221,13 +221,17 @@ def test_a_dropped_photo_becomes_a_layout(client):
     assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
 
 
-@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
-def test_a_dropped_cmp_annotation_becomes_a_layout(client):
+def _cmp_b0001_request() -> dict:
+    """The import request of CMP annotation cmp_b0001 with its label map, 10 m wide."""
     def encoded(name: str) -> str:
         return base64.b64encode((SHARED / name).read_bytes()).decode()
 
-    body = {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
+    return {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
             "width": 10}
+
+@pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
+def test_a_dropped_cmp_annotation_becomes_a_layout(client):
+    body = _cmp_b0001_request()
     imported = client.post("/api/import", json=body).json()
     assert imported["drawing"]["width"] == pytest.approx(10) and "no label map" not in imported["summary"]
     assert any(r["label"] == "window" for r in imported["drawing"]["leaves"])
@@ -352,11 +356,7 @@ def test_a_face_preview_of_a_kind_that_couples_faces_matches_the_build(tmp_path)
 
 @pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
 def test_cmp_import_takes_the_command_lines_tolerances(client):
-    def encoded(name: str) -> str:
-        return base64.b64encode((SHARED / name).read_bytes()).decode()
-
-    body = {"name": "cmp_b0001.xml", "data": encoded("cmp_b0001.xml"), "label_map": encoded("cmp_b0001.png"),
-            "width": 10}
+    body = _cmp_b0001_request()
     default = client.post("/api/import", json=body).json()
     loose = client.post("/api/import", json={**body, "options": {"snap": 0.05, "align": 0.1, "equal_sizes": 0.2,
                                                                   "element_caps": False}}).json()
