@@ -8,23 +8,17 @@ detailed building's ``LOD1`` variant holds the same ``Walls``).
 """
 from __future__ import annotations
 
-import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from pxr import Gf, Sdf, Vt
+from pxr import Sdf
 
 from citygen.footprints import Skipped
 from citygen.lod1 import MassOutcome, MassRecord
-from citygen.usd.author import T
 from citygen.usd.bounds import union
-from citygen.usd.writer import StageStats, StageWriter, _model_bound, _value, attribute_name, variation
-
-
-#: ``citygen:<key>`` attribute names, made once per key (every building has the same dozen).
-_attribute_name = functools.lru_cache(maxsize=4096)(attribute_name)
+from citygen.usd.writer import StageStats, StageWriter, _model_bound, component
 
 
 class MassWriter(StageWriter):
@@ -51,17 +45,7 @@ def _write_mass(writer: StageWriter, parent: Sdf.PrimSpec, record: MassRecord) -
     """One mass-only building prim at its pivot, its meshes in local coordinates; returns its local bound."""
     author, counts = writer.author, writer.counts
     pivot = np.asarray(record.pivot, dtype=float)
-    prim = author.prim(parent, record.name, "Xform")
-    prim.SetInfo("kind", "component")
-    prim.SetInfo("assetInfo", {"name": record.name})
-    author.api(prim, "GeomModelAPI")
-    author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*record.pivot))
-    author.attr(prim, "xformOpOrder", T.TokenArray, Vt.TokenArray(["xformOp:translate"]), uniform=True)
-    for key, value in sorted(record.attributes.items()):
-        vtype, v = _value(value)
-        author.attr(prim, _attribute_name(key), vtype, v, custom=True)
-    tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(record.name))
-    tint.SetInfo("interpolation", "constant")
+    prim = component(author, parent, record.name, pivot, record.attributes)
     roof = record.roof
     used = sorted({record.wall_material} | ({record.roof_material} if roof is not None else set()))
     writer.define(used)

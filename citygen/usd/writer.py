@@ -28,6 +28,7 @@ digest of its bytes names a tile so a run never overwrites a tile the current ro
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import re
@@ -100,6 +101,7 @@ def tile_name(tile: tuple[int, int]) -> str:
     return f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
 
 
+@functools.lru_cache(maxsize=4096)  # (every building has the same dozen keys)
 def attribute_name(key: str) -> str:
     """``citygen:<key>``, each ``:``-separated part of ``key`` a valid identifier (a kept tag ``ref:bag-id``
     becomes ``citygen:tag:ref:bag_id``)."""
@@ -471,6 +473,24 @@ def _mesh_batch(geo: BuildingGeometry, lod: str) -> list[MeshData]:
             *([walls] if walls is not None else [])]
 
 
+def component(author: Author, parent: Sdf.PrimSpec, name: str, pivot: np.ndarray,
+              attributes: Mapping[str, Any]) -> Sdf.PrimSpec:
+    """A building's prim ``name``: a component (``assetInfo``, GeomModelAPI) translated to ``pivot``, with its
+    custom ``citygen:*`` ``attributes`` and ``primvars:citygen:variation``; its geometry goes under it."""
+    prim = author.prim(parent, name, "Xform")
+    prim.SetInfo("kind", "component")
+    prim.SetInfo("assetInfo", {"name": name})
+    author.api(prim, "GeomModelAPI")
+    author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*map(float, pivot)))
+    author.attr(prim, "xformOpOrder", T.TokenArray, tokens("xformOp:translate"), uniform=True)
+    for key, value in sorted(attributes.items()):
+        vtype, v = _value(value)
+        author.attr(prim, attribute_name(key), vtype, v, custom=True)
+    tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(name))
+    tint.SetInfo("interpolation", "constant")
+    return prim
+
+
 def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord, batch: list[MeshData],
                     normals: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray | None:
     """One building prim at its pivot, its geometry in local coordinates; returns its local bound. Its level of
@@ -479,17 +499,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     ``normals`` their :func:`face_normals`."""
     author, counts, geo = writer.author, writer.counts, record.geometry
     pivot = np.asarray(record.pivot, dtype=float)
-    prim = author.prim(parent, record.name, "Xform")
-    prim.SetInfo("kind", "component")
-    prim.SetInfo("assetInfo", {"name": record.name})
-    author.api(prim, "GeomModelAPI")
-    author.attr(prim, "xformOp:translate", T.Double3, Gf.Vec3d(*map(float, pivot)))
-    author.attr(prim, "xformOpOrder", T.TokenArray, tokens("xformOp:translate"), uniform=True)
-    for key, value in sorted(record.attributes.items()):
-        vtype, v = _value(value)
-        author.attr(prim, attribute_name(key), vtype, v, custom=True)
-    tint = author.attr(prim, "primvars:citygen:variation", T.Float, variation(record.name))
-    tint.SetInfo("interpolation", "constant")
+    prim = component(author, parent, record.name, pivot, record.attributes)
     walls = geo.walls if writer.lod != "none" else None
     wall = next((mat for label, mat in geo.meshes if label == "wall"), "concrete")
     used = sorted({mat for _, mat in geo.meshes} | ({geo.roof_material} if geo.roof is not None else set())
