@@ -34,6 +34,13 @@ def _schemas(names: tuple[str, ...]) -> Sdf.TokenListOp:
     return Sdf.TokenListOp.Create(prependedItems=list(names))
 
 
+@functools.lru_cache(maxsize=4096)
+def _reference(target: Sdf.Path) -> Sdf.ReferenceListOp:
+    """The list op prepending an internal reference to ``target`` (made once: every building references its
+    prototypes and look set)."""
+    return Sdf.ReferenceListOp.Create(prependedItems=[Sdf.Reference(primPath=target)])
+
+
 @functools.lru_cache(maxsize=1024)
 def tokens(*values: str) -> Vt.TokenArray:
     """A token array value (made once per distinct one: labels and op orders repeat on every mesh and building)."""
@@ -114,9 +121,12 @@ class Author:
 
     @staticmethod
     def rel(prim: Sdf.PrimSpec, name: str, targets: Iterable[Sdf.Path]) -> None:
-        spec = Sdf.RelationshipSpec(prim, name)
-        for t in targets:
-            spec.targetPathList.explicitItems.append(t)
+        Sdf.RelationshipSpec(prim, name).targetPathList.explicitItems = list(targets)
+
+    @staticmethod
+    def reference(prim: Sdf.PrimSpec, target: Sdf.Path) -> None:
+        """An internal reference to ``target`` (prepended)."""
+        prim.SetInfo("references", _reference(target))
 
     @staticmethod
     def api(prim: Sdf.PrimSpec, *schemas: str) -> None:
@@ -185,7 +195,7 @@ class Author:
         scope = self.prim(parent, "Looks", "")
         names = list(names)
         if names:
-            scope.referenceList.prependedItems.append(Sdf.Reference(primPath=self._look_set(names)))
+            self.reference(scope, self._look_set(names))
         return scope.path
 
     def _look_set(self, names: Iterable[str]) -> Sdf.Path:
@@ -199,7 +209,7 @@ class Author:
             spec = self.prim(self.look_root, key, "")
             for name in looks:
                 look = self.prim(spec, name, "Material")
-                look.referenceList.prependedItems.append(Sdf.Reference(primPath=Sdf.Path("/Materials").AppendChild(name)))
+                self.reference(look, Sdf.Path("/Materials").AppendChild(name))
             path = self.look_sets[key] = spec.path
         return path
 

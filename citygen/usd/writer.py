@@ -47,7 +47,7 @@ from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
-from citygen.geometry.prototypes import Part, ProtoKey, build_prototype
+from citygen.geometry.prototypes import ProtoKey, build_prototype
 from citygen.usd.author import T, Author, MeshArrays, bound_value, tokens
 from citygen.usd.bounds import instances_bound, points_bound, union
 from citygen.usd.materials import Material
@@ -167,6 +167,22 @@ def _elements(library: Mapping[str, Material], uvs: bool) -> dict[ProtoKey, _Pro
     return _ELEMENTS.setdefault((tuple(sorted(library.items())), uvs), {})
 
 
+def _prepare_elements(keys: list[ProtoKey], into: dict[ProtoKey, _Prototype], library: Mapping[str, Material]) -> None:
+    """The :class:`_Prototype` of each element kind in ``keys`` into ``into``: their parts welded in one batch."""
+    if not keys:
+        return
+    parts = [[p for p in build_prototype(key, library) if len(p.quads)] for key in keys]
+    welded = iter(MeshData.many_from_quads([p.quads for ps in parts for p in ps]))
+    for key, ps in zip(keys, parts):
+        meshes = [(p.name, p.material, None, next(welded)) for p in ps]
+        into[key] = _Prototype(key.label, meshes, _meshes_bound([m for *_, m in meshes]))
+
+
+def _meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
+    """The bound of the points of ``meshes``."""
+    return points_bound(np.concatenate([m.points for m in meshes])) if meshes else None
+
+
 class StageWriter:
     """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
 
@@ -244,29 +260,28 @@ class StageWriter:
         self.counts["meshes"] += 1
         self.counts["polygons"] += 1
 
-    def prototype(self, key: ProtoKey | ModuleKey, modules: Mapping[ModuleKey, ModuleProto]) -> Sdf.Path:
-        """The ``/Prototypes`` path of an element kind or module in this layer; its geometry is prepared (and its
-        bound known) at once, its prim authored with the layer's other new prototypes in :meth:`_author_pending`."""
-        if key in self.prototypes:
-            return self.prototypes[key]
-        path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
-        if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
-            # (a module's key leaves sub-millimetre details open: a layer takes its first building's module, so a
-            # tile's bytes never depend on the tiles its process wrote before)
-            names: set[str] = set()
-            meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
-                      for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
-            proto = _Prototype(key.label, meshes, union(points_bound(m.points) for *_, m in meshes))
-        else:
-            proto = self.elements.get(key)
-            if proto is None:
-                parts: list[Part] = [p for p in build_prototype(key, self.library) if len(p.quads)]
-                meshes = [(p.name, p.material, None, MeshData.from_quads(p.quads)) for p in parts]
-                proto = self.elements[key] = _Prototype(key.label, meshes,
-                                                        union(points_bound(m.points) for *_, m in meshes))
-        self.pending.append((path, proto))
-        self.prototypes[key], self.bounds[key] = path, proto.bound
-        return path
+    def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
+        """Give each of ``keys`` its ``/Prototypes`` path in this layer (:attr:`prototypes`) and its bound; the
+        geometry of element prototypes new to the process is prepared in one batch, the prims authored with the
+        layer's other new prototypes in :meth:`_author_pending`."""
+        fresh = [k for k in keys if k not in self.prototypes]
+        if not fresh:
+            return
+        _prepare_elements([k for k in fresh if not isinstance(k, ModuleKey) and k not in self.elements],
+                          self.elements, self.library)
+        for key in fresh:
+            path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
+            if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
+                # (a module's key leaves sub-millimetre details open: a layer takes its first building's module, so
+                # a tile's bytes never depend on the tiles its process wrote before)
+                names: set[str] = set()
+                meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
+                          for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
+                proto = _Prototype(key.label, meshes, _meshes_bound([m for *_, m in meshes]))
+            else:
+                proto = self.elements[key]
+            self.pending.append((path, proto))
+            self.prototypes[key], self.bounds[key] = path, proto.bound
 
     def _instances_bound(self, inst: Instances) -> np.ndarray | None:
         return instances_bound([self.bounds[k] for k in inst.protos], inst.proto_indices, inst.positions,
@@ -540,8 +555,7 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
         counts["polygons"] += len(geo.roof.counts)
     inst = lift_module_elements(geo.instances, geo.modules)
     if len(inst.proto_indices):
-        for key in inst.protos:
-            writer.prototype(key, geo.modules)
+        writer.prototypes_of(inst.protos, geo.modules)
         local = Instances(inst.protos, inst.proto_indices, np.asarray(inst.positions, dtype=float) - pivot,
                           inst.orientations, inst.scales)
         bounds.append(writer._instances_bound(local))
@@ -558,19 +572,25 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
     """A PointInstancer ``Elements`` under ``parent`` whose prototypes reference the shared ``/Prototypes``."""
     pi = author.prim(parent, "Elements", "PointInstancer")
     holder = author.prim(pi, "Prototypes", "Scope")
-    targets = []
-    for k, key in enumerate(inst.protos):
-        ref = author.prim(holder, f"p{k}", "Xform")
-        ref.referenceList.prependedItems.append(Sdf.Reference(primPath=prototypes[key]))
+    names = _ref_names(len(inst.protos))
+    for name, key in zip(names, inst.protos):
+        ref = author.prim(holder, name, "Xform")
+        author.reference(ref, prototypes[key])
         ref.SetInfo("instanceable", True)  # one shared prototype per element kind: DCCs load it once
-        targets.append(ref.path.StripAllVariantSelections())  # (inside a LOD variant: a composed path)
-    author.rel(pi, "prototypes", targets)
+    base = holder.path.StripAllVariantSelections()  # (inside a LOD variant: the targets are composed paths)
+    author.rel(pi, "prototypes", [base.AppendChild(name) for name in names])
     author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
     author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(np.asarray(inst.positions, np.float32)))
     author.attr(pi, "orientations", T.QuathArray, Vt.QuathArray.FromNumpy(inst.orientations.astype(np.float16)))
     author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
     if bound is not None:
         author.attr(pi, "extent", T.Float3Array, bound_value(bound))
+
+
+@functools.lru_cache(maxsize=64)
+def _ref_names(n: int) -> tuple[str, ...]:
+    """The prim names of a PointInstancer's ``n`` prototype references: ``p0``, ``p1``, ..."""
+    return tuple(f"p{k}" for k in range(n))
 
 
 def _finish(layer: Sdf.Layer, path: Path) -> int:
