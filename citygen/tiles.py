@@ -31,6 +31,7 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
+from citygen.usd.library import library_name
 from citygen.usd.writer import StageStats, StageWriter, tile_name
 
 
@@ -109,7 +110,8 @@ def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = N
         if writer is None:
             writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
                                  layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
-                                 lod=job.scene.output.lod, materials=job.scene.materials)
+                                 lod=job.scene.output.lod, materials=job.scene.materials,
+                                 element_library=library_name(job.suffix))
         writer.add(outcome.record)
     if writer is not None:
         stats = writer.close()

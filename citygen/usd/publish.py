@@ -20,6 +20,10 @@ import shutil
 from collections.abc import Collection
 from pathlib import Path
 
+from pxr import Sdf, Tf
+
+from citygen.errors import ExportError
+
 _TEMPORARY = re.compile(r"^\..+\.citygen-(\d+)-")
 #: Hex digits of the content digest in a published tile's name.
 DIGEST_DIGITS = 12
@@ -83,3 +87,26 @@ def remove_unlisted_tiles(tiles_dir: Path, listed: Collection[str], since: float
             with contextlib.suppress(OSError):
                 if entry.stat().st_mtime < since:
                     entry.unlink()
+
+
+def export_layer(layer: Sdf.Layer, target: Path) -> None:
+    """``layer.Export`` whose failures (False, a ``Tf.ErrorException`` such as a full disk, an OSError) are one
+    :class:`ExportError` naming the file and USD's first reason."""
+    try:
+        if layer.Export(str(target)):
+            return
+        reason = ""
+    except Tf.ErrorException as exc:
+        reason = _usd_reason(exc)
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+    raise ExportError(f"USD export failed{': ' + reason if reason else ''}", where=str(target),
+                      hint="check free disk space and permissions")
+
+
+def _usd_reason(exc: Tf.ErrorException) -> str:
+    """The commentary of the first error inside a ``Tf.ErrorException`` (its text lists every error, with C++
+    function names and source lines)."""
+    text = "\n".join(str(a) for a in exc.args) or str(exc)
+    match = re.search(r" : '([^\n]*)'", text)
+    return match[1] if match else text.strip().splitlines()[0] if text.strip() else ""

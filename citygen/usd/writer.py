@@ -31,7 +31,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
-import re
 import shutil
 import tempfile
 import time
@@ -47,12 +46,14 @@ from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
-from citygen.geometry.prototypes import ProtoKey, build_prototype
-from citygen.usd.author import T, Author, MeshArrays, bound_value, tokens
+from citygen.geometry.prototypes import ProtoKey
+from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bound, points_bound, union
+from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
+from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
-from citygen.usd.publish import publish_tile, remove_stale_temporaries, remove_unlisted_tiles, temp_prefix
+from citygen.usd.publish import export_layer, publish_tile, remove_stale_temporaries, remove_unlisted_tiles, temp_prefix
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
 #: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
@@ -142,47 +143,6 @@ def _model_bound(prim: Sdf.PrimSpec, bound: np.ndarray | None) -> None:
         Author.attr(prim, "extentsHint", T.Float3Array, bound_value(bound))
 
 
-@dataclass
-class _Prototype:
-    """A prototype's meshes, bound and, once a layer authors it, its meshes' :class:`MeshArrays` (prepared in one
-    normals batch with the layer's other new prototypes). An element prototype's are a function of its key, the
-    material library and ``uvs`` alone, kept for every writer of the process with those (:func:`_elements`): tile
-    writers would otherwise prepare the same elements again in every tile."""
-
-    label: str
-    meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
-    bound: np.ndarray | None
-    arrays: list[MeshArrays] | None = None
-
-
-#: Element prototypes kept per material library and ``uvs`` (at most this many in all; then the memory starts over).
-ELEMENTS_KEPT = 8192
-_ELEMENTS: dict[tuple, dict[ProtoKey, _Prototype]] = {}
-
-
-def _elements(library: Mapping[str, Material], uvs: bool) -> dict[ProtoKey, _Prototype]:
-    """This process's prepared element prototypes for ``library`` and ``uvs``."""
-    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
-        _ELEMENTS.clear()
-    return _ELEMENTS.setdefault((tuple(sorted(library.items())), uvs), {})
-
-
-def _prepare_elements(keys: list[ProtoKey], into: dict[ProtoKey, _Prototype], library: Mapping[str, Material]) -> None:
-    """The :class:`_Prototype` of each element kind in ``keys`` into ``into``: their parts welded in one batch."""
-    if not keys:
-        return
-    parts = [[p for p in build_prototype(key, library) if len(p.quads)] for key in keys]
-    welded = iter(MeshData.many_from_quads([p.quads for ps in parts for p in ps]))
-    for key, ps in zip(keys, parts):
-        meshes = [(p.name, p.material, None, next(welded)) for p in ps]
-        into[key] = _Prototype(key.label, meshes, _meshes_bound([m for *_, m in meshes]))
-
-
-def _meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
-    """The bound of the points of ``meshes``."""
-    return points_bound(np.concatenate([m.points for m in meshes])) if meshes else None
-
-
 class StageWriter:
     """Streams buildings into a stage: :meth:`add` them in tile order, then :meth:`close` writes the files.
 
@@ -196,7 +156,7 @@ class StageWriter:
 
     def __init__(self, path: str | Path, *, up_axis: str = "Z", layer_data: Mapping[str, Any] | None = None,
                  tile_layers: bool = False, uvs: bool = False, lod: str = "variants",
-                 materials: Mapping[str, Material] | None = None) -> None:
+                 materials: Mapping[str, Material] | None = None, element_library: str | None = None) -> None:
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if suffix not in SUFFIXES:
@@ -213,23 +173,20 @@ class StageWriter:
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
         self.author = Author(self.layer, uvs, self.library, self.path.parent)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
-        self.defined: set[str] = set()  # materials under /Materials
+        self.definitions = Definitions(self.author, element_library)
         self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
         self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
         self.queued: list[BuildingRecord] = []  # the open tile's buildings, authored when it is finished
-        self.pending: list[tuple[Sdf.Path, _Prototype]] = []  # prototypes to author, in order of first use
         self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
         self.tile_bound: np.ndarray | None = None
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
         self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
-        self.elements = _elements(self.library, uvs)
+        self.elements = elements(self.library, uvs)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
             self.world = _world(self.author, self.layer, up_axis)
-            self.materials_root: Sdf.PrimSpec | None = None
-            self.protos_root: Sdf.PrimSpec | None = None
 
     def __enter__(self) -> StageWriter:
         return self
@@ -241,12 +198,7 @@ class StageWriter:
 
     def define(self, names: Iterable[str]) -> None:
         """``/Materials/<name>`` of each name not yet defined in this layer."""
-        for name in names:
-            if name not in self.defined:
-                if self.materials_root is None:
-                    self.materials_root = self.author.prim(self.layer, "Materials", "Scope", Sdf.SpecifierClass)
-                self.author.material(self.materials_root, name)
-                self.defined.add(name)
+        self.definitions.define(names)
 
     def ground(self, x0: float, y0: float, x1: float, y1: float, z: float) -> None:
         """``/World/Ground``: one flat quad (material and semantic label ``ground``) under the city at height ``z``."""
@@ -263,57 +215,28 @@ class StageWriter:
     def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
         """Give each of ``keys`` its ``/Prototypes`` path in this layer (:attr:`prototypes`) and its bound; the
         geometry of element prototypes new to the process is prepared in one batch, the prims authored with the
-        layer's other new prototypes in :meth:`_author_pending`."""
+        layer's other new prototypes when the tile is finished (:class:`~citygen.usd.definitions.Definitions`)."""
         fresh = [k for k in keys if k not in self.prototypes]
         if not fresh:
             return
-        _prepare_elements([k for k in fresh if not isinstance(k, ModuleKey) and k not in self.elements],
-                          self.elements, self.library)
+        prepare_elements([k for k in fresh if not isinstance(k, ModuleKey)], self.elements, self.library)
         for key in fresh:
-            path = Sdf.Path("/Prototypes").AppendChild(Tf.MakeValidIdentifier(key.name))
+            path = PROTOTYPES.AppendChild(Tf.MakeValidIdentifier(key.name))
             if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
                 # (a module's key leaves sub-millimetre details open: a layer takes its first building's module, so
                 # a tile's bytes never depend on the tiles its process wrote before)
                 names: set[str] = set()
                 meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                           for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
-                proto = _Prototype(key.label, meshes, _meshes_bound([m for *_, m in meshes]))
+                proto = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
             else:
                 proto = self.elements[key]
-            self.pending.append((path, proto))
+            self.definitions.pending.append((path, proto))
             self.prototypes[key], self.bounds[key] = path, proto.bound
 
     def _instances_bound(self, inst: Instances) -> np.ndarray | None:
         return instances_bound([self.bounds[k] for k in inst.protos], inst.proto_indices, inst.positions,
                                inst.orientations, inst.scales)
-
-    def _author_pending(self) -> None:
-        """Author the prototypes prepared since the last call (the arrays of those new to the process prepared
-        first, their face normals in one batch)."""
-        if not self.pending:
-            return
-        author = self.author
-        if self.protos_root is None:
-            self.protos_root = author.prim(self.layer, "Prototypes", "", Sdf.SpecifierClass)
-        fresh = [p for _, p in self.pending if p.arrays is None]
-        batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
-        for p in fresh:
-            normals = [next(batch) for _ in p.meshes]
-            kept = [k for k, (*_, m) in enumerate(p.meshes) if len(m.counts)]
-            p.arrays = author.arrays([(p.meshes[k][3], p.meshes[k][1]) for k in kept], [normals[k] for k in kept])
-        with Sdf.ChangeBlock():
-            for path, p in self.pending:
-                proto = author.prim(self.protos_root, path.name, "Xform")
-                author.api(proto, "SemanticsLabelsAPI:class")
-                author.attr(proto, "semantics:labels:class", T.TokenArray, tokens(p.label), uniform=True)
-                used = sorted({mat for _, mat, _, _ in p.meshes})
-                self.define(used)
-                looks = author.looks(proto, used) if used else None
-                arrays = iter(p.arrays)
-                for name, mat, label, mesh in p.meshes:
-                    if len(mesh.counts):
-                        author.mesh(proto, name, next(arrays), looks, mat, label)
-        self.pending = []
 
     def add(self, record: BuildingRecord) -> None:
         """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
@@ -348,7 +271,7 @@ class StageWriter:
         if self.tiles_dir is not None:
             sub = type(self)(self.staging_folder() / f"{name}{self.tile_suffix}", up_axis=self.up_axis,
                               layer_data={**self.layer_data, "tile": name}, uvs=self.uvs, lod=self.lod,
-                              materials=self.library)
+                              materials=self.library, element_library=library_name(self.tile_suffix))
             self.tile = (tile, sub)
             return sub
         prim = self.author.prim(self.world, name, "Xform")
@@ -367,7 +290,7 @@ class StageWriter:
             self.add_tile_layer(stats.path.name, stats, target.prototypes)
             return
         self._write_queued(target)
-        self._author_pending()
+        self.definitions.author_pending()
         with Sdf.ChangeBlock():
             _model_bound(target, self.tile_bound)
         self.world_bounds.append(self.tile_bound)
@@ -413,49 +336,71 @@ class StageWriter:
         self.tile_prototypes.update(prototypes)
 
     def close(self) -> StageStats:
-        """Write the last tile, publish the tiles under their content names, switch the root to them (one
-        rename), then remove the tiles no root lists any more (:mod:`citygen.usd.publish`); return the figures."""
+        """Write the last tile, publish the tiles under their content names and the element library (both runs'
+        elements while the old root may use it), switch the root to them (one rename), then settle the library and
+        remove the tiles no root lists any more (:mod:`citygen.usd.publish`, :mod:`citygen.usd.library`); return
+        the figures."""
         self._flush_tile()
-        self._author_pending()
+        self.definitions.author_pending()
         bound = union(self.world_bounds)
         with Sdf.ChangeBlock():
             _model_bound(self.world, bound)
+        packed = self.path.suffix.lower() == ".usdz"
         if self.tiles_dir is not None:
-            names = self._publish_tiles()
+            library = self._stage_library()
+            names, own = self._publish_tiles(library, packed)
             with Sdf.ChangeBlock():
                 for (prim, _), name in zip(self.sublayers, names):
                     prim.payloadList.prependedItems.append(
                         Sdf.Payload(f"./{self.tiles_dir.name}/{name}", Sdf.Path("/World").AppendChild(prim.name)))
-            if self.path.suffix.lower() == ".usdz":
-                for name in names:
+            files = [*names, *([library] if library else [])]
+            if packed:
+                for name in files:
                     os.utime(self.tiles_dir / name, (PACKED_MTIME, PACKED_MTIME))
         size = _finish(self.layer, self.path)
         if self.tiles_dir is not None:
-            if self.path.suffix.lower() == ".usdz":  # the package holds the tile layers
+            if packed:  # the package holds the tile layers and the library
                 shutil.rmtree(self.tiles_dir)
             else:
-                size += sum((self.tiles_dir / name).stat().st_size for name in names)
-                remove_unlisted_tiles(self.tiles_dir, names, self.started)
+                if own is not None and library:
+                    settle_library(own, self.tiles_dir / library)
+                size += sum((self.tiles_dir / name).stat().st_size for name in files)
+                remove_unlisted_tiles(self.tiles_dir, files, self.started)
         extent = None if bound is None else tuple(float(v) for v in bound.reshape(-1))
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
                           prototypes=len(self.prototypes) + len(self.tile_prototypes), polygons=self.counts["polygons"],
                           bytes=size, extent=extent)
 
-    def _publish_tiles(self) -> list[str]:
+    def _stage_library(self) -> str | None:
+        """Write the element library of the tiles' element prototypes into the staging folder; its name, or None
+        when the tiles use no elements."""
+        keys = [k for k in self.tile_prototypes if isinstance(k, ProtoKey)]
+        if not keys:
+            return None
+        name = library_name(self.tile_suffix)
+        self.author.prims += write_library(self.staging_folder() / name, keys, self.library, self.uvs, self.up_axis)
+        return name
+
+    def _publish_tiles(self, library: str | None, packed: bool) -> tuple[list[str], Path | None]:
         """Move the staged tiles into the tile folder under their content names (none the current root lists is
-        touched); return those names, in tile order."""
+        touched) and the element ``library`` (:func:`~citygen.usd.library.publish_library`; a package's alone);
+        return the tiles' names, in tile order, and the run's own library if it waits to be settled."""
         assert self.tiles_dir is not None
+        staging, own = self.staging_folder(), None
         try:
             self.tiles_dir.mkdir(parents=True, exist_ok=True)
-            names = [publish_tile(self.staging / name, self.tiles_dir) for _, name in self.sublayers]
+            names = [publish_tile(staging / name, self.tiles_dir) for _, name in self.sublayers]
+            if library and packed:
+                os.replace(staging / library, self.tiles_dir / library)
+            elif library:
+                own = publish_library(staging / library, self.tiles_dir)
         except OSError as exc:
             raise ExportError(f"cannot publish the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
                               hint="check free disk space and permissions") from None
-        if self.staging is not None:
-            shutil.rmtree(self.staging, ignore_errors=True)
-            self.staging = None
-        return names
+        shutil.rmtree(staging, ignore_errors=True)
+        self.staging = None
+        return names, own
 
 
 def write_stage(path: str | Path, buildings: Iterable[BuildingRecord], *, up_axis: str = "Z",
@@ -610,7 +555,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
         if suffix == ".usdz":
             from pxr import UsdUtils  # (with UsdShade and UsdGeom: only a .usdz needs them)
             inner = tmp.with_suffix(".usdc")
-            _export(layer, inner)
+            export_layer(layer, inner)
             os.utime(inner, (PACKED_MTIME, PACKED_MTIME))
             try:
                 if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp), f"{path.stem}.usdc"):
@@ -618,7 +563,7 @@ def _finish(layer: Sdf.Layer, path: Path) -> int:
             finally:
                 inner.unlink(missing_ok=True)
         else:
-            _export(layer, tmp)
+            export_layer(layer, tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a stage is an ordinary file
         os.replace(tmp, path)
     except OSError as exc:
@@ -635,29 +580,6 @@ def _umask() -> int:
     umask = os.umask(0)
     os.umask(umask)
     return umask
-
-
-def _export(layer: Sdf.Layer, target: Path) -> None:
-    """``layer.Export`` whose failures (False, a ``Tf.ErrorException`` such as a full disk, an OSError) are one
-    :class:`ExportError` naming the file and USD's first reason."""
-    try:
-        if layer.Export(str(target)):
-            return
-        reason = ""
-    except Tf.ErrorException as exc:
-        reason = _usd_reason(exc)
-    except OSError as exc:
-        reason = exc.strerror or str(exc)
-    raise ExportError(f"USD export failed{': ' + reason if reason else ''}", where=str(target),
-                      hint="check free disk space and permissions")
-
-
-def _usd_reason(exc: Tf.ErrorException) -> str:
-    """The commentary of the first error inside a ``Tf.ErrorException`` (its text lists every error, with C++
-    function names and source lines)."""
-    text = "\n".join(str(a) for a in exc.args) or str(exc)
-    match = re.search(r" : '([^\n]*)'", text)
-    return match[1] if match else text.strip().splitlines()[0] if text.strip() else ""
 
 
 def open_stage(path: str | Path) -> Usd.Stage:

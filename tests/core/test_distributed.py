@@ -82,10 +82,11 @@ def test_dask_stage_composes_like_the_local_tile_layers(small_scene, test_regist
     dask = generate_city(_scene(small_scene, "dask/small.usda"), registry=test_registry, executor="dask",
                          scheduler=cluster.scheduler_address)
     root = dask.stats.path
-    tiles = sorted(p.name for p in (root.parent / "small_tiles").iterdir())
+    tiles = sorted(p.name for p in (root.parent / "small_tiles").glob("Tile_*"))
     assert [re.sub(r"\.[0-9a-f]{12}\.", ".", t) for t in tiles] == ["Tile_0_0.usda", "Tile_0_2.usda", "Tile_1_0.usda"]
     assert _payloads(root) == [f"./small_tiles/{t}" for t in tiles]
-    for t in tiles:  # one tile-layer contract: the same bytes (so the same content name) whichever executor wrote it
+    for t in [*tiles, "elements.usda"]:  # one tile-layer contract: the same bytes (so the same content name)
+        # whichever executor wrote it
         assert (root.parent / "small_tiles" / t).read_bytes() == \
             (local.stats.path.parent / "small_tiles" / t).read_bytes(), t
     composed = _composed(root)
@@ -103,7 +104,7 @@ def test_dask_stage_composes_like_the_local_tile_layers(small_scene, test_regist
 def test_each_dask_tile_layer_opens_alone(small_scene, test_registry, cluster):
     report = generate_city(_scene(small_scene, "dask/small.usda"), registry=test_registry, executor="dask",
                            scheduler=cluster.scheduler_address)
-    for tile in sorted((report.stats.path.parent / "small_tiles").iterdir()):
+    for tile in sorted((report.stats.path.parent / "small_tiles").glob("Tile_*")):
         assert _errors(tile) == [], tile.name
         stage = Usd.Stage.Open(str(tile))
         assert stage.GetDefaultPrim().GetPath() == Sdf.Path("/World")
@@ -125,7 +126,7 @@ def test_dask_output_is_byte_identical_whatever_the_workers_and_completion_order
 
     generate_city(scene, registry=test_registry, executor="dask", scheduler=one_worker.scheduler_address)
     first = files()
-    assert len(first) == 4
+    assert len(first) == 5  # the root, 3 tiles and their element library
     generate_city(scene, registry=test_registry, executor="dask", scheduler=cluster.scheduler_address)
     assert files() == first
 
@@ -216,7 +217,7 @@ def test_cli_generates_on_a_local_dask_cluster(tmp_path, capsys):
                                         f'[[assign]]\nruleset = "{ruleset}"\n[output]\npath = "mini.usdc"\n')
     assert main(["generate", str(tmp_path / "mini.toml"), "--executor", "dask", "--jobs", "1", "-q"]) == 0
     assert "written 2 buildings" in capsys.readouterr().out
-    assert len(list((tmp_path / "mini_tiles").iterdir())) == 2
+    assert len(list((tmp_path / "mini_tiles").glob("Tile_*"))) == 2
     assert main(["validate", str(tmp_path / "mini.usdc")]) == 0
     assert main(["generate", str(tmp_path / "mini.toml"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
     assert "--scheduler needs --executor dask" in capsys.readouterr().err

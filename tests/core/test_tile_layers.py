@@ -1,6 +1,7 @@
 """Tile layers: each tile streamed into a stage of its own, payloaded by the root (`[output] tile_layers = true`)."""
 from __future__ import annotations
 
+import json
 import re
 import time
 from pathlib import Path
@@ -14,6 +15,7 @@ from citygen.geometry.building import BuildingGeometry, Instances
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
+from citygen.usd import writer as writer_module
 from citygen.usd.writer import BuildingRecord, StageWriter
 from tests.usd_util import assert_resolves, buildings
 
@@ -35,8 +37,9 @@ def test_tile_layers_compose_to_the_single_file_stage(small_scene, test_registry
     tiled_scene = _scene(small_scene, '[output]\npath = "tiled/small.usda"\ntile_size = 20\ntile_layers = true\n')
     tiled = generate_city(load_scene(tiled_scene), registry=test_registry)
     root = tiled.stats.path
-    tiles = sorted(p.name for p in (root.parent / "small_tiles").iterdir())
+    tiles = sorted(p.name for p in (root.parent / "small_tiles").glob("Tile_*"))
     assert [re.sub(r"\.[0-9a-f]{12}\.", ".", t) for t in tiles] == ["Tile_0_0.usda", "Tile_0_2.usda", "Tile_1_0.usda"]
+    assert (root.parent / "small_tiles" / "elements.usda").is_file()
     layer = Sdf.Layer.FindOrOpen(str(root))
     world = layer.GetPrimAtPath("/World")
     assert [(p.name, [(str(a.assetPath), str(a.primPath)) for a in p.payloadList.prependedItems])
@@ -56,13 +59,73 @@ def test_every_tile_layer_opens_alone_whichever_executor_wrote_it(small_scene, t
     """One contract (was: local tile layers had no defaultPrim and referenced prototypes of other tiles)."""
     scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
     generate_city(scene, registry=test_registry, executor=executor, jobs=1)
-    tiles = sorted((Path(scene.output.path).parent / "small_tiles").iterdir())
+    tiles = sorted((Path(scene.output.path).parent / "small_tiles").glob("Tile_*"))
     assert len(tiles) == 3
     for tile in tiles:
         stage = Usd.Stage.Open(str(tile))
         assert stage.GetDefaultPrim().GetPath() == "/World" and stage.GetMetadata("metersPerUnit") == 1.0
         assert [f for f in validate_stage(stage) if f.severity == "error"] == [], tile.name
         assert_resolves(stage)
+
+
+def _library(path: Path) -> set[str]:
+    """The element prototypes an element library holds (read afresh, not from USD's layer registry)."""
+    layer = Sdf.Layer.OpenAsAnonymous(str(path))  # (held: its specs die with it)
+    return {p.name for p in layer.GetPrimAtPath("/Prototypes").nameChildren}
+
+
+def _elements_used(tiles: Path) -> set[str]:
+    """The element prototypes the tile layers in ``tiles`` reference from the library."""
+    used = set()
+    for tile in tiles.glob("Tile_*"):
+        layer = Sdf.Layer.OpenAsAnonymous(str(tile))
+        for proto in layer.GetPrimAtPath("/Prototypes").nameChildren:
+            refs = proto.referenceList.prependedItems
+            assert not refs or (refs[0].assetPath == "./elements.usda" and not proto.nameChildren)
+            used |= {str(r.primPath.name) for r in refs}
+    return used
+
+
+def test_tiles_reference_each_element_from_one_library(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    tiles = Path(scene.output.path).parent / "small_tiles"
+    assert _elements_used(tiles) == _library(tiles / "elements.usda") != set()
+    library = tiles / "elements.usda"
+    assert [f for f in validate_stage(library) if f.severity == "error"] == []
+    stage = Usd.Stage.CreateInMemory()  # each element referenced alone brings its looks and materials along
+    for name in sorted(_library(library)):
+        stage.DefinePrim(f"/Check/{name}").GetReferences().AddReference(str(library), f"/Prototypes/{name}")
+    assert_resolves(stage)
+
+
+def test_the_element_library_serves_the_old_root_until_the_new_root_replaces_it(small_scene, test_registry,
+                                                                                monkeypatch):
+    """A rerun whose tiles use other elements: while the root is replaced, the library holds both runs' elements
+    (the old root's tiles still compose whole); then only the new run's, byte for byte a fresh run's."""
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    tiles = Path(scene.output.path).parent / "small_tiles"
+    old = _library(tiles / "elements.usda")
+    (small_scene.parent / "bays.testgrid").write_text(json.dumps({"bay": 3.0, "window": 1.1}))
+    during = []
+    finish = writer_module._finish
+
+    def watched(layer, path):
+        if path == Path(scene.output.path):  # (not a tile's)
+            during.append(_library(tiles / "elements.usda"))
+        return finish(layer, path)
+
+    monkeypatch.setattr(writer_module, "_finish", watched)
+    generate_city(load_scene(small_scene), registry=test_registry)
+    new = _library(tiles / "elements.usda")
+    assert new != old and during == [old | new]
+    assert _elements_used(tiles) == new
+    fresh = load_scene(_scene(small_scene, '[output]\npath = "fresh/small.usda"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(fresh, registry=test_registry)
+    assert (tiles / "elements.usda").read_bytes() == (Path(fresh.output.path).parent / "small_tiles" /
+                                                     "elements.usda").read_bytes()
+    assert not [p for p in tiles.iterdir() if p.name.startswith(".")]
 
 
 def test_load_none_opens_the_city_with_bounds_only(small_scene, test_registry):

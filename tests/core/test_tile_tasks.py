@@ -23,7 +23,7 @@ def _scene(small_scene: Path, output: str):
 
 def _tiles(scene) -> list[str]:
     folder = Path(scene.output.path).parent / "small_tiles"
-    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+    return sorted(p.name for p in folder.glob("Tile_*")) if folder.exists() else []
 
 
 def test_worker_processes_build_and_write_whole_tiles(small_scene, test_registry):

@@ -1,0 +1,125 @@
+"""What a layer defines once for all its buildings: ``/Materials`` (each material once) and ``/Prototypes`` (each
+element kind or module once, authored in batches), and the element prototypes a process prepares for every layer
+it writes.
+
+A layer with an element library (a tile layer, see :mod:`citygen.usd.library`) does not hold its element
+prototypes: each ``/Prototypes/<element>`` is one prim referencing the library's, so the elements of a city are
+authored once, not once per tile.
+"""
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from pxr import Sdf
+
+from citygen.geometry.building import MeshData
+from citygen.geometry.prototypes import ProtoKey, build_prototype
+from citygen.usd.author import Author, MeshArrays, T, tokens
+from citygen.usd.bounds import points_bound
+from citygen.usd.materials import Material
+from citygen.usd.normals import face_normals
+
+PROTOTYPES = Sdf.Path("/Prototypes")
+
+
+@dataclass
+class Prototype:
+    """A prototype's meshes, bound and, once a layer authors it, its meshes' :class:`MeshArrays` (prepared in one
+    normals batch with the layer's other new prototypes). An element prototype's are a function of its key, the
+    material library and ``uvs`` alone, kept for every writer of the process with those (:func:`elements`): tile
+    writers would otherwise prepare the same elements again in every tile."""
+
+    label: str
+    meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
+    bound: np.ndarray | None
+    element: bool = False
+    arrays: list[MeshArrays] | None = None
+
+
+#: Element prototypes kept per material library and ``uvs`` (at most this many in all; then the memory starts over).
+ELEMENTS_KEPT = 8192
+_ELEMENTS: dict[tuple, dict[ProtoKey, Prototype]] = {}
+
+
+def elements(library: Mapping[str, Material], uvs: bool) -> dict[ProtoKey, Prototype]:
+    """This process's prepared element prototypes for ``library`` and ``uvs``."""
+    if sum(map(len, _ELEMENTS.values())) > ELEMENTS_KEPT:
+        _ELEMENTS.clear()
+    return _ELEMENTS.setdefault((tuple(sorted(library.items())), uvs), {})
+
+
+def prepare_elements(keys: Iterable[ProtoKey], into: dict[ProtoKey, Prototype],
+                     library: Mapping[str, Material]) -> None:
+    """The :class:`Prototype` of each element kind in ``keys`` not yet ``into`` it: their parts welded in one
+    batch."""
+    keys = [k for k in dict.fromkeys(keys) if k not in into]
+    if not keys:
+        return
+    parts = [[p for p in build_prototype(key, library) if len(p.quads)] for key in keys]
+    welded = iter(MeshData.many_from_quads([p.quads for ps in parts for p in ps]))
+    for key, ps in zip(keys, parts):
+        meshes = [(p.name, p.material, None, next(welded)) for p in ps]
+        into[key] = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]), element=True)
+
+
+def meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
+    """The bound of the points of ``meshes``."""
+    return points_bound(np.concatenate([m.points for m in meshes])) if meshes else None
+
+
+class Definitions:
+    """A layer's ``/Materials`` and ``/Prototypes``. ``element_library``: the file name (beside the layer) of the
+    element library its element prototypes reference instead of holding them."""
+
+    def __init__(self, author: Author, element_library: str | None = None) -> None:
+        self.author = author
+        self.element_library = element_library
+        self.defined: set[str] = set()
+        self.materials_root: Sdf.PrimSpec | None = None
+        self.protos_root: Sdf.PrimSpec | None = None
+        self.pending: list[tuple[Sdf.Path, Prototype]] = []  # prototypes to author, in order of first use
+
+    def define(self, names: Iterable[str]) -> None:
+        """``/Materials/<name>`` of each name not yet defined in this layer."""
+        for name in names:
+            if name not in self.defined:
+                if self.materials_root is None:
+                    self.materials_root = self.author.prim(self.author.layer, "Materials", "Scope",
+                                                           Sdf.SpecifierClass)
+                self.author.material(self.materials_root, name)
+                self.defined.add(name)
+
+    def author_pending(self) -> None:
+        """Author the prototypes added to :attr:`pending` since the last call (the arrays of those new to the
+        process prepared first, their face normals in one batch)."""
+        if not self.pending:
+            return
+        author = self.author
+        if self.protos_root is None:
+            self.protos_root = author.prim(author.layer, PROTOTYPES.name, "", Sdf.SpecifierClass)
+        held = [(path, p) for path, p in self.pending if not (p.element and self.element_library)]
+        fresh = [p for _, p in held if p.arrays is None]
+        batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
+        for p in fresh:
+            normals = [next(batch) for _ in p.meshes]
+            kept = [k for k, (*_, m) in enumerate(p.meshes) if len(m.counts)]
+            p.arrays = author.arrays([(p.meshes[k][3], p.meshes[k][1]) for k in kept], [normals[k] for k in kept])
+        with Sdf.ChangeBlock():
+            for path, p in self.pending:
+                proto = author.prim(self.protos_root, path.name, "Xform")
+                if p.element and self.element_library:
+                    proto.SetInfo("references", Sdf.ReferenceListOp.Create(
+                        prependedItems=[Sdf.Reference(f"./{self.element_library}", path)]))
+                    continue
+                author.api(proto, "SemanticsLabelsAPI:class")
+                author.attr(proto, "semantics:labels:class", T.TokenArray, tokens(p.label), uniform=True)
+                used = sorted({mat for _, mat, _, _ in p.meshes})
+                self.define(used)
+                looks = author.looks(proto, used) if used else None
+                arrays = iter(p.arrays or ())
+                for name, mat, label, mesh in p.meshes:
+                    if len(mesh.counts):
+                        author.mesh(proto, name, next(arrays), looks, mat, label)
+        self.pending = []
