@@ -20,11 +20,12 @@ A building is an asset: everything it binds and instances is under it or reached
 so a reference to it from another stage brings its looks and prototypes along.
 
 With tile layers, each tile is a stage of its own (``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc``: ``/World`` with the
-tile, ``/Materials`` and the ``/Prototypes`` it uses), written as soon as the tile is complete (memory stays bounded
-by one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root, Usd.Stage.LoadNone)`` opens the city
-with its bounds only. The dask executor writes its tiles with the same code, so every tile layer opens alone. The
-digest of its bytes names a tile so a run never overwrites a tile the current root payloads
-(:mod:`citygen.usd.publish`).
+tile, ``/Materials`` and the ``/Prototypes`` it uses, its element prototypes references into the city's element
+library ``<stem>_tiles/elements.usdc``, :mod:`citygen.usd.library`), written as soon as the tile is complete
+(memory stays bounded by one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root,
+Usd.Stage.LoadNone)`` opens the city with its bounds only. The dask executor writes its tiles with the same code, so
+every tile layer opens alone. The digest of its bytes names a tile so a run never overwrites a tile the current root
+payloads (:mod:`citygen.usd.publish`).
 """
 from __future__ import annotations
 
