@@ -39,7 +39,7 @@ def test_blender_imports_the_delft_city(tmp_path, tile_layers, uvs, lod):
     scene = replace(scene, output=replace(scene.output, tile_layers=tile_layers, tile_size=100.0, uvs=uvs,
                                                          lod=lod))
     report = generate_city(scene, out=out)
-    assert len(list(tmp_path.glob("delft_tiles/*.usdc"))) == (5 if tile_layers else 0)
+    assert len(list(tmp_path.glob("delft_tiles/Tile_*.usdc"))) == (5 if tile_layers else 0)
     # bpy bundles its own USD; run it in a separate interpreter so it never meets usd-core in one process
     result = subprocess.run([sys.executable, "-c", IMPORT, str(out)], capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr[-2000:]
