@@ -99,6 +99,18 @@ def test_tiles_reference_each_element_from_one_library(small_scene, test_registr
     assert_resolves(stage)
 
 
+def test_a_building_referenced_from_its_tile_layer_brings_its_elements_along(small_scene, test_registry):
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    tile = next((Path(scene.output.path).parent / "small_tiles").glob("Tile_1_0.*.usdc"))
+    stage = Usd.Stage.CreateInMemory()
+    house = stage.DefinePrim("/Shot/House", "Xform")
+    house.GetReferences().AddReference(str(tile), "/World/Tile_1_0/way_2")
+    assert_resolves(stage, "/Shot/House")
+    instancers = [p for p in Usd.PrimRange(house) if p.IsA(UsdGeom.PointInstancer)]
+    assert instancers and stage.GetCompositionErrors() == []
+
+
 def test_the_element_library_serves_the_old_root_until_the_new_root_replaces_it(small_scene, test_registry,
                                                                                 monkeypatch):
     """A rerun whose tiles use other elements: while the root is replaced, the library holds both runs' elements
