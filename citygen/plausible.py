@@ -127,8 +127,7 @@ def check_plausible(layout: FacadeLayout, request: FacadeRequest | None = None,
 
 
 def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: PlausibilityRules) -> list[Finding]:
-    leaves = layout.leaves
-    if not leaves:
+    if not len(layout.leaf_rects):
         return []
     x, y, w, h = layout.leaf_rects.T
     lines = np.asarray(request.floor_lines if request is not None else (0.0,), dtype=float)
@@ -179,7 +178,6 @@ def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np
                        lines: np.ndarray, rules: PlausibilityRules) -> list[Finding]:
     """The findings of the rules on single terminals (zero-size, small-opening, short- and floating-door, sliver),
     at most three listed per rule and label."""
-    leaves = layout.leaves
     labelled = layout.label_mask(bool)  # (None and "" are no label)
     zero = labelled & ((w < rules.min_extent) | (h < rules.min_extent))
     size = lambda r: f"{r.w:.2f} x {r.h:.2f} m at x={r.x:.2f}, y={r.y:.2f}"  # noqa: E731
@@ -202,7 +200,7 @@ def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np
     findings: list[Finding] = []
     for code, mask, describe in rows:
         hits = np.flatnonzero(mask)
-        findings += [Finding(code, describe(leaves[i]), leaves[i]) for i in hits[:3].tolist()]
+        findings += [Finding(code, describe(layout.leaves[i]), layout.leaves[i]) for i in hits[:3].tolist()]
         if hits.size > 3:
             findings.append(Finding(code, f"... and {hits.size - 3} more"))
     return findings

@@ -23,7 +23,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from citygen.geometry.prototypes import INSTANCED
-from citygen.layout import Region
+from citygen.layout import Region, is_inner, unwalked
 
 CM = 100.0
 MIN_TERMINALS = 4
@@ -60,26 +60,29 @@ def _code(text: str | None) -> int:
     return zlib.crc32((text or "").encode("utf-8"))
 
 
+#: A region's signature, detail flag, mesh-terminal count and terminal count.
+Info = tuple[int, bool, int, int]
 #: :func:`_leaf_of` by (label, material, layer, depth, w, h): a building's terminals come in a few dozen kinds.
-_LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], tuple[int, bool, int]] = {}
+_LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], Info] = {}
 _LEAVES_SIZE = 1 << 16
 
 
-def _leaf_of(r: Region) -> tuple[int, bool, int]:
-    """Signature, detail flag and mesh-terminal count (1, or 0 for an instanced element) of a terminal region
-    (remembered in ``_LEAVES``)."""
+def _leaf_of(r: Region) -> Info:
+    """Signature, detail flag, mesh-terminal count (1, or 0 for an instanced element) and terminal count (1) of a
+    terminal region (remembered in ``_LEAVES``)."""
     if len(_LEAVES) >= _LEAVES_SIZE:
         _LEAVES.clear()
     result = _LEAVES[r.label, r.material, r.layer, r.depth, r.w, r.h] = (
         hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
               round(r.h * CM))),
         (r.label != "wall" and r.label is not None) or r.depth != 0.0,
-        int(r.label is not None and r.label not in INSTANCED))
+        int(r.label is not None and r.label not in INSTANCED), 1)
     return result
 
 
 class Signatures:
-    """Signature, detail flag and terminal count of the inner regions of some layouts, plus signature counts.
+    """Signature, detail flag, mesh-terminal and terminal counts of the inner regions of some layouts, plus
+    signature counts.
 
     Each subtree is hashed once, bottom-up, in one walk (terminals and keyed copies inline). Regions
     carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later copies
@@ -87,10 +90,10 @@ class Signatures:
     """
 
     def __init__(self, roots: Iterable[Region]) -> None:
-        self.info: dict[int, tuple[int, bool, int]] = {}
+        self.info: dict[int, Info] = {}
         self.log: list[int] = []  # signature of every inner region visited or reused, in order
         self.first: dict[int, Region] = {}
-        self._keyed: dict[int, tuple[tuple[int, bool, int], list[int]]] = {}  # key -> first copy's info, log part
+        self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
         self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
         for root in roots:
             key = root.key
@@ -104,14 +107,14 @@ class Signatures:
                 self._keyed[key] = (self.info[id(root)], [])
         self.counts: Counter[int] = Counter(self.log)
 
-    def _visit(self, r: Region) -> tuple[int, bool, int]:
+    def _visit(self, r: Region) -> Info:
         """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
         keyed, info, log = self._keyed, self.info, self.log
         x, y = r.x, r.y
         start = len(log)
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
         append = content.append
-        detail, terminals = False, 0
+        detail, terminals, leaves = False, 0, 0
         for c in r.children:
             key = c.key
             done = keyed.get(key)  # (None is never a key of it)
@@ -124,12 +127,13 @@ class Signatures:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
                 if key is not None:
                     self.first[key], keyed[key], info[id(c)] = c, (result, []), result
-            sig, more, n = result
+            sig, more, n, k = result
             append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
             if more:
                 detail = True
             terminals += n
-        result = (hash(tuple(content)), detail, terminals)
+            leaves += k
+        result = (hash(tuple(content)), detail, terminals, leaves)
         log.append(result[0])
         key = r.key
         if key is not None:
@@ -149,34 +153,49 @@ class Signatures:
         """Whether the hashed inner region ``twin`` (and every copy of it) is a module (see the module doc)."""
         decided = self._modules.get(id(twin))
         if decided is None:
-            sig, detail, n = self.info[id(twin)]
+            sig, detail, n, _ = self.info[id(twin)]
             c = self.counts[sig]
             decided = self._modules[id(twin)] = (
                 c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
                 and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children))
         return decided
 
-    def split(self, root: Region) -> tuple[list[Region], list[Region]]:
-        """The face's ``(modules, loose terminals)``: maximal repeated subtrees, and every terminal outside them.
+    def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], list[int]]:
+        """The face's ``(modules, loose terminals)``: its maximal repeated subtrees, each with the position of its
+        first terminal among the face's terminals (tree order) and their count, and the positions of every
+        terminal outside them.
 
-        Inside a keyed copy, the walk reads the hashed copy's results in parallel (``twin``).
+        Inside a keyed copy, the walk reads the hashed copy's results in parallel (``twin``). A lazily moved copy
+        (:meth:`Region.moved`) is walked through its original with the offset (``shift``): only the modules
+        found inside it are made as regions, and its terminals are positions, not regions.
         """
-        modules: list[Region] = []
-        loose: list[Region] = []
-        stack = [(root, root)]
-        modules_get = self._modules.get
+        modules: list[tuple[Region, int, int]] = []
+        loose: list[int] = []
+        stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, root, 0)]
+        modules_get, first, info = self._modules.get, self.first, self.info
         while stack:
-            r, twin = stack.pop()
-            if not r.children:
-                loose.append(r)
+            r, shift, twin, at = stack.pop()
+            if not is_inner(r):
+                loose.append(at)
                 continue
             if twin.key is not None:
-                twin = self.first.get(twin.key, twin)
+                twin = first.get(twin.key, twin)
             decided = modules_get(id(twin))
             if decided is None:
                 decided = self._module(twin)
             if decided:
-                modules.append(r)
-            else:
-                stack.extend(reversed(list(zip(r.children, twin.children))))
+                modules.append((r if shift is None else r.moved(*shift), at, info[id(twin)][3]))
+                continue
+            if shift is None:
+                lazy = unwalked(r)
+                if lazy is not None:
+                    r, shift = lazy[0], lazy[1:]
+            below = []
+            for c, t in zip(r.children, twin.children):
+                below.append((c, shift, t, at))
+                if is_inner(t):
+                    at += info[id(first.get(t.key, t) if t.key is not None else t)][3]
+                else:
+                    at += 1
+            stack.extend(reversed(below))
         return modules, loose

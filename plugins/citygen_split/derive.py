@@ -5,6 +5,7 @@ split places its last item exactly at the parent's edge, so the leaves partition
 """
 from __future__ import annotations
 
+import operator
 import os
 from bisect import bisect_right
 from collections.abc import Callable, Sequence
@@ -80,13 +81,19 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
-        self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
+        #: (subtree, its size in regions, position of its first terminal, its terminal count)
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
         #: :meth:`terminal`; none when tracing, which derives every region).
         self.terminals = {} if trace else _terminal_fields(grammar, self.asset)
-        #: The terminal regions made, in tree order (regions are made depth first, children in order).
+        #: The terminal regions made, in tree order (regions are made depth first, children in order), except
+        #: those inside moved copies of subtrees, which are noted in :attr:`copies` instead.
         self.leaves: list[Region] = []
+        #: Per moved copy of a subtree: (terminals made before it, position of the original's first terminal,
+        #: their count, dx, dy); positions count every terminal of the layout in tree order.
+        self.copies: list[tuple[int, int, int, float, float]] = []
+        self.copied = 0  # terminals inside the copies so far
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
         self.points: dict[PointKey, int] = {}
@@ -96,7 +103,9 @@ class _Derivation:
         root = self.region(self.grammar.start, 0.0, 0.0, float(r.width), float(r.height), 0, 0, ())
         layout = FacadeLayout(width=float(r.width), height=float(r.height), root=root,
                               meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
-        layout.__dict__["leaves"] = tuple(self.leaves)  # (FacadeLayout.leaves, already known)
+        if not self.copies:  # (FacadeLayout.leaves, already known)
+            layout.__dict__["leaves"] = tuple(self.leaves)
+        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(self.leaves, self.copies)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -106,17 +115,24 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
-                original, size = done
+                original, size, first, n = done
                 self.count += size
                 if self.count > MAX_REGIONS:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
                                        plugin=PLUGIN_ID, where=self.grammar.source,
                                        hint="the face is too large for this grammar's sizes")
-                return _moved(original, x - original.x, y - original.y, self.leaves.append)
-            before = self.count
+                dx, dy = x - original.x, y - original.y
+                copy = original.moved(dx, dy)
+                if n == 1 and not original.children:
+                    self.leaves.append(copy)
+                else:
+                    self.copies.append((len(self.leaves), first, n, dx, dy))
+                    self.copied += n
+                return copy
+            before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = (region, self.count - before)
+            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
@@ -149,6 +165,8 @@ class _Derivation:
             child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
             return Region.fast(x, y, w, h, symbol, children=(child,))
         children = self.children(body, x, y, w, h, floor, depth + 1, rule)
+        if not children:  # (a grid whose regions are all empty: an unlabelled terminal, as the tree reads it)
+            return self.leaf(Region.fast(x, y, w, h, symbol))
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
 
     def leaf(self, region: Region) -> Region:
@@ -181,7 +199,7 @@ class _Derivation:
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
             _set(region, "__dict__", copied)
-            self.cache[key] = (region, 1)
+            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1)
         self.leaves.append(region)
         return region
 
@@ -371,36 +389,42 @@ class _Derivation:
         return out
 
 
-def _moved(region: Region, dx: float, dy: float, add: Callable[[Region], None]) -> Region:
-    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (a new field dict per region, as
-    :meth:`Region.fast`: no per-field ``object.__setattr__``); ``add`` is given each terminal copy in tree order."""
-    fields_ = region.__dict__.copy()
-    fields_["x"] = region.x + dx
-    fields_["y"] = region.y + dy
-    children = region.children
-    copy = _new(Region)
-    if children:
-        out = []
-        for child in children:
-            if child.children:
-                out.append(_moved(child, dx, dy, add))
-                continue
-            leaf = child.__dict__.copy()
-            leaf["x"] = child.x + dx
-            leaf["y"] = child.y + dy
-            moved = _new(Region)
-            _set(moved, "__dict__", leaf)
-            add(moved)
-            out.append(moved)
-        fields_["children"] = tuple(out)
-    else:
-        add(copy)
-    _set(copy, "__dict__", fields_)
-    return copy
-
-
 _new = object.__new__
 _set = object.__setattr__
+_X, _Y, _W, _H = (operator.attrgetter(name) for name in "xywh")
+
+
+def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, float]]
+                 ) -> tuple[np.ndarray, tuple[tuple[Region, ...], np.ndarray]]:
+    """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
+    ``leaves`` and the terminals of its moved ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied
+    terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
+    xs: list[float] = []
+    ys: list[float] = []
+    ws: list[float] = []
+    hs: list[float] = []
+    source: list[int] = []
+    done = 0
+    for before, first, n, dx, dy in (*copies, (len(leaves), 0, 0, 0.0, 0.0)):
+        if before > done:
+            run = leaves[done:before]
+            xs += map(_X, run)
+            ys += map(_Y, run)
+            ws += map(_W, run)
+            hs += map(_H, run)
+            source += range(done, before)
+            done = before
+        if n:
+            end = first + n
+            xs += [v + dx for v in xs[first:end]]
+            ys += [v + dy for v in ys[first:end]]
+            ws += ws[first:end]
+            hs += hs[first:end]
+            source += source[first:end]
+    rects = np.array((xs, ys, ws, hs), dtype=float).T.copy()
+    index = np.array(source, dtype=np.intp)
+    rects.flags.writeable = index.flags.writeable = False
+    return rects, (tuple(leaves), index)
 
 
 def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:
