@@ -14,6 +14,7 @@ All per-region work is numpy over the regions of a face; Python loops run per fa
 from __future__ import annotations
 
 import math
+import operator
 import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -199,6 +200,9 @@ class _Terminals:
     styles: tuple[tuple[str, str], ...]
 
 
+_LOOK = operator.attrgetter("label", "material", "depth")
+
+
 def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
     """Terminal arrays of every unit, read from its layout's terminal arrays (the style and depth of each distinct
     (label, material, depth) are worked out once, in the order the terminals first show them)."""
@@ -209,11 +213,10 @@ def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
         layout = unit.layout
         known = of_layout.get(id(layout))
         if known is None:
-            sources = layout.leaf_sources[0]
-            known = of_layout[id(layout)] = (
-                np.array([looks.setdefault((r.label, r.material, r.depth), len(looks)) if r.label is not None else -1
-                          for r in sources], dtype=np.intp),
-                np.array([r.label is not None for r in sources], dtype=bool))
+            keys = list(map(_LOOK, layout.leaf_sources[0]))
+            ids = {key: looks.setdefault(key, len(looks)) if key[0] is not None else -1 for key in dict.fromkeys(keys)}
+            look_of = np.fromiter(map(ids.__getitem__, keys), np.intp, len(keys))
+            known = of_layout[id(layout)] = (look_of, look_of >= 0)
         look_of, visible = known
         source = layout.leaf_sources[1][unit.leaves]
         rects = layout.leaf_rects[unit.leaves]
@@ -440,7 +443,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         keyed = [(ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)),
                             wall_material), r) for r, _, _ in placed]
         faces.append((face, m, len(units), keyed))
-        units.append(_Unit(layout, np.fromiter(loose, np.intp), m))
+        units.append(_Unit(layout, np.asarray(loose, np.intp), m))
         for (key, r), (_, at, n) in zip(keyed, placed):
             if key not in protos:
                 protos[key] = cache.get(key)

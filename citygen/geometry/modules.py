@@ -22,6 +22,8 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+import numpy as np
+
 from citygen.geometry.prototypes import INSTANCED
 from citygen.layout import Region, is_inner, unwalked
 
@@ -95,6 +97,9 @@ class Signatures:
         self.first: dict[int, Region] = {}
         self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
         self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
+        #: id of a hashed inner region -> (index, position of its first terminal among the region's) of each of
+        #: its inner children: what :meth:`split` walks
+        self._inner: dict[int, list[tuple[int, int]]] = {}
         for root in roots:
             key = root.key
             done = self._keyed.get(key)
@@ -115,14 +120,18 @@ class Signatures:
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
         append = content.append
         detail, terminals, leaves = False, 0, 0
-        for c in r.children:
+        inner: list[tuple[int, int]] = []
+        for i, c in enumerate(r.children):
             key = c.key
             done = keyed.get(key)  # (None is never a key of it)
             if done is not None:
                 result, below = done
                 log.extend(below)
+                if below:  # (an inner region logs its own signature at least)
+                    inner.append((i, leaves))
             elif c.children:
                 result = self._visit(c)
+                inner.append((i, leaves))
             else:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
                 if key is not None:
@@ -139,6 +148,7 @@ class Signatures:
         if key is not None:
             self.first[key], keyed[key] = r, (result, log[start:])
         info[id(r)] = result
+        self._inner[id(r)] = inner
         return result
 
     def canonical(self, r: Region) -> Region:
@@ -160,24 +170,22 @@ class Signatures:
                 and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children))
         return decided
 
-    def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], list[int]]:
+    def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], np.ndarray]:
         """The face's ``(modules, loose terminals)``: its maximal repeated subtrees, each with the position of its
         first terminal among the face's terminals (tree order) and their count, and the positions of every
-        terminal outside them.
+        terminal outside them (ascending: tree order).
 
-        Inside a keyed copy, the walk reads the hashed copy's results in parallel (``twin``). A lazily moved copy
-        (:meth:`Region.moved`) is walked through its original with the offset (``shift``): only the modules
-        found inside it are made as regions, and its terminals are positions, not regions.
+        The walk visits inner regions only. Inside a keyed copy it reads the hashed copy's results in parallel
+        (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
+        (``shift``): only the modules found inside it are made as regions.
         """
+        if not is_inner(root):
+            return [], np.zeros(1, np.intp)
         modules: list[tuple[Region, int, int]] = []
-        loose: list[int] = []
         stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, root, 0)]
-        modules_get, first, info = self._modules.get, self.first, self.info
+        modules_get, first, info, inner = self._modules.get, self.first, self.info, self._inner
         while stack:
             r, shift, twin, at = stack.pop()
-            if not is_inner(r):
-                loose.append(at)
-                continue
             if twin.key is not None:
                 twin = first.get(twin.key, twin)
             decided = modules_get(id(twin))
@@ -190,12 +198,9 @@ class Signatures:
                 lazy = unwalked(r)
                 if lazy is not None:
                     r, shift = lazy[0], lazy[1:]
-            below = []
-            for c, t in zip(r.children, twin.children):
-                below.append((c, shift, t, at))
-                if is_inner(t):
-                    at += info[id(first.get(t.key, t) if t.key is not None else t)][3]
-                else:
-                    at += 1
-            stack.extend(reversed(below))
-        return modules, loose
+            children, twins = r.children, twin.children
+            stack.extend([(children[i], shift, twins[i], at + offset) for i, offset in reversed(inner[id(twin)])])
+        loose = np.ones(info[id(self.canonical(root))][3], dtype=bool)
+        for _, at, n in modules:
+            loose[at:at + n] = False
+        return modules, np.flatnonzero(loose)

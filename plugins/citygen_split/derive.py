@@ -5,6 +5,7 @@ split places its last item exactly at the parent's edge, so the leaves partition
 """
 from __future__ import annotations
 
+import itertools
 import operator
 import os
 from bisect import bisect_right
@@ -391,7 +392,7 @@ class _Derivation:
 
 _new = object.__new__
 _set = object.__setattr__
-_X, _Y, _W, _H = (operator.attrgetter(name) for name in "xywh")
+_XYWH = operator.attrgetter("x", "y", "w", "h")
 
 
 def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, float]]
@@ -399,30 +400,21 @@ def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, 
     """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
     ``leaves`` and the terminals of its moved ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied
     terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
-    xs: list[float] = []
-    ys: list[float] = []
-    ws: list[float] = []
-    hs: list[float] = []
+    rows: list[tuple[float, float, float, float]] = []
     source: list[int] = []
     done = 0
-    for before, first, n, dx, dy in (*copies, (len(leaves), 0, 0, 0.0, 0.0)):
+    for before, first, n, dx, dy in copies:
         if before > done:
-            run = leaves[done:before]
-            xs += map(_X, run)
-            ys += map(_Y, run)
-            ws += map(_W, run)
-            hs += map(_H, run)
+            rows += map(_XYWH, leaves[done:before])
             source += range(done, before)
             done = before
-        if n:
-            end = first + n
-            xs += [v + dx for v in xs[first:end]]
-            ys += [v + dy for v in ys[first:end]]
-            ws += ws[first:end]
-            hs += hs[first:end]
-            source += source[first:end]
-    rects = np.array((xs, ys, ws, hs), dtype=float).T.copy()
-    index = np.array(source, dtype=np.intp)
+        end = first + n
+        rows += [(x + dx, y + dy, w, h) for x, y, w, h in rows[first:end]]
+        source += source[first:end]
+    rows += map(_XYWH, leaves[done:])
+    source += range(done, len(leaves))
+    rects = np.fromiter(itertools.chain.from_iterable(rows), float, 4 * len(rows)).reshape(-1, 4)
+    index = np.fromiter(source, np.intp, len(source))
     rects.flags.writeable = index.flags.writeable = False
     return rects, (tuple(leaves), index)
 

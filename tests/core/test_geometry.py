@@ -91,7 +91,7 @@ def test_a_floor_of_identical_bays_instances_the_bay():
     from citygen.geometry.modules import Signatures
     facade = _facade(False)
     mods, loose = Signatures([facade]).split(facade)
-    assert len(mods) == 30 and {m.symbol for m, _, _ in mods} == {"Bay"} and loose == []
+    assert len(mods) == 30 and {m.symbol for m, _, _ in mods} == {"Bay"} and loose.size == 0
     assert [(at, n) for _, at, n in mods] == [(5 * k, 5) for k in range(30)]  # each bay's terminals, in tree order
 
 
