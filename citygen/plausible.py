@@ -131,7 +131,8 @@ def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: Plausi
         return []
     x, y, w, h = layout.leaf_rects.T
     lines = np.asarray(request.floor_lines if request is not None else (0.0,), dtype=float)
-    findings = _terminal_findings(layout, x, y, w, h, lines, rules) if _suspect(layout, w, h, rules) else []
+    findings = _terminal_findings(layout, x, y, w, h, lines, rules) if _suspect(layout, y, w, h, lines, rules) \
+        else []
     if request is not None:
         findings += _storeys(layout, y, h, request, rules)
     relabelled = int(layout.meta.get("relabelled", 0) or 0)
@@ -140,10 +141,11 @@ def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: Plausi
     return findings
 
 
-def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: PlausibilityRules) -> bool:
-    """Whether a terminal rule may report a terminal: every such rule asks for ``w < a or h < b`` with limits by
-    label (a floating door also needs a door), so one comparison with each label's largest limits rules most
-    layouts out at once."""
+def _suspect(layout: FacadeLayout, y: np.ndarray, w: np.ndarray, h: np.ndarray, lines: np.ndarray,
+             rules: PlausibilityRules) -> bool:
+    """Whether a terminal rule may report a terminal: every such rule but the floating door's asks for ``w < a or
+    h < b`` with limits by label, so one comparison with each label's largest limits, and the floating-door test
+    on the doors alone, rule most layouts out at once."""
     names, codes = layout.leaf_labels
     known = _LIMITS.get((names, id(rules)))
     if known is None or known[0] is not rules:
@@ -151,7 +153,13 @@ def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: Plausibi
             _LIMITS.clear()
         known = _LIMITS[names, id(rules)] = (rules, _limits(names, rules))
     limit_w, limit_h = known[1][codes].T
-    return "door" in names or bool(np.any((w < limit_w) | (h < limit_h)))
+    if np.any((w < limit_w) | (h < limit_h)):
+        return True
+    if "door" not in names:
+        return False
+    door_y = y[codes == names.index("door")]  # (as :func:`_terminal_findings`' floating-door rule)
+    below = lines[np.clip(np.searchsorted(lines, door_y + 1e-6, side="right") - 1, 0, None)]
+    return bool(np.any(door_y - below > rules.door_step + 1e-6))
 
 
 #: ``(labels, id(rules)) -> (rules, limits)``: the limits of :func:`_limits`, per label set and rules met (layouts
