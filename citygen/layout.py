@@ -496,10 +496,10 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
 
     def cull(region: Region) -> Region:
         if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
-            if region.children or region.label not in (None, "wall") or region.depth:
+            if is_inner(region) or region.label not in (None, "wall") or region.depth:
                 return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
             return region
-        if not region.children or region.y >= highest - tol:
+        if region.y >= highest - tol or not is_inner(region):  # (a moved copy above the cover stays unmade)
             return region
         children = tuple(cull(c) for c in region.children)
         if all(map(operator.is_, children, region.children)):

@@ -162,7 +162,7 @@ class Signatures:
             c = self.counts[sig]
             decided = self._modules[id(twin)] = (
                 c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
-                and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children))
+                and not any(is_inner(tc) and self.counts[self.signature(tc)] > c for tc in twin.children))
         return decided
 
     def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], np.ndarray]:

@@ -5,6 +5,7 @@ split places its last item exactly at the parent's edge, so the leaves partition
 """
 from __future__ import annotations
 
+import functools
 import itertools
 import operator
 import os
@@ -74,7 +75,7 @@ class _Derivation:
             "street": bool(ctx.street_facing), "courtyard": bool(ctx.is_courtyard), "levels": ctx.levels,
         }
         self.attributes = ctx.attributes
-        self.base = None if grammar.source.startswith("<") else Path(grammar.source).parent
+        self.base = _folder(grammar.source)
         self.corners = _corner_widths(request)
         self.once: dict[str, int] = {}
         self.streams: dict[str, np.random.Generator] = {}
@@ -436,6 +437,12 @@ def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]
 
 #: ``id(grammar) -> (grammar, fields)`` of :func:`_terminal_fields`.
 _TERMINALS: dict[int, tuple[Grammar, dict[str, dict[str, Any]]]] = {}
+
+
+@functools.lru_cache(maxsize=256)
+def _folder(source: str) -> Path | None:
+    """The folder of a grammar file, against which its asset paths resolve (None for a grammar from text)."""
+    return None if source.startswith("<") else Path(source).parent
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:

@@ -169,3 +169,22 @@ def test_leaf_sources_labels_and_materials_read_from_sources():
     rects = layout.leaf_rects
     kept = layout.with_meta({"note": 1})  # (the arrays made so far are kept)
     assert kept.meta == {"note": 1} and kept.leaf_rects is rects and kept.root is layout.root
+
+
+def test_hidden_behind_leaves_moved_copies_above_the_cover_unmade():
+    """Culling walked into every moved copy (making its children) to test whether it had any; a copy wholly above
+    the neighbour stays as it is, and the culled tree equals the one culled from regions made eagerly."""
+    from dataclasses import replace as copy_with
+
+    from citygen.layout import unwalked
+    lower = Region(0.0, 0.0, 7.3, 0.5, "Base", "wall")
+    floor = _nested()
+    upper = floor.moved(0.0, 4.1)
+    root = Region(0.0, 0.0, 7.3, 8.7, "Facade", children=(lower, Region(0.0, 0.5, 7.3, 8.2, "Body", children=(
+        floor.moved(0.0, 0.5), upper))))
+    culled = hidden_behind(FacadeLayout(7.3, 8.7, root), [2.0])
+    assert unwalked(upper) is not None
+
+    def eager(r):
+        return copy_with(r, children=tuple(eager(c) for c in r.children))
+    assert culled.root == hidden_behind(FacadeLayout(7.3, 8.7, eager(root)), [2.0]).root
