@@ -98,7 +98,7 @@ class Signatures:
         self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
         self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
         #: id of a hashed inner region -> (index, position of its first terminal among the region's) of each of
-        #: its inner children: what :meth:`split` walks (made when first walked)
+        #: its inner children, last first: what :meth:`split` walks
         self._inner: dict[int, list[tuple[int, int]]] = {}
         for root in roots:
             key = root.key
@@ -120,13 +120,17 @@ class Signatures:
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
         append = content.append
         detail, terminals, leaves = False, 0, 0
+        inner: list[tuple[int, int]] = []  # (index, first terminal's position) of each inner child
         for c in r.children:
             key = c.key
             done = keyed.get(key)  # (None is never a key of it)
             if done is not None:
                 result, below = done
                 log.extend(below)
+                if below:  # (an inner region logs its own signature at least)
+                    inner.append((len(content) - 3, leaves))
             elif c.children:
+                inner.append((len(content) - 3, leaves))
                 result = self._visit(c)
             else:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
@@ -144,6 +148,8 @@ class Signatures:
         if key is not None:
             self.first[key], keyed[key] = r, (result, log[start:])
         info[id(r)] = result
+        inner.reverse()  # (the order :meth:`split` stacks them)
+        self._inner[id(r)] = inner
         return result
 
     def canonical(self, r: Region) -> Region:
@@ -194,26 +200,8 @@ class Signatures:
                 if lazy is not None:
                     r, shift = lazy[0], lazy[1:]
             children, twins = r.children, twin.children
-            below = inner.get(id(twin))
-            if below is None:
-                below = self._inner_children(twins)
-                inner[id(twin)] = below
-            stack.extend([(children[i], shift, twins[i], at + offset) for i, offset in below])
+            stack.extend([(children[i], shift, twins[i], at + offset) for i, offset in inner[id(twin)]])
         loose = np.ones(info[id(self.canonical(root))][3], dtype=bool)  # (then every module's terminals taken out)
         for _, at, n in modules:
             loose[at:at + n] = False
         return modules, np.flatnonzero(loose)
-
-    def _inner_children(self, children: tuple[Region, ...]) -> list[tuple[int, int]]:
-        """(index, position of its first terminal among theirs) of each inner one of a hashed region's
-        ``children``, last first (the order :meth:`split` stacks them)."""
-        out, at = [], 0
-        first, info = self.first, self.info
-        for i, c in enumerate(children):
-            if is_inner(c):
-                out.append((i, at))
-                at += info[id(first.get(c.key, c) if c.key is not None else c)][3]
-            else:
-                at += 1
-        out.reverse()
-        return out
