@@ -192,7 +192,7 @@ class Builder:
     def _defined(self, layout: FacadeLayout, ruleset: Path, warnings: list[str]) -> FacadeLayout:
         """``layout`` with every material name no library defines dropped (the region's label default is used),
         each such name reported once per ruleset with its fallback."""
-        named = set(map(_MATERIAL, layout.leaves)) - {None, BUILDING_RENDER}
+        named = set(map(_MATERIAL, layout.leaf_sources[0])) - {None, BUILDING_RENDER}
         undefined = {m for m in named if resolve(m, self.scene.materials) is None}
         if not undefined:
             return layout
@@ -233,7 +233,7 @@ class Builder:
         out = []
         for layout, request in zip(layouts, requests):
             if not layout.meta.get("fallback"):
-                findings = check_plausible(enforce_entrance(layout, request)[0], request, self.scene.plausibility)
+                findings = check_plausible(_entrance(layout, request)[0], request, self.scene.plausibility)
                 if findings:
                     layout = plain_wall(request, f"implausible layout: {summary(findings)}", findings, kind=kind_id)
             out.append(layout)
@@ -276,7 +276,7 @@ class Builder:
                                hint="this is a bug in the ruleset kind; please report it with the ruleset")
         if layout.meta.get("fallback") and not layout.meta.get("outside_range"):  # a kind that could not dress
             warnings.append(f"{where}: {kind_id} fell back to plain walls: {layout.meta['fallback']}")  # the face
-        layout, note = enforce_entrance(layout, request)
+        layout, note = _entrance(layout, request)
         if note:
             warnings.append(f"{where}: {note}")
         warnings.extend(f"{where}: {p}" for p in check_request(layout, request)[:2])
@@ -284,6 +284,13 @@ class Builder:
 
 
 _MATERIAL = operator.attrgetter("material")
+
+
+def _entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[FacadeLayout, str | None]:
+    """:func:`enforce_entrance`, which a layout with its doors already skips without a walk of its terminals."""
+    if layout.count("door") == (1 if request.entrance else 0):
+        return layout, None
+    return enforce_entrance(layout, request)
 
 
 def _without(region: Region, names: set[str]) -> Region:

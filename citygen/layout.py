@@ -103,6 +103,20 @@ class Region:
         return replace(self, x=self.x + dx, y=self.y + dy,
                        children=tuple(c.translated(dx, dy) for c in self.children))
 
+    def moved(self, dx: float, dy: float) -> Region:
+        """:meth:`translated`, made lazily: an inner region's copy makes its children (copies moved alike) when
+        they are first read, so a generator that repeats a subtree pays one object per copy until a consumer walks
+        into it. Every other field is shared; ``x + dx`` is the same float either way."""
+        fields_ = self.__dict__.copy()
+        fields_["x"] = self.x + dx
+        fields_["y"] = self.y + dy
+        if fields_.get("children", True):  # (an inner region, or a moved copy not yet walked)
+            fields_.pop("children", None)
+            fields_[_MOVED] = (self, dx, dy)
+        copy = object.__new__(Region)
+        object.__setattr__(copy, "__dict__", fields_)
+        return copy
+
     def to_json(self) -> dict[str, Any]:
         data: dict[str, Any] = {"x": self.x, "y": self.y, "w": self.w, "h": self.h, "symbol": self.symbol}
         if self.label is not None:
@@ -152,6 +166,42 @@ class Region:
                    children=tuple(cls.from_json(c, f"{path}.children[{i}]", source) for i, c in enumerate(children)))
 
 
+#: The field of a lazily moved copy (:meth:`Region.moved`) naming ``(original, dx, dy)`` until its children exist.
+_MOVED = "_moved_from"
+
+
+class _Children:
+    """``Region.children``: a field like the others (kept in the region's ``__dict__``, which wins over this
+    non-data descriptor), except in a lazily moved copy, whose children are made here on first read."""
+
+    def __get__(self, region: Region | None, owner: type | None = None) -> tuple[Region, ...]:
+        if region is None:
+            return ()
+        fields_ = region.__dict__
+        moved = fields_.get(_MOVED)
+        if moved is None:
+            return ()
+        original, dx, dy = moved
+        children = tuple(c.moved(dx, dy) for c in original.children)
+        fields_["children"] = children
+        fields_.pop(_MOVED, None)
+        return children
+
+
+Region.children = _Children()  # type: ignore[assignment]  (the dataclass keeps its default, ())
+
+
+def unwalked(region: Region) -> tuple[Region, float, float] | None:
+    """``(original, dx, dy)`` of a lazily moved copy whose children are not made yet (:meth:`Region.moved`): its
+    children are the original's, each moved by ``(dx, dy)``; else None."""
+    return region.__dict__.get(_MOVED)
+
+
+def is_inner(region: Region) -> bool:
+    """Whether ``region`` has children, without making a lazily moved copy's."""
+    return bool(region.__dict__.get("children", True))
+
+
 def _collect_leaves(region: Region, add: Callable[[Region], None]) -> None:
     """``add`` every terminal below ``region`` in tree order (recursion: cheaper than a generator's stack)."""
     for child in region.children:
@@ -196,13 +246,24 @@ class FacadeLayout:
         return tuple(out)
 
     @functools.cached_property
+    def leaf_sources(self) -> tuple[tuple[Region, ...], np.ndarray]:
+        """Terminals standing for all (*sources*, in tree order) and per terminal the index of its source, as a
+        read-only int array: a terminal equals its source in every field but ``x`` and ``y``. By default every
+        terminal is its own source; a generator that places moved copies of subtrees (:meth:`Region.moved`)
+        hands over its own, so the checks read labels, layers and materials without walking the copies."""
+        index = np.arange(len(self.leaves))
+        index.flags.writeable = False
+        return self.leaves, index
+
+    @functools.cached_property
     def leaf_labels(self) -> tuple[tuple[str | None, ...], np.ndarray]:
         """The terminals' distinct labels (in order of first appearance) and each terminal's index into them, as a
         read-only int array: the checks test a few labels of a few hundred terminals as array lookups."""
-        labels = list(map(_LABEL, self.leaves))
+        sources, index = self.leaf_sources
+        labels = list(map(_LABEL, sources))
         names = tuple(dict.fromkeys(labels))
-        index = {name: k for k, name in enumerate(names)}
-        codes = np.fromiter(map(index.__getitem__, labels), dtype=np.intp, count=len(labels))
+        position = {name: k for k, name in enumerate(names)}
+        codes = np.fromiter(map(position.__getitem__, labels), dtype=np.intp, count=len(labels))[index]
         codes.flags.writeable = False
         return names, codes
 
@@ -220,7 +281,7 @@ class FacadeLayout:
     @functools.cached_property
     def leaf_rects(self) -> np.ndarray:
         """Terminal rectangles in tree order as a read-only ``(n, 4)`` float array of ``x, y, w, h``, computed once
-        (the partition and request checks both read it)."""
+        (the partition and request checks both read it; a generator may hand it over)."""
         leaves = self.leaves
         rects = np.fromiter(itertools.chain.from_iterable(map(_XYWH, leaves)), dtype=float,
                             count=4 * len(leaves)).reshape(-1, 4)
@@ -232,7 +293,15 @@ class FacadeLayout:
         return self.leaf_rects.copy()
 
     def count(self, label: str) -> int:
-        return sum(1 for r in self.leaves if r.label == label)
+        names, codes = self.leaf_labels
+        return int(np.count_nonzero(codes == names.index(label))) if label in names else 0
+
+    def with_meta(self, meta: Mapping[str, Any]) -> FacadeLayout:
+        """This layout with ``meta`` instead of its own, keeping the terminal arrays already made (same tree)."""
+        out = FacadeLayout(self.width, self.height, self.root, meta)
+        known = self.__dict__
+        out.__dict__.update({name: known[name] for name in _LEAF_DATA if name in known})
+        return out
 
     def to_json(self) -> dict[str, Any]:
         return {"schema_version": SCHEMA_VERSION, "width": self.width, "height": self.height,
@@ -275,6 +344,10 @@ class FacadeLayout:
                               hint="a facade's regions nest a few levels deep; check the file") from None
 
 
+#: The cached properties of a :class:`FacadeLayout` that depend only on its tree.
+_LEAF_DATA = ("leaves", "leaf_sources", "leaf_labels", "leaf_rects")
+
+
 def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
     """Problems with the partition contract; an empty list means the layout is valid.
 
@@ -285,36 +358,51 @@ def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:
     """
     problems: list[str] = []
     eps = tol * max(layout.width, layout.height, 1e-9)
-    leaves, all_rects = layout.leaves, layout.leaf_rects
-    layers = list(map(_LAYER, leaves))
+    (sources, index), all_rects = layout.leaf_sources, layout.leaf_rects
+    symbols = _Symbols(sources, index)
+    layers = list(map(_LAYER, sources))
     if layers.count(layers[0]) == len(layers):  # (one layer: most layouts)
-        return _layer_partition(layout, layers[0], leaves, all_rects, eps)
-    by_layer: dict[str | None, list[int]] = {layer: [] for layer in layers}
-    for i, layer in enumerate(layers):
-        by_layer[layer].append(i)
-    for layer, members in by_layer.items():
-        problems += _layer_partition(layout, layer, [leaves[i] for i in members], all_rects[members], eps)
+        return _layer_partition(layout, layers[0], symbols, all_rects, eps)
+    order = {layer: k for k, layer in enumerate(dict.fromkeys(layers))}
+    of_leaf = np.array([order[layer] for layer in layers])[index]
+    for layer, k in order.items():
+        members = np.flatnonzero(of_leaf == k)
+        problems += _layer_partition(layout, layer, symbols.subset(members), all_rects[members], eps)
     return problems
 
 
-def _layer_partition(layout: FacadeLayout, layer: str | None, regions: Sequence[Region], rects: np.ndarray,
+@dataclass(frozen=True)
+class _Symbols:
+    """The symbols of some terminals of a layout, by position, read from their sources (for messages)."""
+
+    sources: Sequence[Region]
+    index: np.ndarray
+
+    def __getitem__(self, i: int) -> str:
+        return self.sources[self.index[i]].symbol
+
+    def subset(self, members: np.ndarray) -> _Symbols:
+        return _Symbols(self.sources, self.index[members])
+
+
+def _layer_partition(layout: FacadeLayout, layer: str | None, symbols: _Symbols, rects: np.ndarray,
                      eps: float) -> list[str]:
-    """:func:`check_partition` of one layer's terminals ``regions`` and their rectangles ``rects``."""
+    """:func:`check_partition` of one layer's terminals: their ``symbols`` and rectangles ``rects``."""
     name = f"layer {layer!r}" if layer is not None else "layout"
     x0, y0 = rects[:, 0], rects[:, 1]
     x1, y1 = x0 + rects[:, 2], y0 + rects[:, 3]
     if rects.min() >= -eps and x1.max() <= layout.width + eps and y1.max() <= layout.height + eps:
         # (finite -- a NaN fails every comparison, an infinity one of them --, no negative size, none outside)
-        return _coverage(name, regions, x0, y0, x1, y1, layout.width, layout.height, eps)
+        return _coverage(name, symbols, x0, y0, x1, y1, layout.width, layout.height, eps)
     if not np.all(np.isfinite(rects)):
         return [f"{name}: non-finite coordinates"]
     bad = np.flatnonzero((rects[:, 2] < -eps) | (rects[:, 3] < -eps))
-    problems = [f"{name}: region {regions[i].symbol} has negative size {rects[i, 2:]}" for i in bad[:5]]
+    problems = [f"{name}: region {symbols[i]} has negative size {rects[i, 2:]}" for i in bad[:5]]
     outside = np.flatnonzero((x0 < -eps) | (y0 < -eps) | (x1 > layout.width + eps) | (y1 > layout.height + eps))
-    problems += [f"{name}: region {regions[i].symbol} at {rects[i]} leaves the rectangle" for i in outside[:5]]
+    problems += [f"{name}: region {symbols[i]} at {rects[i]} leaves the rectangle" for i in outside[:5]]
     if bad.size or outside.size:
         return problems
-    return _coverage(name, regions, x0, y0, x1, y1, layout.width, layout.height, eps)
+    return _coverage(name, symbols, x0, y0, x1, y1, layout.width, layout.height, eps)
 
 
 def _cluster(starts: np.ndarray, ends: np.ndarray, bounds: tuple[float, float],
@@ -335,13 +423,13 @@ def _cluster(starts: np.ndarray, ends: np.ndarray, bounds: tuple[float, float],
     return ordered[new], index[: 2 * starts.size].reshape(2, -1)
 
 
-def _coverage(name: str, regions: Sequence[Region], x0: np.ndarray, y0: np.ndarray, x1: np.ndarray,
+def _coverage(name: str, symbols: _Symbols, x0: np.ndarray, y0: np.ndarray, x1: np.ndarray,
               y1: np.ndarray, width: float, height: float, eps: float) -> list[str]:
     xs, ix = _cluster(x0, x1, (0.0, width), eps)
     ys, iy = _cluster(y0, y1, (0.0, height), eps)
     nx, ny = len(xs), len(ys)
     if nx * ny > 25_000_000:
-        return [f"{name}: {len(regions)} regions on a {nx}x{ny} grid are too irregular to check"]
+        return [f"{name}: {len(x0)} regions on a {nx}x{ny} grid are too irregular to check"]
     stride = ny + 1
     cells = (nx + 1) * stride
     # +1 at each rectangle's (x0, y0) and (x1, y1) corner, -1 at (x1, y0) and (x0, y1)
@@ -362,7 +450,7 @@ def _coverage(name: str, regions: Sequence[Region], x0: np.ndarray, y0: np.ndarr
     if over.size:
         gx, gy = over[0]
         hit = np.flatnonzero((ix[0] <= gx) & (ix[1] > gx) & (iy[0] <= gy) & (iy[1] > gy))
-        pair = " and ".join(regions[i].symbol for i in hit[:2])
+        pair = " and ".join(symbols[i] for i in hit[:2].tolist())
         problems.append(f"{name}: regions {pair} overlap at x={xs[gx]:.4g}, y={ys[gy]:.4g}")
     return problems
 
@@ -408,10 +496,10 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
 
     def cull(region: Region) -> Region:
         if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
-            if region.children or region.label not in (None, "wall") or region.depth:
+            if is_inner(region) or region.label not in (None, "wall") or region.depth:
                 return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
             return region
-        if not region.children or region.y >= highest - tol:
+        if region.y >= highest - tol or not is_inner(region):  # (a moved copy above the cover stays unmade)
             return region
         children = tuple(cull(c) for c in region.children)
         if all(map(operator.is_, children, region.children)):

@@ -127,12 +127,12 @@ def check_plausible(layout: FacadeLayout, request: FacadeRequest | None = None,
 
 
 def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: PlausibilityRules) -> list[Finding]:
-    leaves = layout.leaves
-    if not leaves:
+    if not len(layout.leaf_rects):
         return []
     x, y, w, h = layout.leaf_rects.T
     lines = np.asarray(request.floor_lines if request is not None else (0.0,), dtype=float)
-    findings = _terminal_findings(layout, x, y, w, h, lines, rules) if _suspect(layout, w, h, rules) else []
+    findings = _terminal_findings(layout, x, y, w, h, lines, rules) if _suspect(layout, y, w, h, lines, rules) \
+        else []
     if request is not None:
         findings += _storeys(layout, y, h, request, rules)
     relabelled = int(layout.meta.get("relabelled", 0) or 0)
@@ -141,10 +141,11 @@ def _findings(layout: FacadeLayout, request: FacadeRequest | None, rules: Plausi
     return findings
 
 
-def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: PlausibilityRules) -> bool:
-    """Whether a terminal rule may report a terminal: every such rule asks for ``w < a or h < b`` with limits by
-    label (a floating door also needs a door), so one comparison with each label's largest limits rules most
-    layouts out at once."""
+def _suspect(layout: FacadeLayout, y: np.ndarray, w: np.ndarray, h: np.ndarray, lines: np.ndarray,
+             rules: PlausibilityRules) -> bool:
+    """Whether a terminal rule may report a terminal: every such rule but the floating door's asks for ``w < a or
+    h < b`` with limits by label, so one comparison with each label's largest limits, and the floating-door test
+    on the doors alone, rule most layouts out at once."""
     names, codes = layout.leaf_labels
     known = _LIMITS.get((names, id(rules)))
     if known is None or known[0] is not rules:
@@ -152,7 +153,13 @@ def _suspect(layout: FacadeLayout, w: np.ndarray, h: np.ndarray, rules: Plausibi
             _LIMITS.clear()
         known = _LIMITS[names, id(rules)] = (rules, _limits(names, rules))
     limit_w, limit_h = known[1][codes].T
-    return "door" in names or bool(np.any((w < limit_w) | (h < limit_h)))
+    if np.any((w < limit_w) | (h < limit_h)):
+        return True
+    if "door" not in names:
+        return False
+    door_y = y[codes == names.index("door")]  # (as :func:`_terminal_findings`' floating-door rule)
+    below = lines[np.clip(np.searchsorted(lines, door_y + 1e-6, side="right") - 1, 0, None)]
+    return bool(np.any(door_y - below > rules.door_step + 1e-6))
 
 
 #: ``(labels, id(rules)) -> (rules, limits)``: the limits of :func:`_limits`, per label set and rules met (layouts
@@ -179,7 +186,6 @@ def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np
                        lines: np.ndarray, rules: PlausibilityRules) -> list[Finding]:
     """The findings of the rules on single terminals (zero-size, small-opening, short- and floating-door, sliver),
     at most three listed per rule and label."""
-    leaves = layout.leaves
     labelled = layout.label_mask(bool)  # (None and "" are no label)
     zero = labelled & ((w < rules.min_extent) | (h < rules.min_extent))
     size = lambda r: f"{r.w:.2f} x {r.h:.2f} m at x={r.x:.2f}, y={r.y:.2f}"  # noqa: E731
@@ -202,7 +208,7 @@ def _terminal_findings(layout: FacadeLayout, x: np.ndarray, y: np.ndarray, w: np
     findings: list[Finding] = []
     for code, mask, describe in rows:
         hits = np.flatnonzero(mask)
-        findings += [Finding(code, describe(leaves[i]), leaves[i]) for i in hits[:3].tolist()]
+        findings += [Finding(code, describe(layout.leaves[i]), layout.leaves[i]) for i in hits[:3].tolist()]
         if hits.size > 3:
             findings.append(Finding(code, f"... and {hits.size - 3} more"))
     return findings

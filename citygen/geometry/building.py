@@ -14,6 +14,7 @@ All per-region work is numpy over the regions of a face; Python loops run per fa
 from __future__ import annotations
 
 import math
+import operator
 import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -172,10 +173,12 @@ class _Sink:
 
 @dataclass(frozen=True)
 class _Unit:
-    """Terminal regions emitted together through one transform: a face's loose terminals, or a module prototype's
-    (shifted by ``-dx, -dy``, then scaled by ``sx, sy`` into its own frame)."""
+    """Terminals emitted together through one transform: a face's loose terminals, or a module prototype's
+    (shifted by ``-dx, -dy``, then scaled by ``sx, sy`` into its own frame), as positions among ``layout``'s
+    terminals (:attr:`FacadeLayout.leaf_rects`, :attr:`FacadeLayout.leaf_sources`)."""
 
-    regions: Iterable[Region]
+    layout: FacadeLayout
+    leaves: np.ndarray
     matrix: np.ndarray
     dx: float = 0.0
     dy: float = 0.0
@@ -197,32 +200,45 @@ class _Terminals:
     styles: tuple[tuple[str, str], ...]
 
 
+_LOOK = operator.attrgetter("label", "material", "depth")
+
+
 def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
-    """Terminal arrays of every unit (one Python pass into one flat list; the style and depth of each distinct
-    (label, material, depth) are worked out once)."""
-    styles: dict[tuple[str, str], int] = {}
-    looks: dict[tuple[str, str | None, float], tuple[float, int]] = {}
-    rows: list[float] = []  # x0, y0, x1, y1, depth, style code per terminal
-    extend, known = rows.extend, looks.get
-    sizes = []
+    """Terminal arrays of every unit, read from its layout's terminal arrays (the style and depth of each distinct
+    (label, material, depth) are worked out once, in the order the terminals first show them)."""
+    looks: dict[tuple[str, str | None, float], int] = {}
+    of_layout: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # id(layout) -> look of each source, visible sources
+    parts, look_parts, sizes = [], [], []
     for unit in units:
-        start = len(rows)
-        for r in unit.regions:
-            label, w, h = r.label, r.w, r.h
-            if label is None or w <= 1e-6 or h <= 1e-6:
-                continue
-            look = known((label, r.material, r.depth))
-            if look is None:
-                look = looks[label, r.material, r.depth] = _look(label, r.material, r.depth, wall_material, styles)
-            x, y = r.x, r.y
-            extend((x, y, x + w, y + h, *look))
-        sizes.append((len(rows) - start) // 6)
-    table = np.fromiter(rows, float, len(rows)).reshape(-1, 6)
+        layout = unit.layout
+        known = of_layout.get(id(layout))
+        if known is None:
+            keys = list(map(_LOOK, layout.leaf_sources[0]))
+            ids = {key: looks.setdefault(key, len(looks)) if key[0] is not None else -1 for key in dict.fromkeys(keys)}
+            look_of = np.fromiter(map(ids.__getitem__, keys), np.intp, len(keys))
+            known = of_layout[id(layout)] = (look_of, look_of >= 0)
+        look_of, visible = known
+        source = layout.leaf_sources[1][unit.leaves]
+        rects = layout.leaf_rects[unit.leaves]
+        keep = visible[source] & ~(rects[:, 2] <= 1e-6) & ~(rects[:, 3] <= 1e-6)
+        parts.append(rects[keep])
+        look_parts.append(look_of[source[keep]])
+        sizes.append(int(keep.sum()))
+    xywh = np.concatenate(parts) if parts else np.zeros((0, 4))
+    look = np.concatenate(look_parts) if look_parts else np.zeros(0, np.intp)
+    rows = list(looks)
+    seen, first = np.unique(look, return_index=True)
+    styles: dict[tuple[str, str], int] = {}
+    depth_of, code_of = np.zeros(len(rows)), np.zeros(len(rows), np.int64)
+    for k in seen[np.argsort(first)].tolist():  # (styles numbered in the order the terminals first show them)
+        depth_of[k], code_of[k] = _look(*rows[k], wall_material, styles)
     unit_of = np.repeat(np.arange(len(units)), sizes)
     frame = np.array([(u.dx, u.dy, u.sx, u.sy) for u in units], dtype=float).reshape(-1, 4)[unit_of]
-    rects = (table[:, :4] - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
-    codes = table[:, 5].astype(np.int64)
-    return _Terminals(rects, table[:, 4], codes, unit_of, _local_codes(unit_of, codes, len(styles)), tuple(styles))
+    table = np.column_stack([xywh[:, 0], xywh[:, 1], xywh[:, 0] + xywh[:, 2], xywh[:, 1] + xywh[:, 3]])
+    rects = (table - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
+    codes = code_of[look]
+    return _Terminals(rects, depth_of[look], codes, unit_of, _local_codes(unit_of, codes, len(styles)),
+                      tuple(styles))
 
 
 def _local_codes(units: np.ndarray, codes: np.ndarray, n_styles: int) -> np.ndarray:
@@ -420,18 +436,21 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
         if layout is None:
             faces.append((face, m, None, []))
             continue
-        placed, loose = signatures.split(layout.root) if modules else ([], layout.leaves)
+        if modules:
+            placed, loose = signatures.split(layout.root)
+        else:
+            placed, loose = [], range(len(layout.leaf_rects))
         keyed = [(ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)),
-                            wall_material), r) for r in placed]
+                            wall_material), r) for r, _, _ in placed]
         faces.append((face, m, len(units), keyed))
-        units.append(_Unit(loose, m))
-        for key, r in keyed:
+        units.append(_Unit(layout, np.asarray(loose, np.intp), m))
+        for (key, r), (_, at, n) in zip(keyed, placed):
             if key not in protos:
                 protos[key] = cache.get(key)
                 if protos[key] is None:
                     qw, qh = key.size
                     built.append((key, len(units)))
-                    units.append(_Unit(r.terminals(), _IDENTITY, r.x, r.y, qw / r.w, qh / r.h))
+                    units.append(_Unit(layout, np.arange(at, at + n), _IDENTITY, r.x, r.y, qw / r.w, qh / r.h))
     emitted = _emit(units, _terminal_arrays(units, wall_material), wall_material)
     sinks = [_Sink() for _ in built]
     for own, (_, unit) in zip(sinks, built):

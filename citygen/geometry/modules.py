@@ -22,8 +22,10 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+import numpy as np
+
 from citygen.geometry.prototypes import INSTANCED
-from citygen.layout import Region
+from citygen.layout import Region, is_inner, unwalked
 
 CM = 100.0
 MIN_TERMINALS = 4
@@ -60,26 +62,29 @@ def _code(text: str | None) -> int:
     return zlib.crc32((text or "").encode("utf-8"))
 
 
+#: A region's signature, detail flag, mesh-terminal count and terminal count.
+Info = tuple[int, bool, int, int]
 #: :func:`_leaf_of` by (label, material, layer, depth, w, h): a building's terminals come in a few dozen kinds.
-_LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], tuple[int, bool, int]] = {}
+_LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], Info] = {}
 _LEAVES_SIZE = 1 << 16
 
 
-def _leaf_of(r: Region) -> tuple[int, bool, int]:
-    """Signature, detail flag and mesh-terminal count (1, or 0 for an instanced element) of a terminal region
-    (remembered in ``_LEAVES``)."""
+def _leaf_of(r: Region) -> Info:
+    """Signature, detail flag, mesh-terminal count (1, or 0 for an instanced element) and terminal count (1) of a
+    terminal region (remembered in ``_LEAVES``)."""
     if len(_LEAVES) >= _LEAVES_SIZE:
         _LEAVES.clear()
     result = _LEAVES[r.label, r.material, r.layer, r.depth, r.w, r.h] = (
         hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
               round(r.h * CM))),
         (r.label != "wall" and r.label is not None) or r.depth != 0.0,
-        int(r.label is not None and r.label not in INSTANCED))
+        int(r.label is not None and r.label not in INSTANCED), 1)
     return result
 
 
 class Signatures:
-    """Signature, detail flag and terminal count of the inner regions of some layouts, plus signature counts.
+    """Signature, detail flag, mesh-terminal and terminal counts of the inner regions of some layouts, plus
+    signature counts.
 
     Each subtree is hashed once, bottom-up, in one walk (terminals and keyed copies inline). Regions
     carrying a generator's ``key`` hint (:class:`citygen.layout.Region`) are hashed once per key: later copies
@@ -87,11 +92,14 @@ class Signatures:
     """
 
     def __init__(self, roots: Iterable[Region]) -> None:
-        self.info: dict[int, tuple[int, bool, int]] = {}
+        self.info: dict[int, Info] = {}
         self.log: list[int] = []  # signature of every inner region visited or reused, in order
         self.first: dict[int, Region] = {}
-        self._keyed: dict[int, tuple[tuple[int, bool, int], list[int]]] = {}  # key -> first copy's info, log part
+        self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
         self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
+        #: id of a hashed inner region -> (index, position of its first terminal among the region's) of each of
+        #: its inner children, last first: what :meth:`split` walks
+        self._inner: dict[int, list[tuple[int, int]]] = {}
         for root in roots:
             key = root.key
             done = self._keyed.get(key)
@@ -104,37 +112,44 @@ class Signatures:
                 self._keyed[key] = (self.info[id(root)], [])
         self.counts: Counter[int] = Counter(self.log)
 
-    def _visit(self, r: Region) -> tuple[int, bool, int]:
+    def _visit(self, r: Region) -> Info:
         """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
         keyed, info, log = self._keyed, self.info, self.log
         x, y = r.x, r.y
         start = len(log)
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
         append = content.append
-        detail, terminals = False, 0
+        detail, terminals, leaves = False, 0, 0
+        inner: list[tuple[int, int]] = []  # (index, first terminal's position) of each inner child
         for c in r.children:
             key = c.key
             done = keyed.get(key)  # (None is never a key of it)
             if done is not None:
                 result, below = done
                 log.extend(below)
+                if below:  # (an inner region logs its own signature at least)
+                    inner.append((len(content) - 3, leaves))
             elif c.children:
+                inner.append((len(content) - 3, leaves))
                 result = self._visit(c)
             else:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
                 if key is not None:
                     self.first[key], keyed[key], info[id(c)] = c, (result, []), result
-            sig, more, n = result
+            sig, more, n, k = result
             append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
             if more:
                 detail = True
             terminals += n
-        result = (hash(tuple(content)), detail, terminals)
+            leaves += k
+        result = (hash(tuple(content)), detail, terminals, leaves)
         log.append(result[0])
         key = r.key
         if key is not None:
             self.first[key], keyed[key] = r, (result, log[start:])
         info[id(r)] = result
+        inner.reverse()  # (the order :meth:`split` stacks them)
+        self._inner[id(r)] = inner
         return result
 
     def canonical(self, r: Region) -> Region:
@@ -149,34 +164,44 @@ class Signatures:
         """Whether the hashed inner region ``twin`` (and every copy of it) is a module (see the module doc)."""
         decided = self._modules.get(id(twin))
         if decided is None:
-            sig, detail, n = self.info[id(twin)]
+            sig, detail, n, _ = self.info[id(twin)]
             c = self.counts[sig]
             decided = self._modules[id(twin)] = (
                 c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
-                and not any(tc.children and self.counts[self.signature(tc)] > c for tc in twin.children))
+                and not any(is_inner(tc) and self.counts[self.signature(tc)] > c for tc in twin.children))
         return decided
 
-    def split(self, root: Region) -> tuple[list[Region], list[Region]]:
-        """The face's ``(modules, loose terminals)``: maximal repeated subtrees, and every terminal outside them.
+    def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], np.ndarray]:
+        """The face's ``(modules, loose terminals)``: its maximal repeated subtrees, each with the position of its
+        first terminal among the face's terminals (tree order) and their count, and the positions of every
+        terminal outside them (ascending: tree order).
 
-        Inside a keyed copy, the walk reads the hashed copy's results in parallel (``twin``).
+        The walk visits inner regions only. Inside a keyed copy it reads the hashed copy's results in parallel
+        (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
+        (``shift``): only the modules found inside it are made as regions.
         """
-        modules: list[Region] = []
-        loose: list[Region] = []
-        stack = [(root, root)]
-        modules_get = self._modules.get
+        if not is_inner(root):
+            return [], np.zeros(1, np.intp)
+        modules: list[tuple[Region, int, int]] = []
+        stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, root, 0)]
+        modules_get, first, info, inner = self._modules.get, self.first, self.info, self._inner
         while stack:
-            r, twin = stack.pop()
-            if not r.children:
-                loose.append(r)
-                continue
+            r, shift, twin, at = stack.pop()
             if twin.key is not None:
-                twin = self.first.get(twin.key, twin)
+                twin = first.get(twin.key, twin)
             decided = modules_get(id(twin))
             if decided is None:
                 decided = self._module(twin)
             if decided:
-                modules.append(r)
-            else:
-                stack.extend(reversed(list(zip(r.children, twin.children))))
-        return modules, loose
+                modules.append((r if shift is None else r.moved(*shift), at, info[id(twin)][3]))
+                continue
+            if shift is None:
+                lazy = unwalked(r)
+                if lazy is not None:
+                    r, shift = lazy[0], lazy[1:]
+            children, twins = r.children, twin.children
+            stack.extend([(children[i], shift, twins[i], at + offset) for i, offset in inner[id(twin)]])
+        loose = np.ones(info[id(self.canonical(root))][3], dtype=bool)  # (then every module's terminals taken out)
+        for _, at, n in modules:
+            loose[at:at + n] = False
+        return modules, np.flatnonzero(loose)

@@ -72,8 +72,7 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
         return Outcome(layout, best.alternatives, derivations, tuple(best.findings), best.problems)
     layout = best.layout
     if best.alternatives:
-        layout = FacadeLayout(layout.width, layout.height, layout.root,
-                              meta={**layout.meta, "alternatives": len(best.alternatives)})
+        layout = layout.with_meta({**layout.meta, "alternatives": len(best.alternatives)})
     return Outcome(layout, best.alternatives, derivations, (), best.problems)
 
 

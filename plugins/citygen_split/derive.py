@@ -5,6 +5,9 @@ split places its last item exactly at the parent's edge, so the leaves partition
 """
 from __future__ import annotations
 
+import functools
+import itertools
+import operator
 import os
 from bisect import bisect_right
 from collections.abc import Callable, Sequence
@@ -72,7 +75,7 @@ class _Derivation:
             "street": bool(ctx.street_facing), "courtyard": bool(ctx.is_courtyard), "levels": ctx.levels,
         }
         self.attributes = ctx.attributes
-        self.base = None if grammar.source.startswith("<") else Path(grammar.source).parent
+        self.base = _folder(grammar.source)
         self.corners = _corner_widths(request)
         self.once: dict[str, int] = {}
         self.streams: dict[str, np.random.Generator] = {}
@@ -80,13 +83,19 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
-        self.cache: dict[tuple[str, float, float, int], tuple[Region, int]] = {}  # (subtree, its size)
+        #: (subtree, its size in regions, position of its first terminal, its terminal count)
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
         #: :meth:`terminal`; none when tracing, which derives every region).
         self.terminals = {} if trace else _terminal_fields(grammar, self.asset)
-        #: The terminal regions made, in tree order (regions are made depth first, children in order).
+        #: The terminal regions made, in tree order (regions are made depth first, children in order), except
+        #: those inside moved copies of subtrees, which are noted in :attr:`copies` instead.
         self.leaves: list[Region] = []
+        #: Per moved copy of a subtree: (terminals made before it, position of the original's first terminal,
+        #: their count, dx, dy); positions count every terminal of the layout in tree order.
+        self.copies: list[tuple[int, int, int, float, float]] = []
+        self.copied = 0  # terminals inside the copies so far
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
         self.points: dict[PointKey, int] = {}
@@ -96,7 +105,9 @@ class _Derivation:
         root = self.region(self.grammar.start, 0.0, 0.0, float(r.width), float(r.height), 0, 0, ())
         layout = FacadeLayout(width=float(r.width), height=float(r.height), root=root,
                               meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
-        layout.__dict__["leaves"] = tuple(self.leaves)  # (FacadeLayout.leaves, already known)
+        if not self.copies:  # (FacadeLayout.leaves, already known)
+            layout.__dict__["leaves"] = tuple(self.leaves)
+        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(self.leaves, self.copies)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -106,17 +117,24 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
-                original, size = done
+                original, size, first, n = done
                 self.count += size
                 if self.count > MAX_REGIONS:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
                                        plugin=PLUGIN_ID, where=self.grammar.source,
                                        hint="the face is too large for this grammar's sizes")
-                return _moved(original, x - original.x, y - original.y, self.leaves.append)
-            before = self.count
+                dx, dy = x - original.x, y - original.y
+                copy = original.moved(dx, dy)
+                if n == 1 and not original.children:
+                    self.leaves.append(copy)
+                else:
+                    self.copies.append((len(self.leaves), first, n, dx, dy))
+                    self.copied += n
+                return copy
+            before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = (region, self.count - before)
+            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
@@ -149,6 +167,8 @@ class _Derivation:
             child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
             return Region.fast(x, y, w, h, symbol, children=(child,))
         children = self.children(body, x, y, w, h, floor, depth + 1, rule)
+        if not children:  # (a grid whose regions are all empty: an unlabelled terminal, as the tree reads it)
+            return self.leaf(Region.fast(x, y, w, h, symbol))
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
 
     def leaf(self, region: Region) -> Region:
@@ -181,7 +201,7 @@ class _Derivation:
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
             _set(region, "__dict__", copied)
-            self.cache[key] = (region, 1)
+            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1)
         self.leaves.append(region)
         return region
 
@@ -371,36 +391,33 @@ class _Derivation:
         return out
 
 
-def _moved(region: Region, dx: float, dy: float, add: Callable[[Region], None]) -> Region:
-    """A copy of ``region``'s tree moved by ``(dx, dy)``, every other field shared (a new field dict per region, as
-    :meth:`Region.fast`: no per-field ``object.__setattr__``); ``add`` is given each terminal copy in tree order."""
-    fields_ = region.__dict__.copy()
-    fields_["x"] = region.x + dx
-    fields_["y"] = region.y + dy
-    children = region.children
-    copy = _new(Region)
-    if children:
-        out = []
-        for child in children:
-            if child.children:
-                out.append(_moved(child, dx, dy, add))
-                continue
-            leaf = child.__dict__.copy()
-            leaf["x"] = child.x + dx
-            leaf["y"] = child.y + dy
-            moved = _new(Region)
-            _set(moved, "__dict__", leaf)
-            add(moved)
-            out.append(moved)
-        fields_["children"] = tuple(out)
-    else:
-        add(copy)
-    _set(copy, "__dict__", fields_)
-    return copy
-
-
 _new = object.__new__
 _set = object.__setattr__
+_XYWH = operator.attrgetter("x", "y", "w", "h")
+
+
+def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, float]]
+                 ) -> tuple[np.ndarray, tuple[tuple[Region, ...], np.ndarray]]:
+    """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
+    ``leaves`` and the terminals of its moved ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied
+    terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
+    rows: list[tuple[float, float, float, float]] = []
+    source: list[int] = []
+    done = 0
+    for before, first, n, dx, dy in copies:
+        if before > done:
+            rows += map(_XYWH, leaves[done:before])
+            source += range(done, before)
+            done = before
+        end = first + n
+        rows += [(x + dx, y + dy, w, h) for x, y, w, h in rows[first:end]]
+        source += source[first:end]
+    rows += map(_XYWH, leaves[done:])
+    source += range(done, len(leaves))
+    rects = np.fromiter(itertools.chain.from_iterable(rows), float, 4 * len(rows)).reshape(-1, 4)
+    index = np.fromiter(source, np.intp, len(source))
+    rects.flags.writeable = index.flags.writeable = False
+    return rects, (tuple(leaves), index)
 
 
 def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:
@@ -420,6 +437,12 @@ def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]
 
 #: ``id(grammar) -> (grammar, fields)`` of :func:`_terminal_fields`.
 _TERMINALS: dict[int, tuple[Grammar, dict[str, dict[str, Any]]]] = {}
+
+
+@functools.lru_cache(maxsize=256)
+def _folder(source: str) -> Path | None:
+    """The folder of a grammar file, against which its asset paths resolve (None for a grammar from text)."""
+    return None if source.startswith("<") else Path(source).parent
 
 
 def _corner_widths(request: FacadeRequest) -> tuple[float, float]:

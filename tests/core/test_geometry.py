@@ -1,10 +1,13 @@
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from citygen.geometry.quads import box_quads, merge_rects, weld
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def area(rects):
@@ -74,8 +77,9 @@ def test_modules_found_with_and_without_generator_keys():
     from citygen.geometry.modules import Signatures
     plain, keyed = _facade(False), _facade(True)
     a, b = Signatures([plain]), Signatures([keyed])
-    mods_a, loose_a = a.split(plain)
-    mods_b, loose_b = b.split(keyed)
+    placed_a, loose_a = a.split(plain)
+    placed_b, loose_b = b.split(keyed)
+    mods_a, mods_b = [m for m, _, _ in placed_a], [m for m, _, _ in placed_b]
     assert [m.symbol for m in mods_a] == [m.symbol for m in mods_b] == ["Bay"] * 30
     assert [(m.x, m.y) for m in mods_a] == [(m.x, m.y) for m in mods_b]
     assert {a.signature(m) for m in mods_a} == {b.signature(m) for m in mods_b}
@@ -87,7 +91,8 @@ def test_a_floor_of_identical_bays_instances_the_bay():
     from citygen.geometry.modules import Signatures
     facade = _facade(False)
     mods, loose = Signatures([facade]).split(facade)
-    assert len(mods) == 30 and {m.symbol for m in mods} == {"Bay"} and loose == []
+    assert len(mods) == 30 and {m.symbol for m, _, _ in mods} == {"Bay"} and loose.size == 0
+    assert [(at, n) for _, at, n in mods] == [(5 * k, 5) for k in range(30)]  # each bay's terminals, in tree order
 
 
 def test_render_walls_take_the_buildings_colour_and_a_data_colour_paints_every_wall():
@@ -312,3 +317,45 @@ def test_face_quaternion_rotates_as_the_faces_matrix(angle, tilt):
                          [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                          [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
     assert np.allclose(np.eye(3) @ matrix[:3, :3], (rotation @ np.eye(3)).T, atol=1e-12)
+
+
+def _eager(region):
+    """``region``'s tree with every lazily moved copy made (keys kept)."""
+    from dataclasses import replace
+    return replace(region, children=tuple(_eager(c) for c in region.children))
+
+
+@pytest.mark.parametrize("modules", [True, False])
+def test_geometry_reads_the_derivations_arrays_as_it_read_the_regions(modules):
+    """Geometry takes a face's loose terminals and module terminals as positions in the layout's terminal arrays
+    (the derivation's, with lazily moved copies left unmade): the same meshes and instances, bit for bit, as from
+    the same tree made region by region."""
+    from shapely.geometry import Polygon
+
+    from citygen.footprints import Footprint
+    from citygen.geometry.building import build_geometry, clear_module_cache
+    from citygen.layout import FacadeLayout
+    from citygen.mass import build_mass
+    from citygen.request import FacadeRequest
+    from citygen_split import derive, load
+
+    mass = build_mass(Footprint("b", Polygon([(0, 0), (23.3, 0), (23.3, 9), (0, 9)]), 12.5, "height"))
+    grammar = load(REPO / "rulesets" / "apartment.grammar")
+    faces = []
+    for face in mass.faces:
+        request = FacadeRequest(face.width, 12.5, (0.0, 3.5, 6.5, 9.5, 12.5), entrance=face.index == 0,
+                                corner_widths=(0.4, 0.7), seed=(3, face.index))
+        faces.append((face, derive(grammar, request)))
+    eager = [(face, FacadeLayout(layout.width, layout.height, _eager(layout.root))) for face, layout in faces]
+
+    def arrays(pairs):
+        clear_module_cache()
+        g = build_geometry(mass, pairs, "plaster_ochre", None, modules=modules)
+        out = [g.instances.proto_indices, g.instances.positions, g.instances.scales, g.instances.orientations]
+        for meshes in [g.meshes, *(p.meshes for p in g.modules.values())]:
+            out += [a for key in sorted(meshes) for a in (meshes[key].points, meshes[key].indices)]
+        return [a.tobytes() for a in out], list(g.modules), g.instances.protos
+
+    lazy = arrays(faces)
+    assert lazy == arrays(eager)
+    assert not modules or lazy[1]  # (the grammar's bays are modules)

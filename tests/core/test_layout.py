@@ -1,4 +1,5 @@
 import json
+import pickle
 
 import pytest
 from hypothesis import given, strategies as st
@@ -136,3 +137,54 @@ def test_leaves_label_codes_and_masks_follow_tree_order():
     assert layout.label_mask(lambda label: label in ("window", None)).tolist() == [False, True, True]
     lone = FacadeLayout(4, 3, leaf(0, 0, 4, 3, "Wall", "wall"))
     assert lone.leaves == (lone.root,) and lone.label_mask(bool).tolist() == [True]
+
+
+def _nested() -> Region:
+    bay = Region(1.25, 0.5, 2.0, 3.0, "Bay", children=(
+        leaf(1.25, 0.5, 2.0, 1.0, "W", "wall"),
+        Region(1.25, 1.5, 2.0, 2.0, "Top", children=(leaf(1.25, 1.5, 1.0, 2.0, "Win", "window", depth=-0.2),
+                                                     leaf(2.25, 1.5, 1.0, 2.0, "W", "wall", material="stone")))))
+    return Region(0.0, 0.0, 7.3, 4.1, "Floor", children=(bay, bay.moved(2.1, 0.0)))
+
+
+def test_moved_copies_equal_translated_ones_and_make_children_on_first_read():
+    from citygen.layout import is_inner, unwalked
+    root = _nested()
+    original, copy = root.children
+    nested = copy.moved(0.1, 0.3)  # (a copy of a copy: the offsets add one after the other)
+    assert unwalked(copy) == (original, 2.1, 0.0) and is_inner(copy) and unwalked(nested)[0] is copy
+    assert copy == original.translated(2.1, 0.0) and nested == original.translated(2.1, 0.0).translated(0.1, 0.3)
+    assert unwalked(copy) is None and copy.children is copy.children  # made once, then a field like any other
+    assert copy.children[1].children[0].x == 1.25 + 2.1 and copy.key is original.key
+    assert not is_inner(copy.children[0]) and Region.children == ()
+    assert pickle.loads(pickle.dumps(nested)) == nested
+    assert [r.x for r in FacadeLayout(7.3, 4.1, _nested()).leaves] == [1.25, 1.25, 2.25, 3.35, 3.35, 4.35]
+
+
+def test_leaf_sources_labels_and_materials_read_from_sources():
+    layout = FacadeLayout(7.3, 4.1, _nested())
+    sources, index = layout.leaf_sources
+    assert sources == layout.leaves and index.tolist() == list(range(6))
+    assert layout.leaf_labels[0] == ("wall", "window") and layout.count("window") == 2 and layout.count("door") == 0
+    rects = layout.leaf_rects
+    kept = layout.with_meta({"note": 1})  # (the arrays made so far are kept)
+    assert kept.meta == {"note": 1} and kept.leaf_rects is rects and kept.root is layout.root
+
+
+def test_hidden_behind_leaves_moved_copies_above_the_cover_unmade():
+    """Culling walked into every moved copy (making its children) to test whether it had any; a copy wholly above
+    the neighbour stays as it is, and the culled tree equals the one culled from regions made eagerly."""
+    from dataclasses import replace as copy_with
+
+    from citygen.layout import unwalked
+    lower = Region(0.0, 0.0, 7.3, 0.5, "Base", "wall")
+    floor = _nested()
+    upper = floor.moved(0.0, 4.1)
+    root = Region(0.0, 0.0, 7.3, 8.7, "Facade", children=(lower, Region(0.0, 0.5, 7.3, 8.2, "Body", children=(
+        floor.moved(0.0, 0.5), upper))))
+    culled = hidden_behind(FacadeLayout(7.3, 8.7, root), [2.0])
+    assert unwalked(upper) is not None
+
+    def eager(r):
+        return copy_with(r, children=tuple(eager(c) for c in r.children))
+    assert culled.root == hidden_behind(FacadeLayout(7.3, 8.7, eager(root)), [2.0]).root

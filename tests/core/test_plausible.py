@@ -161,7 +161,19 @@ def test_terminal_rules_are_never_skipped_when_one_of_them_reports(terminals, ru
     x, y, w, h = layout.leaf_rects.T
     lines = np.asarray(FacadeRequest.preview(10, 10, 3.0).floor_lines, dtype=float)
     if _terminal_findings(layout, x, y, w, h, lines, rules):
-        assert _suspect(layout, w, h, rules)
+        assert _suspect(layout, y, w, h, lines, rules)
+
+
+def test_a_face_with_a_good_door_skips_the_per_terminal_rules():
+    """The entrance face's door alone no longer makes every terminal rule run (it did for each entrance face);
+    a floating door still does."""
+    request = FacadeRequest.preview(10, 9, 3.0, 3.0)
+    lines = np.asarray(request.floor_lines, dtype=float)
+    for door, suspect in ((leaf(4, 0.0, 1.2, 2.3, "Door", "door"), False),
+                          (leaf(4, 0.8, 1.2, 2.0, "Door", "door"), True)):
+        layout = layout_of(10, 9, leaf(1, 4, 1.2, 1.5, "Window", "window"), door)
+        x, y, w, h = layout.leaf_rects.T
+        assert _suspect(layout, y, w, h, lines, DEFAULT_RULES) is suspect
 
 
 @pytest.mark.parametrize("label, below, at, code", [

@@ -5,10 +5,11 @@ import importlib
 import operator
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from citygen.errors import RulesetError
-from citygen.layout import check_partition
+from citygen.layout import FacadeLayout, check_partition
 from citygen.request import FaceContext, check_request
 from citygen_split import derive, explain, load, parse
 
@@ -302,8 +303,9 @@ def test_place_keeps_equal_tiles_bit_identical():
 
 
 def test_leaves_noted_while_deriving_are_the_trees_terminals():
-    """The derivation hands the layout its terminals (fresh, copied, corner strips, dropped empty items); they
-    are the very regions of the tree, in tree order, for every shipped grammar and a tricky one."""
+    """The derivation hands the layout its terminals' arrays (fresh, copied, corner strips, dropped empty items;
+    repeated subtrees are lazily moved copies): they are the tree's terminals, in tree order, bit for bit, for
+    every shipped grammar and a tricky one."""
     from citygen.layout import _collect_leaves
     from .conftest import RULESETS
     tricky = grammar("X --> floors { 0: E | *: Bays }\nE --> split(x) { 5: A | '1: B }\n"
@@ -312,8 +314,15 @@ def test_leaves_noted_while_deriving_are_the_trees_terminals():
     for g in [tricky, *map(load, RULESETS)]:
         r = request(23.3, 12.5, (0.0, 3.5, 6.5, 9.5, 12.5), entrance=True, corner_widths=(0.4, 0.7), seed=(3,))
         layout = derive(g, r)
+        rects, (sources, index) = layout.leaf_rects, layout.leaf_sources  # (made by the derivation)
         walked: list = []
         _collect_leaves(layout.root, walked.append)
         assert len(layout.leaves) == len(walked) and all(map(operator.is_, layout.leaves, walked)), g.source
+        # the arrays are the tree's terminals bit for bit; each terminal equals its source but for x and y
+        assert rects.tobytes() == np.array([(r.x, r.y, r.w, r.h) for r in walked]).tobytes(), g.source
+        assert all(replace(r, x=0.0, y=0.0) == replace(sources[i], x=0.0, y=0.0)
+                   for r, i in zip(walked, index.tolist())), g.source
+        assert layout.leaf_labels[1].tolist() == FacadeLayout(layout.width, layout.height,
+                                                              layout.root).leaf_labels[1].tolist()
     layout = derive(grammar("X --> terminal(wall)"), request(4, 3))
     assert layout.leaves == (layout.root,)
