@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import subprocess
 import sys
 import tempfile
@@ -105,8 +104,9 @@ def main() -> None:
             cpu, size = write(scene, recs, ground, base / f"{lod}.usdc", lod=lod)
             print(f"  lod = {lod!r}: writer {cpu:.2f} s CPU, {size / 1e6:.1f} MB")
         cpu, size = write(scene, recs, ground, base / "tiled.usdc", tile_layers=True)
-        print(f"  tile layers: writer {cpu:.2f} s CPU, {size / 1e6:.1f} MB in {len(os.listdir(base / 'tiled_tiles'))} "
-              f"tile layers")
+        tiles = len(list((base / "tiled_tiles").glob("Tile_*")))
+        print(f"  tile layers: writer {cpu:.2f} s CPU, {size / 1e6:.1f} MB in {tiles} tile layers and the element "
+              f"library")
         print(f"  one file:    {opening(base / 'variants.usdc')}")
         print(f"  tile layers: {opening(base / 'tiled.usdc')}")
         if args.blender:
