@@ -30,6 +30,7 @@ def _phases() -> dict[str, tuple[object, str]]:
     import citygen.layout
     import citygen.plausible
     import citygen.request
+    import citygen.roofmesh
     import citygen_relayout.api
     import citygen_split.alternatives
     derive = importlib.import_module("citygen_split.derive")  # (the package's ``derive`` is the function)
@@ -46,7 +47,7 @@ def _phases() -> dict[str, tuple[object, str]]:
         "builder: _defined": (citygen.builder.Builder, "_defined"),
         "hidden_behind": (citygen.builder, "hidden_behind"),
         "enforce_entrance": (citygen.entrance, "enforce_entrance"),
-        "roof": (citygen.builder.Builder, "_roof"),
+        "roof": (citygen.roofmesh, "build_roof"),
         "build_geometry": (citygen.builder, "build_geometry"),
     }
 
