@@ -11,7 +11,6 @@ import contextlib
 import functools
 import itertools
 from collections import Counter
-import math
 import os
 import pickle
 import re
@@ -32,12 +31,13 @@ from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
 from citygen.lifeline import stop_workers, tie_to_parent
-from citygen.mass import Mass, neighbour_cover
+from citygen.mass import MassPlan
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
-from citygen.roofplan import plan_mass
+from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
+from citygen.tilework import TileWork, Work, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -113,7 +113,6 @@ def _faces_line(faces: Counter[str]) -> str:
     return "facades: " + ", ".join(parts) + found
 
 
-_Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: Builder | None = None
 
 
@@ -136,7 +135,7 @@ def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | Non
     return registry.extra_plugins, registry.entry_points
 
 
-def _work(chunk: Sequence[_Work]) -> list[BuildingOutcome]:
+def _work(chunk: Sequence[Work]) -> list[BuildingOutcome]:
     assert _WORKER is not None
     return [_WORKER.build(*item) for item in chunk]
 
@@ -179,12 +178,12 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     if not imported.footprints:
         report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
     t1, c1 = time.perf_counter(), time.process_time()
-    footprints, masses = [], []
+    footprints, plans = [], []
     roofs = registry.roof_builders
     for fp in imported.footprints:
         try:
-            mass, notes = plan_mass(fp, scene, roofs)
-            masses.append(mass)
+            plan, notes = mass_plan(fp, scene, roofs)
+            plans.append(plan)
             footprints.append(fp)
             report.warnings += notes
         except CitygenError as exc:
@@ -192,14 +191,12 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         except Exception as exc:  # a bug skips one building, not the city, and says it is one
             report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
                                           fp.source))
-    report.warnings += condition_warnings(scene, footprints, masses)
-    cover = neighbour_cover(masses)
-    ground = _ground(masses) if scene.output.ground and masses else None
+    report.warnings += condition_warnings(scene, footprints, plans)  # (of a mass, it reads the outline's area)
+    ground = _ground(plans) if scene.output.ground and plans else None
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in footprints]
-    size = scene.output.tile_size
-    tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
-    work = sorted(zip(footprints, masses, cover, names, tiles), key=lambda w: (w[4], w[3]))
+    works = tile_works(footprints, plans, names, scene.output.tile_size)
+    del footprints, plans, names  # (the tiles' work holds them)
     plugins = _worker_plugins(registry) if jobs > 1 or executor == "dask" else None
     if isinstance(plugins, str) and executor == "dask":
         raise CitygenError(f"the registry given to generate_city cannot be rebuilt on dask workers: {plugins}",
@@ -208,6 +205,11 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
                                f"worker processes: {plugins}")
         jobs, plugins = 1, None
+    count = sum(map(len, works))
+    tiled = not gltf and (count > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
+    masses_only = scene.output.masses and not gltf and executor == "local"
+    by_tasks = not masses_only and (executor == "dask" or (tiled and (jobs == 1 or len(works) >= jobs)))
+    work = [] if by_tasks else work_items(works)  # (tile tasks make their own tile's)
     t2, c2 = time.perf_counter(), time.process_time()
     georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
@@ -215,21 +217,20 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         ignored = [key for key in ("tile_layers", "uvs", "lod") if getattr(scene.output, key)]
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
-    tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
-    if scene.output.masses and not gltf and executor == "local":
+    if masses_only:
         timings, cpu = _generate_masses(work, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
                                         progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
         report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0}
         return report
-    if executor == "dask" or (tiled and (jobs == 1 or len({w[4] for w in work}) >= jobs)):
+    if by_tasks:
         if executor == "dask":
             runner = functools.partial(run_tiles, scheduler=scheduler)
         else:
             from citygen.builder import Builder
             from citygen.tiles import run_local
             runner = functools.partial(run_local, builder=Builder(scene, seed, registry, rulesets))
-        timings, cpu, tasks = _generate_tiles(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
+        timings, cpu, tasks = _generate_tiles(works, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
                                               runner, report, progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
         report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0, **tasks}
@@ -296,7 +297,7 @@ def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportR
                          hint=exc.hint) from None
 
 
-def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
+def _ground(masses: Sequence[MassPlan]) -> tuple[float, float, float, float, float]:
     """The ground quad: the masses' bounds plus ``GROUND_MARGIN`` on every side, at the lowest base."""
     bounds = np.array([m.outline.bounds for m in masses])
     x0, y0 = bounds[:, :2].min(axis=0) - GROUND_MARGIN
@@ -304,7 +305,7 @@ def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
     return float(x0), float(y0), float(x1), float(y1), float(min(m.base for m in masses))
 
 
-def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
+def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
                     out: Path, layer_data: dict[str, Any], jobs: int, runner: Callable[..., list[TileResult]],
                     report: Report, progress: Callable[[int, int], None] | None,
                     ground: tuple[float, float, float, float, float] | None
@@ -320,7 +321,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
-        results = runner(work, job, jobs, progress)
+        results = runner(works, job, jobs, progress)
         t1, c1 = time.perf_counter(), time.process_time()
         for result in results:
             report.warnings += result.warnings
@@ -337,7 +338,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
-def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
+def _generate_masses(work: Sequence[Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
                      plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
                      tiled: bool, report: Report,
                      progress: Callable[[int, int], None] | None,
@@ -384,7 +385,7 @@ def _in_workers(jobs: int, total: int) -> bool:
     return jobs > 1 and total >= 2 * jobs
 
 
-def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
+def _run(work: Sequence[Work], scene: Scene, seed: int, jobs: int, registry: Registry,
          plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None,
          rulesets: dict[tuple[str, Path], Any]) -> Iterator[BuildingOutcome]:
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished

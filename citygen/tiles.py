@@ -31,6 +31,7 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
+from citygen.tilework import TileWork
 from citygen.usd.writer import StageStats, StageWriter, tile_name
 
 
@@ -85,11 +86,12 @@ def _builder(job: TileJob) -> Builder:
     return _BUILDERS.builder
 
 
-def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = None) -> TileResult:
-    """The task: build one tile's buildings (``items`` are the pipeline's work items, all of one tile) and write its
-    layer into ``job.staging``; ``builder``: one to use instead of this thread's own (the main process's)."""
+def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> TileResult:
+    """The task: build one tile's buildings (their masses and neighbour covers made here: :meth:`TileWork.items`)
+    and write its layer into ``job.staging``; ``builder``: one to use instead of this thread's own (the main
+    process's)."""
     builder = builder or _builder(job)
-    tile = items[0][4]
+    tile = work.tile
     layer = f"{tile_name(tile)}{job.suffix}"
     skipped: list[Skipped] = []
     warnings: list[str] = []
@@ -98,7 +100,7 @@ def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = N
     stats = None
     builds = 0.0
     start = time.thread_time()
-    for item in items:
+    for item in work.items():
         outcome = builder.build(*item)
         builds += outcome.cpu
         warnings += outcome.warnings
@@ -118,18 +120,12 @@ def build_tile(job: TileJob, items: Sequence[tuple], builder: Builder | None = N
                       time.thread_time() - start - builds)
 
 
-def by_tile(work: Sequence[tuple]) -> list[list[tuple]]:
-    """The work items (sorted by tile) grouped into one list per tile, in tile order."""
-    return [list(items) for _, items in itertools.groupby(work, key=lambda w: w[4])]
-
-
-def run_local(work: Sequence[tuple], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
+def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
               *, builder: Builder) -> list[TileResult]:
     """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes,
     largest tile first so the last ones to finish are small, in batches of about :data:`BUILDINGS_PER_WORKER`
     buildings per worker, each batch with fresh workers; results in tile order."""
-    tiles = by_tile(work)
-    total, done = len(work), 0
+    total, done = sum(map(len, tiles)), 0
     if jobs <= 1 or len(tiles) < 2:
         results = []
         for items in tiles:

@@ -26,7 +26,7 @@ def test_a_bug_building_one_mass_skips_that_building_as_an_internal_error(small_
     """A mass builder that raises something other than a CitygenError is a bug: the building is skipped with a
     reason saying so (as a facade or roof bug is), which the fuzz harness looks for; the rest is written."""
     import citygen.pipeline as pipeline
-    original = pipeline.plan_mass
+    original = pipeline.mass_plan
     first = []
 
     def broken(footprint, scene, roofs):
@@ -35,7 +35,7 @@ def test_a_bug_building_one_mass_skips_that_building_as_an_internal_error(small_
             raise ZeroDivisionError("float division by zero")
         return original(footprint, scene, roofs)
 
-    monkeypatch.setattr(pipeline, "plan_mass", broken)
+    monkeypatch.setattr(pipeline, "mass_plan", broken)
     report = generate_city(load_scene(small_scene), registry=test_registry)
     assert report.written == 2
     (skip,) = [s for s in report.skipped if s.id == first[0]]
