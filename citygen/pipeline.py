@@ -178,25 +178,10 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     if not imported.footprints:
         report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
     t1, c1 = time.perf_counter(), time.process_time()
-    footprints, plans = [], []
     roofs = registry.roof_builders
-    for fp in imported.footprints:
-        try:
-            plan, notes = mass_plan(fp, scene, roofs)
-            plans.append(plan)
-            footprints.append(fp)
-            report.warnings += notes
-        except CitygenError as exc:
-            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
-        except Exception as exc:  # a bug skips one building, not the city, and says it is one
-            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
-                                          fp.source))
-    report.warnings += condition_warnings(scene, footprints, plans)  # (of a mass, it reads the outline's area)
-    ground = _ground(plans) if scene.output.ground and plans else None
-    taken: set[str] = set()
-    names = [prim_name(fp.id, taken) for fp in footprints]
-    works = tile_works(footprints, plans, names, scene.output.tile_size)
-    del footprints, plans, names  # (the tiles' work holds them)
+    works, ground = _planned(imported.footprints, scene, roofs, report)
+    georef = imported.georef.to_dict() if imported.georef else {}
+    del imported  # (the tiles' work holds the footprints, packed: see citygen.tilework)
     plugins = _worker_plugins(registry) if jobs > 1 or executor == "dask" else None
     if isinstance(plugins, str) and executor == "dask":
         raise CitygenError(f"the registry given to generate_city cannot be rebuilt on dask workers: {plugins}",
@@ -211,7 +196,6 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     by_tasks = not masses_only and (executor == "dask" or (tiled and (jobs == 1 or len(works) >= jobs)))
     work = [] if by_tasks else work_items(works)  # (tile tasks make their own tile's)
     t2, c2 = time.perf_counter(), time.process_time()
-    georef = imported.georef.to_dict() if imported.georef else {}
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if gltf:
         ignored = [key for key in ("tile_layers", "uvs", "lod") if getattr(scene.output, key)]
@@ -260,6 +244,29 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
                   "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
+
+
+def _planned(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report
+             ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
+    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one that cannot be is skipped), its
+    prim name given, and all of them packed in tiles; and the ground quad when the scene asks for one."""
+    planned, plans = [], []
+    for fp in footprints:
+        try:
+            plan, notes = mass_plan(fp, scene, roofs)
+            plans.append(plan)
+            planned.append(fp)
+            report.warnings += notes
+        except CitygenError as exc:
+            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
+        except Exception as exc:  # a bug skips one building, not the city, and says it is one
+            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
+                                          fp.source))
+    report.warnings += condition_warnings(scene, planned, plans)  # (of a mass, it reads the outline's area)
+    ground = _ground(plans) if scene.output.ground and plans else None
+    taken: set[str] = set()
+    names = [prim_name(fp.id, taken) for fp in planned]
+    return tile_works(planned, plans, names, scene.output.tile_size), ground
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):

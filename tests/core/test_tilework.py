@@ -58,7 +58,7 @@ def test_a_tile_carries_only_the_neighbours_that_may_stand_against_it(small_scen
     prints = _row()
     plans = _plans(small_scene, prints)
     works = tile_works(prints, plans, [p.id for p in prints], size=20.0)
-    assert [[plans.index(p) for p in w.around] for w in works] == [[2], [1, 5], [4, 7], [6]]
+    assert [[plans.index(p) for p in w.unpacked()[1]] for w in works] == [[2], [1, 5], [4, 7], [6]]
 
 
 def test_neighbours_are_the_outlines_within_reach_of_each_other():
