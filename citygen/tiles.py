@@ -4,7 +4,8 @@ This is how a city with tile layers is generated, by either executor: the local 
 (one job) or in worker processes (:func:`run_local`), the dask one on a cluster (:mod:`citygen.distributed`). The
 stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
 time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
-from the root. A task builds its buildings with the same per-building seeds and error handling as the per-building
+from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
+neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error handling as the per-building
 path (a bad building skips itself) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
 buildings use, so the layer opens alone and its bytes depend on the seed and its buildings only, never on which
 process built it or when. Only small results travel back (a :class:`TileResult`).
