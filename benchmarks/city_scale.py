@@ -4,7 +4,7 @@
 
 Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide, 3-8 storeys, in blocks that
 share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
-main plus its finished children: the workers), peak memory (main process, largest worker, and the whole process
+main plus its finished children: the workers and the child that imports the footprints and plans the masses), peak memory (main process, largest worker, and the whole process
 tree: the sums of the RSS -- which counts pages a forked worker shares with the main process twice -- and of the
 PSS -- which shares them out -- of the main process and its children, sampled every second by a thread whose own
 CPU is left out of the main process's: reading a process's smaps costs ~4 ms, so sampling three processes five

@@ -16,6 +16,7 @@ from citygen.usd.writer import tile_name
 
 if TYPE_CHECKING:
     from citygen.tiles import TileJob, TileResult
+    from citygen.tilework import TileWork
 
 EXECUTORS = ("local", "dask")
 INSTALL_HINT = "pip install 'citygen[distributed]'"
@@ -55,17 +56,17 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
         yield client
 
 
-def run_tiles(work: Sequence[tuple], job: TileJob, workers: int, progress: Callable[[int, int], None] | None = None,
-              *, scheduler: str | None = None) -> list[TileResult]:
-    """Submit one task per tile (``work`` sorted by tile) and return their results in tile order."""
-    from citygen.tiles import build_tile, by_tile  # (the facade machinery: imported when a run needs it)
-    tiles = by_tile(work)
-    total, done = len(work), 0
+def run_tiles(tiles: Sequence[TileWork], job: TileJob, workers: int,
+              progress: Callable[[int, int], None] | None = None, *, scheduler: str | None = None
+              ) -> list[TileResult]:
+    """Submit one task per tile (``tiles`` in tile order) and return their results in tile order."""
+    from citygen.tiles import build_tile  # (the facade machinery: imported when a run needs it)
+    total, done = sum(map(len, tiles)), 0
     results: dict[tuple[int, int], TileResult] = {}
     with dask_client(scheduler, workers) as client:
         from dask.distributed import as_completed
 
-        futures = {client.submit(build_tile, job, items, pure=False): (items[0][4], len(items)) for items in tiles}
+        futures = {client.submit(build_tile, job, work, pure=False): (work.tile, len(work)) for work in tiles}
         for future in as_completed(futures):
             tile, size = futures[future]
             try:

@@ -12,11 +12,16 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import ctypes.util
+import multiprocessing
 import os
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
+from typing import TypeVar
+
+T = TypeVar("T")
 
 #: ``PR_SET_PDEATHSIG`` of ``<linux/prctl.h>``.
 PR_SET_PDEATHSIG = 1
@@ -58,3 +63,35 @@ def stop_workers(pool: ProcessPoolExecutor, grace: float = 2.0) -> None:
                 process.kill()
                 process.join(grace)
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+def run_apart(fn: Callable[[], T]) -> T | None:
+    """``fn()`` computed in a child process forked from this one (and tied to it), its result pickled back: what
+    ``fn`` allocates on the way -- a city's imported footprints -- never stays in this process's memory, nor in
+    the memory of workers forked from it later. ``None`` where this process cannot fork (not Linux) or when the
+    child failed: the caller then calls ``fn`` itself, which raises the error where it is reported."""
+    if not sys.platform.startswith("linux"):
+        return None
+    context = multiprocessing.get_context("fork")
+    receive, send = context.Pipe(duplex=False)
+    child = context.Process(target=_apart, args=(fn, send, os.getpid()), daemon=True)
+    child.start()
+    send.close()
+    try:
+        return receive.recv()
+    except EOFError:  # (it ended without an answer: killed, out of memory)
+        return None
+    finally:
+        receive.close()
+        child.join()
+
+
+def _apart(fn: Callable[[], object], send, parent: int) -> None:
+    tie_to_parent(parent)
+    try:
+        send.send(fn())
+    except BaseException:
+        send.send(None)
+    finally:
+        send.close()
+        os._exit(0)  # (no cleanup of the parent's state)

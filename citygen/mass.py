@@ -7,6 +7,7 @@ shorter than the tolerance are absorbed into their neighbours instead of becomin
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -140,23 +141,50 @@ def _ring_faces(coords: np.ndarray, ring: int, first_index: int, base: float, he
             for i, ((x, y), (ux, uy), w) in enumerate(zip(pts.tolist(), u.tolist(), width.tolist()))]
 
 
+@dataclass(frozen=True)
+class MassPlan:
+    """A mass before its wall faces are made: what the pipeline's main process holds of every building of the city
+    (tiling, the ground, the neighbour cover's neighbours), a few objects each; a tile task makes the
+    :meth:`mass` of its own buildings only."""
+
+    outline: Polygon | MultiPolygon
+    base: float
+    height: float
+    roof: RoofSpec = RoofSpec()
+    roof_source: str = "flat"
+
+    def mass(self) -> Mass:
+        """The :class:`Mass`: these walls with their faces, this roof."""
+        return Mass(outline=self.outline, base=self.base, height=self.height,
+                    faces=wall_faces(self.outline, self.base, self.height), roof=self.roof,
+                    roof_source=self.roof_source)
+
+
+def wall_faces(outline: Polygon | MultiPolygon, base: float, height: float) -> tuple[Face, ...]:
+    """A face for every exterior and courtyard edge of the cleaned ``outline``, from ``base`` up ``height``."""
+    faces: list[Face] = []
+    ring = 0
+    for part in (outline.geoms if isinstance(outline, MultiPolygon) else [outline]):
+        for k, r in enumerate((part.exterior, *part.interiors)):
+            faces += _ring_faces(np.asarray(r.coords), ring, len(faces), base, height, k > 0)
+            ring += 1
+    return tuple(faces)
+
+
 def build_mass(footprint: Footprint, collinear_tol: float = 0.1, min_edge: float = 0.8, *,
                outline: Polygon | MultiPolygon | None = None, height: float | None = None) -> Mass:
     """Extrude ``footprint`` to its height (or ``height``); faces for every exterior and courtyard edge of its
     cleaned outline (or ``outline``, already cleaned)."""
     outline = clean_outline(footprint.polygon, collinear_tol, min_edge) if outline is None else outline
     height = footprint.height if height is None else height
-    faces: list[Face] = []
-    ring = 0
-    for part in (outline.geoms if isinstance(outline, MultiPolygon) else [outline]):
-        for k, r in enumerate((part.exterior, *part.interiors)):
-            faces += _ring_faces(np.asarray(r.coords), ring, len(faces), footprint.base, height, k > 0)
-            ring += 1
-    return Mass(outline=outline, base=footprint.base, height=height, faces=tuple(faces))
+    return Mass(outline=outline, base=footprint.base, height=height,
+                faces=wall_faces(outline, footprint.base, height))
 
 
 #: Equal parts of a face's width in which the neighbour cover is measured (one sample each).
 COVER_BINS = 10
+#: Metres outside a wall at which the neighbour cover's samples lie.
+COVER_OFFSET = 0.3
 
 
 #: Sample points made into geometries at a time (a city's 100,000 buildings have millions: made at once, their
@@ -164,16 +192,19 @@ COVER_BINS = 10
 COVER_CHUNK = 65536
 
 
-def neighbour_cover(masses: list[Mass], offset: float = 0.3, bins: int = COVER_BINS) -> list[np.ndarray]:
+def neighbour_cover(masses: Sequence[Mass], offset: float = COVER_OFFSET, bins: int = COVER_BINS, *,
+                    around: Sequence[Mass | MassPlan] = ()) -> list[np.ndarray]:
     """Per mass, an ``(n_faces, bins)`` array: per face and per bin (equal parts of its width, left to right seen
-    from outside) the height (metres above the mass's base, 0..its height) up to which other buildings stand
-    against it there; 0 where none does.
+    from outside) the height (metres above the mass's base, 0..its height) up to which other buildings -- the other
+    ``masses`` and those ``around`` them -- stand against it there; 0 where none does.
 
     A bin's sample lies ``offset`` metres outside the wall at the bin's centre; it is hidden up to the lowest top
-    among the neighbours it falls in (the wall is seen above them).
+    among the neighbours it falls in (the wall is seen above them). Each sample's figure depends only on the
+    buildings it falls in, so a tile's masses with their :func:`neighbours` from other tiles ``around`` get the
+    figures the whole city's masses get.
     """
-    outlines = [m.outline for m in masses]
-    tree = shapely.STRtree(outlines)
+    standing = [*masses, *around]
+    tree = shapely.STRtree([m.outline for m in standing])
     fractions = (np.arange(bins) + 0.5) / bins
     owner = [mi for mi, mass in enumerate(masses) for _ in mass.faces]
     if not owner:
@@ -187,7 +218,7 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, bins: int = COVER_B
     hit_pt, hit_poly = np.concatenate(hits, axis=1)
     other = hit_poly != point_owner[hit_pt]
     hit_pt, hit_poly = hit_pt[other], hit_poly[other]
-    base, height = np.array([m.base for m in masses]), np.array([m.height for m in masses])
+    base, height = np.array([m.base for m in standing]), np.array([m.height for m in standing])
     top = base + height
     covered = np.full(len(pts), np.inf)  # per sample the lowest neighbour top above the face's base
     np.minimum.at(covered, hit_pt, top[hit_poly] - base[point_owner[hit_pt]])
@@ -198,3 +229,16 @@ def neighbour_cover(masses: list[Mass], offset: float = 0.3, bins: int = COVER_B
         result.append(per_face[start:start + len(mass.faces)])
         start += len(mass.faces)
     return result
+
+
+def neighbours(outlines: Sequence[Polygon | MultiPolygon], offset: float = COVER_OFFSET) -> np.ndarray:
+    """``(2, k)`` index pairs ``i, j`` (``i != j``) of the ``outlines`` such that ``j`` may hold a sample of
+    :func:`neighbour_cover` for ``i``: their bounds, ``i``'s widened by twice the samples' ``offset``, meet (a
+    superset: every sample lies within ``offset`` of its wall, inside those bounds)."""
+    if not len(outlines):
+        return np.zeros((2, 0), dtype=np.intp)
+    bounds = shapely.bounds(outlines)
+    reach = 2 * offset
+    boxes = shapely.box(bounds[:, 0] - reach, bounds[:, 1] - reach, bounds[:, 2] + reach, bounds[:, 3] + reach)
+    pairs = shapely.STRtree(outlines).query(boxes)
+    return pairs[:, pairs[0] != pairs[1]]

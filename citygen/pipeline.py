@@ -11,7 +11,6 @@ import contextlib
 import functools
 import itertools
 from collections import Counter
-import math
 import os
 import pickle
 import re
@@ -31,13 +30,14 @@ from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
-from citygen.lifeline import stop_workers, tie_to_parent
-from citygen.mass import Mass, neighbour_cover
+from citygen.lifeline import run_apart, stop_workers, tie_to_parent
+from citygen.mass import MassPlan
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
-from citygen.roofplan import plan_mass
+from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
+from citygen.tilework import TileWork, Work, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -113,7 +113,6 @@ def _faces_line(faces: Counter[str]) -> str:
     return "facades: " + ", ".join(parts) + found
 
 
-_Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 _WORKER: Builder | None = None
 
 
@@ -136,7 +135,7 @@ def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | Non
     return registry.extra_plugins, registry.entry_points
 
 
-def _work(chunk: Sequence[_Work]) -> list[BuildingOutcome]:
+def _work(chunk: Sequence[Work]) -> list[BuildingOutcome]:
     assert _WORKER is not None
     return [_WORKER.build(*item) for item in chunk]
 
@@ -173,33 +172,24 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     else:
         from citygen.builder import load_rulesets
         rulesets = load_rulesets(scene, registry)
-    imported = import_footprints(scene, registry)
-    report.skipped += imported.skipped
-    report.warnings += imported.warnings
-    if not imported.footprints:
-        report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
-    t1, c1 = time.perf_counter(), time.process_time()
-    footprints, masses = [], []
     roofs = registry.roof_builders
-    for fp in imported.footprints:
-        try:
-            mass, notes = plan_mass(fp, scene, roofs)
-            masses.append(mass)
-            footprints.append(fp)
-            report.warnings += notes
-        except CitygenError as exc:
-            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
-        except Exception as exc:  # a bug skips one building, not the city, and says it is one
-            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
-                                          fp.source))
-    report.warnings += condition_warnings(scene, footprints, masses)
-    cover = neighbour_cover(masses)
-    ground = _ground(masses) if scene.output.ground and masses else None
-    taken: set[str] = set()
-    names = [prim_name(fp.id, taken) for fp in footprints]
-    size = scene.output.tile_size
-    tiles = [(math.floor(m.outline.centroid.x / size), math.floor(m.outline.centroid.y / size)) for m in masses]
-    work = sorted(zip(footprints, masses, cover, names, tiles), key=lambda w: (w[4], w[3]))
+    plan = functools.partial(_plan, scene, registry, roofs)
+    tr, cr = time.perf_counter(), time.process_time()
+    planned = run_apart(plan)  # (the import's memory stays in a child process: see _Planned)
+    apart = planned is not None
+    if planned is None:
+        planned = plan()
+    report.skipped += planned.skipped
+    report.warnings += planned.warnings
+    works, ground, georef = planned.works, planned.ground, planned.georef
+    t1 = tr + planned.timings["import"]
+    c1 = cr + planned.cpu["import"]
+    borrowed = planned.cpu["import"] + planned.cpu["masses"] if apart else 0.0  # (the child's CPU)
+
+    def clock() -> float:
+        """This process's CPU seconds, and the planning child's."""
+        return time.process_time() + borrowed
+
     plugins = _worker_plugins(registry) if jobs > 1 or executor == "dask" else None
     if isinstance(plugins, str) and executor == "dask":
         raise CitygenError(f"the registry given to generate_city cannot be rebuilt on dask workers: {plugins}",
@@ -208,31 +198,34 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         report.warnings.append(f"running with 1 job: the registry given to generate_city cannot be rebuilt in "
                                f"worker processes: {plugins}")
         jobs, plugins = 1, None
-    t2, c2 = time.perf_counter(), time.process_time()
-    georef = imported.georef.to_dict() if imported.georef else {}
+    count = sum(map(len, works))
+    tiled = not gltf and (count > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
+    masses_only = scene.output.masses and not gltf and executor == "local"
+    by_tasks = not masses_only and (executor == "dask" or (tiled and (jobs == 1 or len(works) >= jobs)))
+    work = [] if by_tasks else work_items(works)  # (tile tasks make their own tile's)
+    t2, c2 = time.perf_counter(), clock()
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if gltf:
         ignored = [key for key in ("tile_layers", "uvs", "lod") if getattr(scene.output, key)]
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
-    tiled = not gltf and (len(work) > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
-    if scene.output.masses and not gltf and executor == "local":
+    if masses_only:
         timings, cpu = _generate_masses(work, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
                                         progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
-        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": clock() - c0}
         return report
-    if executor == "dask" or (tiled and (jobs == 1 or len({w[4] for w in work}) >= jobs)):
+    if by_tasks:
         if executor == "dask":
             runner = functools.partial(run_tiles, scheduler=scheduler)
         else:
             from citygen.builder import Builder
             from citygen.tiles import run_local
             runner = functools.partial(run_local, builder=Builder(scene, seed, registry, rulesets))
-        timings, cpu, tasks = _generate_tiles(work, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
+        timings, cpu, tasks = _generate_tiles(works, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
                                               runner, report, progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
-        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": time.process_time() - c0, **tasks}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": clock() - c0, **tasks}
         return report
     usd = builds = 0.0  # CPU seconds: the writer's add calls (this thread), the builds (wherever they ran)
     with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
@@ -252,13 +245,69 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
             writer.add(outcome.record)
             usd += time.thread_time() - tw
             report.written += 1
-        t3, c3 = time.perf_counter(), time.process_time()
+        t3, c3 = time.perf_counter(), clock()
         report.stats = writer.close()
-    t4, c4 = time.perf_counter(), time.process_time()
+    t4, c4 = time.perf_counter(), clock()
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "buildings": t3 - t2, "usd": t4 - t3, "total": t4 - t0}
     report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
                   "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
+
+
+@dataclass(frozen=True)
+class _Planned:
+    """The city planned by :func:`_plan`: its tiles' work, the ground quad, the georeference, the skipped
+    footprints and warnings met, and the wall and CPU seconds of the ``import`` and ``masses`` phases.
+
+    It is all the main process keeps of the footprint import: planned in a forked child (:func:`run_apart`), the
+    importer's objects (~5 kB a building: 20,000 buildings held ~60 MB after they were dropped, the allocator's
+    fragments) never enter the main process, nor the tile workers forked from it."""
+
+    works: list[TileWork]
+    ground: tuple[float, float, float, float, float] | None
+    georef: dict[str, Any]
+    skipped: list[Skipped]
+    warnings: list[str]
+    timings: dict[str, float]
+    cpu: dict[str, float]
+
+
+def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any]) -> _Planned:
+    """The scene's footprints imported, every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one
+    that cannot be is skipped) and its prim name given, and all of them packed in tiles."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    imported = import_footprints(scene, registry)
+    report = Report(skipped=list(imported.skipped), warnings=list(imported.warnings))
+    if not imported.footprints:
+        report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
+    t1, c1 = time.perf_counter(), time.process_time()
+    works, ground = _plan_masses(imported.footprints, scene, roofs, report)
+    return _Planned(works, ground, imported.georef.to_dict() if imported.georef else {}, report.skipped,
+                    report.warnings, {"import": t1 - t0, "masses": time.perf_counter() - t1},
+                    {"import": c1 - c0, "masses": time.process_time() - c1})
+
+
+def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report
+                 ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
+    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one that cannot be is skipped), its
+    prim name given, and all of them packed in tiles; and the ground quad when the scene asks for one."""
+    planned, plans = [], []
+    for fp in footprints:
+        try:
+            plan, notes = mass_plan(fp, scene, roofs)
+            plans.append(plan)
+            planned.append(fp)
+            report.warnings += notes
+        except CitygenError as exc:
+            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
+        except Exception as exc:  # a bug skips one building, not the city, and says it is one
+            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
+                                          fp.source))
+    report.warnings += condition_warnings(scene, planned, plans)  # (of a mass, it reads the outline's area)
+    ground = _ground(plans) if scene.output.ground and plans else None
+    taken: set[str] = set()
+    names = [prim_name(fp.id, taken) for fp in planned]
+    return tile_works(planned, plans, names, scene.output.tile_size), ground
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
@@ -296,7 +345,7 @@ def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportR
                          hint=exc.hint) from None
 
 
-def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
+def _ground(masses: Sequence[MassPlan]) -> tuple[float, float, float, float, float]:
     """The ground quad: the masses' bounds plus ``GROUND_MARGIN`` on every side, at the lowest base."""
     bounds = np.array([m.outline.bounds for m in masses])
     x0, y0 = bounds[:, :2].min(axis=0) - GROUND_MARGIN
@@ -304,7 +353,7 @@ def _ground(masses: Sequence[Mass]) -> tuple[float, float, float, float, float]:
     return float(x0), float(y0), float(x1), float(y1), float(min(m.base for m in masses))
 
 
-def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
+def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
                     out: Path, layer_data: dict[str, Any], jobs: int, runner: Callable[..., list[TileResult]],
                     report: Report, progress: Callable[[int, int], None] | None,
                     ground: tuple[float, float, float, float, float] | None
@@ -320,7 +369,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
-        results = runner(work, job, jobs, progress)
+        results = runner(works, job, jobs, progress)
         t1, c1 = time.perf_counter(), time.process_time()
         for result in results:
             report.warnings += result.warnings
@@ -337,7 +386,7 @@ def _generate_tiles(work: Sequence[_Work], scene: Scene, seed: int, plugins: tup
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
-def _generate_masses(work: Sequence[_Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
+def _generate_masses(work: Sequence[Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
                      plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
                      tiled: bool, report: Report,
                      progress: Callable[[int, int], None] | None,
@@ -384,7 +433,7 @@ def _in_workers(jobs: int, total: int) -> bool:
     return jobs > 1 and total >= 2 * jobs
 
 
-def _run(work: Sequence[_Work], scene: Scene, seed: int, jobs: int, registry: Registry,
+def _run(work: Sequence[Work], scene: Scene, seed: int, jobs: int, registry: Registry,
          plugins: tuple[tuple[object, ...], bool] | None, progress: Callable[[int, int], None] | None,
          rulesets: dict[tuple[str, Path], Any]) -> Iterator[BuildingOutcome]:
     """Outcomes in ``work`` order; with worker processes only a few chunks are in flight at a time, so finished

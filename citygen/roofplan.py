@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.footprints import Footprint
-from citygen.mass import Mass, build_mass, clean_outline
+from citygen.mass import Mass, MassPlan, clean_outline
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec, roof_angle, roof_levels, roof_spec
 from citygen.scene import Scene
@@ -112,10 +112,17 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
     return HeightSplit(walls, replace(spec, height=rise, cap=math.inf), source, tuple(warnings))
 
 
+def mass_plan(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilder]
+              ) -> tuple[MassPlan, tuple[str, ...]]:
+    """The building's mass, before its wall faces are made: its cleaned outline, walls to their height and the
+    roof it carries (:func:`split_height`); and the warnings met."""
+    outline = clean_outline(footprint.polygon)
+    split = split_height(footprint, outline, scene, roofs)
+    return MassPlan(outline, footprint.base, float(split.walls), split.roof, split.source), split.warnings
+
+
 def plan_mass(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilder]) -> tuple[Mass, tuple[str, ...]]:
     """The building's mass with walls to their height and the roof it carries (:func:`split_height`), and the
     warnings met."""
-    outline = clean_outline(footprint.polygon)
-    split = split_height(footprint, outline, scene, roofs)
-    mass = build_mass(footprint, outline=outline, height=float(split.walls))
-    return replace(mass, roof=split.roof, roof_source=split.source), split.warnings
+    plan, warnings = mass_plan(footprint, scene, roofs)
+    return plan.mass(), warnings

@@ -1,0 +1,76 @@
+"""The city's work in tiles (issue 24, memory at scale): the main process holds mass plans, a tile's task makes its
+masses and neighbour covers, the same as the whole city's."""
+from __future__ import annotations
+
+import numpy as np
+from shapely.geometry import Polygon
+
+from citygen.footprints import Footprint
+from citygen.mass import MassPlan, build_mass, neighbour_cover, neighbours
+from citygen.roofplan import mass_plan, plan_mass
+from citygen.scene import load_scene
+from citygen.tilework import tile_works, work_items
+
+
+def _row(n: int = 9) -> list[Footprint]:
+    """Row houses 8 m wide sharing party walls, of growing heights; the fourth one set back 0.2 m (its
+    neighbours' walls against it partly free), the last reaching over the next tile's border."""
+    prints = []
+    for k in range(n):
+        x, y = 8.0 * k, 0.2 if k == 3 else 0.0
+        width = 20.0 if k == n - 1 else 8.0
+        prints.append(Footprint(id=f"b{k}", polygon=Polygon([(x, y), (x + width, y), (x + width, 10), (x, 10)]),
+                                height=6.0 + k, height_source="height", height_is_total=True))
+    return prints
+
+
+def _plans(small_scene, prints):
+    scene = load_scene(small_scene)
+    roofs = {}
+    return [mass_plan(p, scene, roofs)[0] for p in prints]
+
+
+def test_a_mass_plan_makes_the_mass_plan_mass_makes(small_scene):
+    scene = load_scene(small_scene)
+    for footprint in _row(3):
+        assert mass_plan(footprint, scene, {})[0].mass() == plan_mass(footprint, scene, {})[0]
+
+
+def test_tiles_get_the_neighbour_cover_of_the_whole_city_across_their_borders(small_scene):
+    """Regression (memory at scale): covers measured per tile, with the buildings of other tiles around, are the
+    same numbers as the whole city's -- a wall on a tile border stays a party wall."""
+    prints = _row()
+    plans = _plans(small_scene, prints)
+    names = [p.id for p in prints]
+    whole = dict(zip(names, neighbour_cover([plan.mass() for plan in plans])))
+    works = tile_works(prints, plans, names, size=20.0)
+    assert [w.tile for w in works] == [(0, 0), (1, 0), (2, 0), (3, 0)]
+    assert [len(w) for w in works] == [2, 3, 2, 2]
+    items = work_items(works)
+    assert [name for _, _, _, name, _ in items] == names
+    assert whole["b1"][1].min() == 7.0 and whole["b2"][3].min() == 7.0  # (their party wall: two tiles' border)
+    for footprint, mass, cover, name, tile in items:
+        assert np.array_equal(cover, whole[name]), name
+        assert mass == plans[names.index(name)].mass()
+
+
+def test_a_tile_carries_only_the_neighbours_that_may_stand_against_it(small_scene):
+    prints = _row()
+    plans = _plans(small_scene, prints)
+    works = tile_works(prints, plans, [p.id for p in prints], size=20.0)
+    assert [[plans.index(p) for p in w.unpacked()[1]] for w in works] == [[2], [1, 5], [4, 7], [6]]
+
+
+def test_neighbours_are_the_outlines_within_reach_of_each_other():
+    boxes = [Polygon([(x, 0), (x + 5, 0), (x + 5, 5), (x, 5)]) for x in (0.0, 5.0, 10.5, 30.0)]
+    pairs = neighbours(boxes, offset=0.3)
+    assert sorted(map(tuple, pairs.T.tolist())) == [(0, 1), (1, 0), (1, 2), (2, 1)]
+    assert neighbours([]).shape == (2, 0)
+
+
+def test_a_mass_plan_is_what_build_mass_extrudes():
+    footprint = Footprint(id="c", polygon=Polygon([(0, 0), (30, 0), (30, 30), (0, 30)],
+                                                  [[(10, 10), (20, 10), (20, 20), (10, 20)]]),
+                          height=9.0, height_source="height", base=2.0)
+    mass = build_mass(footprint)
+    assert MassPlan(mass.outline, 2.0, 9.0).mass() == mass
