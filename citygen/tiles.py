@@ -34,9 +34,8 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
-from citygen.usd.library import library_name
-
 from citygen.tilework import TileWork
+from citygen.usd.library import library_name
 from citygen.usd.writer import StageStats, StageWriter, tile_name
 
 
