@@ -22,9 +22,11 @@ from citygen.errors import LayoutError
 from citygen_photo.fcn import FacadeFCN
 from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
+from citygen_photo.unet import FacadeUNet
 
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
 FCN_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
+UNET_PATH = Path(__file__).resolve().parent / "model" / "facade_unet.npz"
 #: The shipped parser: the ensemble of these models.
 SHIPPED = (MODEL_PATH, FCN_PATH)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
@@ -114,7 +116,7 @@ class Ensemble:
     """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the convolutional
     network, which err on different pixels)."""
 
-    members: tuple[FacadeParser | FacadeFCN, ...]
+    members: tuple[FacadeParser | FacadeFCN | FacadeUNet, ...]
 
     def probabilities(self, rgb: np.ndarray) -> np.ndarray:
         """The members' mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1."""
@@ -122,13 +124,13 @@ class Ensemble:
 
 
 @functools.lru_cache(maxsize=4)
-def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | Ensemble:
+def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | FacadeUNet | Ensemble:
     """The parser whose weights are in ``paths`` (several: their ensemble; none: the shipped one, ``SHIPPED``)."""
     models = tuple(_load_one(path) for path in (paths or SHIPPED))
     return models[0] if len(models) == 1 else Ensemble(models)
 
 
-def _load_one(path: Path) -> FacadeParser | FacadeFCN:
+def _load_one(path: Path) -> FacadeParser | FacadeFCN | FacadeUNet:
     """The convolutional network (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context
     perceptrons."""
     try:
@@ -140,6 +142,8 @@ def _load_one(path: Path) -> FacadeParser | FacadeFCN:
                                "python -m citygen_photo.train_fcn") from None
     if "kind" in arrays and str(arrays["kind"]) == "fcn":
         return FacadeFCN.from_arrays(arrays)
+    if "kind" in arrays and str(arrays["kind"]) == "unet":
+        return FacadeUNet.from_arrays(arrays)
     count = sum(1 for key in arrays if key.endswith("_mean"))
     return FacadeParser(tuple(Stage.from_arrays(arrays, f"s{k}") for k in range(1, count + 1)), arrays["prior"])
 
