@@ -104,3 +104,23 @@ def test_numpy_inference_is_the_torch_network_and_training_is_reproducible(tmp_p
     assert np.allclose(loaded.probabilities(photos[0][0]), a.probabilities(photos[0][0]), atol=1e-6)
     matrix = confusion(a, photos)
     assert matrix[2, 2] / matrix[2].sum() > 0.8  # the synthetic windows are learned
+
+
+def test_the_shipped_unet_is_small_and_parses_a_synthetic_facade():
+    """The shipped U-Net (``model/facade_unet.npz``) loads without PyTorch, is under 1 MiB, and its
+    probabilities favour a synthetic facade's windows over its wall."""
+    from citygen_photo.parser import UNET_PATH, load_parser
+    from citygen_photo.unet import FacadeUNet
+    from tests.photo.synthetic import facade
+    assert UNET_PATH.stat().st_size < 1024 * 1024
+    model = load_parser(UNET_PATH)
+    assert isinstance(model, FacadeUNet) and model.feature_mean.size == 0
+    rgb, boxes, _ = facade(floors=4, cols=5)
+    prob = model.probabilities(rgb)
+    assert prob.shape[:2] == (192, 192) and np.allclose(prob.sum(axis=-1), 1.0, atol=1e-4)
+    f = prob.shape[0] / rgb.shape[0]
+    inside = np.zeros(prob.shape[:2], bool)
+    for x0, y0, x1, y1 in boxes:
+        inside[round(y0 * f) + 1:round(y1 * f) - 1, round(x0 * f) + 1:round(x1 * f) - 1] = True
+    window = prob[..., CMP_LABELS.index("window")]
+    assert window[inside].mean() > 2 * window[~inside].mean()
