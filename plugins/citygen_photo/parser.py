@@ -27,8 +27,9 @@ from citygen_photo.unet import FacadeUNet
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
 FCN_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
 UNET_PATH = Path(__file__).resolve().parent / "model" / "facade_unet.npz"
-#: The shipped parser: the ensemble of these models.
-SHIPPED = (MODEL_PATH, FCN_PATH)
+#: The shipped parser: the ensemble of the perceptrons and the U-Net (round 4; the dilated network of round 3,
+#: ``FCN_PATH``, stays loadable as a member through ``load_parser``).
+SHIPPED = (MODEL_PATH, UNET_PATH)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
 CONTEXT = (7, 21)
 #: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.

@@ -117,7 +117,7 @@ def test_the_shipped_unet_is_small_and_parses_a_synthetic_facade():
     assert isinstance(model, FacadeUNet) and model.feature_mean.size == 0
     rgb, boxes, _ = facade(floors=4, cols=5)
     prob = model.probabilities(rgb)
-    assert prob.shape[:2] == (192, 192) and np.allclose(prob.sum(axis=-1), 1.0, atol=1e-4)
+    assert max(prob.shape[:2]) == 192 and np.allclose(prob.sum(axis=-1), 1.0, atol=1e-4)
     f = prob.shape[0] / rgb.shape[0]
     inside = np.zeros(prob.shape[:2], bool)
     for x0, y0, x1, y1 in boxes:
