@@ -7,7 +7,8 @@ the pixel, and profiled along the pixel's row and column, so a pixel learns from
 pane between window frames, a door below a window column, a row of windows at the pitch above). Weights ship in ``model/facade_parser.npz`` (trained by
 :mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
 is numpy only and nothing is downloaded. The shipped parser (``SHIPPED``, :class:`Ensemble`) averages these
-probabilities with those of the convolutional network of :mod:`citygen_photo.fcn`.
+probabilities with those of the U-Net of :mod:`citygen_photo.unet`; the dilated network of :mod:`citygen_photo.fcn`
+can be a member too.
 """
 from __future__ import annotations
 
@@ -114,8 +115,8 @@ class FacadeParser:
 
 @dataclass(frozen=True)
 class Ensemble:
-    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the convolutional
-    network, which err on different pixels)."""
+    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the U-Net, which err on
+    different pixels)."""
 
     members: tuple[FacadeParser | FacadeFCN | FacadeUNet, ...]
 
@@ -132,15 +133,15 @@ def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | FacadeUNet | Ensembl
 
 
 def _load_one(path: Path) -> FacadeParser | FacadeFCN | FacadeUNet:
-    """The convolutional network (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context
-    perceptrons."""
+    """The dilated network (:mod:`citygen_photo.fcn`) or the U-Net (:mod:`citygen_photo.unet`) where the file says
+    so, else the auto-context perceptrons."""
     try:
         with np.load(path) as data:
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
-                          hint="reinstall citygen, or train the models with python -m citygen_photo.train and "
-                               "python -m citygen_photo.train_fcn") from None
+                          hint="reinstall citygen, or train the models with python -m citygen_photo.train, "
+                               "python -m citygen_photo.train_unet (or train_fcn)") from None
     if "kind" in arrays and str(arrays["kind"]) == "fcn":
         return FacadeFCN.from_arrays(arrays)
     if "kind" in arrays and str(arrays["kind"]) == "unet":
