@@ -1,6 +1,7 @@
 """Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
 
-    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40] [--parser learned|contrast] [--model M.npz ...]
+    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40 | --photos N ...] [--parser learned|contrast]
+        [--model M.npz ...]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors

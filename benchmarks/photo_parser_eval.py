@@ -1,6 +1,6 @@
 """The learned facade parser's pixel accuracy on held-out CMP photos (cmp_b0001-0040, never trained on).
 
-    python benchmarks/photo_parser_eval.py [DATA_DIR] [--model MODEL.npz ...] [--first 1 --last 40]
+    python benchmarks/photo_parser_eval.py [DATA_DIR] [--model MODEL.npz ...] [--first 1 --last 40 | --photos N ...]
 
 Each photo is cropped to its annotated facade box and parsed; the predicted label (argmax) of every working pixel
 is compared with the label map there: per-class recall (pixel accuracy of the class), window pixel precision and
