@@ -1,6 +1,7 @@
 """Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
 
-    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40] [--parser learned|contrast] [--model M.npz ...]
+    python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40 | --photos N ...] [--parser learned|contrast]
+        [--model M.npz ...]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors
@@ -138,6 +139,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("data", nargs="?", default=str(DEFAULT))
     parser.add_argument("--first", type=int, default=1)
     parser.add_argument("--last", type=int, default=40)
+    parser.add_argument("--photos", type=int, nargs="+", default=[],
+                        help="photo numbers instead of --first..--last (e.g. round 2's balcony fold)")
     parser.add_argument("--parser", choices=PARSERS, default="learned",
                         help="learned (default): the trained parser; contrast: mueller2007's contrast test")
     parser.add_argument("--model", type=Path, nargs="+", default=[],
@@ -145,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     data = Path(args.data)
     model = load_parser(*args.model) if args.model else None
-    photos = [data / f"cmp_b{i:04d}.jpg" for i in range(args.first, args.last + 1)]
+    photos = [data / f"cmp_b{i:04d}.jpg" for i in (args.photos or range(args.first, args.last + 1))]
     photos = [p for p in photos if p.is_file()]
     if not photos:
         print(f"error: no cmp_b*.jpg photos in {data}", file=sys.stderr)

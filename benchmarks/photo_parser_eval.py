@@ -1,6 +1,6 @@
 """The learned facade parser's pixel accuracy on held-out CMP photos (cmp_b0001-0040, never trained on).
 
-    python benchmarks/photo_parser_eval.py [DATA_DIR] [--model MODEL.npz ...] [--first 1 --last 40]
+    python benchmarks/photo_parser_eval.py [DATA_DIR] [--model MODEL.npz ...] [--first 1 --last 40 | --photos N ...]
 
 Each photo is cropped to its annotated facade box and parsed; the predicted label (argmax) of every working pixel
 is compared with the label map there: per-class recall (pixel accuracy of the class), window pixel precision and
@@ -30,12 +30,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="the parser's weights, several for their ensemble (default: the shipped parser)")
     parser.add_argument("--first", type=int, default=1)
     parser.add_argument("--last", type=int, default=40)
+    parser.add_argument("--photos", type=int, nargs="+", default=[],
+                        help="photo numbers instead of --first..--last (e.g. round 2's balcony fold)")
     args = parser.parse_args(argv)
     model = load_parser(*args.model)
     n = len(CMP_LABELS)
     confusion = np.zeros((n, n), dtype=np.int64)
     cpu = []
-    for k in range(args.first, args.last + 1):
+    for k in args.photos or range(args.first, args.last + 1):
         jpg = args.data / f"cmp_b{k:04d}.jpg"
         if not jpg.exists():
             continue
@@ -46,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
         truth = _resized_labels(labels, prob.shape[:2]).ravel() - 1
         confusion += np.bincount(truth * n + prob.argmax(axis=-1).ravel(), minlength=n * n).reshape(n, n)
     if not cpu:
-        print(f"no CMP photos cmp_b{args.first:04d}-{args.last:04d} in {args.data}", file=sys.stderr)
+        print(f"no CMP photos of those numbers in {args.data}", file=sys.stderr)
         return 2
     recall = confusion.diagonal() / np.maximum(confusion.sum(axis=1), 1)
     precision = confusion.diagonal() / np.maximum(confusion.sum(axis=0), 1)

@@ -7,7 +7,8 @@ the pixel, and profiled along the pixel's row and column, so a pixel learns from
 pane between window frames, a door below a window column, a row of windows at the pitch above). Weights ship in ``model/facade_parser.npz`` (trained by
 :mod:`citygen_photo.train` on CMP photos cmp_b0061-0300; CMP Facade Database, Tylecek & Sara, GCPR 2013); inference
 is numpy only and nothing is downloaded. The shipped parser (``SHIPPED``, :class:`Ensemble`) averages these
-probabilities with those of the convolutional network of :mod:`citygen_photo.fcn`.
+probabilities with those of the U-Net of :mod:`citygen_photo.unet`; the dilated network of :mod:`citygen_photo.fcn`
+can be a member too.
 """
 from __future__ import annotations
 
@@ -22,11 +23,14 @@ from citygen.errors import LayoutError
 from citygen_photo.fcn import FacadeFCN
 from citygen_photo.features import pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
+from citygen_photo.unet import FacadeUNet
 
 MODEL_PATH = Path(__file__).resolve().parent / "model" / "facade_parser.npz"
 FCN_PATH = Path(__file__).resolve().parent / "model" / "facade_fcn.npz"
-#: The shipped parser: the ensemble of these models.
-SHIPPED = (MODEL_PATH, FCN_PATH)
+UNET_PATH = Path(__file__).resolve().parent / "model" / "facade_unet.npz"
+#: The shipped parser: the ensemble of the perceptrons and the U-Net (round 4; the dilated network of round 3,
+#: ``FCN_PATH``, stays loadable as a member through ``load_parser``).
+SHIPPED = (MODEL_PATH, UNET_PATH)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
 CONTEXT = (7, 21)
 #: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.
@@ -111,10 +115,10 @@ class FacadeParser:
 
 @dataclass(frozen=True)
 class Ensemble:
-    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the convolutional
-    network, which err on different pixels)."""
+    """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the U-Net, which err on
+    different pixels)."""
 
-    members: tuple[FacadeParser | FacadeFCN, ...]
+    members: tuple[FacadeParser | FacadeFCN | FacadeUNet, ...]
 
     def probabilities(self, rgb: np.ndarray) -> np.ndarray:
         """The members' mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1."""
@@ -122,24 +126,26 @@ class Ensemble:
 
 
 @functools.lru_cache(maxsize=4)
-def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | Ensemble:
+def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | FacadeUNet | Ensemble:
     """The parser whose weights are in ``paths`` (several: their ensemble; none: the shipped one, ``SHIPPED``)."""
     models = tuple(_load_one(path) for path in (paths or SHIPPED))
     return models[0] if len(models) == 1 else Ensemble(models)
 
 
-def _load_one(path: Path) -> FacadeParser | FacadeFCN:
-    """The convolutional network (:mod:`citygen_photo.fcn`) where the file says so, else the auto-context
-    perceptrons."""
+def _load_one(path: Path) -> FacadeParser | FacadeFCN | FacadeUNet:
+    """The dilated network (:mod:`citygen_photo.fcn`) or the U-Net (:mod:`citygen_photo.unet`) where the file says
+    so, else the auto-context perceptrons."""
     try:
         with np.load(path) as data:
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError) as exc:
         raise LayoutError(f"cannot read the facade parser's weights ({exc})", where=str(path),
-                          hint="reinstall citygen, or train the models with python -m citygen_photo.train and "
-                               "python -m citygen_photo.train_fcn") from None
+                          hint="reinstall citygen, or train the models with python -m citygen_photo.train, "
+                               "python -m citygen_photo.train_unet (or train_fcn)") from None
     if "kind" in arrays and str(arrays["kind"]) == "fcn":
         return FacadeFCN.from_arrays(arrays)
+    if "kind" in arrays and str(arrays["kind"]) == "unet":
+        return FacadeUNet.from_arrays(arrays)
     count = sum(1 for key in arrays if key.endswith("_mean"))
     return FacadeParser(tuple(Stage.from_arrays(arrays, f"s{k}") for k in range(1, count + 1)), arrays["prior"])
 

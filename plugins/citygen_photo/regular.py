@@ -46,7 +46,7 @@ TIGHT = 0.5
 #: A gap between rows of windows this many pitches long holds more floors.
 MISSING_ROW = 1.6
 #: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
-GROUND_SHARE = 0.5
+GROUND_SHARE = 0.4
 #: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
 #: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
 SHOP_BAND = 0.2

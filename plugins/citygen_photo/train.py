@@ -36,7 +36,7 @@ HIDDEN = (64, 64)
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
-def facade_examples(data: Path, numbers: range) -> list[tuple[np.ndarray, np.ndarray]]:
+def facade_examples(data: Path, numbers) -> list[tuple[np.ndarray, np.ndarray]]:
     """(features, labels) at working size for every photo of ``numbers`` in ``data`` (missing ones skipped)."""
     out = []
     for n in numbers:
@@ -139,14 +139,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--stages", type=int, default=STAGES, help="auto-context stages")
     parser.add_argument("--hidden", type=int, nargs="+", default=list(HIDDEN), help="hidden layer sizes")
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--exclude", type=int, nargs="*", default=[], help="photo numbers left out of training")
     parser.add_argument("--validate", action="store_true",
                         help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
                              f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
     args = parser.parse_args(argv)
-    numbers = range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN
+    numbers = [n for n in (range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN)
+               if n not in set(args.exclude)]
     photos = facade_examples(args.data, numbers)
     if not photos:
-        print(f"no CMP photos cmp_b{numbers.start:04d}-{numbers.stop - 1:04d} in {args.data}", file=sys.stderr)
+        print(f"no CMP photos among cmp_b{numbers[0]:04d}-{numbers[-1]:04d} in {args.data}", file=sys.stderr)
         return 2
     model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed)
     arrays = {"prior": model.prior}

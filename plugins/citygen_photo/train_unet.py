@@ -1,0 +1,199 @@
+"""Train the U-Net facade parser on CMP photos: ``python -m citygen_photo.train_unet [DATA] [-o MODEL.npz]``.
+
+Needs PyTorch (``pip install -e '.[photo-train]'``, CPU is enough); the shipped model (``model/facade_unet.npz``)
+was made by this script with its defaults, reproducible from the seed on the same photos (one thread). Photos
+cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation and never seen here.
+
+Each photo is cropped to its annotated facade box and reduced to the working size. Every step draws ``--batch``
+photos, each with probability proportional to its balcony + blind pixel share plus ``EVEN`` times the mean share
+(the held-out kind -- French windows behind railings, closed shutters -- comes up more often without dropping the
+photos that have none), jitters its colours (a gain per channel and a gamma), mirrors it left-right half the time,
+and cuts a random ``--crop``-pixel window; Adam descends on the cross-entropy with label weights
+``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), whose exported ``prior`` turns the
+outputs back into probabilities. ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
+on cmp_b0261-0300; ``--exclude`` leaves photos out (the balcony fold).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from citygen_photo.features import pixel_features
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.parser import UNET_PATH
+from citygen_photo.train import DEFAULT_DATA, TRAIN, VALIDATION, facade_examples, save
+from citygen_photo.train_fcn import COLUMN, label_weights
+from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, FacadeUNet, base_input, layer_shapes
+
+#: Defaults of the shipped model: level widths, steps, photos per step, crop side (working pixels), label weights.
+CHANNELS = (16, 32, 48, 64)
+STEPS = 2400
+BATCH = 6
+CROP = 128
+WEIGHT_POWER = 0.5
+#: A photo's draw weight is its balcony + blind share plus this many times the photos' mean share.
+EVEN = 1.0
+#: Colour jitter: gain per channel within 1 +- GAIN, gamma within [1 / GAMMA, GAMMA].
+GAIN = 0.1
+GAMMA = 1.25
+_HELD_OUT_KIND = (CMP_LABELS.index("balcony") + 1, CMP_LABELS.index("blind") + 1)
+
+
+def draw_weights(photos: list[tuple[np.ndarray, np.ndarray]], even: float = EVEN) -> np.ndarray:
+    """Each photo's probability of being drawn: its balcony + blind pixel share plus ``even`` times the mean."""
+    share = np.array([np.isin(lab, _HELD_OUT_KIND).mean() for _, lab in photos])
+    weight = share + even * share.mean() + 1e-9
+    return weight / weight.sum()
+
+
+def jittered(work: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``work`` (H, W, 3) in 0..1 with a random gamma and a random gain per channel, clipped to 0..1."""
+    gamma = GAMMA ** rng.uniform(-1, 1)
+    return np.clip(work ** gamma * rng.uniform(1 - GAIN, 1 + GAIN, 3), 0, 1)
+
+
+def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.ndarray] | None,
+               weights: np.ndarray, rng: np.random.Generator, batch: int, crop: int,
+               column: tuple[float, float] = (0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
+    """One training batch: inputs ``(batch, C, crop, crop)`` float32 and labels ``(batch, crop, crop)`` (ids - 1;
+    pixels padded onto a photo smaller than the crop are -100, ignored by the loss). ``features``: the photos'
+    standardised pixel features or None; ``column`` the (mean, std) they were standardised with in the column
+    position's channel, which a mirrored photo flips."""
+    xs, ys = [], []
+    for i in rng.choice(len(photos), size=batch, p=weights):
+        work, lab = photos[i]
+        x = base_input(jittered(work, rng))
+        if features is not None:
+            x = np.concatenate([x, features[i]], axis=-1)
+        if rng.random() < 0.5:
+            x, lab = x[:, ::-1].copy(), lab[:, ::-1]
+            if features is not None:
+                mean, std = column
+                x[..., BASE_INPUTS + COLUMN] = (1 - 2 * mean - x[..., BASE_INPUTS + COLUMN] * std) / std
+        h, w = lab.shape
+        ch, cw = min(crop, h), min(crop, w)
+        y0, x0 = rng.integers(h - ch + 1), rng.integers(w - cw + 1)
+        xc = np.zeros((crop, crop, x.shape[-1]), np.float32)
+        yc = np.full((crop, crop), -100, np.int64)
+        xc[:ch, :cw] = x[y0:y0 + ch, x0:x0 + cw]
+        yc[:ch, :cw] = lab[y0:y0 + ch, x0:x0 + cw].astype(np.int64) - 1
+        xs.append(xc.transpose(2, 0, 1))
+        ys.append(yc)
+    return np.stack(xs), np.stack(ys)
+
+
+def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
+          features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
+          power: float = WEIGHT_POWER, even: float = EVEN, seed: int = 7) -> FacadeUNet:
+    """The network fitted on ``photos`` (working image, label map) from ``seed``."""
+    import torch
+    from torch import nn
+    torch.set_num_threads(1)
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    feats, mean, std = None, np.zeros(0, np.float32), np.zeros(0, np.float32)
+    if features:
+        feats = [pixel_features(work) for work, _ in photos]
+        flat = np.concatenate([f.reshape(-1, f.shape[-1]) for f in feats])
+        mean, std = flat.mean(axis=0).astype(np.float32), (flat.std(axis=0) + 1e-6).astype(np.float32)
+        feats = [((f - mean) / std).astype(np.float32) for f in feats]
+    net = build_network(BASE_INPUTS + mean.size, channels)
+    weight = label_weights(photos, power)
+    loss_fn = nn.CrossEntropyLoss(weight=torch.tensor(weight, dtype=torch.float32))
+    optimiser = torch.optim.Adam(net.parameters(), lr=2e-3, weight_decay=1e-5)
+    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
+    draw = draw_weights(photos, even)
+    column = (float(mean[COLUMN]), float(std[COLUMN])) if features else (0.0, 1.0)
+    t0, running = time.process_time(), 0.0
+    for step in range(steps):
+        x, y = draw_batch(photos, feats, draw, rng, batch, crop, column)
+        loss = loss_fn(net(torch.from_numpy(x)), torch.from_numpy(y))
+        optimiser.zero_grad()
+        loss.backward()
+        optimiser.step()
+        schedule.step()
+        running = 0.98 * running + 0.02 * loss.item()
+        if (step + 1) % 100 == 0:
+            print(f"step {step + 1}: loss {running:.3f}, {time.process_time() - t0:.0f} s cpu", file=sys.stderr)
+    prior = np.where(weight > 0, 1 / np.maximum(weight, 1e-9), 0.0)
+    return exported(net, channels, mean, std, (prior / prior.sum()).astype(np.float32))
+
+
+def build_network(inputs: int, channels: tuple[int, ...]):
+    """The PyTorch module of :class:`citygen_photo.unet.FacadeUNet`'s architecture (same layer order)."""
+    import torch
+    from torch import nn
+    from torch.nn import functional as F
+    shapes = layer_shapes(inputs, channels, len(CMP_LABELS))
+    levels = len(channels) - 1
+    dilations = [1] * (2 * levels) + list(BOTTOM_DILATIONS) + [1] * levels
+
+    class UNet(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.convs = nn.ModuleList([nn.Conv2d(i, o, 3, padding=d, dilation=d)
+                                        for (i, o), d in zip(shapes, dilations)] + [nn.Conv2d(*shapes[-1], 1)])
+
+        def forward(self, x):
+            layers, skips = iter(self.convs), []
+            for _ in range(levels):
+                for _ in range(2):
+                    x = torch.relu(next(layers)(x))
+                skips.append(x)
+                x = F.max_pool2d(x, 2)
+            for _ in BOTTOM_DILATIONS:
+                x = torch.relu(next(layers)(x))
+            for skip in reversed(skips):
+                x = torch.relu(next(layers)(torch.cat([F.interpolate(x, scale_factor=2, mode="nearest"), skip], 1)))
+            return next(layers)(x)
+    return UNet()
+
+
+def exported(net, channels: tuple[int, ...], mean: np.ndarray, std: np.ndarray, prior: np.ndarray) -> FacadeUNet:
+    """The numpy parser of the PyTorch module ``net``, its weights rounded to float16 as stored."""
+    import torch
+    convs = net.convs
+    with torch.no_grad():
+        layers = [(c.weight.permute(2, 3, 1, 0).numpy().copy(), c.bias.numpy().copy()) for c in convs[:-1]]
+        layers.append((convs[-1].weight[:, :, 0, 0].T.numpy().copy(), convs[-1].bias.numpy().copy()))
+    return FacadeUNet(tuple(channels), mean, std, tuple((w.astype(np.float16).astype(np.float32),
+                                                         b.astype(np.float16).astype(np.float32)) for w, b in layers),
+                      prior)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA)
+    parser.add_argument("-o", "--output", type=Path, default=UNET_PATH)
+    parser.add_argument("--channels", type=int, nargs="+", default=list(CHANNELS),
+                        help="widths of the levels, finest first (the last is the bottom's)")
+    parser.add_argument("--features", action="store_true", help="add the perceptrons' pixel features as inputs")
+    parser.add_argument("--steps", type=int, default=STEPS)
+    parser.add_argument("--batch", type=int, default=BATCH)
+    parser.add_argument("--crop", type=int, default=CROP, help="crop side, working pixels (a multiple of 8)")
+    parser.add_argument("--power", type=float, default=WEIGHT_POWER, help="label weight = share ** -power")
+    parser.add_argument("--even", type=float, default=EVEN,
+                        help="photo draw weight = balcony + blind share + EVEN x the mean share")
+    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--exclude", type=int, nargs="*", default=[], help="photo numbers left out of training")
+    parser.add_argument("--validate", action="store_true",
+                        help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
+                             f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
+    args = parser.parse_args(argv)
+    numbers = [n for n in (range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN)
+               if n not in set(args.exclude)]
+    photos = facade_examples(args.data, numbers)
+    if not photos:
+        print(f"no CMP photos among cmp_b{numbers[0]:04d}-{numbers[-1]:04d} in {args.data}", file=sys.stderr)
+        return 2
+    model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
+                  batch=args.batch, crop=args.crop, power=args.power, even=args.even, seed=args.seed)
+    return save(model, model.arrays(), args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
