@@ -138,23 +138,36 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int, default=SAMPLES, help="pixels drawn per photo")
     parser.add_argument("--stages", type=int, default=STAGES, help="auto-context stages")
     parser.add_argument("--hidden", type=int, nargs="+", default=list(HIDDEN), help="hidden layer sizes")
-    parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--exclude", type=int, nargs="*", default=[], help="photo numbers left out of training")
-    parser.add_argument("--validate", action="store_true",
-                        help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
-                             f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
+    add_training_arguments(parser)
     args = parser.parse_args(argv)
-    numbers = [n for n in (range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN)
-               if n not in set(args.exclude)]
-    photos = facade_examples(args.data, numbers)
+    photos = training_photos(args)
     if not photos:
-        print(f"no CMP photos among cmp_b{numbers[0]:04d}-{numbers[-1]:04d} in {args.data}", file=sys.stderr)
         return 2
     model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed)
     arrays = {"prior": model.prior}
     for k, stage in enumerate(model.stages, start=1):
         arrays.update(stage.arrays(f"s{k}"))
     return save(model, arrays, args)
+
+
+def add_training_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options every training script shares: ``--seed``, ``--exclude`` and ``--validate``."""
+    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--exclude", type=int, nargs="*", default=[], help="photo numbers left out of training")
+    parser.add_argument("--validate", action="store_true",
+                        help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
+                             f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
+
+
+def training_photos(args: argparse.Namespace) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The photos and label maps ``args`` train on (:func:`add_training_arguments`); none found is said on
+    stderr."""
+    numbers = [n for n in (range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN)
+               if n not in set(args.exclude)]
+    photos = facade_examples(args.data, numbers)
+    if not photos:
+        print(f"no CMP photos among cmp_b{numbers[0]:04d}-{numbers[-1]:04d} in {args.data}", file=sys.stderr)
+    return photos
 
 
 def save(model: FacadeParser, arrays: dict[str, np.ndarray], args: argparse.Namespace) -> int:

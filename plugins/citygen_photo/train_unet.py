@@ -25,7 +25,7 @@ import numpy as np
 from citygen_photo.features import pixel_features
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.parser import UNET_PATH
-from citygen_photo.train import DEFAULT_DATA, TRAIN, VALIDATION, facade_examples, save
+from citygen_photo.train import DEFAULT_DATA, add_training_arguments, save, training_photos
 from citygen_photo.train_fcn import COLUMN, label_weights
 from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, FacadeUNet, base_input, layer_shapes
 
@@ -178,17 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--power", type=float, default=WEIGHT_POWER, help="label weight = share ** -power")
     parser.add_argument("--even", type=float, default=EVEN,
                         help="photo draw weight = balcony + blind share + EVEN x the mean share")
-    parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--exclude", type=int, nargs="*", default=[], help="photo numbers left out of training")
-    parser.add_argument("--validate", action="store_true",
-                        help=f"train on cmp_b{TRAIN.start:04d}-{VALIDATION.start - 1:04d} only and report the pixel "
-                             f"accuracy on cmp_b{VALIDATION.start:04d}-{VALIDATION.stop - 1:04d} (for choices)")
+    add_training_arguments(parser)
     args = parser.parse_args(argv)
-    numbers = [n for n in (range(TRAIN.start, VALIDATION.start) if args.validate else TRAIN)
-               if n not in set(args.exclude)]
-    photos = facade_examples(args.data, numbers)
+    photos = training_photos(args)
     if not photos:
-        print(f"no CMP photos among cmp_b{numbers[0]:04d}-{numbers[-1]:04d} in {args.data}", file=sys.stderr)
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
                   batch=args.batch, crop=args.crop, power=args.power, even=args.even, seed=args.seed)
