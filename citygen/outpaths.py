@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from citygen.errors import ExportError
-from citygen.usd.publish import temp_prefix
+from citygen.usd.publish import current_umask, temp_prefix
 
 
 def check_writable(path: str | Path, what: str) -> None:
@@ -61,7 +61,7 @@ def write_file(path: str | Path, write: Callable[[BinaryIO], object], what: str)
         tmp = Path(name)
         with os.fdopen(fd, "wb") as f:
             write(f)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; the result is an ordinary file
+        os.chmod(tmp, 0o666 & ~current_umask())  # mkstemp makes 0600; the result is an ordinary file
         os.replace(tmp, path)
         tmp = None
     except OSError as exc:
@@ -78,9 +78,3 @@ def _is(path: Path, test) -> bool:
         return test(path)
     except OSError:
         return False
-
-
-def _umask() -> int:
-    umask = os.umask(0)
-    os.umask(umask)
-    return umask

@@ -99,8 +99,7 @@ class Definitions:
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(author.layer, PROTOTYPES.name, "", Sdf.SpecifierClass)
-        held = [(path, p) for path, p in self.pending if not (p.element and self.element_library)]
-        fresh = [p for _, p in held if p.arrays is None]
+        fresh = [p for _, p in self.pending if p.arrays is None and not (p.element and self.element_library)]
         batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
         for p in fresh:
             normals = [next(batch) for _ in p.meshes]

@@ -14,7 +14,6 @@ the other run's library settled away: run them one after the other.
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -24,7 +23,7 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.usd.author import Author
 from citygen.usd.definitions import PROTOTYPES, Definitions, elements, prepare_elements
 from citygen.usd.materials import Material
-from citygen.usd.publish import export_layer, temp_prefix
+from citygen.usd.publish import export_layer, temp_prefix, write_layer
 
 STEM = "elements"
 
@@ -66,7 +65,7 @@ def publish_library(staged: Path, tiles_dir: Path) -> Path | None:
     old = Sdf.Layer.OpenAsAnonymous(str(target))
     for path in extra:
         Sdf.CopySpec(old, path, union, path)  # (a transient layer: its field order need not be reproducible)
-    _replace(union, target)
+    write_layer(union, target)
     own = tiles_dir / f"{temp_prefix(staged.name)}own{staged.suffix}"
     os.replace(staged, own)
     return own
@@ -98,12 +97,3 @@ def _missing(target: Path, staged: Path) -> list[Sdf.Path]:
         extra += [child.path for child in spec.nameChildren if new.GetPrimAtPath(child.path) is None]
     return extra
 
-
-def _replace(layer: Sdf.Layer, target: Path) -> None:
-    fd, name = tempfile.mkstemp(prefix=temp_prefix(target.name), suffix=target.suffix, dir=target.parent)
-    os.close(fd)
-    try:
-        export_layer(layer, Path(name))
-        os.replace(name, target)
-    finally:
-        Path(name).unlink(missing_ok=True)

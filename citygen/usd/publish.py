@@ -17,6 +17,7 @@ import hashlib
 import os
 import re
 import shutil
+import tempfile
 from collections.abc import Collection
 from pathlib import Path
 
@@ -24,6 +25,9 @@ from pxr import Sdf, Tf
 
 from citygen.errors import ExportError
 
+#: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
+#: packs to the same bytes.
+PACKED_MTIME = 946684800
 _TEMPORARY = re.compile(r"^\..+\.citygen-(\d+)-")
 #: Hex digits of the content digest in a published tile's name.
 DIGEST_DIGITS = 12
@@ -32,6 +36,13 @@ DIGEST_DIGITS = 12
 def temp_prefix(name: str) -> str:
     """The prefix of a temporary for file or folder ``name`` written by this process (for ``tempfile``)."""
     return f".{name}.citygen-{os.getpid()}-"
+
+
+def current_umask() -> int:
+    """The process's file mode creation mask (read without changing it)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
 
 
 def _alive(pid: int) -> bool:
@@ -110,3 +121,41 @@ def _usd_reason(exc: Tf.ErrorException) -> str:
     text = "\n".join(str(a) for a in exc.args) or str(exc)
     match = re.search(r" : '([^\n]*)'", text)
     return match[1] if match else text.strip().splitlines()[0] if text.strip() else ""
+
+
+def write_layer(layer: Sdf.Layer, path: Path) -> int:
+    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size. A
+    ``.usdz``'s root layer is named after it (``city.usdz`` holds ``city.usdc``). On any failure (an
+    :class:`ExportError`) the file at ``path`` is unchanged and the temporary one removed."""
+    suffix = path.suffix.lower()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=temp_prefix(path.stem), suffix=suffix, dir=path.parent)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        if suffix == ".usdz":
+            from pxr import UsdUtils  # (with UsdShade and UsdGeom: only a .usdz needs them)
+            inner = tmp.with_suffix(".usdc")
+            export_layer(layer, inner)
+            os.utime(inner, (PACKED_MTIME, PACKED_MTIME))
+            try:
+                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp), f"{path.stem}.usdc"):
+                    raise ExportError("usdz packaging failed", where=str(path))
+            finally:
+                inner.unlink(missing_ok=True)
+        else:
+            export_layer(layer, tmp)
+        os.chmod(tmp, 0o666 & ~current_umask())  # mkstemp makes 0600; a stage is an ordinary file
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
+                          hint="check free disk space and permissions") from None
+    except ExportError as exc:  # named by the stage's path, not the temporary file's
+        raise ExportError(exc.message, where=str(path), hint=exc.hint) from None
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path.stat().st_size

@@ -54,12 +54,10 @@ from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
-from citygen.usd.publish import export_layer, publish_tile, remove_stale_temporaries, remove_unlisted_tiles, temp_prefix
+from citygen.usd.publish import (PACKED_MTIME, current_umask, publish_tile, remove_stale_temporaries,
+                                 remove_unlisted_tiles, temp_prefix, write_layer)
 
 SUFFIXES = (".usda", ".usdc", ".usdz")
-#: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
-#: packs to the same bytes.
-PACKED_MTIME = 946684800
 LOD_SET, LOD_FULL, LOD_MASS = "LOD", "LOD0", "LOD1"
 
 
@@ -307,7 +305,7 @@ class StageWriter:
                 self.tiles_dir.parent.mkdir(parents=True, exist_ok=True)
                 self.staging = Path(tempfile.mkdtemp(prefix=temp_prefix(self.tiles_dir.name),
                                                      dir=self.tiles_dir.parent))
-                os.chmod(self.staging, 0o777 & ~_umask())  # (shared with dask workers)
+                os.chmod(self.staging, 0o777 & ~current_umask())  # (shared with dask workers)
             except OSError as exc:
                 raise ExportError(f"cannot write the tile layers: {exc.strerror or exc}", where=str(self.tiles_dir),
                                   hint="check free disk space and permissions") from None
@@ -358,7 +356,7 @@ class StageWriter:
             if packed:
                 for name in files:
                     os.utime(self.tiles_dir / name, (PACKED_MTIME, PACKED_MTIME))
-        size = _finish(self.layer, self.path)
+        size = write_layer(self.layer, self.path)
         if self.tiles_dir is not None:
             if packed:  # the package holds the tile layers and the library
                 shutil.rmtree(self.tiles_dir)
@@ -537,50 +535,6 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
 def _ref_names(n: int) -> tuple[str, ...]:
     """The prim names of a PointInstancer's ``n`` prototype references: ``p0``, ``p1``, ..."""
     return tuple(f"p{k}" for k in range(n))
-
-
-def _finish(layer: Sdf.Layer, path: Path) -> int:
-    """Export ``layer`` to ``path`` through a temporary file in the same folder; return the file size. A
-    ``.usdz``'s root layer is named after it (``city.usdz`` holds ``city.usdc``). On any failure (an
-    :class:`ExportError`) the file at ``path`` is unchanged and the temporary one removed."""
-    suffix = path.suffix.lower()
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=temp_prefix(path.stem), suffix=suffix, dir=path.parent)
-    except OSError as exc:
-        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
-                          hint="check free disk space and permissions") from None
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        if suffix == ".usdz":
-            from pxr import UsdUtils  # (with UsdShade and UsdGeom: only a .usdz needs them)
-            inner = tmp.with_suffix(".usdc")
-            export_layer(layer, inner)
-            os.utime(inner, (PACKED_MTIME, PACKED_MTIME))
-            try:
-                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(inner)), str(tmp), f"{path.stem}.usdc"):
-                    raise ExportError("usdz packaging failed", where=str(path))
-            finally:
-                inner.unlink(missing_ok=True)
-        else:
-            export_layer(layer, tmp)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a stage is an ordinary file
-        os.replace(tmp, path)
-    except OSError as exc:
-        raise ExportError(f"cannot write the stage: {exc.strerror or exc}", where=str(path),
-                          hint="check free disk space and permissions") from None
-    except ExportError as exc:  # named by the stage's path, not the temporary file's
-        raise ExportError(exc.message, where=str(path), hint=exc.hint) from None
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path.stat().st_size
-
-
-def _umask() -> int:
-    umask = os.umask(0)
-    os.umask(umask)
-    return umask
 
 
 def open_stage(path: str | Path) -> Usd.Stage:

@@ -47,7 +47,7 @@ def test_a_failed_root_write_leaves_the_old_root_composing_its_own_tiles(tmp_pat
     def full_disk(layer, path):
         raise ExportError("USD export failed: No space left on device", where=str(path))
 
-    monkeypatch.setattr(writer, "_finish", full_disk)
+    monkeypatch.setattr(writer, "write_layer", full_disk)
     with pytest.raises(ExportError):
         generate_city(scene, seed=2)  # other seed: other tiles
     assert _layers(root) == before

@@ -16,6 +16,7 @@ from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
 from citygen.usd import writer as writer_module
+from citygen.usd.publish import current_umask
 from citygen.usd.writer import BuildingRecord, StageWriter
 from tests.usd_util import assert_resolves, buildings
 
@@ -120,18 +121,20 @@ def test_the_element_library_serves_the_old_root_until_the_new_root_replaces_it(
     tiles = Path(scene.output.path).parent / "small_tiles"
     old = _library(tiles / "elements.usda")
     (small_scene.parent / "bays.testgrid").write_text(json.dumps({"bay": 3.0, "window": 1.1}))
-    during = []
-    finish = writer_module._finish
+    during, modes = [], []
+    finish = writer_module.write_layer
 
     def watched(layer, path):
         if path == Path(scene.output.path):  # (not a tile's)
             during.append(_library(tiles / "elements.usda"))
+            modes.append((tiles / "elements.usda").stat().st_mode & 0o777)
         return finish(layer, path)
 
-    monkeypatch.setattr(writer_module, "_finish", watched)
+    monkeypatch.setattr(writer_module, "write_layer", watched)
     generate_city(load_scene(small_scene), registry=test_registry)
     new = _library(tiles / "elements.usda")
     assert new != old and during == [old | new]
+    assert modes == [0o666 & ~current_umask()]  # (was: the union was published 0600, mkstemp's mode)
     assert _elements_used(tiles) == new
     fresh = load_scene(_scene(small_scene, '[output]\npath = "fresh/small.usda"\ntile_size = 20\ntile_layers = true\n'))
     generate_city(fresh, registry=test_registry)
