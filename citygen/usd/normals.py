@@ -15,8 +15,6 @@ from citygen.geometry.building import MeshData
 
 #: Normals are told apart on a grid of this step (about 0.014 degrees): the faces of one plane share one normal.
 STEP = 2.0 ** -12
-_NEXT, _LAST = [1, 2, 0], [2, 0, 1]
-_CORNERS = np.arange(4)
 
 
 def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
@@ -30,13 +28,12 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
     pts = np.asarray(points, dtype=float)
     indices = np.asarray(indices)
     start = np.cumsum(counts) - counts
-    low, high = counts.min(), counts.max()
-    if low >= 3 and high <= 4:
-        normal = _diagonal_normals(pts, counts, indices, start, low == 4)
+    if counts.min() >= 3 and counts.max() <= 4:
+        normal = _diagonal_normals(pts, counts, indices, start)
     else:
         normal = np.empty((counts.size, 3))
         small = (counts >= 3) & (counts <= 4)
-        normal[small] = _diagonal_normals(pts, counts[small], indices, start[small], False)
+        normal[small] = _diagonal_normals(pts, counts[small], indices, start[small])
         other = np.flatnonzero(~small)
         corner = np.repeat(start[other] - np.cumsum(counts[other]) + counts[other], counts[other]) + \
             np.arange(counts[other].sum())
@@ -48,13 +45,15 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
     return normal / length[:, None]
 
 
-def _diagonal_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray, start: np.ndarray,
-                      quads: bool) -> np.ndarray:
-    """Unnormalised normals of triangles and quads (``start``: each one's first corner in ``indices``)."""
-    corners = indices.reshape(-1, 4) if quads else indices[start[:, None] + np.minimum(_CORNERS, counts[:, None] - 1)]
-    p = pts[corners]
-    a, b = p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]
-    return a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]  # a x b (np.cross is slow on small arrays)
+def _diagonal_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """Unnormalised normals of triangles and quads (``start``: each one's first corner in ``indices``): the cross
+    product of the diagonals from corner 0 to 2 and from corner 1 to the last, column by column (np.cross and
+    ``(n, 4, 3)`` corner arrays are slow)."""
+    a = pts[indices[start + 2]] - pts[indices[start]]
+    b = pts[indices[start + counts - 1]] - pts[indices[start + 1]]
+    ax, ay, az = a.T
+    bx, by, bz = b.T
+    return np.column_stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
 
 
 def _newell_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
