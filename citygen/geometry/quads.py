@@ -23,8 +23,7 @@ _SIDES = np.array([
 def _corners(rects: np.ndarray, depth: np.ndarray, spec: np.ndarray) -> np.ndarray:
     """``(n * k, 4, 3)`` quad corners of ``n`` rectangles for a ``(k, 4, 3)`` corner spec."""
     out = np.empty((len(rects), len(spec), 4, 3))
-    out[..., 0] = rects[:, spec[..., 0]]
-    out[..., 1] = rects[:, spec[..., 1]]
+    out[..., :2] = rects[:, spec[..., :2]]
     out[..., 2] = depth[:, None, None] * spec[..., 2]
     return out.reshape(-1, 4, 3)
 
@@ -37,7 +36,9 @@ def box_quads(rects: np.ndarray, depth: np.ndarray, front: bool = True, sides: b
     ``|depth| > eps``; the front quad sits at ``z = depth``.
     """
     rects = np.asarray(rects, dtype=float).reshape(-1, 4)
-    depth = np.broadcast_to(np.asarray(depth, dtype=float), (len(rects),))
+    depth = np.asarray(depth, dtype=float)
+    if depth.shape != (len(rects),):  # (a scalar depth; broadcast_to costs more than the quads of a few boxes)
+        depth = np.broadcast_to(depth, (len(rects),))
     parts = [_corners(rects, depth, _FRONT)] if front else []
     if sides:
         deep = np.abs(depth) > eps

@@ -6,6 +6,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+
 def points_bound(points: np.ndarray) -> np.ndarray | None:
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
     return np.array([pts.min(axis=0), pts.max(axis=0)]) if len(pts) else None
@@ -19,18 +20,18 @@ def union(bounds: Iterable[np.ndarray | None]) -> np.ndarray | None:
     return np.array([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])
 
 
-def instances_bound(proto_bounds: Sequence[np.ndarray | None], proto_indices: np.ndarray, positions: np.ndarray,
-                    orientations: np.ndarray, scales: np.ndarray) -> np.ndarray | None:
-    """The bound of a PointInstancer's instances as USD composes them (scale, then rotate by the orientation
+def instances_bounds(proto_bounds: Sequence[np.ndarray | None], proto_indices: np.ndarray, positions: np.ndarray,
+                     orientations: np.ndarray, scales: np.ndarray, sizes: Sequence[int]) -> list[np.ndarray | None]:
+    """The bounds of PointInstancers' instances as USD composes them (scale, then rotate by the orientation
     quaternion ``(x, y, z, w)``, then translate), each instance's prototype bound given by ``proto_bounds``;
     orientations are taken at half precision, as the stage stores them. A rotated box's bound is its rotated
-    centre plus ``|R|`` times its half size."""
-    if not len(proto_indices):
-        return None
-    known = np.array([b is not None for b in proto_bounds])
-    keep = known[proto_indices]
+    centre plus ``|R|`` times its half size. The instancers' rows come one after the other (``sizes``: each one's
+    number of rows) in one numpy pass; each bound is what the instancer alone would give."""
+    found: list[np.ndarray | None] = [None] * len(sizes)
+    known = np.array([b is not None for b in proto_bounds], dtype=bool)
+    keep = known[proto_indices] if len(proto_indices) else np.zeros(0, dtype=bool)
     if not keep.any():
-        return None
+        return found
     boxes = np.array([b if b is not None else np.zeros((2, 3)) for b in proto_bounds])[proto_indices[keep]]
     scale = np.asarray(scales, dtype=float)[keep]
     centre, half = (boxes[:, 0] + boxes[:, 1]) * 0.5 * scale, np.abs((boxes[:, 1] - boxes[:, 0]) * 0.5 * scale)
@@ -43,4 +44,10 @@ def instances_bound(proto_bounds: Sequence[np.ndarray | None], proto_indices: np
     rot[:, 2, 0], rot[:, 2, 1], rot[:, 2, 2] = s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)
     middle = np.einsum("nij,nj->ni", rot, centre) + np.asarray(positions, dtype=float)[keep]
     reach = np.einsum("nij,nj->ni", np.abs(rot), half)
-    return np.array([(middle - reach).min(axis=0), (middle + reach).max(axis=0)])
+    kept = np.bincount(np.repeat(np.arange(len(sizes)), sizes)[keep], minlength=len(sizes))
+    some = np.flatnonzero(kept)
+    starts = (np.cumsum(kept) - kept)[some]
+    low, high = np.minimum.reduceat(middle - reach, starts), np.maximum.reduceat(middle + reach, starts)
+    for k, lo, hi in zip(some.tolist(), low, high):
+        found[k] = np.array([lo, hi])
+    return found

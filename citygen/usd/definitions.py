@@ -93,18 +93,17 @@ class Definitions:
 
     def author_pending(self) -> None:
         """Author the prototypes added to :attr:`pending` since the last call (the arrays of those new to the
-        process prepared first, their face normals in one batch)."""
+        process prepared first, all in one batch)."""
         if not self.pending:
             return
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(author.layer, PROTOTYPES.name, "", Sdf.SpecifierClass)
         fresh = [p for _, p in self.pending if p.arrays is None and not (p.element and self.element_library)]
-        batch = iter(face_normals([m for p in fresh for *_, m in p.meshes]))
-        for p in fresh:
-            normals = [next(batch) for _ in p.meshes]
-            kept = [k for k, (*_, m) in enumerate(p.meshes) if len(m.counts)]
-            p.arrays = author.arrays([(p.meshes[k][3], p.meshes[k][1]) for k in kept], [normals[k] for k in kept])
+        kept = [[(m, mat) for _, mat, _, m in p.meshes if len(m.counts)] for p in fresh]
+        prepared = iter(author.arrays([m for ms in kept for m in ms], face_normals([m for ms in kept for m, _ in ms])))
+        for p, ms in zip(fresh, kept):
+            p.arrays = [next(prepared) for _ in ms]
         with Sdf.ChangeBlock():
             for path, p in self.pending:
                 proto = author.prim(self.protos_root, path.name, "Xform")

@@ -49,7 +49,7 @@ from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
-from citygen.usd.bounds import instances_bound, points_bound, union
+from citygen.usd.bounds import instances_bounds, points_bound, union
 from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
@@ -233,10 +233,6 @@ class StageWriter:
             self.definitions.pending.append((path, proto))
             self.prototypes[key], self.bounds[key] = path, proto.bound
 
-    def _instances_bound(self, inst: Instances) -> np.ndarray | None:
-        return instances_bound([self.bounds[k] for k in inst.protos], inst.proto_indices, inst.positions,
-                               inst.orientations, inst.scales)
-
     def add(self, record: BuildingRecord) -> None:
         """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
         records must come grouped by tile (a tile cannot be reopened)."""
@@ -247,15 +243,40 @@ class StageWriter:
         self.queued.append(record)
 
     def _write_queued(self, target: Sdf.PrimSpec) -> None:
-        """Author the open tile's buildings, in the order added, their face normals in one batch."""
+        """Author the open tile's buildings, in the order added: their face normals and their instancers' bounds
+        each in one batch."""
         batches = [_mesh_batch(record.geometry, self.lod) for record in self.queued]
         normals = iter(face_normals([mesh for batch in batches for mesh in batch]))
+        placed = self._placed(self.queued)
         with Sdf.ChangeBlock():
-            for record, batch in zip(self.queued, batches):
-                bound = _write_building(self, target, record, batch, [next(normals) for _ in batch])
+            for record, batch, (inst, inst_bound) in zip(self.queued, batches, placed):
+                bound = _write_building(self, target, record, batch, [next(normals) for _ in batch], inst, inst_bound)
                 if bound is not None:
                     self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
         self.queued = []
+
+    def _placed(self, records: list[BuildingRecord]) -> list[tuple[Instances, np.ndarray | None]]:
+        """Each building's instances with its modules' elements lifted (:func:`lift_module_elements`), placed from
+        its pivot, and their bound; their prototypes get their paths in this layer in order of first use
+        (:meth:`prototypes_of`). The bounds of all the buildings come from one numpy pass."""
+        placed = []
+        for record in records:
+            geo = record.geometry
+            inst = lift_module_elements(geo.instances, geo.modules)
+            if len(inst.proto_indices):
+                self.prototypes_of(inst.protos, geo.modules)
+            placed.append(Instances(inst.protos, inst.proto_indices,
+                                    np.asarray(inst.positions, dtype=float) - np.asarray(record.pivot, dtype=float),
+                                    inst.orientations, inst.scales))
+        keys = list(dict.fromkeys(k for inst in placed for k in inst.protos))
+        number = {k: n for n, k in enumerate(keys)}
+        rows = [np.array([number[k] for k in inst.protos], dtype=np.int64)[inst.proto_indices] if len(inst.protos)
+                else np.zeros(0, np.int64) for inst in placed]
+        bounds = instances_bounds([self.bounds[k] for k in keys], np.concatenate([np.zeros(0, np.int64), *rows]),
+                                  _rows([inst.positions for inst in placed], 3),
+                                  _rows([inst.orientations for inst in placed], 4),
+                                  _rows([inst.scales for inst in placed], 3), [len(r) for r in rows])
+        return list(zip(placed, bounds))
 
     def _tile(self, tile: tuple[int, int]) -> Sdf.PrimSpec | StageWriter:
         """The open tile's prim (or, with tile layers, its writer), opening ``tile`` after closing the last."""
@@ -451,11 +472,13 @@ def component(author: Author, parent: Sdf.PrimSpec, name: str, pivot: np.ndarray
 
 
 def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingRecord, batch: list[MeshData],
-                    normals: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray | None:
+                    normals: list[tuple[np.ndarray, np.ndarray]], local: Instances,
+                    local_bound: np.ndarray | None) -> np.ndarray | None:
     """One building prim at its pivot, its geometry in local coordinates; returns its local bound. Its level of
     detail follows ``writer.lod``: the facades and elements (``LOD0``) and the plain walls of its mass (``LOD1``)
     as variants or as a render/proxy pair; the roof is shared by both. ``batch``: its :func:`_mesh_batch`,
-    ``normals`` their :func:`face_normals`."""
+    ``normals`` their :func:`face_normals`; ``local``: its instances placed from its pivot, of bound ``local_bound``
+    (:meth:`StageWriter._placed`)."""
     author, counts, geo = writer.author, writer.counts, record.geometry
     pivot = np.asarray(record.pivot, dtype=float)
     prim = component(author, parent, record.name, pivot, record.attributes)
@@ -497,14 +520,10 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
         bounds.append(author.mesh(prim, "Roof", arrays[len(geo.meshes)], looks, geo.roof_material, "roof"))
         counts["meshes"] += 1
         counts["polygons"] += len(geo.roof.counts)
-    inst = lift_module_elements(geo.instances, geo.modules)
-    if len(inst.proto_indices):
-        writer.prototypes_of(inst.protos, geo.modules)
-        local = Instances(inst.protos, inst.proto_indices, np.asarray(inst.positions, dtype=float) - pivot,
-                          inst.orientations, inst.scales)
-        bounds.append(writer._instances_bound(local))
-        _instancer(author, body, local, writer.prototypes, bounds[-1])
-        counts["instances"] += len(inst.proto_indices)
+    if len(local.proto_indices):
+        bounds.append(local_bound)
+        _instancer(author, body, local, writer.prototypes, local_bound)
+        counts["instances"] += len(local.proto_indices)
     counts["buildings"] += 1
     building = union(bounds)
     _model_bound(prim, building)
@@ -529,6 +548,11 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
     author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
     if bound is not None:
         author.attr(pi, "extent", T.Float3Array, bound_value(bound))
+
+
+def _rows(arrays: list[np.ndarray], width: int) -> np.ndarray:
+    """``arrays`` of ``width`` columns one after the other (none: no rows)."""
+    return np.concatenate([np.zeros((0, width)), *(np.asarray(a, dtype=float).reshape(-1, width) for a in arrays)])
 
 
 @functools.lru_cache(maxsize=64)
