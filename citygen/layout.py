@@ -362,7 +362,8 @@ class InnerTable:
     its first terminal and of the one after its last among the layout's terminals (tree order, as
     :attr:`FacadeLayout.leaf_rects`). A lazily moved copy (:meth:`Region.moved`, with a ``key``) of an inner region
     listed before it stands for its whole subtree: ``original[k]`` is that region's index (-1 for a region whose
-    inner children are listed), and nothing inside the copy is listed.
+    inner children are listed), and nothing inside the copy is listed. The terminal children of a listed region
+    are the rows in its range that no listed child's range holds.
     """
 
     regions: tuple[Region, ...]
@@ -376,8 +377,7 @@ class InnerTable:
         listed before it, or that has no key, is walked like any region: its children are made)."""
         regions: list[Region] = []
         parent: list[int] = []
-        firsts: list[int] = []
-        ends: list[int] = []
+        rows: list[list[int]] = []
         original: list[int] = []
         listed: dict[int, int] = {}
 
@@ -385,51 +385,33 @@ class InnerTable:
             k = len(regions)
             regions.append(region)
             parent.append(up)
-            firsts.append(at)
-            ends.append(at)
             listed[id(region)] = k
             lazy = unwalked(region)
             source = listed.get(id(lazy[0]), -1) if lazy is not None and region.key is not None else -1
             original.append(source)
             if source >= 0:
-                at += ends[source] - firsts[source]
-            else:
-                for child in region.children:
-                    at = visit(child, k, at) if is_inner(child) else at + 1
-            ends[k] = at
+                first, end = rows[source]
+                rows.append([at, at + end - first])
+                return at + end - first
+            rows.append([at, at])
+            for child in region.children:
+                at = visit(child, k, at) if is_inner(child) else at + 1
+            rows[k][1] = at
             return at
 
         if is_inner(root):
             visit(root, -1, 0)
-        return cls.made(regions, parent, firsts, ends, original)
+        return cls.made(regions, parent, rows, original)
 
     @classmethod
-    def made(cls, regions: Sequence[Region], parent: Sequence[int], firsts: Sequence[int], ends: Sequence[int],
+    def made(cls, regions: Sequence[Region], parent: Sequence[int], rows: Sequence[Sequence[int]],
              original: Sequence[int]) -> InnerTable:
         """A table from lists (read-only arrays)."""
-        n = len(regions)
-        arrays = (np.fromiter(parent, np.intp, n), np.fromiter(itertools.chain(firsts, ends), np.intp, 2 * n)
-                  .reshape(2, n).T, np.fromiter(original, np.intp, n))
+        arrays = (np.asarray(parent, np.intp).reshape(-1), np.asarray(rows, np.intp).reshape(-1, 2),
+                  np.asarray(original, np.intp).reshape(-1))
         for array in arrays:
             array.flags.writeable = False
         return cls(tuple(regions), *arrays)
-
-    @functools.cached_property
-    def owner(self) -> np.ndarray:
-        """Per terminal of the layout (``rows[0, 1]`` of them), the listed region whose child it is or the moved
-        copy it lies in: the deepest listed region whose range holds it (-1 for a terminal root)."""
-        n = len(self.regions)
-        if not n:
-            return np.full(1, -1, np.intp)
-        first, end = self.rows.T
-        # events: a region's range opens at its first terminal (the deepest last) and closes at its end, handing
-        # the rows back to its parent (the deepest first, before any range opening there)
-        at = np.concatenate([end, first])
-        events = np.concatenate([self.parent, np.arange(n)])
-        index = np.arange(n)
-        order = np.lexsort((np.concatenate([-index, index]), np.repeat([0, 1], n), at))
-        rows = np.arange(end[0])
-        return events[order][np.searchsorted(at[order], rows, side="right") - 1]
 
 
 def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:

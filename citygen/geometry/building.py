@@ -425,33 +425,32 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     (the ``mass`` level of detail). The roof's vertical faces (gables, steps between roof pieces) are wall: they
     join the ``("wall", wall_material)`` mesh (and the plain walls), the roof keeps the rest.
     """
-    signatures = Signatures(layout for _, layout in layouts if layout is not None and modules)
+    signatures = Signatures(layout.root for _, layout in layouts if layout is not None and modules)
     cache = _module_cache()
     protos: dict[ModuleKey, ModuleProto | None] = {}  # (None: built below, with the faces' terminals)
     units: list[_Unit] = []
     built: list[tuple[ModuleKey, int]] = []  # modules to build, with their unit
-    #: per face: its matrix, unit and modules (key, x, y, w, h)
-    faces: list[tuple[Face, np.ndarray, int | None, list[tuple[ModuleKey, float, float, float, float]]]] = []
+    faces: list[tuple[Face, np.ndarray, int | None, list[tuple[ModuleKey, Region]]]] = []  # + unit, modules
     for face, layout in layouts:
         m = face.matrix()
         if layout is None:
             faces.append((face, m, None, []))
             continue
         if modules:
-            placed, loose = signatures.split(layout)
+            placed, loose = signatures.split(layout.root)
         else:
             placed, loose = [], range(len(layout.leaf_rects))
-        keyed = [(ModuleKey(sig, max(1, round(w * CM)), max(1, round(h * CM)), wall_material), x, y, w, h)
-                 for sig, x, y, w, h, _, _ in placed]
+        keyed = [(ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)),
+                            wall_material), r) for r, _, _ in placed]
         faces.append((face, m, len(units), keyed))
         units.append(_Unit(layout, np.asarray(loose, np.intp), m))
-        for (key, x, y, w, h), (*_, at, n) in zip(keyed, placed):
+        for (key, r), (_, at, n) in zip(keyed, placed):
             if key not in protos:
                 protos[key] = cache.get(key)
                 if protos[key] is None:
                     qw, qh = key.size
                     built.append((key, len(units)))
-                    units.append(_Unit(layout, np.arange(at, at + n), _IDENTITY, x, y, qw / w, qh / h))
+                    units.append(_Unit(layout, np.arange(at, at + n), _IDENTITY, r.x, r.y, qw / r.w, qh / r.h))
     emitted = _emit(units, _terminal_arrays(units, wall_material), wall_material)
     sinks = [_Sink() for _ in built]
     for own, (_, unit) in zip(sinks, built):
@@ -465,10 +464,10 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
             continue
         sink.take(emitted[unit])
         if keyed:
-            sink.add_instances(np.asarray([sink.keys.setdefault(key, len(sink.keys)) for key, *_ in keyed]),
-                               to_world(np.asarray([(x, y, 0.0) for _, x, y, _, _ in keyed], dtype=float), m),
-                               face_quaternion(m), np.asarray([(w / key.size[0], h / key.size[1])
-                                                               for key, _, _, w, h in keyed]))
+            sink.add_instances(np.asarray([sink.keys.setdefault(key, len(sink.keys)) for key, _ in keyed]),
+                               to_world(np.asarray([(r.x, r.y, 0.0) for _, r in keyed], dtype=float), m),
+                               face_quaternion(m), np.asarray([(r.w / key.size[0], r.h / key.size[1])
+                                                               for key, r in keyed]))
     *module_meshes, meshes = _meshes([*sinks, sink])
     for (key, _), own, own_meshes in zip(built, sinks, module_meshes):
         if len(cache) >= _MODULE_CACHE_SIZE:

@@ -84,7 +84,7 @@ class _Derivation:
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
         #: (subtree, its size in regions, position of its first terminal, its terminal count, its index in
-        #: :attr:`inner` if it has children, else among :attr:`sources`)
+        #: :attr:`inner` if it has children)
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
@@ -93,20 +93,15 @@ class _Derivation:
         #: The terminal regions made, in tree order (regions are made depth first, children in order), except
         #: those inside moved copies of subtrees, which are noted in :attr:`copies` instead.
         self.leaves: list[Region] = []
-        #: The distinct terminals (:attr:`FacadeLayout.leaf_sources`: a repeated terminal is a moved copy of the
-        #: first), in tree order, and the index of each of :attr:`leaves` among them.
-        self.sources: list[Region] = []
-        self.source_of: list[int] = []
         #: Per moved copy of a subtree: (terminals made before it, position of the original's first terminal,
         #: their count, dx, dy); positions count every terminal of the layout in tree order.
         self.copies: list[tuple[int, int, int, float, float]] = []
         self.copied = 0  # terminals inside the copies so far
         #: :class:`InnerTable` of the layout, as lists: the inner regions (originals and moved copies) in tree order,
-        #: each one's parent, first terminal's position, position after its last terminal, original (-1: not a copy)
+        #: each one's parent, terminal positions ``[first, end)`` and original (-1: not a copy)
         self.inner: list[Region | None] = []
         self.parents: list[int] = []
-        self.firsts: list[int] = []
-        self.ends: list[int] = []
+        self.rows: list[list[int]] = []
         self.originals: list[int] = []
         self.up = -1  # index in :attr:`inner` of the region whose children are being derived
         self.alternatives = alternatives or {}
@@ -120,9 +115,8 @@ class _Derivation:
                               meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
         if not self.copies:  # (FacadeLayout.leaves, already known)
             layout.__dict__["leaves"] = tuple(self.leaves)
-        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(
-            self.leaves, self.sources, self.source_of, self.copies)
-        layout.__dict__["inner"] = InnerTable.made(self.inner, self.parents, self.firsts, self.ends, self.originals)
+        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(self.leaves, self.copies)
+        layout.__dict__["inner"] = InnerTable.made(self.inner, self.parents, self.rows, self.originals)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -132,7 +126,7 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
-                original, size, first, n, index = done
+                original, size, first, n, node = done
                 self.count += size
                 if self.count > MAX_REGIONS:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
@@ -142,22 +136,19 @@ class _Derivation:
                 copy = original.moved(dx, dy)
                 if n == 1 and not original.children:
                     self.leaves.append(copy)
-                    self.source_of.append(index)
                 else:
                     at = len(self.leaves) + self.copied
                     self.copies.append((len(self.leaves), first, n, dx, dy))
                     self.copied += n
                     self.inner.append(copy)
                     self.parents.append(self.up)
-                    self.firsts.append(at)
-                    self.ends.append(at + n)
-                    self.originals.append(index)
+                    self.rows.append([at, at + n])
+                    self.originals.append(node)
                 return copy
             before, first, node = self.count, len(self.leaves) + self.copied, len(self.inner)
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first,
-                               node if region.__dict__["children"] else len(self.sources) - 1)
+            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first, node)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
@@ -187,31 +178,38 @@ class _Derivation:
                 cycle = " --> ".join((*chain, symbol, body.symbol))
                 raise RulesetError(f"rename cycle {cycle}", where=rule.loc, plugin=PLUGIN_ID,
                                    hint="one of these rules must split or end in a terminal")
-        # (listed in :attr:`inner` before its children, made after them)
-        inner, up = self.inner, self.up
-        k = self.up = len(inner)
-        inner.append(None)
-        self.parents.append(up)
-        self.firsts.append(len(self.leaves) + self.copied)
-        self.ends.append(0)
-        self.originals.append(-1)
-        if isinstance(body, Rename):
-            children = [self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))]
-        else:
-            children = self.children(body, x, y, w, h, floor, depth + 1, rule)
-        self.up = up
+            k, up = self.enter()
+            child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
+            return self.made(k, up, Region.fast(x, y, w, h, symbol, children=(child,)))
+        k, up = self.enter()
+        children = self.children(body, x, y, w, h, floor, depth + 1, rule)
         if not children:  # (a grid whose regions are all empty: an unlabelled terminal, as the tree reads it)
-            del inner[k], self.parents[k], self.firsts[k], self.ends[k], self.originals[k]
+            self.up = up
+            del self.inner[k:], self.parents[k:], self.rows[k:], self.originals[k:]
             return self.leaf(Region.fast(x, y, w, h, symbol))
-        region = inner[k] = Region.fast(x, y, w, h, symbol, children=tuple(children))
-        self.ends[k] = len(self.leaves) + self.copied
+        return self.made(k, up, Region.fast(x, y, w, h, symbol, children=tuple(children)))
+
+    def enter(self) -> tuple[int, int]:
+        """List an inner region about to be derived in :attr:`inner` (made by :meth:`made`) and make it the parent
+        of the regions derived next: ``(its index, the previous parent)``."""
+        k, at = len(self.inner), len(self.leaves) + self.copied
+        self.inner.append(None)
+        self.parents.append(self.up)
+        self.rows.append([at, at])
+        self.originals.append(-1)
+        up, self.up = self.up, k
+        return k, up
+
+    def made(self, k: int, up: int, region: Region) -> Region:
+        """``region``, the inner region listed at ``k`` by :meth:`enter`, its children derived."""
+        self.inner[k] = region
+        self.rows[k][1] = len(self.leaves) + self.copied
+        self.up = up
         return region
 
     def leaf(self, region: Region) -> Region:
-        """``region``, a terminal, noted in :attr:`leaves` and :attr:`sources`."""
+        """``region``, a terminal, noted in :attr:`leaves`."""
         self.leaves.append(region)
-        self.source_of.append(len(self.sources))
-        self.sources.append(region)
         return region
 
     def terminal(self, symbol: str, fields_: dict[str, Any], x: float, y: float, w: float, h: float,
@@ -231,7 +229,6 @@ class _Derivation:
             copied["x"] = original.x + (x - original.x)
             copied["y"] = original.y + (y - original.y)
             _set(region, "__dict__", copied)
-            self.source_of.append(done[4])
         else:
             copied = fields_.copy()
             copied["x"] = x
@@ -240,9 +237,7 @@ class _Derivation:
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
             _set(region, "__dict__", copied)
-            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1, len(self.sources))
-            self.source_of.append(len(self.sources))
-            self.sources.append(region)
+            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1, -1)
         self.leaves.append(region)
         return region
 
@@ -437,30 +432,28 @@ _set = object.__setattr__
 _XYWH = operator.attrgetter("x", "y", "w", "h")
 
 
-def _leaf_arrays(leaves: list[Region], sources: list[Region], source_of: list[int],
-                 copies: list[tuple[int, int, int, float, float]]
+def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, float]]
                  ) -> tuple[np.ndarray, tuple[tuple[Region, ...], np.ndarray]]:
     """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
-    ``leaves`` (with their distinct ``sources`` and the index of each one's source) and the terminals of its moved
-    ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied terminal is its original's ``x + dx``,
-    ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
+    ``leaves`` and the terminals of its moved ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied
+    terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
     rows: list[tuple[float, float, float, float]] = []
     source: list[int] = []
     done = 0
     for before, first, n, dx, dy in copies:
         if before > done:
             rows += map(_XYWH, leaves[done:before])
-            source += source_of[done:before]
+            source += range(done, before)
             done = before
         end = first + n
         rows += [(x + dx, y + dy, w, h) for x, y, w, h in rows[first:end]]
         source += source[first:end]
     rows += map(_XYWH, leaves[done:])
-    source += source_of[done:]
+    source += range(done, len(leaves))
     rects = np.fromiter(itertools.chain.from_iterable(rows), float, 4 * len(rows)).reshape(-1, 4)
     index = np.fromiter(source, np.intp, len(source))
     rects.flags.writeable = index.flags.writeable = False
-    return rects, (tuple(sources), index)
+    return rects, (tuple(leaves), index)
 
 
 def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:
