@@ -256,12 +256,6 @@ class FacadeLayout:
         return self.leaves, index
 
     @functools.cached_property
-    def inner(self) -> InnerTable:
-        """The inner regions as arrays (:class:`InnerTable`), made once from the tree (a generator may hand it
-        over): consumers that hash or walk subtrees read it instead of visiting every terminal."""
-        return InnerTable.of(self.root)
-
-    @functools.cached_property
     def leaf_labels(self) -> tuple[tuple[str | None, ...], np.ndarray]:
         """The terminals' distinct labels (in order of first appearance) and each terminal's index into them, as a
         read-only int array: the checks test a few labels of a few hundred terminals as array lookups."""
@@ -351,67 +345,7 @@ class FacadeLayout:
 
 
 #: The cached properties of a :class:`FacadeLayout` that depend only on its tree.
-_LEAF_DATA = ("leaves", "leaf_sources", "leaf_labels", "leaf_rects", "inner")
-
-
-@dataclass(frozen=True)
-class InnerTable:
-    """A layout's inner regions (those with children) in tree order -- depth first, children in order -- as arrays.
-
-    ``regions[k]`` is the region, ``parent[k]`` its parent's index (-1: the root) and ``rows[k]`` the positions of
-    its first terminal and of the one after its last among the layout's terminals (tree order, as
-    :attr:`FacadeLayout.leaf_rects`). A lazily moved copy (:meth:`Region.moved`, with a ``key``) of an inner region
-    listed before it stands for its whole subtree: ``original[k]`` is that region's index (-1 for a region whose
-    inner children are listed), and nothing inside the copy is listed. The terminal children of a listed region
-    are the rows in its range that no listed child's range holds.
-    """
-
-    regions: tuple[Region, ...]
-    parent: np.ndarray
-    rows: np.ndarray
-    original: np.ndarray
-
-    @classmethod
-    def of(cls, root: Region) -> InnerTable:
-        """The table of the tree under ``root``, walking its inner regions (a moved copy whose original is not
-        listed before it, or that has no key, is walked like any region: its children are made)."""
-        regions: list[Region] = []
-        parent: list[int] = []
-        rows: list[list[int]] = []
-        original: list[int] = []
-        listed: dict[int, int] = {}
-
-        def visit(region: Region, up: int, at: int) -> int:
-            k = len(regions)
-            regions.append(region)
-            parent.append(up)
-            listed[id(region)] = k
-            lazy = unwalked(region)
-            source = listed.get(id(lazy[0]), -1) if lazy is not None and region.key is not None else -1
-            original.append(source)
-            if source >= 0:
-                first, end = rows[source]
-                rows.append([at, at + end - first])
-                return at + end - first
-            rows.append([at, at])
-            for child in region.children:
-                at = visit(child, k, at) if is_inner(child) else at + 1
-            rows[k][1] = at
-            return at
-
-        if is_inner(root):
-            visit(root, -1, 0)
-        return cls.made(regions, parent, rows, original)
-
-    @classmethod
-    def made(cls, regions: Sequence[Region], parent: Sequence[int], rows: Sequence[Sequence[int]],
-             original: Sequence[int]) -> InnerTable:
-        """A table from lists (read-only arrays)."""
-        arrays = (np.asarray(parent, np.intp).reshape(-1), np.asarray(rows, np.intp).reshape(-1, 2),
-                  np.asarray(original, np.intp).reshape(-1))
-        for array in arrays:
-            array.flags.writeable = False
-        return cls(tuple(regions), *arrays)
+_LEAF_DATA = ("leaves", "leaf_sources", "leaf_labels", "leaf_rects")
 
 
 def check_partition(layout: FacadeLayout, tol: float = 1e-6) -> list[str]:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from citygen.errors import RulesetError
-from citygen.layout import FacadeLayout, InnerTable, Region
+from citygen.layout import FacadeLayout, Region
 from citygen.request import FacadeRequest
 from citygen_split.ast import (
     Case, Choice, Floors, Grammar, Grid, Item, Rename, Repeat, RepeatABA, Rule, SimpleBody, Split, SymSplit,
@@ -83,9 +83,8 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
-        #: (subtree, its size in regions, position of its first terminal, its terminal count, its index in
-        #: :attr:`inner` if it has children)
-        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
+        #: (subtree, its size in regions, position of its first terminal, its terminal count)
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
         #: :meth:`terminal`; none when tracing, which derives every region).
@@ -97,13 +96,6 @@ class _Derivation:
         #: their count, dx, dy); positions count every terminal of the layout in tree order.
         self.copies: list[tuple[int, int, int, float, float]] = []
         self.copied = 0  # terminals inside the copies so far
-        #: :class:`InnerTable` of the layout, as lists: the inner regions (originals and moved copies) in tree order,
-        #: each one's parent, terminal positions ``[first, end)`` and original (-1: not a copy)
-        self.inner: list[Region | None] = []
-        self.parents: list[int] = []
-        self.rows: list[list[int]] = []
-        self.originals: list[int] = []
-        self.up = -1  # index in :attr:`inner` of the region whose children are being derived
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
         self.points: dict[PointKey, int] = {}
@@ -116,7 +108,6 @@ class _Derivation:
         if not self.copies:  # (FacadeLayout.leaves, already known)
             layout.__dict__["leaves"] = tuple(self.leaves)
         layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(self.leaves, self.copies)
-        layout.__dict__["inner"] = InnerTable.made(self.inner, self.parents, self.rows, self.originals)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -126,7 +117,7 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
-                original, size, first, n, node = done
+                original, size, first, n = done
                 self.count += size
                 if self.count > MAX_REGIONS:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
@@ -137,18 +128,13 @@ class _Derivation:
                 if n == 1 and not original.children:
                     self.leaves.append(copy)
                 else:
-                    at = len(self.leaves) + self.copied
                     self.copies.append((len(self.leaves), first, n, dx, dy))
                     self.copied += n
-                    self.inner.append(copy)
-                    self.parents.append(self.up)
-                    self.rows.append([at, at + n])
-                    self.originals.append(node)
                 return copy
-            before, first, node = self.count, len(self.leaves) + self.copied, len(self.inner)
+            before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first, node)
+            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
@@ -178,34 +164,12 @@ class _Derivation:
                 cycle = " --> ".join((*chain, symbol, body.symbol))
                 raise RulesetError(f"rename cycle {cycle}", where=rule.loc, plugin=PLUGIN_ID,
                                    hint="one of these rules must split or end in a terminal")
-            k, up = self.enter()
             child = self.region(body.symbol, x, y, w, h, floor, depth + 1, (*chain, symbol))
-            return self.made(k, up, Region.fast(x, y, w, h, symbol, children=(child,)))
-        k, up = self.enter()
+            return Region.fast(x, y, w, h, symbol, children=(child,))
         children = self.children(body, x, y, w, h, floor, depth + 1, rule)
         if not children:  # (a grid whose regions are all empty: an unlabelled terminal, as the tree reads it)
-            self.up = up
-            del self.inner[k:], self.parents[k:], self.rows[k:], self.originals[k:]
             return self.leaf(Region.fast(x, y, w, h, symbol))
-        return self.made(k, up, Region.fast(x, y, w, h, symbol, children=tuple(children)))
-
-    def enter(self) -> tuple[int, int]:
-        """List an inner region about to be derived in :attr:`inner` (made by :meth:`made`) and make it the parent
-        of the regions derived next: ``(its index, the previous parent)``."""
-        k, at = len(self.inner), len(self.leaves) + self.copied
-        self.inner.append(None)
-        self.parents.append(self.up)
-        self.rows.append([at, at])
-        self.originals.append(-1)
-        up, self.up = self.up, k
-        return k, up
-
-    def made(self, k: int, up: int, region: Region) -> Region:
-        """``region``, the inner region listed at ``k`` by :meth:`enter`, its children derived."""
-        self.inner[k] = region
-        self.rows[k][1] = len(self.leaves) + self.copied
-        self.up = up
-        return region
+        return Region.fast(x, y, w, h, symbol, children=tuple(children))
 
     def leaf(self, region: Region) -> Region:
         """``region``, a terminal, noted in :attr:`leaves`."""
@@ -237,7 +201,7 @@ class _Derivation:
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
             _set(region, "__dict__", copied)
-            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1, -1)
+            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1)
         self.leaves.append(region)
         return region
 

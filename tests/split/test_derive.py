@@ -326,29 +326,3 @@ def test_leaves_noted_while_deriving_are_the_trees_terminals():
                                                               layout.root).leaf_labels[1].tolist()
     layout = derive(grammar("X --> terminal(wall)"), request(4, 3))
     assert layout.leaves == (layout.root,)
-
-
-def test_inner_table_handed_over_is_the_trees():
-    """The derivation hands the layout its inner regions as arrays (:class:`InnerTable`: originals and moved copies
-    in tree order, parents, terminal ranges, the original of each copy): the same table as one walked from the
-    tree, for every shipped grammar, a tricky one (copies inside copies, renames, corner strips)
-    and a terminal root."""
-    from citygen.layout import InnerTable, unwalked
-    from .conftest import RULESETS
-    tricky = grammar("X --> floors { 0: E | *: Bays }\nE --> split(x) { 5: A | '1: B }\n"
-                     "Bays --> repeat(x) { ~2: Pair }\nPair --> Twin\nTwin --> repeat(x) { ~1: Bay }\n"
-                     "Bay --> split(x) { '1: A | 1: Win | '1: A }\nWin --> split(y) { 1: C | '1: Window }")
-    for g in [tricky, *map(load, RULESETS)]:
-        for width, seed in ((23.3, 3), (41.9, 8), (7.1, 2)):
-            r = request(width, 12.5, (0.0, 3.5, 6.5, 9.5, 12.5), entrance=True, corner_widths=(0.4, 0.7),
-                        seed=(seed,))
-            layout = derive(g, r)
-            handed, walked = layout.inner, InnerTable.of(layout.root)
-            assert all(map(operator.is_, handed.regions, walked.regions)), g.source
-            assert len(handed.regions) == len(walked.regions), g.source
-            for name in ("parent", "rows", "original"):
-                assert np.array_equal(getattr(handed, name), getattr(walked, name)), (g.source, name)
-            copies = np.flatnonzero(handed.original >= 0)
-            assert all(unwalked(handed.regions[k]) is not None for k in copies.tolist())
-            assert handed.rows[-1, 1] <= len(layout.leaf_rects) == handed.rows[0, 1], g.source
-    assert len(derive(grammar("X --> terminal(wall)"), request(4, 3)).inner.regions) == 0
