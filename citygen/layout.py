@@ -249,8 +249,9 @@ class FacadeLayout:
     def leaf_sources(self) -> tuple[tuple[Region, ...], np.ndarray]:
         """Terminals standing for all (*sources*, in tree order) and per terminal the index of its source, as a
         read-only int array: a terminal equals its source in every field but ``x`` and ``y``. By default every
-        terminal is its own source; a generator that places moved copies of subtrees (:meth:`Region.moved`)
-        hands over its own, so the checks read labels, layers and materials without walking the copies."""
+        terminal is its own source; a generator that places moved copies of subtrees or terminals
+        (:meth:`Region.moved`) hands over its own (the split derivation: one source per distinct terminal, the first
+        of its kind), so the checks read labels, layers and materials without walking the copies."""
         index = np.arange(len(self.leaves))
         index.flags.writeable = False
         return self.leaves, index

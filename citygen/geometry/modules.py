@@ -134,8 +134,8 @@ class Signatures:
                 result = self._visit(c)
             else:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
-                if key is not None:
-                    self.first[key], keyed[key], info[id(c)] = c, (result, []), result
+                if key is not None:  # (a terminal is never canonical: only its results are reused)
+                    keyed[key] = (result, [])
             sig, more, n, k = result
             append((sig, round((c.x - x) * CM), round((c.y - y) * CM)))
             if more:

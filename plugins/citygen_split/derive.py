@@ -83,8 +83,9 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
-        #: (subtree, its size in regions, position of its first terminal, its terminal count)
-        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int]] = {}
+        #: (subtree, its size in regions, position of its first terminal, its terminal count, and for a terminal
+        #: its index among :attr:`sources`)
+        self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
         #: :meth:`terminal`; none when tracing, which derives every region).
@@ -92,6 +93,10 @@ class _Derivation:
         #: The terminal regions made, in tree order (regions are made depth first, children in order), except
         #: those inside moved copies of subtrees, which are noted in :attr:`copies` instead.
         self.leaves: list[Region] = []
+        #: The distinct terminals (:attr:`FacadeLayout.leaf_sources`: a repeated terminal is a moved copy of the
+        #: first), in tree order, and the index of each of :attr:`leaves` among them.
+        self.sources: list[Region] = []
+        self.source_of: list[int] = []
         #: Per moved copy of a subtree: (terminals made before it, position of the original's first terminal,
         #: their count, dx, dy); positions count every terminal of the layout in tree order.
         self.copies: list[tuple[int, int, int, float, float]] = []
@@ -107,7 +112,8 @@ class _Derivation:
                               meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
         if not self.copies:  # (FacadeLayout.leaves, already known)
             layout.__dict__["leaves"] = tuple(self.leaves)
-        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(self.leaves, self.copies)
+        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(
+            self.leaves, self.sources, self.source_of, self.copies)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -117,7 +123,7 @@ class _Derivation:
             key = (symbol, w, h, floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
-                original, size, first, n = done
+                original, size, first, n, source = done
                 self.count += size
                 if self.count > MAX_REGIONS:
                     raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
@@ -127,6 +133,7 @@ class _Derivation:
                 copy = original.moved(dx, dy)
                 if n == 1 and not original.children:
                     self.leaves.append(copy)
+                    self.source_of.append(source)
                 else:
                     self.copies.append((len(self.leaves), first, n, dx, dy))
                     self.copied += n
@@ -134,7 +141,8 @@ class _Derivation:
             before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
-            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first)
+            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first,
+                               len(self.sources) - 1)  # (the source of a terminal region)
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
@@ -172,8 +180,10 @@ class _Derivation:
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
 
     def leaf(self, region: Region) -> Region:
-        """``region``, a terminal, noted in :attr:`leaves`."""
+        """``region``, a terminal, noted in :attr:`leaves` and :attr:`sources`."""
         self.leaves.append(region)
+        self.source_of.append(len(self.sources))
+        self.sources.append(region)
         return region
 
     def terminal(self, symbol: str, fields_: dict[str, Any], x: float, y: float, w: float, h: float,
@@ -193,6 +203,7 @@ class _Derivation:
             copied["x"] = original.x + (x - original.x)
             copied["y"] = original.y + (y - original.y)
             _set(region, "__dict__", copied)
+            self.source_of.append(done[4])
         else:
             copied = fields_.copy()
             copied["x"] = x
@@ -201,7 +212,9 @@ class _Derivation:
             copied["h"] = h
             copied["key"] = hash((self.request.seed, key))
             _set(region, "__dict__", copied)
-            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1)
+            self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1, len(self.sources))
+            self.source_of.append(len(self.sources))
+            self.sources.append(region)
         self.leaves.append(region)
         return region
 
@@ -396,28 +409,30 @@ _set = object.__setattr__
 _XYWH = operator.attrgetter("x", "y", "w", "h")
 
 
-def _leaf_arrays(leaves: list[Region], copies: list[tuple[int, int, int, float, float]]
+def _leaf_arrays(leaves: list[Region], sources: list[Region], source_of: list[int],
+                 copies: list[tuple[int, int, int, float, float]]
                  ) -> tuple[np.ndarray, tuple[tuple[Region, ...], np.ndarray]]:
     """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
-    ``leaves`` and the terminals of its moved ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied
-    terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
+    ``leaves`` (with their distinct ``sources`` and the index of each one's source) and the terminals of its moved
+    ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied terminal is its original's ``x + dx``,
+    ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
     rows: list[tuple[float, float, float, float]] = []
     source: list[int] = []
     done = 0
     for before, first, n, dx, dy in copies:
         if before > done:
             rows += map(_XYWH, leaves[done:before])
-            source += range(done, before)
+            source += source_of[done:before]
             done = before
         end = first + n
         rows += [(x + dx, y + dy, w, h) for x, y, w, h in rows[first:end]]
         source += source[first:end]
     rows += map(_XYWH, leaves[done:])
-    source += range(done, len(leaves))
+    source += source_of[done:]
     rects = np.fromiter(itertools.chain.from_iterable(rows), float, 4 * len(rows)).reshape(-1, 4)
     index = np.fromiter(source, np.intp, len(source))
     rects.flags.writeable = index.flags.writeable = False
-    return rects, (tuple(leaves), index)
+    return rects, (tuple(sources), index)
 
 
 def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]) -> dict[str, dict[str, Any]]:

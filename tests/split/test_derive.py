@@ -326,3 +326,18 @@ def test_leaves_noted_while_deriving_are_the_trees_terminals():
                                                               layout.root).leaf_labels[1].tolist()
     layout = derive(grammar("X --> terminal(wall)"), request(4, 3))
     assert layout.leaves == (layout.root,)
+
+
+def test_repeated_terminals_share_their_source():
+    """A repeated terminal (a moved copy of the first one of its symbol, size and floor) shares that one's source in
+    ``leaf_sources``: each source is the first terminal of its kind, so the checks map over the distinct
+    terminals only (e.g. 71 instead of 150 per face of the synthetic city)."""
+    from .conftest import RULESETS
+    for g in map(load, RULESETS):
+        r = request(31.7, 12.5, (0.0, 3.5, 6.5, 9.5, 12.5), entrance=True, seed=(4,))
+        layout = derive(g, r)
+        sources, index = layout.leaf_sources
+        assert len(set(map(id, sources))) == len(sources) < len(layout.leaves), g.source
+        _, first = np.unique(index, return_index=True)
+        assert np.array_equal(index[np.sort(first)], np.arange(len(sources))), g.source  # (in tree order)
+        assert all(layout.leaves[i] is sources[index[i]] for i in first.tolist()), g.source
