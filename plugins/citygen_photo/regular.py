@@ -58,6 +58,8 @@ SHOP_BAND = 0.3
 ATTIC_BOX = 5
 ATTIC_PEAK = 0.4
 ATTIC_GAP = 0.6
+#: An attic run is at least this share of the rows' median height.
+ATTIC_LEAST = 0.25
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
 BALCONY_VOTE = 0.15
@@ -267,15 +269,15 @@ def _relabelled(prob: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple
 
 def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
     """``rows`` with an attic row put on top: the lowest run, at least ``ATTIC_GAP`` pitches above the top row,
-    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least 40 % of the rows'
-    median height (a few dormers are a row of windows though their row mean is low)."""
+    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least ``ATTIC_LEAST`` of
+    the rows' median height (a few dormers are a row of windows though their row mean is low)."""
     if not rows or pitch <= 0:
         return rows
     top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
     if top <= 2:
         return rows
     peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
-    above = runs(peak, share=0.0, least=max(2, round(0.4 * float(np.median([b - a for a, b in rows])))),
+    above = runs(peak, share=0.0, least=max(2, round(ATTIC_LEAST * float(np.median([b - a for a, b in rows])))),
                  floor=ATTIC_PEAK)
     return [above[-1], *rows] if above else rows
 

@@ -114,6 +114,19 @@ def test_an_attic_row_of_few_dormers_is_a_floor():
     assert any(box[1] < 30 for box, label in facade_.elements if label == "window")
 
 
+def test_a_row_of_windows_cut_by_the_crops_top_is_a_floor():
+    """Regression (validation cmp_b0274, balcony fold): the crop's top cuts the highest row to a sliver under half a
+    window tall where the parser sees one window; an attic run of a quarter of the rows' height is a floor
+    (``ATTIC_LEAST``; 0.4 before round 5)."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    top = np.zeros((12, prob.shape[1], n))
+    top[..., CMP_LABELS.index("facade")] = 1.0
+    top[2:6, 55:65] = np.eye(n)[WINDOW]  # the lower 4 of a window's 14 rows
+    facade_ = regular_facade(np.concatenate([top, prob]))
+    assert len(facade_.floor_lines) - 1 == 5 and 6 <= facade_.floor_lines[1] <= 20
+
+
 def test_shop_windows_are_the_ground_floor_not_a_row_of_windows():
     """A band of shops standing on the ground whose glass the parser also calls window is the ground floor: its
     shop windows are not a row of windows of the floors above (nor cut by their tile lines)."""
