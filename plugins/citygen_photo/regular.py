@@ -14,7 +14,9 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
 2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
    upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
-   voted per tile (the mean probability in its window box).
+   voted per tile (the mean probability in its window box), and so is its label: a window box that holds more
+   blind or balcony probability than glass (closed shutters, a French window behind a railing) is a blind or a
+   balcony.
 3. **Synchronised sizes** (§3.2, wu2014 §3.3): windows share their row's height and their column's width; rows
    and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size;
    each window then moves (its size kept) to where it holds the most glass probability. The windows behind
@@ -40,7 +42,7 @@ RUN_SHARE = 0.4
 #: Rows (columns) of windows whose height (width) is within this share of the median take the median.
 SAME_SIZE = 0.25
 #: A tile holds a window when the mean window (or blind) probability in its box reaches this.
-VOTE = 0.25
+VOTE = 0.3
 #: A window's sides lie where its row's (column's) window probability reaches this share of its peak.
 TIGHT = 0.5
 #: A gap between rows of windows this many pitches long holds more floors.
@@ -49,13 +51,15 @@ MISSING_ROW = 1.6
 GROUND_SHARE = 0.4
 #: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
 #: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
-SHOP_BAND = 0.2
+SHOP_BAND = 0.3
 #: An attic row (dormers, a gable's windows: too few for the row mean) is a run where the window probability,
 #: smoothed over ``ATTIC_BOX`` pixels, peaks at ``ATTIC_PEAK`` or more somewhere along the row, at least
 #: ``ATTIC_GAP`` pitches above the top row.
 ATTIC_BOX = 5
 ATTIC_PEAK = 0.4
 ATTIC_GAP = 0.6
+#: An attic run is at least this share of the rows' median height.
+ATTIC_LEAST = 0.25
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
 BALCONY_VOTE = 0.15
@@ -64,6 +68,9 @@ BALCONY_VOTE = 0.15
 #: synchronised, positions per element).
 FIT_REACH = 0.5
 FIT_GAIN = 0.1
+#: A voted window is a blind (balcony) when the mean blind (balcony) probability in its box exceeds this share of
+#: the mean glass probability there: closed shutters and French windows behind a railing, which CMP labels so.
+RELABEL = 0.7
 #: Samples of a window's height in the balcony group's mean profile.
 PROFILE = 32
 #: A door found by its probability stands on the ground: its run of rows ends at most this share of the floor's
@@ -190,7 +197,9 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
             box = _clip((c, a, d, b), w, h)
             if box and window[int(box[1]):int(np.ceil(box[3])), int(box[0]):int(np.ceil(box[2]))].mean() >= VOTE:
                 elements.append((box, "window"))
-    elements = _with_balconies(prob, _fitted(glass, elements))
+    elements = _relabelled(prob, _fitted(glass, elements))
+    windows = [e for e in elements if e[1] == "window"]
+    elements = _with_balconies(prob, windows) + [e for e in elements if e[1] != "window"]
     if ground_top is not None:
         elements += _ground(prob, ground_top, door(ground_top) if door else None)
     elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
@@ -240,17 +249,35 @@ def _fitted(glass: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple[Bo
     return out
 
 
+def _relabelled(prob: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple[Box, str]]:
+    """The voted windows with their label voted too (mueller2007 §3.2): a box whose mean blind or balcony
+    probability exceeds ``RELABEL`` times its mean glass probability takes that label (blind where both do and it
+    is the larger)."""
+    out = []
+    for box, label in elements:
+        x0, y0, x1, y1 = box
+        mean = prob[int(y0):max(int(np.ceil(y1)), int(y0) + 1),
+                    int(x0):max(int(np.ceil(x1)), int(x0) + 1)].reshape(-1, prob.shape[-1]).mean(axis=0)
+        blind, balcony, glass = mean[BLIND], mean[BALCONY], RELABEL * mean[WINDOW]
+        if blind > glass and blind >= balcony:
+            label = "blind"
+        elif balcony > glass:
+            label = "balcony"
+        out.append((box, label))
+    return out
+
+
 def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
     """``rows`` with an attic row put on top: the lowest run, at least ``ATTIC_GAP`` pitches above the top row,
-    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least 40 % of the rows'
-    median height (a few dormers are a row of windows though their row mean is low)."""
+    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least ``ATTIC_LEAST`` of
+    the rows' median height (a few dormers are a row of windows though their row mean is low)."""
     if not rows or pitch <= 0:
         return rows
     top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
     if top <= 2:
         return rows
     peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
-    above = runs(peak, share=0.0, least=max(2, round(0.4 * float(np.median([b - a for a, b in rows])))),
+    above = runs(peak, share=0.0, least=max(2, round(ATTIC_LEAST * float(np.median([b - a for a, b in rows])))),
                  floor=ATTIC_PEAK)
     return [above[-1], *rows] if above else rows
 

@@ -114,6 +114,19 @@ def test_an_attic_row_of_few_dormers_is_a_floor():
     assert any(box[1] < 30 for box, label in facade_.elements if label == "window")
 
 
+def test_a_row_of_windows_cut_by_the_crops_top_is_a_floor():
+    """Regression (validation cmp_b0274, balcony fold): the crop's top cuts the highest row to a sliver under half a
+    window tall where the parser sees one window; an attic run of a quarter of the rows' height is a floor
+    (``ATTIC_LEAST``; 0.4 before round 5)."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    top = np.zeros((12, prob.shape[1], n))
+    top[..., CMP_LABELS.index("facade")] = 1.0
+    top[2:6, 55:65] = np.eye(n)[WINDOW]  # the lower 4 of a window's 14 rows
+    facade_ = regular_facade(np.concatenate([top, prob]))
+    assert len(facade_.floor_lines) - 1 == 5 and 6 <= facade_.floor_lines[1] <= 20
+
+
 def test_shop_windows_are_the_ground_floor_not_a_row_of_windows():
     """A band of shops standing on the ground whose glass the parser also calls window is the ground floor: its
     shop windows are not a row of windows of the floors above (nor cut by their tile lines)."""
@@ -230,3 +243,21 @@ def test_a_dark_window_above_a_wall_band_is_not_the_door():
     prob[98:, 31:41] = 0.6 * eye[WINDOW] + 0.4 * eye[DOOR]  # reaching the ground: the entrance
     door = [box for box, label in regular_facade(prob).elements if label == "door"]
     assert len(door) == 1 and door[0][3] == prob.shape[0]
+
+
+def test_a_voted_window_of_closed_shutters_or_behind_a_railing_takes_that_label():
+    """The tile vote decides the label too (round 5): a window box holding more blind (balcony) probability than
+    ``RELABEL`` times its glass is a blind (a balcony: a French window behind a railing, as CMP labels it)."""
+    prob = probabilities(floors=4)
+    n = len(CMP_LABELS)
+    blind, balcony = CMP_LABELS.index("blind"), CMP_LABELS.index("balcony")
+    shutters = 0.45 * np.eye(n)[WINDOW] + 0.55 * np.eye(n)[blind]  # voted (window + blind) but mostly shutter
+    for j in range(5):
+        prob[38:52, j * 24 + 7:j * 24 + 17] = shutters  # the second floor's windows
+    prob[68:82, 7:17] = 0.3 * np.eye(n)[WINDOW] + 0.7 * np.eye(n)[balcony]  # one French window behind a railing
+    facade_ = regular_facade(prob)
+    labels = [label for _, label in facade_.elements]
+    assert labels.count("blind") == 5 and labels.count("balcony") == 1 and labels.count("window") == 14
+    assert all(30 <= box[1] < 60 for box, label in facade_.elements if label == "blind")
+    layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
+    assert check_partition(layout) == [] and layout.count("blind") == 5 and layout.count("window") == 14
