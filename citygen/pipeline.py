@@ -37,7 +37,7 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tilework import TileWork, Work, tile_works, work_items
+from citygen.tilework import TileWork, Work, tile_of, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -136,8 +136,9 @@ def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | Non
 
 
 def _work(chunk: Sequence[Work]) -> list[BuildingOutcome]:
+    from citygen.tiles import build_building
     assert _WORKER is not None
-    return [_WORKER.build(*item) for item in chunk]
+    return [build_building(_WORKER, item) for item in chunk]
 
 
 def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = None, jobs: int = 1,
@@ -202,7 +203,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     tiled = not gltf and (count > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
     masses_only = scene.output.masses and not gltf and executor == "local"
     by_tasks = not masses_only and (executor == "dask" or (tiled and (jobs == 1 or len(works) >= jobs)))
-    work = [] if by_tasks else work_items(works)  # (tile tasks make their own tile's)
+    work, lost = ([], []) if by_tasks else work_items(works)  # (tile tasks make their own tile's)
+    report.skipped += lost
     t2, c2 = time.perf_counter(), clock()
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if gltf:
@@ -289,12 +291,14 @@ def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any]) -> _Planned:
 
 def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report
                  ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
-    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one that cannot be is skipped), its
-    prim name given, and all of them packed in tiles; and the ground quad when the scene asks for one."""
-    planned, plans = [], []
+    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
+    is skipped), its prim name given, and all of them packed in tiles; and the ground quad when the scene asks for
+    one."""
+    planned, plans, tiles = [], [], []
     for fp in footprints:
         try:
             plan, notes = mass_plan(fp, scene, roofs)
+            tiles.append(tile_of(plan, scene.output.tile_size))
             plans.append(plan)
             planned.append(fp)
             report.warnings += notes
@@ -307,7 +311,7 @@ def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str,
     ground = _ground(plans) if scene.output.ground and plans else None
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in planned]
-    return tile_works(planned, plans, names, scene.output.tile_size), ground
+    return tile_works(planned, plans, names, tiles), ground
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
@@ -440,11 +444,12 @@ def _run(work: Sequence[Work], scene: Scene, seed: int, jobs: int, registry: Reg
     buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
     already loaded (worker processes load their own)."""
     from citygen.builder import Builder
+    from citygen.tiles import build_building
     total = len(work)
     if not _in_workers(jobs, total):
         builder = Builder(scene, seed, registry, rulesets)
         for k, item in enumerate(work):
-            yield builder.build(*item)
+            yield build_building(builder, item)
             if progress:
                 progress(k + 1, total)
         return

@@ -5,8 +5,9 @@ This is how a city with tile layers is generated, by either executor: the local 
 stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
 time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
 from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
-neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error handling as the per-building
-path (a bad building skips itself) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
+neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error
+handling as the per-building path (a bad building skips itself: :meth:`~citygen.tilework.TileWork.items`,
+:func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
 buildings use, so the layer opens alone and its bytes depend on the seed and its buildings only, never on which
 process built it or when. Only small results travel back (a :class:`TileResult`).
 """
@@ -27,16 +28,19 @@ from typing import Any
 
 from pxr import Work
 
-from citygen.builder import Builder
-from citygen.footprints import Skipped
+from citygen.builder import Builder, BuildingOutcome
+from citygen.errors import ExportError
+from citygen.footprints import Footprint, Skipped
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
-from citygen.tilework import TileWork
+from citygen.tilework import TileWork, failed
+from citygen.tilework import Work as Item  # (pxr's Work is USD's thread pool)
 from citygen.usd.library import library_name
-from citygen.usd.writer import StageStats, StageWriter, tile_name
+from citygen.usd.publish import temp_prefix
+from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, tile_name
 
 
 @dataclass(frozen=True)
@@ -72,6 +76,8 @@ class TileResult:
 
 
 _BUILDERS = threading.local()
+#: Errors of the machine, not of a building: a tile task that meets one while writing its layer stops with it.
+ENVIRONMENT = (OSError, MemoryError, ExportError)
 
 
 def _init_worker(parent: int) -> None:
@@ -93,39 +99,83 @@ def _builder(job: TileJob) -> Builder:
     return _BUILDERS.builder
 
 
+def build_building(builder: Builder, item: Item) -> BuildingOutcome:
+    """``builder.build(*item)``; a building whose build raises anyway (past the builder's own guard: its
+    attributes, its pivot) is skipped with the reason, as the builder skips one."""
+    try:
+        return builder.build(*item)
+    except Exception as exc:
+        return BuildingOutcome(None, failed(item[0], exc, "building it"), ())
+
+
 def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> TileResult:
     """The task: build one tile's buildings (their masses and neighbour covers made here: :meth:`TileWork.items`)
     and write its layer into ``job.staging``; ``builder``: one to use instead of this thread's own (the main
     process's)."""
     builder = builder or _builder(job)
-    tile = work.tile
-    layer = f"{tile_name(tile)}{job.suffix}"
-    skipped: list[Skipped] = []
+    start = time.thread_time()
+    items, skipped = work.items()
     warnings: list[str] = []
     faces: Counter[str] = Counter()
-    writer: StageWriter | None = None
-    stats = None
+    built: list[tuple[Footprint, BuildingRecord]] = []
     builds = 0.0
-    start = time.thread_time()
-    for item in work.items():
-        outcome = builder.build(*item)
+    for item in items:
+        outcome = build_building(builder, item)
         builds += outcome.cpu
         warnings += outcome.warnings
         faces.update(dict(outcome.faces))
         if outcome.record is None:
             skipped.append(outcome.skipped)
-            continue
-        if writer is None:
-            writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
-                                 layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
-                                 lod=job.scene.output.lod, materials=job.scene.materials,
-                                 element_library=library_name(job.suffix))
-        writer.add(outcome.record)
-    if writer is not None:
-        stats = writer.close()
-    return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
-                      tuple(skipped), tuple(warnings), tuple(sorted(faces.items())), builds,
+        else:
+            built.append((item[0], outcome.record))
+    writer, stats, lost = _write_tile(job, work.tile, built)
+    return TileResult(writer.path.name if writer else None, stats, tuple(writer.prototypes) if writer else (),
+                      tuple(skipped + lost), tuple(warnings), tuple(sorted(faces.items())), builds,
                       time.thread_time() - start - builds)
+
+
+def _write_tile(job: TileJob, tile: tuple[int, int], built: Sequence[tuple[Footprint, BuildingRecord]]
+                ) -> tuple[StageWriter | None, StageStats | None, list[Skipped]]:
+    """The tile's layer written from ``built``'s records (no writer, no figures: none to write), and the buildings
+    left out. A record the stage writer fails on would fail the whole layer: then each record is written alone to
+    find those it fails on, which are skipped, and the layer written again without them. An error of the
+    machine's (:data:`ENVIRONMENT`: a full disk, no memory) is no building's: it stops the task."""
+    name = f"{tile_name(tile)}{job.suffix}"
+    try:
+        return (*_layer(job, tile, job.staging / name, [record for _, record in built]), [])
+    except ENVIRONMENT:
+        raise
+    except Exception:
+        checked = [(footprint, record, _fails(job, tile, record)) for footprint, record in built]
+    lost = [failed(footprint, exc, "writing it to the stage") for footprint, _, exc in checked if exc is not None]
+    return (*_layer(job, tile, job.staging / name, [record for _, record, exc in checked if exc is None]), lost)
+
+
+def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[BuildingRecord]
+           ) -> tuple[StageWriter | None, StageStats | None]:
+    """The layer at ``path`` of ``records`` (none: no layer) and its figures."""
+    if not records:
+        return None, None
+    writer = StageWriter(path, up_axis=job.scene.output.up_axis, layer_data={**job.layer_data, "tile": tile_name(tile)},
+                         uvs=job.scene.output.uvs, lod=job.scene.output.lod, materials=job.scene.materials,
+                         element_library=library_name(job.suffix))
+    for record in records:
+        writer.add(record)
+    return writer, writer.close()
+
+
+def _fails(job: TileJob, tile: tuple[int, int], record: BuildingRecord) -> Exception | None:
+    """The error writing ``record`` alone in a layer raises (a scratch file, removed), or None."""
+    scratch = job.staging / f"{temp_prefix(tile_name(tile))}check{job.suffix}"
+    try:
+        _layer(job, tile, scratch, [record])
+    except ENVIRONMENT:
+        raise
+    except Exception as exc:
+        return exc
+    finally:
+        scratch.unlink(missing_ok=True)
+    return None
 
 
 def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
