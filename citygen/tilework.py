@@ -32,17 +32,20 @@ Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 class TileWork:
     """One tile's work, packed: its buildings (footprint, mass plan, prim name; in prim name order) and the plans
     of the buildings of other tiles around them (:func:`~citygen.mass.neighbours`), pickled; ``count``: how many
-    buildings."""
+    buildings, ``pitched``: how many of them carry a roof that is not flat (what a mass-only city's build costs,
+    :func:`citygen.lod1.build_cost`)."""
 
     tile: tuple[int, int]
     count: int
     packed: bytes
+    pitched: int = 0
 
     @classmethod
     def pack(cls, tile: tuple[int, int], buildings: Sequence[tuple[Footprint, MassPlan, str]],
              around: Sequence[MassPlan] = ()) -> TileWork:
         return cls(tile, len(buildings), pickle.dumps((tuple(buildings), tuple(around)),
-                                                      protocol=pickle.HIGHEST_PROTOCOL))
+                                                      protocol=pickle.HIGHEST_PROTOCOL),
+                   sum(plan.roof.height is not None for _, plan, _ in buildings))
 
     def __len__(self) -> int:
         return self.count

@@ -91,3 +91,14 @@ def test_a_footprint_too_far_out_to_measure_is_skipped_on_every_path(small_scene
         (reason,) = [s.reason for s in report.skipped if s.id == "way/far"]
         assert reason.startswith("cannot build its mass: its outline's centroid cannot be computed (bounds 0, 100, "
                                  "1e+200, 112)") and reason.endswith("-- check the source's coordinates and their CRS")
+
+
+@pytest.mark.parametrize("step", ["making its wall faces", "measuring its neighbour cover"])
+def test_a_mass_only_city_skips_the_same_building_with_the_same_reason(small_scene, test_registry, monkeypatch, step):
+    _raising_for_way_1(monkeypatch, step)
+    small_scene.write_text(small_scene.read_text().split("[output]")[0]
+                           + '[output]\npath = "out/small.usdc"\ntile_size = 40\nmasses = true\n')
+    report = generate_city(load_scene(small_scene), registry=test_registry)
+    assert report.written == 2
+    skipped = {s.id: (s.reason, s.where) for s in report.skipped}
+    assert skipped["way/1"] == (f"internal error ZeroDivisionError {step}: boom", "city.local.json[0]")
