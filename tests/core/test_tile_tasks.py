@@ -121,3 +121,17 @@ def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_
     report = generate_city(scene, registry=test_registry, jobs=2)
     assert pools == [2, 2]  # (3 tiles of one building: the third one goes to fresh workers)
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
+
+
+def test_tile_results_share_their_equal_prototype_keys():
+    """Regression (main-process memory at scale): results unpickled from the workers, held until every tile is done,
+    each held its own copies of the same element keys; equal keys are now one object."""
+    import pickle
+
+    from citygen.geometry.prototypes import ProtoKey
+    key = ProtoKey("window", "glass", 120, 150, 5)
+    first, second = (pickle.loads(pickle.dumps(tiles.TileResult(None, None, (key,), (), ()))) for _ in range(2))
+    assert first.prototypes[0] is not second.prototypes[0]
+    keys: dict = {}
+    first, second = tiles.interned(first, keys), tiles.interned(second, keys)
+    assert first.prototypes[0] is second.prototypes[0] and first.prototypes == (key,)
