@@ -7,9 +7,10 @@ time: memory is bounded by the largest tile whatever the city's size, and the ma
 from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
 neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error
 handling as the per-building path (a bad building skips itself: :meth:`~citygen.tilework.TileWork.items`,
-:func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
-buildings use, so the layer opens alone and its bytes depend on the seed and its buildings only, never on which
-process built it or when. Only small results travel back (a :class:`TileResult`).
+:func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes
+``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so the layer opens alone and
+its bytes depend on the seed and its buildings only, never on which process built it or when. Only small results
+travel back (a :class:`TileResult`).
 """
 from __future__ import annotations
 

@@ -100,7 +100,7 @@ def failed(footprint: Footprint, exc: Exception, doing: str) -> Skipped:
 
 def tile_of(plan: MassPlan, size: float) -> tuple[int, int]:
     """The tile (column, row) of ``size`` metres holding the centroid of the plan's outline; a
-    :class:`~citygen.errors.FootprintError` when the centroid overflows (coordinates of ~1e155 m and more)."""
+    :class:`~citygen.errors.FootprintError` when the centroid overflows (coordinates beyond ~1e154 m)."""
     centroid = plan.outline.centroid
     x, y = centroid.x, centroid.y
     if not (math.isfinite(x) and math.isfinite(y)):
