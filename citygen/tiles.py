@@ -92,8 +92,9 @@ def _init_worker(parent: int) -> None:
     """In a worker process forked to run tile tasks: tied to its parent (:mod:`citygen.lifeline`), and USD's work
     done in this thread. USD's work-thread pool (TBB) does not survive a fork: the tasks it runs detached -- the
     freeing of every released layer's data -- never ran, and a forked worker grew by ~0.2 MB per building it built
-    (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held: the worker stays
-    at ~170 MB whatever the city's size, for a few per cent more CPU (the freeing the leak skipped)."""
+    (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held, for a few per cent
+    more CPU (the freeing the leak skipped); what USD keeps of the paths it saw is bounded by
+    :data:`BUILDINGS_PER_WORKER`."""
     tie_to_parent(parent)
     Work.SetConcurrencyLimit(1)
 
