@@ -99,6 +99,16 @@ def _init_worker(parent: int) -> None:
     Work.SetConcurrencyLimit(1)
 
 
+@dataclass
+class _Slot:
+    """One of :func:`run_local`'s worker processes: its executor (None between two workers), the buildings sent to
+    it and its tiles in flight."""
+
+    pool: ProcessPoolExecutor | None = None
+    given: int = 0
+    busy: int = 0
+
+
 def _pool(workers: int) -> ProcessPoolExecutor:
     """``workers`` tile worker processes (:func:`_init_worker`), forked from this one."""
     return ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(os.getpid(),))
@@ -202,7 +212,7 @@ def interned(result: TileResult, keys: dict[ProtoKey | ModuleKey, ProtoKey | Mod
 def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
               *, builder: Builder) -> list[TileResult]:
     """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes
-    (:func:`_init_worker`; replaced after :data:`BUILDINGS_PER_WORKER` buildings each), largest tile first so the
+    (:func:`_init_worker`; each replaced after :data:`BUILDINGS_PER_WORKER` buildings), largest tile first so the
     last ones to finish are small; results in tile order."""
     total, done = sum(map(len, tiles)), 0
     if jobs <= 1 or len(tiles) < 2:
@@ -215,40 +225,47 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
         return results
     order = sorted(range(len(tiles)), key=lambda k: (-len(tiles[k]), k))
     found: dict[int, TileResult] = {}
-    workers = min(jobs, len(tiles))
-    pools = [_pool(workers)]
-    given = 0  # buildings sent to the newest pool
-    pending: dict[Future, int] = {}
+    slots = [_Slot() for _ in range(min(jobs, len(tiles)))]
+    pending: dict[Future, tuple[int, _Slot]] = {}
     keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey] = {}
+    queue = iter(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
 
-    def submit(k: int) -> None:
-        nonlocal given
-        if given >= BUILDINGS_PER_WORKER * workers:  # fresh workers; the old ones end when their tiles are done
-            pools[-1].shutdown(wait=False)
-            pools.append(_pool(workers))
-            given = 0
-        given += len(tiles[k])
-        pending[pools[-1].submit(build_tile, job, tiles[k])] = k
+    def feed(slot: _Slot) -> None:
+        """Up to two tiles in flight in ``slot``'s worker, a fresh one once the last has built its share and is
+        done (no two workers of a slot alive at once: the tree's memory stays that of ``jobs`` workers)."""
+        while slot.busy < 2 and not (slot.pool is not None and slot.given >= BUILDINGS_PER_WORKER):
+            k = next(queue, None)
+            if k is None:
+                return
+            if slot.pool is None:
+                slot.pool = _pool(1)
+            slot.given += len(tiles[k])
+            slot.busy += 1
+            pending[slot.pool.submit(build_tile, job, tiles[k])] = (k, slot)
+        if slot.busy == 0 and slot.pool is not None:  # (its share built: a fresh worker takes over)
+            slot.pool.shutdown()
+            slot.pool, slot.given = None, 0
+            feed(slot)
 
     try:
-        queue = iter(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
-        for k in itertools.islice(queue, 2 * workers):
-            submit(k)
+        for slot in slots:
+            feed(slot)
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
-                k = pending.pop(future)
+                k, slot = pending.pop(future)
                 found[k] = interned(future.result(), keys)
-                following = next(queue, None)
-                if following is not None:
-                    submit(following)
+                slot.busy -= 1
+                feed(slot)
                 done += len(tiles[k])
                 if progress:
                     progress(done, total)
     except BaseException:  # an error, Ctrl-C, SIGTERM: the workers end now
-        for pool in pools:
-            stop_workers(pool)
+        for slot in slots:
+            if slot.pool is not None:
+                stop_workers(slot.pool)
         raise
-    for pool in pools:
-        pool.shutdown()
+    for slot in slots:
+        if slot.pool is not None:
+            slot.pool.shutdown()
     return [found[k] for k in range(len(tiles))]

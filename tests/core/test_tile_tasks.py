@@ -104,8 +104,8 @@ def test_tile_workers_write_the_stage_one_job_writes(small_scene, test_registry)
 def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_same_stage(small_scene, test_registry,
                                                                                           monkeypatch):
     """Regression (memory at scale): USD keeps memory for every distinct path a process authored, so a worker that
-    wrote a whole city grew with it (~7.6 kB a building); workers are replaced after BUILDINGS_PER_WORKER buildings
-    each, the old ones finishing their tiles, and the stage is the same bytes."""
+    wrote a whole city grew with it (~7.6 kB a building); each worker is replaced after BUILDINGS_PER_WORKER
+    buildings, once its tiles are done, and the stage is the same bytes."""
     scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
     out = Path(scene.output.path)
 
@@ -119,7 +119,7 @@ def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_
     monkeypatch.setattr(tiles, "_pool", lambda workers: pools.append(workers) or pool(workers))
     monkeypatch.setattr(tiles, "BUILDINGS_PER_WORKER", 1)
     report = generate_city(scene, registry=test_registry, jobs=2)
-    assert pools == [2, 2]  # (3 tiles of one building: the third one goes to fresh workers)
+    assert pools == [1, 1, 1]  # (3 tiles of one building, 2 workers: the third tile goes to a fresh one)
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
 
 
