@@ -1,6 +1,6 @@
 """Scaling benchmark: a synthetic city of N blocks of row houses, to see how generation grows with city size.
 
-    python benchmarks/city_scale.py [N ...] [--jobs 2] [--one-file] [--executor dask [--scheduler ADDRESS]]
+    python benchmarks/city_scale.py [N ...] [--jobs 2] [--one-file] [--masses] [--executor dask [--scheduler ADDRESS]]
 
 Footprints are rectangles in EPSG:3067 (Finnish TM) around Helsinki, 8-40 m wide, 3-8 storeys, in blocks that
 share party walls, dressed with the shipped split grammars. Prints buildings/s, wall and CPU time (main process, and
@@ -10,7 +10,7 @@ PSS -- which shares them out -- of the main process and its children, sampled ev
 CPU is left out of the main process's: reading a process's smaps costs ~4 ms, so sampling three processes five
 times a second took ~70 s of the main process's CPU in a 20-minute run) and stage size per N. The
 scene leaves ``tile_layers`` unset (tile layers above 1,000 buildings, the default); ``--one-file`` forces one
-layer.
+layer; ``--masses`` makes a mass-only (LOD1) city.
 ``--executor dask`` runs one task per tile on a local dask cluster of ``--jobs`` workers (or on ``--scheduler``;
 then the workers' CPU and memory are not seen here). Run one N per invocation for a clean peak (ru_maxrss never
 goes down).
@@ -55,6 +55,7 @@ def main() -> None:
     parser.add_argument("sizes", nargs="*", type=int, default=[500, 2000])
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--one-file", action="store_true", help="tile_layers = false: the whole city in one layer")
+    parser.add_argument("--masses", action="store_true", help="masses = true: a mass-only (LOD1) city")
     parser.add_argument("--executor", choices=("local", "dask"), default="local")
     parser.add_argument("--scheduler", help="with --executor dask: a running scheduler's address")
     args = parser.parse_args()
@@ -67,7 +68,7 @@ def main() -> None:
             (tmp / "scene.toml").write_text(
                 f'[scene]\nseed = 1\n[footprints]\npath = "city.geojson"\ncrs = "EPSG:3067"\n'
                 f'[[assign]]\nruleset = [{rulesets}]\n[output]\npath = "city.usdc"\n'
-                + ("tile_layers = false\n" if args.one_file else ""))
+                + ("tile_layers = false\n" if args.one_file else "") + ("masses = true\n" if args.masses else ""))
             t0, c0, k0 = time.perf_counter(), time.process_time(), _children_cpu()
             with TreePeak() as tree:
                 report = generate_city(load_scene(tmp / "scene.toml"), jobs=args.jobs, executor=args.executor,
@@ -76,7 +77,8 @@ def main() -> None:
             main_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
             worker_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
             s = report.stats
-            print(f"N={n} [{args.executor}, {args.jobs} jobs{', one file' if args.one_file else ''}]: "
+            print(f"N={n} [{args.executor}, {args.jobs} jobs{', one file' if args.one_file else ''}"
+                  f"{', masses only' if args.masses else ''}]: "
                   f"{report.written} buildings in {elapsed:.1f} s = {report.written / elapsed:.0f} buildings/s; "
                   f"CPU main {cpu:.1f} s, main+workers {cpu + children:.1f} s; "
                   f"peak RSS main {main_peak:.0f} MB, worker {worker_peak:.0f} MB, process tree {tree.peak:.0f} MB "

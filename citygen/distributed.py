@@ -60,9 +60,10 @@ def run_tiles(tiles: Sequence[TileWork], job: TileJob, workers: int,
               progress: Callable[[int, int], None] | None = None, *, scheduler: str | None = None
               ) -> list[TileResult]:
     """Submit one task per tile (``tiles`` in tile order) and return their results in tile order."""
-    from citygen.tiles import build_tile  # (the facade machinery: imported when a run needs it)
+    from citygen.tiles import build_tile, interned  # (the facade machinery: imported when a run needs it)
     total, done = sum(map(len, tiles)), 0
     results: dict[tuple[int, int], TileResult] = {}
+    keys: dict = {}
     with dask_client(scheduler, workers) as client:
         from dask.distributed import as_completed
 
@@ -77,7 +78,7 @@ def run_tiles(tiles: Sequence[TileWork], job: TileJob, workers: int,
                     raise
                 raise CitygenError(f"{tile_name(tile)} failed on its dask worker: {type(exc).__name__}: {exc}",
                                   hint="see the worker's log") from exc
-            results[tile] = result
+            results[tile] = interned(result, keys)
             future.release()
             done += size
             if progress:

@@ -13,7 +13,7 @@ import itertools
 import os
 import time
 from collections import deque
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -30,6 +30,7 @@ from citygen.mass import Mass
 from citygen.registry import RoofBuilder, default_registry, load_registry
 from citygen.roofmesh import build_roof
 from citygen.scene import Scene
+from citygen.tilework import TileWork, Work
 from citygen.usd.normals import face_normals
 
 #: Buildings whose walls are computed in one batch (bounds the arrays of a city of any size).
@@ -86,24 +87,30 @@ class _Planned:
     warnings: tuple[str, ...]
 
 
-def in_workers(work: Sequence[tuple], jobs: int) -> bool:
-    """Whether :func:`mass_batches` builds ``work`` in ``jobs`` worker processes: its estimated build CPU
-    (:data:`FLAT_COST`, :data:`PITCHED_COST` per building) reaches :data:`WORKERS_FROM`."""
-    return jobs > 1 and sum(FLAT_COST if w[1].roof.height is None else PITCHED_COST for w in work) >= WORKERS_FROM
+def build_cost(works: Sequence[TileWork]) -> float:
+    """The estimated CPU seconds of building ``works``' buildings as masses (:data:`FLAT_COST`,
+    :data:`PITCHED_COST` per building)."""
+    return sum(FLAT_COST * (len(w) - w.pitched) + PITCHED_COST * w.pitched for w in works)
 
 
-def mass_batches(work: Sequence[tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]], scene: Scene, seed: int,
-                 roofs: Mapping[str, RoofBuilder], jobs: int = 1,
-                 plugins: tuple[tuple[object, ...], bool] | None = None) -> Iterator[tuple[list[MassOutcome], float]]:
+def in_workers(cost: float, jobs: int) -> bool:
+    """Whether :func:`mass_batches` is to build buildings of estimated build CPU ``cost`` (:func:`build_cost`) in
+    ``jobs`` worker processes: from :data:`WORKERS_FROM`."""
+    return jobs > 1 and cost >= WORKERS_FROM
+
+
+def mass_batches(work: Iterable[Work], scene: Scene, seed: int, roofs: Mapping[str, RoofBuilder], jobs: int = 1,
+                 plugins: tuple[tuple[object, ...], bool] | None = None, chunk: int = 0
+                 ) -> Iterator[tuple[list[MassOutcome], float]]:
     """The outcome of every work item (footprint, mass, neighbour cover, prim name, tile), in order, in lists of
-    buildings built together, each with the CPU seconds it took; in ``jobs`` worker processes where
-    :func:`in_workers` says so (``plugins``: how they load the registry, ``None`` for the default one)."""
-    if not in_workers(work, jobs):
-        for start in range(0, len(work), BATCH):
-            yield _timed(work[start:start + BATCH], scene, seed, roofs)
+    buildings built together, each with the CPU seconds it took: here, :data:`BATCH` at a time, or with ``chunk``
+    in ``jobs`` worker processes, ``chunk`` at a time (``plugins``: how they load the registry, ``None`` for the
+    default one). ``work`` is taken as it comes: a lazy one is never held whole."""
+    if not chunk:
+        for batch in _chunks(work, BATCH):
+            yield _timed(batch, scene, seed, roofs)
         return
-    size = max(1, min(64, len(work) // (8 * jobs)))
-    chunks = (work[k:k + size] for k in range(0, len(work), size))
+    chunks = _chunks(work, chunk)
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(plugins, os.getpid()))
     try:
         pending = deque(pool.submit(_timed, c, scene, seed) for c in itertools.islice(chunks, 4 * jobs))
@@ -117,6 +124,13 @@ def mass_batches(work: Sequence[tuple[Footprint, Mass, np.ndarray, str, tuple[in
         stop_workers(pool)
         raise
     pool.shutdown()
+
+
+def _chunks(work: Iterable[Work], size: int) -> Iterator[list[Work]]:
+    """``work`` in lists of ``size`` items (the last one shorter)."""
+    items = iter(work)
+    while chunk := list(itertools.islice(items, size)):
+        yield chunk
 
 
 _ROOFS: Mapping[str, RoofBuilder] = {}  # (a worker process's roof builders)

@@ -37,7 +37,7 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tilework import TileWork, Work, tile_works, work_items
+from citygen.tilework import TileWork, Work, tile_of, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -136,8 +136,9 @@ def _worker_plugins(registry: Registry) -> tuple[tuple[object, ...], bool] | Non
 
 
 def _work(chunk: Sequence[Work]) -> list[BuildingOutcome]:
+    from citygen.tiles import build_building
     assert _WORKER is not None
-    return [_WORKER.build(*item) for item in chunk]
+    return [build_building(_WORKER, item) for item in chunk]
 
 
 def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = None, jobs: int = 1,
@@ -202,7 +203,8 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
     tiled = not gltf and (count > AUTO_TILE_LAYERS if scene.output.tile_layers is None else scene.output.tile_layers)
     masses_only = scene.output.masses and not gltf and executor == "local"
     by_tasks = not masses_only and (executor == "dask" or (tiled and (jobs == 1 or len(works) >= jobs)))
-    work = [] if by_tasks else work_items(works)  # (tile tasks make their own tile's)
+    work, lost = ([], []) if by_tasks or masses_only else work_items(works)  # (made per tile where built)
+    report.skipped += lost
     t2, c2 = time.perf_counter(), clock()
     layer_data = {"scene": scene.name, "seed": seed, "source": scene.footprints.name, "georeference": georef}
     if gltf:
@@ -210,7 +212,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         if ignored:
             report.warnings.append(f"{Path(out).name}: glTF output ignores [output] {', '.join(ignored)}")
     if masses_only:
-        timings, cpu = _generate_masses(work, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
+        timings, cpu = _generate_masses(works, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
                                         progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
         report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": clock() - c0}
@@ -289,12 +291,14 @@ def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any]) -> _Planned:
 
 def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report
                  ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
-    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one that cannot be is skipped), its
-    prim name given, and all of them packed in tiles; and the ground quad when the scene asks for one."""
-    planned, plans = [], []
+    """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
+    is skipped), its prim name given, and all of them packed in tiles; and the ground quad when the scene asks for
+    one."""
+    planned, plans, tiles = [], [], []
     for fp in footprints:
         try:
             plan, notes = mass_plan(fp, scene, roofs)
+            tiles.append(tile_of(plan, scene.output.tile_size))
             plans.append(plan)
             planned.append(fp)
             report.warnings += notes
@@ -307,7 +311,7 @@ def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str,
     ground = _ground(plans) if scene.output.ground and plans else None
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in planned]
-    return tile_works(planned, plans, names, scene.output.tile_size), ground
+    return tile_works(planned, plans, names, tiles), ground
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
@@ -386,7 +390,7 @@ def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins:
             {"builds": builds, "tile layers": layers, "workers": builds + layers if elsewhere else 0.0})
 
 
-def _generate_masses(work: Sequence[Work], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
+def _generate_masses(works: Sequence[TileWork], scene: Scene, seed: int, roofs: dict[str, Any], jobs: int,
                      plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
                      tiled: bool, report: Report,
                      progress: Callable[[int, int], None] | None,
@@ -395,22 +399,26 @@ def _generate_masses(work: Sequence[Work], scene: Scene, seed: int, roofs: dict[
     """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`): built in ``jobs`` worker processes where
     its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), else here; a tiled one of that kind
     written half here, half by a forked helper where it is big enough (:func:`citygen.lod1tiles.with_helper`), else
-    all here. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases (this process) and the
-    ``builds`` CPU, with the part of it spent in ``workers`` (or the helper's builds and tile layers)."""
-    from citygen.lod1 import in_workers, mass_batches
+    all here. The work items -- masses and neighbour covers -- are made one tile at a time as they are built, so
+    memory does not grow with the city. Returns the wall and CPU seconds of the ``buildings`` and ``usd`` phases
+    (this process) and the ``builds`` CPU, with the part of it spent in ``workers`` (or the helper's builds and
+    tile layers)."""
+    from citygen.lod1 import build_cost, in_workers, mass_batches
     from citygen.lod1stage import MassWriter, write_outcomes
     from citygen.lod1tiles import run_with_helper, with_helper
     t0, c0 = time.perf_counter(), time.process_time()
     usd = builds = helper = 0.0  # CPU seconds: writing here, the builds (wherever), the helper's (builds and layers)
-    done = 0
+    done, total = 0, sum(map(len, works))
+    workers = in_workers(build_cost(works), jobs)
+    lost: list[Skipped] = []  # (buildings whose mass or cover cannot be made, met by :func:`_tile_items`)
     with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
-        helped = with_helper(work, jobs, tiled) and not in_workers(work, jobs)
-        parts = (run_with_helper(work, scene, seed, roofs, writer) if helped else
-                 (write_outcomes(writer, outcomes, cpu) for outcomes, cpu in mass_batches(work, scene, seed, roofs,
-                                                                                            jobs, plugins)))
+        chunk = max(1, min(64, total // (8 * jobs))) if workers else 0
+        parts = (run_with_helper(works, scene, seed, roofs, writer) if with_helper(works, jobs, tiled) and not workers
+                 else (write_outcomes(writer, outcomes, cpu) for outcomes, cpu in
+                       mass_batches(_tile_items(works, lost), scene, seed, roofs, jobs, plugins, chunk)))
         for part in parts:
             report.skipped += part.skipped
             report.warnings += part.warnings
@@ -420,12 +428,22 @@ def _generate_masses(work: Sequence[Work], scene: Scene, seed: int, roofs: dict[
             helper += 0.0 if part.here else part.builds + part.usd
             done += part.written + len(part.skipped)
             if progress:
-                progress(done, len(work))
+                progress(done, total)
+        report.skipped += lost
         t1, c1 = time.perf_counter(), time.process_time()
         report.stats = writer.close()
-    workers = builds if in_workers(work, jobs) else helper
     return ({"buildings": t1 - t0, "usd": time.perf_counter() - t1},
-            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds, "workers": workers})
+            {"buildings": c1 - c0 - usd, "usd": usd + time.process_time() - c1, "builds": builds,
+             "workers": builds if workers else helper})
+
+
+def _tile_items(works: Sequence[TileWork], lost: list[Skipped]) -> Iterator[Work]:
+    """The tiles' work items, each tile's made when the one before is used up; the buildings skipped on the way
+    go to ``lost``."""
+    for work in works:
+        items, skipped = work.items()
+        lost += skipped
+        yield from items
 
 
 def _in_workers(jobs: int, total: int) -> bool:
@@ -440,11 +458,12 @@ def _run(work: Sequence[Work], scene: Scene, seed: int, jobs: int, registry: Reg
     buildings never pile up in memory faster than the stage writer consumes them. ``rulesets``: the scene's,
     already loaded (worker processes load their own)."""
     from citygen.builder import Builder
+    from citygen.tiles import build_building
     total = len(work)
     if not _in_workers(jobs, total):
         builder = Builder(scene, seed, registry, rulesets)
         for k, item in enumerate(work):
-            yield builder.build(*item)
+            yield build_building(builder, item)
             if progress:
                 progress(k + 1, total)
         return

@@ -5,10 +5,12 @@ This is how a city with tile layers is generated, by either executor: the local 
 stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
 time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
 from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
-neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error handling as the per-building
-path (a bad building skips itself) and writes ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its
-buildings use, so the layer opens alone and its bytes depend on the seed and its buildings only, never on which
-process built it or when. Only small results travel back (a :class:`TileResult`).
+neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error
+handling as the per-building path (a bad building skips itself: :meth:`~citygen.tilework.TileWork.items`,
+:func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes
+``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so the layer opens alone and
+its bytes depend on the seed and its buildings only, never on which process built it or when. Only small results
+travel back (a :class:`TileResult`).
 """
 from __future__ import annotations
 
@@ -21,22 +23,25 @@ import time
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from pxr import Work
 
-from citygen.builder import Builder
-from citygen.footprints import Skipped
+from citygen.builder import Builder, BuildingOutcome
+from citygen.errors import ExportError
+from citygen.footprints import Footprint, Skipped
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
-from citygen.tilework import TileWork
+from citygen.tilework import TileWork, failed
+from citygen.tilework import Work as Item  # (pxr's Work is USD's thread pool)
 from citygen.usd.library import library_name
-from citygen.usd.writer import StageStats, StageWriter, tile_name
+from citygen.usd.publish import temp_prefix
+from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, tile_name
 
 
 @dataclass(frozen=True)
@@ -72,16 +77,41 @@ class TileResult:
 
 
 _BUILDERS = threading.local()
+#: Buildings a tile worker process builds (on average over the pool) before fresh ones, forked again from the main
+#: process, take over. USD keeps memory for every distinct prim and property path and relationship target a process
+#: ever authored, layers long freed (~25-50 B a path, ~160 B a target: ~4-8 kB a synthetic building), so a worker
+#: that wrote a whole city grew with it (100,000 buildings: 202 -> 584 MB from 10,000); replaced, it stays within
+#: ~30 MB of its start. A fresh worker costs ~0.3 s of CPU (its plugins and rulesets loaded again); the old ones
+#: finish their tiles beside the new ones, so nothing waits for them.
+BUILDINGS_PER_WORKER = 4000
+#: Errors of the machine, not of a building: a tile task that meets one while writing its layer stops with it.
+ENVIRONMENT = (OSError, MemoryError, ExportError)
 
 
 def _init_worker(parent: int) -> None:
     """In a worker process forked to run tile tasks: tied to its parent (:mod:`citygen.lifeline`), and USD's work
     done in this thread. USD's work-thread pool (TBB) does not survive a fork: the tasks it runs detached -- the
     freeing of every released layer's data -- never ran, and a forked worker grew by ~0.2 MB per building it built
-    (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held: the worker stays
-    at ~170 MB whatever the city's size, for a few per cent more CPU (the freeing the leak skipped)."""
+    (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held, for a few per cent
+    more CPU (the freeing the leak skipped); what USD keeps of the paths it saw is bounded by
+    :data:`BUILDINGS_PER_WORKER`."""
     tie_to_parent(parent)
     Work.SetConcurrencyLimit(1)
+
+
+@dataclass
+class _Slot:
+    """One of :func:`run_local`'s worker processes: its executor (None between two workers), the buildings sent to
+    it and its tiles in flight."""
+
+    pool: ProcessPoolExecutor | None = None
+    given: int = 0
+    busy: int = 0
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """``workers`` tile worker processes (:func:`_init_worker`), forked from this one."""
+    return ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(os.getpid(),))
 
 
 def _builder(job: TileJob) -> Builder:
@@ -93,45 +123,97 @@ def _builder(job: TileJob) -> Builder:
     return _BUILDERS.builder
 
 
+def build_building(builder: Builder, item: Item) -> BuildingOutcome:
+    """``builder.build(*item)``; a building whose build raises anyway (past the builder's own guard: its
+    attributes, its pivot) is skipped with the reason, as the builder skips one."""
+    try:
+        return builder.build(*item)
+    except Exception as exc:
+        return BuildingOutcome(None, failed(item[0], exc, "building it"), ())
+
+
 def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> TileResult:
     """The task: build one tile's buildings (their masses and neighbour covers made here: :meth:`TileWork.items`)
     and write its layer into ``job.staging``; ``builder``: one to use instead of this thread's own (the main
     process's)."""
     builder = builder or _builder(job)
-    tile = work.tile
-    layer = f"{tile_name(tile)}{job.suffix}"
-    skipped: list[Skipped] = []
+    start = time.thread_time()
+    items, skipped = work.items()
     warnings: list[str] = []
     faces: Counter[str] = Counter()
-    writer: StageWriter | None = None
-    stats = None
+    built: list[tuple[Footprint, BuildingRecord]] = []
     builds = 0.0
-    start = time.thread_time()
-    for item in work.items():
-        outcome = builder.build(*item)
+    for item in items:
+        outcome = build_building(builder, item)
         builds += outcome.cpu
         warnings += outcome.warnings
         faces.update(dict(outcome.faces))
         if outcome.record is None:
             skipped.append(outcome.skipped)
-            continue
-        if writer is None:
-            writer = StageWriter(job.staging / layer, up_axis=job.scene.output.up_axis,
-                                 layer_data={**job.layer_data, "tile": tile_name(tile)}, uvs=job.scene.output.uvs,
-                                 lod=job.scene.output.lod, materials=job.scene.materials,
-                                 element_library=library_name(job.suffix))
-        writer.add(outcome.record)
-    if writer is not None:
-        stats = writer.close()
-    return TileResult(layer if writer else None, stats, tuple(writer.prototypes) if writer else (),
-                      tuple(skipped), tuple(warnings), tuple(sorted(faces.items())), builds,
+        else:
+            built.append((item[0], outcome.record))
+    writer, stats, lost = _write_tile(job, work.tile, built)
+    return TileResult(writer.path.name if writer else None, stats, tuple(writer.prototypes) if writer else (),
+                      tuple(skipped + lost), tuple(warnings), tuple(sorted(faces.items())), builds,
                       time.thread_time() - start - builds)
+
+
+def _write_tile(job: TileJob, tile: tuple[int, int], built: Sequence[tuple[Footprint, BuildingRecord]]
+                ) -> tuple[StageWriter | None, StageStats | None, list[Skipped]]:
+    """The tile's layer written from ``built``'s records (no writer, no figures: none to write), and the buildings
+    left out. A record the stage writer fails on would fail the whole layer: then each record is written alone to
+    find those it fails on, which are skipped, and the layer written again without them. An error of the
+    machine's (:data:`ENVIRONMENT`: a full disk, no memory) is no building's: it stops the task."""
+    name = f"{tile_name(tile)}{job.suffix}"
+    try:
+        return (*_layer(job, tile, job.staging / name, [record for _, record in built]), [])
+    except ENVIRONMENT:
+        raise
+    except Exception:
+        checked = [(footprint, record, _fails(job, tile, record)) for footprint, record in built]
+    lost = [failed(footprint, exc, "writing it to the stage") for footprint, _, exc in checked if exc is not None]
+    return (*_layer(job, tile, job.staging / name, [record for _, record, exc in checked if exc is None]), lost)
+
+
+def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[BuildingRecord]
+           ) -> tuple[StageWriter | None, StageStats | None]:
+    """The layer at ``path`` of ``records`` (none: no layer) and its figures."""
+    if not records:
+        return None, None
+    writer = StageWriter(path, up_axis=job.scene.output.up_axis, layer_data={**job.layer_data, "tile": tile_name(tile)},
+                         uvs=job.scene.output.uvs, lod=job.scene.output.lod, materials=job.scene.materials,
+                         element_library=library_name(job.suffix))
+    for record in records:
+        writer.add(record)
+    return writer, writer.close()
+
+
+def _fails(job: TileJob, tile: tuple[int, int], record: BuildingRecord) -> Exception | None:
+    """The error writing ``record`` alone in a layer raises (a scratch file, removed), or None."""
+    scratch = job.staging / f"{temp_prefix(tile_name(tile))}check{job.suffix}"
+    try:
+        _layer(job, tile, scratch, [record])
+    except ENVIRONMENT:
+        raise
+    except Exception as exc:
+        return exc
+    finally:
+        scratch.unlink(missing_ok=True)
+    return None
+
+
+def interned(result: TileResult, keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey]) -> TileResult:
+    """``result`` with each of its prototype keys replaced by the equal one in ``keys`` (added when new): results
+    unpickled from other processes, held until every tile is done, would each hold copies of the same element
+    keys (~100 per tile, ~0.4 kB each)."""
+    return replace(result, prototypes=tuple(keys.setdefault(key, key) for key in result.prototypes))
 
 
 def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
               *, builder: Builder) -> list[TileResult]:
     """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes
-    (:func:`_init_worker`), largest tile first so the last ones to finish are small; results in tile order."""
+    (:func:`_init_worker`; each replaced after :data:`BUILDINGS_PER_WORKER` buildings), largest tile first so the
+    last ones to finish are small; results in tile order."""
     total, done = sum(map(len, tiles)), 0
     if jobs <= 1 or len(tiles) < 2:
         results = []
@@ -143,25 +225,47 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
         return results
     order = sorted(range(len(tiles)), key=lambda k: (-len(tiles[k]), k))
     found: dict[int, TileResult] = {}
-    workers = min(jobs, len(tiles))
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(os.getpid(),))
+    slots = [_Slot() for _ in range(min(jobs, len(tiles)))]
+    pending: dict[Future, tuple[int, _Slot]] = {}
+    keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey] = {}
+    queue = iter(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
+
+    def feed(slot: _Slot) -> None:
+        """Up to two tiles in flight in ``slot``'s worker, a fresh one once the last has built its share and is
+        done (no two workers of a slot alive at once: the tree's memory stays that of ``jobs`` workers)."""
+        while slot.busy < 2 and not (slot.pool is not None and slot.given >= BUILDINGS_PER_WORKER):
+            k = next(queue, None)
+            if k is None:
+                return
+            if slot.pool is None:
+                slot.pool = _pool(1)
+            slot.given += len(tiles[k])
+            slot.busy += 1
+            pending[slot.pool.submit(build_tile, job, tiles[k])] = (k, slot)
+        if slot.busy == 0 and slot.pool is not None:  # (its share built: a fresh worker takes over)
+            slot.pool.shutdown()
+            slot.pool, slot.given = None, 0
+            feed(slot)
+
     try:
-        queue = iter(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
-        pending: dict[Future, int] = {pool.submit(build_tile, job, tiles[k]): k
-                                      for k in itertools.islice(queue, 2 * workers)}
+        for slot in slots:
+            feed(slot)
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
-                k = pending.pop(future)
-                found[k] = future.result()
-                following = next(queue, None)
-                if following is not None:
-                    pending[pool.submit(build_tile, job, tiles[following])] = following
+                k, slot = pending.pop(future)
+                found[k] = interned(future.result(), keys)
+                slot.busy -= 1
+                feed(slot)
                 done += len(tiles[k])
                 if progress:
                     progress(done, total)
     except BaseException:  # an error, Ctrl-C, SIGTERM: the workers end now
-        stop_workers(pool)
+        for slot in slots:
+            if slot.pool is not None:
+                stop_workers(slot.pool)
         raise
-    pool.shutdown()
+    for slot in slots:
+        if slot.pool is not None:
+            slot.pool.shutdown()
     return [found[k] for k in range(len(tiles))]

@@ -6,7 +6,9 @@ objects each; tiling, the ground and the neighbour cover's neighbours need no mo
 pickled, as it is sent to a task anyway: a :class:`TileWork` packs one tile's buildings and the plans of the
 buildings of other tiles that may stand against them, ~0.45 kB a building where the objects took ~6 kB. Its
 :meth:`~TileWork.items` -- the masses with their faces and neighbour covers -- are made where the tile is built, one
-tile at a time, and are the same as the whole city's would be.
+tile at a time, and are the same as the whole city's would be. A building whose mass or cover cannot be made is
+skipped there (:func:`failed`), the rest of its tile is built: both ways of building a city -- tile tasks and
+building by building -- make their work items here, so they skip the same buildings with the same reasons.
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citygen.footprints import Footprint
+from citygen.errors import CitygenError, FootprintError
+from citygen.footprints import Footprint, Skipped
 from citygen.mass import Mass, MassPlan, neighbour_cover, neighbours
 
 #: A work item of the builder: footprint, mass, neighbour cover, prim name, tile.
@@ -29,17 +32,20 @@ Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 class TileWork:
     """One tile's work, packed: its buildings (footprint, mass plan, prim name; in prim name order) and the plans
     of the buildings of other tiles around them (:func:`~citygen.mass.neighbours`), pickled; ``count``: how many
-    buildings."""
+    buildings, ``pitched``: how many of them carry a roof that is not flat (what a mass-only city's build costs,
+    :func:`citygen.lod1.build_cost`)."""
 
     tile: tuple[int, int]
     count: int
     packed: bytes
+    pitched: int = 0
 
     @classmethod
     def pack(cls, tile: tuple[int, int], buildings: Sequence[tuple[Footprint, MassPlan, str]],
              around: Sequence[MassPlan] = ()) -> TileWork:
         return cls(tile, len(buildings), pickle.dumps((tuple(buildings), tuple(around)),
-                                                      protocol=pickle.HIGHEST_PROTOCOL))
+                                                      protocol=pickle.HIGHEST_PROTOCOL),
+                   sum(plan.roof.height is not None for _, plan, _ in buildings))
 
     def __len__(self) -> int:
         return self.count
@@ -48,26 +54,66 @@ class TileWork:
         """The buildings and the plans around them."""
         return pickle.loads(self.packed)
 
-    def items(self) -> list[Work]:
-        """The builder's work items of this tile: the masses with their faces and neighbour covers."""
+    def items(self) -> tuple[list[Work], list[Skipped]]:
+        """The builder's work items of this tile -- the masses with their faces and neighbour covers -- and the
+        buildings skipped because their mass or cover could not be made."""
         buildings, around = self.unpacked()
-        masses = [plan.mass() for _, plan, _ in buildings]
-        covers = neighbour_cover(masses, around=around)
-        return [(footprint, mass, cover, name, self.tile)
-                for (footprint, _, name), mass, cover in zip(buildings, masses, covers)]
+        made, skipped = [], []
+        for footprint, plan, name in buildings:
+            try:
+                made.append((footprint, plan.mass(), name))
+            except Exception as exc:  # (one building's, not the tile's)
+                skipped.append(failed(footprint, exc, "making its wall faces"))
+        items = []
+        for (footprint, mass, name), cover in zip(made, covers([mass for _, mass, _ in made], around)):
+            if isinstance(cover, Exception):
+                skipped.append(failed(footprint, cover, "measuring its neighbour cover"))
+            else:
+                items.append((footprint, mass, cover, name, self.tile))
+        return items, skipped
+
+
+def covers(masses: Sequence[Mass], around: Sequence[MassPlan]) -> list[np.ndarray | Exception]:
+    """The :func:`~citygen.mass.neighbour_cover` of ``masses``, in one batch; if the batch raises, each mass's own
+    with the others around it (the same figures: a sample's depends only on the buildings it falls in), and the
+    error of each mass whose own raises."""
+    try:
+        return neighbour_cover(masses, around=around)
+    except Exception:
+        found: list[np.ndarray | Exception] = []
+        for k, mass in enumerate(masses):
+            try:
+                found.append(neighbour_cover([mass], around=[*masses[:k], *masses[k + 1:], *around])[0])
+            except Exception as exc:
+                found.append(exc)
+        return found
+
+
+def failed(footprint: Footprint, exc: Exception, doing: str) -> Skipped:
+    """``footprint`` skipped because ``doing`` it (``"making its wall faces"``) raised ``exc``: a
+    :class:`~citygen.errors.CitygenError` says what is wrong with the input; anything else is a bug, and the reason
+    says it is one."""
+    if isinstance(exc, CitygenError):
+        return Skipped(footprint.id, f"{exc} ({doing})", footprint.source)
+    return Skipped(footprint.id, f"internal error {type(exc).__name__} {doing}: {exc}", footprint.source)
 
 
 def tile_of(plan: MassPlan, size: float) -> tuple[int, int]:
-    """The tile (column, row) of ``size`` metres holding the centroid of the plan's outline."""
+    """The tile (column, row) of ``size`` metres holding the centroid of the plan's outline; a
+    :class:`~citygen.errors.FootprintError` when the centroid overflows (coordinates beyond ~1e154 m)."""
     centroid = plan.outline.centroid
-    return math.floor(centroid.x / size), math.floor(centroid.y / size)
+    x, y = centroid.x, centroid.y
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise FootprintError(f"its outline's centroid cannot be computed (bounds "
+                             f"{', '.join(f'{v:g}' for v in plan.outline.bounds)}): its coordinates are not metres "
+                             f"in a local frame", hint="check the source's coordinates and their CRS")
+    return math.floor(x / size), math.floor(y / size)
 
 
 def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names: Sequence[str],
-               size: float) -> list[TileWork]:
-    """The buildings (``footprints[k]``, ``plans[k]``, ``names[k]``) in tiles of ``size`` metres, in tile order,
-    each tile with the plans of its neighbours in other tiles."""
-    tiles = [tile_of(plan, size) for plan in plans]
+               tiles: Sequence[tuple[int, int]]) -> list[TileWork]:
+    """The buildings (``footprints[k]``, ``plans[k]``, ``names[k]``) in their ``tiles[k]`` (:func:`tile_of`), in
+    tile order, each tile with the plans of its neighbours in other tiles."""
     order = sorted(range(len(plans)), key=lambda k: (tiles[k], names[k]))
     members: dict[tuple[int, int], list[int]] = {}
     for k in order:
@@ -81,7 +127,13 @@ def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names
             for tile, ks in members.items()]
 
 
-def work_items(works: Sequence[TileWork]) -> list[Work]:
-    """Every tile's :meth:`~TileWork.items`, in tile order: the whole city's, for the paths that build it
-    building by building."""
-    return [item for work in works for item in work.items()]
+def work_items(works: Sequence[TileWork]) -> tuple[list[Work], list[Skipped]]:
+    """Every tile's :meth:`~TileWork.items` and skipped buildings, in tile order: the whole city's, for the paths
+    that build it building by building."""
+    items: list[Work] = []
+    skipped: list[Skipped] = []
+    for work in works:
+        made, lost = work.items()
+        items += made
+        skipped += lost
+    return items, skipped

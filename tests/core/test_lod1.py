@@ -148,14 +148,17 @@ def test_workers_build_a_mass_only_city_only_when_its_roofs_pay_for_them(small_s
 
 
 def test_the_demo_scenes_flat_roofs_are_built_in_process_and_its_hipped_roofs_in_workers():
+    from citygen.lod1 import build_cost, in_workers
+    from citygen.roofplan import mass_plan
+    from citygen.tilework import TileWork
     scene = load_scene(REPO / "scenes" / "helsinki.toml")
     roofs = default_registry().roof_builders
     footprints = import_footprints(scene).footprints
-    hipped = [(fp, plan_mass(fp, scene, roofs)[0]) for fp in footprints]
     flat_scene = replace(scene, defaults=replace(scene.defaults, roof_shape="flat"))
-    flat = [(fp, plan_mass(fp, flat_scene, roofs)[0]) for fp in footprints]
-    from citygen.lod1 import in_workers
-    assert not in_workers(flat, 2) and in_workers(hipped, 2) and not in_workers(hipped, 1)
+
+    def cost(scene) -> float:  # (the demo's buildings packed in one tile)
+        return build_cost([TileWork.pack((0, 0), [(fp, mass_plan(fp, scene, roofs)[0], fp.id) for fp in footprints])])
+    assert not in_workers(cost(flat_scene), 2) and in_workers(cost(scene), 2) and not in_workers(cost(scene), 1)
 
 
 def test_a_forked_helper_writes_half_of_the_tile_layers_and_the_stage_is_the_same_bytes(small_scene, test_registry,
@@ -212,3 +215,23 @@ def test_a_bug_building_one_mass_only_building_skips_it_and_keeps_its_warnings(s
     skipped = {s.id: s.reason for s in report.skipped}
     assert skipped["way/2"] == "internal error ZeroDivisionError: float division by zero"
     assert "way/2: a roof note" in report.warnings
+
+
+def test_a_mass_only_city_makes_its_masses_one_tile_at_a_time(small_scene, test_registry, tmp_path, monkeypatch):
+    """Regression (memory at scale): a mass-only city made every building's mass and neighbour cover in the main
+    process before building any (~2.5 kB a building); each tile's are now made when the tiles before it are
+    built (here one building a batch: the tiles' masses and writes interleave)."""
+    import citygen.lod1 as lod1
+    from citygen.lod1stage import MassWriter
+    from citygen.tilework import TileWork
+    log = []
+    items, add = TileWork.items, MassWriter.add
+    monkeypatch.setattr(TileWork, "items", lambda self: log.append(("items", self.tile)) or items(self))
+    monkeypatch.setattr(MassWriter, "add", lambda self, record: log.append(("add", record.tile)) or add(self, record))
+    monkeypatch.setattr(lod1, "BATCH", 1)
+    scene = _masses_scene(small_scene)
+    report = generate_city(replace(scene, output=replace(scene.output, tile_size=20.0)), registry=test_registry,
+                           out=tmp_path / "city.usda")
+    assert report.written == 3
+    assert log == [("items", (0, 0)), ("add", (0, 0)), ("items", (0, 2)), ("add", (0, 2)), ("items", (1, 0)),
+                   ("add", (1, 0))]

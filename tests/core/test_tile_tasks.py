@@ -99,3 +99,39 @@ def test_tile_workers_write_the_stage_one_job_writes(small_scene, test_registry)
     alone = files()
     report = generate_city(scene, registry=test_registry, jobs=2)
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
+
+
+def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_same_stage(small_scene, test_registry,
+                                                                                          monkeypatch):
+    """Regression (memory at scale): USD keeps memory for every distinct path a process authored, so a worker that
+    wrote a whole city grew with it (~7.6 kB a building); each worker is replaced after BUILDINGS_PER_WORKER
+    buildings, once its tiles are done, and the stage is the same bytes."""
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    out = Path(scene.output.path)
+
+    def files() -> dict[str, bytes]:
+        return {p.name: p.read_bytes() for p in [out, *sorted((out.parent / "small_tiles").iterdir())]}
+
+    generate_city(scene, registry=test_registry, jobs=1)
+    alone = files()
+    pools = []
+    pool = tiles._pool
+    monkeypatch.setattr(tiles, "_pool", lambda workers: pools.append(workers) or pool(workers))
+    monkeypatch.setattr(tiles, "BUILDINGS_PER_WORKER", 1)
+    report = generate_city(scene, registry=test_registry, jobs=2)
+    assert pools == [1, 1, 1]  # (3 tiles of one building, 2 workers: the third tile goes to a fresh one)
+    assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
+
+
+def test_tile_results_share_their_equal_prototype_keys():
+    """Regression (main-process memory at scale): results unpickled from the workers, held until every tile is done,
+    each held its own copies of the same element keys; equal keys are now one object."""
+    import pickle
+
+    from citygen.geometry.prototypes import ProtoKey
+    key = ProtoKey("window", "glass", 120, 150, 5)
+    first, second = (pickle.loads(pickle.dumps(tiles.TileResult(None, None, (key,), (), ()))) for _ in range(2))
+    assert first.prototypes[0] is not second.prototypes[0]
+    keys: dict = {}
+    first, second = tiles.interned(first, keys), tiles.interned(second, keys)
+    assert first.prototypes[0] is second.prototypes[0] and first.prototypes == (key,)

@@ -9,7 +9,7 @@ from citygen.footprints import Footprint
 from citygen.mass import MassPlan, build_mass, neighbour_cover, neighbours
 from citygen.roofplan import mass_plan, plan_mass
 from citygen.scene import load_scene
-from citygen.tilework import tile_works, work_items
+from citygen.tilework import tile_of, tile_works, work_items
 
 
 def _row(n: int = 9) -> list[Footprint]:
@@ -43,10 +43,11 @@ def test_tiles_get_the_neighbour_cover_of_the_whole_city_across_their_borders(sm
     plans = _plans(small_scene, prints)
     names = [p.id for p in prints]
     whole = dict(zip(names, neighbour_cover([plan.mass() for plan in plans])))
-    works = tile_works(prints, plans, names, size=20.0)
+    works = tile_works(prints, plans, names, [tile_of(plan, 20.0) for plan in plans])
     assert [w.tile for w in works] == [(0, 0), (1, 0), (2, 0), (3, 0)]
     assert [len(w) for w in works] == [2, 3, 2, 2]
-    items = work_items(works)
+    items, skipped = work_items(works)
+    assert skipped == []
     assert [name for _, _, _, name, _ in items] == names
     assert whole["b1"][1].min() == 7.0 and whole["b2"][3].min() == 7.0  # (their party wall: two tiles' border)
     for footprint, mass, cover, name, tile in items:
@@ -57,7 +58,7 @@ def test_tiles_get_the_neighbour_cover_of_the_whole_city_across_their_borders(sm
 def test_a_tile_carries_only_the_neighbours_that_may_stand_against_it(small_scene):
     prints = _row()
     plans = _plans(small_scene, prints)
-    works = tile_works(prints, plans, [p.id for p in prints], size=20.0)
+    works = tile_works(prints, plans, [p.id for p in prints], [tile_of(plan, 20.0) for plan in plans])
     assert [[plans.index(p) for p in w.unpacked()[1]] for w in works] == [[2], [1, 5], [4, 7], [6]]
 
 
