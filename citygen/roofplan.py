@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 
 from shapely.geometry import MultiPolygon, Polygon
 
+from citygen.errors import FootprintError
 from citygen.footprints import Footprint
 from citygen.mass import Mass, MassPlan, clean_outline
 from citygen.registry import RoofBuilder
@@ -112,10 +113,22 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
     return HeightSplit(walls, replace(spec, height=rise, cap=math.inf), source, tuple(warnings))
 
 
+#: The longest a footprint may span, in metres (the longest buildings are 1-4.5 km). Beyond, its coordinates are
+#: not metres in a local frame (millimetres read as metres, an unprojected CRS): its facades would never be derived.
+MAX_SPAN = 10_000.0
+
+
 def mass_plan(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilder]
               ) -> tuple[MassPlan, tuple[str, ...]]:
     """The building's mass, before its wall faces are made: its cleaned outline, walls to their height and the
-    roof it carries (:func:`split_height`); and the warnings met."""
+    roof it carries (:func:`split_height`); and the warnings met. A :class:`~citygen.errors.FootprintError` when the
+    footprint spans more than :data:`MAX_SPAN`."""
+    x0, y0, x1, y1 = footprint.polygon.bounds
+    span = max(x1 - x0, y1 - y0)
+    if not span <= MAX_SPAN:
+        raise FootprintError(f"its outline spans {span:,.0f} m (bounds {x0:g}, {y0:g}, {x1:g}, {y1:g}), longer than "
+                             f"any building ({MAX_SPAN:,.0f} m at most): its coordinates are not metres in a local "
+                             f"frame", hint="check the source's coordinates, their units and CRS")
     outline = clean_outline(footprint.polygon)
     split = split_height(footprint, outline, scene, roofs)
     return MassPlan(outline, footprint.base, float(split.walls), split.roof, split.source), split.warnings

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citygen.errors import CitygenError, FootprintError
+from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
 from citygen.mass import Mass, MassPlan, neighbour_cover, neighbours
 
@@ -99,15 +99,10 @@ def failed(footprint: Footprint, exc: Exception, doing: str) -> Skipped:
 
 
 def tile_of(plan: MassPlan, size: float) -> tuple[int, int]:
-    """The tile (column, row) of ``size`` metres holding the centroid of the plan's outline; a
-    :class:`~citygen.errors.FootprintError` when the centroid overflows (coordinates beyond ~1e154 m)."""
+    """The tile (column, row) of ``size`` metres holding the centroid of the plan's outline (finite: a plan spans at
+    most :data:`~citygen.roofplan.MAX_SPAN`)."""
     centroid = plan.outline.centroid
-    x, y = centroid.x, centroid.y
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise FootprintError(f"its outline's centroid cannot be computed (bounds "
-                             f"{', '.join(f'{v:g}' for v in plan.outline.bounds)}): its coordinates are not metres "
-                             f"in a local frame", hint="check the source's coordinates and their CRS")
-    return math.floor(x / size), math.floor(y / size)
+    return math.floor(centroid.x / size), math.floor(centroid.y / size)
 
 
 def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names: Sequence[str],

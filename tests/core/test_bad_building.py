@@ -79,18 +79,22 @@ def test_a_building_that_raises_skips_itself_not_its_tile(small_scene, test_regi
         assert skipped["way/1"] == (f"internal error ZeroDivisionError {step}: boom", "city.local.json[0]"), path
 
 
-def test_a_footprint_too_far_out_to_measure_is_skipped_on_every_path(small_scene, test_registry):
-    """Regression: a valid footprint whose coordinates overflow the centroid (1e200 m) stopped the whole city with
-    an OverflowError while its tile was found; it is skipped, saying what is wrong and what to check."""
-    far = {"id": "way/far", "coordinates": [[[0, 100], [1e200, 100], [1e200, 112], [0, 112], [0, 100]]],
+@pytest.mark.parametrize("far_x, shown", [(1e200, "1e+200"), (1e7, "1e+07")])
+def test_a_footprint_longer_than_any_building_is_skipped_on_every_path(small_scene, test_registry, far_x, shown):
+    """Regressions: a valid footprint 1e200 m long overflowed its centroid and stopped the whole city with an
+    OverflowError while its tile was found; one 1e7 m long (millimetres read as metres) hung the facade derivation.
+    Both are skipped, saying what is wrong and what to check."""
+    far = {"id": "way/far", "coordinates": [[[0, 100], [far_x, 100], [far_x, 112], [0, 112], [0, 100]]],
            "height": 9.0}
     (small_scene.parent / "city.local.json").write_text(json.dumps([*SMALL_CITY, far]))
     for path in PATHS:
         report, names = _run(small_scene, test_registry, path)
         assert names == ["way_1", "way_2", "way_3"], path
         (reason,) = [s.reason for s in report.skipped if s.id == "way/far"]
-        assert reason.startswith("cannot build its mass: its outline's centroid cannot be computed (bounds 0, 100, "
-                                 "1e+200, 112)") and reason.endswith("-- check the source's coordinates and their CRS")
+        assert reason.startswith("cannot build its mass: its outline spans ")
+        assert f"(bounds 0, 100, {shown}, 112)" in reason
+        assert "longer than any building (10,000 m at most)" in reason
+        assert reason.endswith("-- check the source's coordinates, their units and CRS")
 
 
 @pytest.mark.parametrize("step", ["making its wall faces", "measuring its neighbour cover"])
