@@ -20,7 +20,7 @@ import os
 import pickle
 import threading
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, replace
@@ -77,15 +77,17 @@ class TileResult:
 
 
 _BUILDERS = threading.local()
-#: Buildings a tile worker process builds (on average over the pool) before fresh ones, forked again from the main
-#: process, take over. USD keeps memory for every distinct prim and property path and relationship target a process
-#: ever authored, layers long freed (~25-50 B a path, ~160 B a target: ~4-8 kB a synthetic building), so a worker
-#: that wrote a whole city grew with it (100,000 buildings: 202 -> 584 MB from 10,000); replaced, it stays within
-#: ~30 MB of its start. A fresh worker costs ~0.3 s of CPU (its plugins and rulesets loaded again); the old ones
-#: finish their tiles beside the new ones, so nothing waits for them.
+#: Buildings a tile worker process builds before a fresh one, forked again from the main process, takes over (once
+#: the old one has finished its tiles: never more than ``jobs`` workers alive). USD keeps memory for every distinct
+#: prim and property path and relationship target a process ever authored, layers long freed (~25-50 B a path, ~160 B
+#: a target: ~4-8 kB a synthetic building), so a worker that wrote a whole city grew with it (100,000 buildings:
+#: 202 -> 584 MB from 10,000); replaced, it stays within ~30 MB of its start. A fresh worker costs ~0.1-0.3 s of CPU
+#: (its plugins and rulesets loaded again).
 BUILDINGS_PER_WORKER = 4000
 #: Errors of the machine, not of a building: a tile task that meets one while writing its layer stops with it.
 ENVIRONMENT = (OSError, MemoryError, ExportError)
+#: The last tiles, this many a worker, are handed out one at a time (see :func:`run_local`).
+TAIL = 4
 
 
 def _init_worker(parent: int) -> None:
@@ -228,15 +230,18 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
     slots = [_Slot() for _ in range(min(jobs, len(tiles)))]
     pending: dict[Future, tuple[int, _Slot]] = {}
     keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey] = {}
-    queue = iter(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
+    queue = deque(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
 
     def feed(slot: _Slot) -> None:
-        """Up to two tiles in flight in ``slot``'s worker, a fresh one once the last has built its share and is
-        done (no two workers of a slot alive at once: the tree's memory stays that of ``jobs`` workers)."""
-        while slot.busy < 2 and not (slot.pool is not None and slot.given >= BUILDINGS_PER_WORKER):
-            k = next(queue, None)
-            if k is None:
+        """Up to two tiles in flight in ``slot``'s worker (one in the last :data:`TAIL` tiles a slot, so those go to
+        whichever worker is free first instead of waiting behind a slot's running tile: the demo's last tile waited
+        1.3 s), a fresh worker once the last has built its share and is done (no two workers of a slot alive at
+        once: the tree's memory stays that of ``jobs`` workers)."""
+        while (slot.busy < 1 or slot.busy < 2 and len(queue) > TAIL * len(slots)) and \
+                not (slot.pool is not None and slot.given >= BUILDINGS_PER_WORKER):
+            if not queue:
                 return
+            k = queue.popleft()
             if slot.pool is None:
                 slot.pool = _pool(1)
             slot.given += len(tiles[k])
@@ -265,7 +270,9 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
             if slot.pool is not None:
                 stop_workers(slot.pool)
         raise
-    for slot in slots:
-        if slot.pool is not None:
-            slot.pool.shutdown()
+    live = [slot.pool for slot in slots if slot.pool is not None]
+    for pool in live:  # (the workers end side by side, then are joined)
+        pool.shutdown(wait=False)
+    for pool in live:
+        pool.shutdown()
     return [found[k] for k in range(len(tiles))]
