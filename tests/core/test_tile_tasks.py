@@ -88,15 +88,21 @@ def _usd_concurrency() -> int:
     return Work.GetConcurrencyLimit()
 
 
-def test_tile_workers_write_the_stage_one_job_writes(small_scene, test_registry):
+def _tiled_stage_files(small_scene: Path, registry):
+    """The scene of three one-building tiles, a function reading its stage's files (root and tiles), and those files
+    as one job writes them."""
     scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
     out = Path(scene.output.path)
 
     def files() -> dict[str, bytes]:
         return {p.name: p.read_bytes() for p in [out, *sorted((out.parent / "small_tiles").iterdir())]}
 
-    generate_city(scene, registry=test_registry, jobs=1)
-    alone = files()
+    generate_city(scene, registry=registry, jobs=1)
+    return scene, files, files()
+
+
+def test_tile_workers_write_the_stage_one_job_writes(small_scene, test_registry):
+    scene, files, alone = _tiled_stage_files(small_scene, test_registry)
     report = generate_city(scene, registry=test_registry, jobs=2)
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
 
@@ -106,14 +112,7 @@ def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_
     """Regression (memory at scale): USD keeps memory for every distinct path a process authored, so a worker that
     wrote a whole city grew with it (~7.6 kB a building); each worker is replaced after BUILDINGS_PER_WORKER
     buildings, once its tiles are done, and the stage is the same bytes."""
-    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
-    out = Path(scene.output.path)
-
-    def files() -> dict[str, bytes]:
-        return {p.name: p.read_bytes() for p in [out, *sorted((out.parent / "small_tiles").iterdir())]}
-
-    generate_city(scene, registry=test_registry, jobs=1)
-    alone = files()
+    scene, files, alone = _tiled_stage_files(small_scene, test_registry)
     pools = []
     pool = tiles._pool
     monkeypatch.setattr(tiles, "_pool", lambda workers: pools.append(workers) or pool(workers))
