@@ -47,13 +47,15 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
 
 def _diagonal_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray, start: np.ndarray) -> np.ndarray:
     """Unnormalised normals of triangles and quads (``start``: each one's first corner in ``indices``): the cross
-    product of the diagonals from corner 0 to 2 and from corner 1 to the last, column by column (np.cross and
-    ``(n, 4, 3)`` corner arrays are slow)."""
-    a = pts[indices[start + 2]] - pts[indices[start]]
-    b = pts[indices[start + counts - 1]] - pts[indices[start + 1]]
-    ax, ay, az = a.T
-    bx, by, bz = b.T
-    return np.column_stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
+    product of the diagonals from corner 0 to 2 and from corner 1 to the last, on contiguous coordinate columns
+    (gathers of ``(n, 3)`` rows, strided columns and np.cross take twice as long)."""
+    x, y, z = (np.ascontiguousarray(column) for column in pts.T)
+    i0, i1, i2, i3 = indices[start], indices[start + 1], indices[start + 2], indices[start + counts - 1]
+    ax, ay, az = x[i2] - x[i0], y[i2] - y[i0], z[i2] - z[i0]
+    bx, by, bz = x[i3] - x[i1], y[i3] - y[i1], z[i3] - z[i1]
+    normal = np.empty((len(start), 3))
+    normal[:, 0], normal[:, 1], normal[:, 2] = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    return normal
 
 
 def _newell_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
