@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citygen_photo.features import pixel_features, working_image
+from citygen_photo.features import WORK, pixel_features, working_image
 
 #: Dilations of the 3 x 3 convolutions, in order.
 DILATIONS = (1, 2, 4, 8, 16)
@@ -42,10 +42,10 @@ class FacadeFCN:
     layers: tuple[tuple[np.ndarray, np.ndarray], ...]  # input, one per dilation, output
     prior: np.ndarray
 
-    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+    def probabilities(self, rgb: np.ndarray, work: int = WORK) -> np.ndarray:
         """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size
-        (longest side :data:`citygen_photo.features.WORK`)."""
-        x = (pixel_features(working_image(rgb)) - self.mean) / self.std
+        (longest side ``work``)."""
+        x = (pixel_features(working_image(rgb, work)) - self.mean) / self.std
         (w0, b0), *hidden, (wn, bn) = self.layers
         x = np.maximum(x @ w0 + b0, 0)
         for (w, b), d in zip(hidden, DILATIONS):

@@ -24,11 +24,13 @@ FEATURES = 9 + 10 * len(SCALES) + 4 + 3 + 7
 
 
 def working_image(rgb: np.ndarray, work: int = WORK) -> np.ndarray:
-    """``rgb`` (H, W, 3) in 0..1 resampled (linear) so its longest side is ``work`` pixels."""
+    """``rgb`` (H, W, 3) in 0..1 resampled (linear) so its longest side is ``work`` pixels. Edge pixels are
+    repeated beyond the border: zoom's default constant mode made the last row or column black on some sizes
+    (round 6)."""
     h, w = rgb.shape[:2]
     f = work / max(h, w)
     shape = (max(8, round(h * f)), max(8, round(w * f)))
-    return np.clip(zoom(rgb, (shape[0] / h, shape[1] / w, 1), order=1), 0.0, 1.0)
+    return np.clip(zoom(rgb, (shape[0] / h, shape[1] / w, 1), order=1, mode="nearest"), 0.0, 1.0)
 
 
 def pixel_features(rgb: np.ndarray) -> np.ndarray:

@@ -21,7 +21,7 @@ from scipy.ndimage import uniform_filter, zoom
 
 from citygen.errors import LayoutError
 from citygen_photo.fcn import FacadeFCN
-from citygen_photo.features import pixel_features, working_image
+from citygen_photo.features import WORK, pixel_features, working_image
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.unet import FacadeUNet
 
@@ -31,6 +31,9 @@ UNET_PATH = Path(__file__).resolve().parent / "model" / "facade_unet.npz"
 #: The shipped parser: the ensemble of the perceptrons and the U-Net (round 4; the dilated network of round 3,
 #: ``FCN_PATH``, stays loadable as a member through ``load_parser``).
 SHIPPED = (MODEL_PATH, UNET_PATH)
+#: Working sizes (longest side, pixels) at which the shipped ensemble parses a photo; the probabilities of the
+#: larger ones are resampled to the first's grid and averaged (multi-scale inference, round 6).
+SCALES = (WORK, 256)
 #: Neighbourhoods (working pixels) over which a stage's probabilities are averaged for the next stage.
 CONTEXT = (7, 21)
 #: Offsets (share of the longest working side) at which the next stage sees them above, below, left and right.
@@ -102,10 +105,10 @@ class FacadeParser:
     stages: tuple[Stage, ...]
     prior: np.ndarray  # label share in the photos / share in the training sample (see citygen_photo.train)
 
-    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+    def probabilities(self, rgb: np.ndarray, work: int = WORK) -> np.ndarray:
         """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size
-        (longest side :data:`citygen_photo.features.WORK`)."""
-        features = pixel_features(working_image(rgb))
+        (longest side ``work``)."""
+        features = pixel_features(working_image(rgb, work))
         prob = None
         for stage in self.stages:
             prob = predict_stage(stage, stage_input(features, prob))
@@ -116,20 +119,27 @@ class FacadeParser:
 @dataclass(frozen=True)
 class Ensemble:
     """Parsers whose probabilities are averaged (the shipped parser: the perceptrons and the U-Net, which err on
-    different pixels)."""
+    different pixels), each at every working size of ``scales`` (the first sets the output's grid)."""
 
     members: tuple[FacadeParser | FacadeFCN | FacadeUNet, ...]
+    scales: tuple[int, ...] = (WORK,)
 
     def probabilities(self, rgb: np.ndarray) -> np.ndarray:
-        """The members' mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1."""
-        return sum(m.probabilities(rgb) for m in self.members) / len(self.members)
+        """The mean ``(h, w, 12)`` label probabilities of ``rgb`` (H, W, 3) in 0..1 over the members and scales,
+        on the grid of the working size ``scales[0]``."""
+        out = None
+        for work in self.scales:
+            mean = sum(m.probabilities(rgb, work) for m in self.members) / len(self.members)
+            out = mean if out is None else out + upsampled(mean, out.shape[:2])
+        return out / len(self.scales)
 
 
 @functools.lru_cache(maxsize=4)
 def load_parser(*paths: Path) -> FacadeParser | FacadeFCN | FacadeUNet | Ensemble:
-    """The parser whose weights are in ``paths`` (several: their ensemble; none: the shipped one, ``SHIPPED``)."""
+    """The parser whose weights are in ``paths`` (several: their ensemble at the working sizes ``SCALES``; none: the
+    shipped one, ``SHIPPED``)."""
     models = tuple(_load_one(path) for path in (paths or SHIPPED))
-    return models[0] if len(models) == 1 else Ensemble(models)
+    return models[0] if len(models) == 1 else Ensemble(models, SCALES)
 
 
 def _load_one(path: Path) -> FacadeParser | FacadeFCN | FacadeUNet:
@@ -151,8 +161,10 @@ def _load_one(path: Path) -> FacadeParser | FacadeFCN | FacadeUNet:
 
 
 def upsampled(prob: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """``prob`` (h, w, n) resampled (linear) to ``shape`` pixels."""
-    return zoom(prob, (shape[0] / prob.shape[0], shape[1] / prob.shape[1], 1), order=1)
+    """``prob`` (h, w, n) resampled (linear, edge pixels repeated) to ``shape`` pixels, each pixel's
+    probabilities summing to 1."""
+    out = zoom(prob, (shape[0] / prob.shape[0], shape[1] / prob.shape[1], 1), order=1, mode="nearest")
+    return out / out.sum(axis=-1, keepdims=True)
 
 
 def load_labels(jpg: Path) -> tuple[np.ndarray, np.ndarray]:

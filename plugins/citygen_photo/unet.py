@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from citygen_photo.fcn import conv3x3
-from citygen_photo.features import pixel_features, working_image
+from citygen_photo.features import WORK, pixel_features, working_image
 
 #: Dilations of the 3 x 3 convolutions at the coarsest level.
 BOTTOM_DILATIONS = (1, 2, 4)
@@ -100,9 +100,10 @@ class FacadeUNet:
         weight, bias = next(layers)
         return (x @ weight + bias)[:h, :w]
 
-    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
-        """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size."""
-        logits = self.logits(self.network_input(working_image(rgb)))
+    def probabilities(self, rgb: np.ndarray, work: int = WORK) -> np.ndarray:
+        """``(h, w, 12)`` label probabilities of the facade photo ``rgb`` (H, W, 3) in 0..1, at the working size
+        (longest side ``work``)."""
+        logits = self.logits(self.network_input(working_image(rgb, work)))
         logits -= logits.max(axis=-1, keepdims=True)
         prob = np.exp(logits) * self.prior
         return prob / prob.sum(axis=-1, keepdims=True)

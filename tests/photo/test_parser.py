@@ -96,3 +96,36 @@ def test_floors_and_window_pixels_of_held_out_photos(number, floors):
             mine[max(y0, 0):round(labels.shape[0] - r.y / s), round(r.x / s):round((r.x + r.w) / s)] = True
     truth = labels == 3
     assert (mine & truth).sum() >= 0.6 * mine.sum() and (mine & truth).sum() >= 0.6 * truth.sum()
+
+
+def test_working_image_repeats_its_edge_instead_of_a_black_row():
+    """Regression (round 6): zoom's default constant mode left the last row (column) of the working image black
+    for some crop sizes, e.g. 445 x 484 -> 177 x 192 (15 of the 64 validation and fold photos)."""
+    for shape in ((445, 484, 3), (555, 511, 3), (884, 456, 3)):
+        work = working_image(np.full(shape, 0.8))
+        assert max(work.shape[:2]) == 192 and np.allclose(work, 0.8)
+
+
+def test_upsampled_probabilities_keep_their_edges_and_sum_to_one():
+    from citygen_photo.parser import upsampled
+    prob = np.full((224, 191, len(CMP_LABELS)), 1 / len(CMP_LABELS))
+    out = upsampled(prob, (192, 163))
+    assert out.shape == (192, 163, len(CMP_LABELS)) and np.allclose(out, 1 / len(CMP_LABELS))
+
+
+def test_the_ensemble_averages_its_members_over_the_working_sizes():
+    """Multi-scale inference (round 6): every member parses the photo at each working size of ``scales``; the
+    larger sizes' probabilities are resampled to the first's grid and all are averaged."""
+    from citygen_photo.parser import SCALES, Ensemble, upsampled
+    from citygen_photo.features import WORK
+    shipped = load_parser()
+    assert shipped.scales == SCALES and SCALES[0] == WORK and len(SCALES) > 1
+    rgb, _, _ = facade(floors=3, cols=4)
+    members = shipped.members
+    one = Ensemble(members).probabilities(rgb)
+    assert np.allclose(one, sum(m.probabilities(rgb) for m in members) / len(members))
+    two = Ensemble(members, (WORK, 256)).probabilities(rgb)
+    large = sum(m.probabilities(rgb, 256) for m in members) / len(members)
+    assert max(large.shape[:2]) == 256 and two.shape == one.shape
+    assert np.allclose(two, (one + upsampled(large, one.shape[:2])) / 2)
+    assert np.allclose(two.sum(axis=-1), 1.0, atol=1e-5)
