@@ -204,23 +204,26 @@ def _fails(job: TileJob, tile: tuple[int, int], record: BuildingRecord) -> Excep
     return None
 
 
-def interned(result: TileResult, keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey]) -> TileResult:
-    """``result`` with each of its prototype keys replaced by the equal one in ``keys`` (added when new): results
-    unpickled from other processes, held until every tile is done, would each hold copies of the same element
-    keys (~100 per tile, ~0.4 kB each)."""
-    return replace(result, prototypes=tuple(keys.setdefault(key, key) for key in result.prototypes))
+def slimmed(result: TileResult, writer: StageWriter) -> TileResult:
+    """``result`` as the main process holds it until every tile is done: its prototype keys handed to the root's
+    ``writer`` as it comes in (:meth:`~citygen.usd.writer.StageWriter.take_prototypes`) and dropped, so what is
+    held does not grow with the keys (~1.8 module prototypes a building, ~250 bytes each)."""
+    writer.take_prototypes(result.prototypes)
+    return replace(result, prototypes=())
 
 
 def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
-              *, builder: Builder) -> list[TileResult]:
+              *, builder: Builder, take: Callable[[TileResult], TileResult] = lambda result: result
+              ) -> list[TileResult]:
     """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes
     (:func:`_init_worker`; each replaced after :data:`BUILDINGS_PER_WORKER` buildings), largest tile first so the
-    last ones to finish are small; results in tile order."""
+    last ones to finish are small; results in tile order, each as ``take`` makes it when it comes in
+    (:func:`slimmed`). The workers read their tiles' packed work from the spill file themselves."""
     total, done = sum(map(len, tiles)), 0
     if jobs <= 1 or len(tiles) < 2:
         results = []
         for items in tiles:
-            results.append(build_tile(job, items, builder))
+            results.append(take(build_tile(job, items, builder)))
             done += len(items)
             if progress:
                 progress(done, total)
@@ -229,7 +232,6 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
     found: dict[int, TileResult] = {}
     slots = [_Slot() for _ in range(min(jobs, len(tiles)))]
     pending: dict[Future, tuple[int, _Slot]] = {}
-    keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey] = {}
     queue = deque(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
 
     def feed(slot: _Slot) -> None:
@@ -259,7 +261,7 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
                 k, slot = pending.pop(future)
-                found[k] = interned(future.result(), keys)
+                found[k] = take(future.result())
                 slot.busy -= 1
                 feed(slot)
                 done += len(tiles[k])

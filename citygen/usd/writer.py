@@ -51,6 +51,7 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
 from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
+from citygen.usd.distinct import DistinctCount
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -181,7 +182,8 @@ class StageWriter:
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
-        self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
+        self.tile_prototypes: set[ProtoKey] = set()  # (the tile layers' element kinds: the element library's)
+        self.tile_modules = DistinctCount()  # (the tile layers' module prototypes, counted only)
         self.elements = elements(self.library, uvs)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
@@ -353,7 +355,19 @@ class StageWriter:
         self.author.prims += stats.prims
         for key in ("buildings", "meshes", "instances", "polygons"):
             self.counts[key] += getattr(stats, key)
-        self.tile_prototypes.update(prototypes)
+        self.take_prototypes(prototypes)
+
+    def take_prototypes(self, keys: Iterable[ProtoKey | ModuleKey]) -> None:
+        """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
+        the main process then holds no tile's keys): the element kinds, for the element library, and the module
+        prototypes, only counted (a city's are ~1.8 a building)."""
+        modules = []
+        for key in keys:
+            if isinstance(key, ProtoKey):
+                self.tile_prototypes.add(key)
+            else:
+                modules.append(key)
+        self.tile_modules.update(modules)
 
     def close(self) -> StageStats:
         """Write the last tile, publish the tiles under their content names and the element library (both runs'
@@ -389,13 +403,14 @@ class StageWriter:
         extent = None if bound is None else tuple(float(v) for v in bound.reshape(-1))
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
-                          prototypes=len(self.prototypes) + len(self.tile_prototypes), polygons=self.counts["polygons"],
+                          prototypes=len(self.prototypes) + len(self.tile_prototypes) + len(self.tile_modules),
+                          polygons=self.counts["polygons"],
                           bytes=size, extent=extent)
 
     def _stage_library(self) -> str | None:
         """Write the element library of the tiles' element prototypes into the staging folder; its name, or None
         when the tiles use no elements."""
-        keys = [k for k in self.tile_prototypes if isinstance(k, ProtoKey)]
+        keys = list(self.tile_prototypes)
         if not keys:
             return None
         name = library_name(self.tile_suffix)

@@ -122,15 +122,17 @@ def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
 
 
-def test_tile_results_share_their_equal_prototype_keys():
-    """Regression (main-process memory at scale): results unpickled from the workers, held until every tile is done,
-    each held its own copies of the same element keys; equal keys are now one object."""
-    import pickle
-
+def test_tile_results_hand_their_prototype_keys_to_the_root_writer(tmp_path):
+    """Regression (main-process memory at scale): results held until every tile is done held each tile's prototype
+    keys (~1.8 module keys a building); the root's writer now takes them as a result comes in -- the element kinds
+    kept for the library, the module prototypes counted -- and the result drops them."""
+    from citygen.geometry.modules import ModuleKey
     from citygen.geometry.prototypes import ProtoKey
-    key = ProtoKey("window", "glass", 120, 150, 5)
-    first, second = (pickle.loads(pickle.dumps(tiles.TileResult(None, None, (key,), (), ()))) for _ in range(2))
-    assert first.prototypes[0] is not second.prototypes[0]
-    keys: dict = {}
-    first, second = tiles.interned(first, keys), tiles.interned(second, keys)
-    assert first.prototypes[0] is second.prototypes[0] and first.prototypes == (key,)
+    from citygen.usd.writer import StageWriter
+    window, door = ProtoKey("window", "glass", 120, 150, 5), ProtoKey("door", "wood", 100, 210, 5)
+    modules = [ModuleKey(k, 300, 310, "plaster") for k in (7, 8, 9)]
+    writer = StageWriter(tmp_path / "city.usdc", tile_layers=True)
+    first = tiles.slimmed(tiles.TileResult(None, None, (window, *modules[:2]), (), ()), writer)
+    second = tiles.slimmed(tiles.TileResult(None, None, (window, door, *modules[1:]), (), ()), writer)
+    assert first.prototypes == second.prototypes == ()
+    assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 3
