@@ -39,7 +39,7 @@ from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tilework import Spill, TileWork, Work, tile_of, tile_works, work_items
+from citygen.tilework import Spill, TileWork, Work, failed, tile_of, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -274,14 +274,28 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
             tw = time.thread_time()
             writer.add(outcome.record)
             usd += time.thread_time() - tw
-            report.written += 1
+            report.written += 1 - _left_out(writer, work, report)
         t3, c3 = time.perf_counter(), clock()
         report.stats = writer.close()
+        report.written -= _left_out(writer, work, report)
     t4, c4 = time.perf_counter(), clock()
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "buildings": t3 - t2, "usd": t4 - t3, "total": t4 - t0}
     report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
                   "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
+
+
+def _left_out(writer: Any, work: Sequence[Work], report: Report) -> int:
+    """How many buildings the stage writer has left out since the last call (its ``failed``: their writing raised),
+    each skipped in ``report`` with the reason, its id and source found in ``work``."""
+    lost = writer.failed
+    if not lost:
+        return 0
+    footprints = {item[3]: item[0] for item in work}
+    report.skipped += [failed(footprints[record.name], exc, "writing it to the stage") for record, exc in lost]
+    count = len(lost)
+    lost.clear()
+    return count
 
 
 @dataclass(frozen=True)

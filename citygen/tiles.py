@@ -30,7 +30,6 @@ from typing import Any
 from pxr import Work
 
 from citygen.builder import Builder, BuildingOutcome
-from citygen.errors import ExportError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
@@ -41,7 +40,7 @@ from citygen.tilework import TileWork, failed
 from citygen.tilework import Work as Item  # (pxr's Work is USD's thread pool)
 from citygen.usd.library import library_name
 from citygen.usd.publish import temp_prefix
-from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, tile_name
+from citygen.usd.writer import ENVIRONMENT, BuildingRecord, StageStats, StageWriter, tile_name
 
 
 @dataclass(frozen=True)
@@ -84,8 +83,6 @@ _BUILDERS = threading.local()
 #: 202 -> 584 MB from 10,000); replaced, it stays within ~30 MB of its start. A fresh worker costs ~0.1-0.3 s of CPU
 #: (its plugins and rulesets loaded again).
 BUILDINGS_PER_WORKER = 4000
-#: Errors of the machine, not of a building: a tile task that meets one while writing its layer stops with it.
-ENVIRONMENT = (OSError, MemoryError, ExportError)
 #: The last tiles, this many a worker, are handed out one at a time (see :func:`run_local`).
 TAIL = 4
 
@@ -163,18 +160,23 @@ def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> 
 def _write_tile(job: TileJob, tile: tuple[int, int], built: Sequence[tuple[Footprint, BuildingRecord]]
                 ) -> tuple[StageWriter | None, StageStats | None, list[Skipped]]:
     """The tile's layer written from ``built``'s records (no writer, no figures: none to write), and the buildings
-    left out. A record the stage writer fails on would fail the whole layer: then each record is written alone to
-    find those it fails on, which are skipped, and the layer written again without them. An error of the
-    machine's (:data:`ENVIRONMENT`: a full disk, no memory) is no building's: it stops the task."""
-    name = f"{tile_name(tile)}{job.suffix}"
+    left out: those the stage writer fails on (its :attr:`~citygen.usd.writer.StageWriter.failed`, or found by
+    writing each record alone when the layer fails as a whole), the layer written again without them, so its bytes
+    are those of a tile without them. An error of the machine's (:data:`~citygen.usd.writer.ENVIRONMENT`: a full
+    disk, no memory) is no building's: it stops the task."""
+    path = job.staging / f"{tile_name(tile)}{job.suffix}"
     try:
-        return (*_layer(job, tile, job.staging / name, [record for _, record in built]), [])
+        writer, stats = _layer(job, tile, path, [record for _, record in built])
+        bad = {record.name: exc for record, exc in writer.failed} if writer else {}
     except ENVIRONMENT:
         raise
     except Exception:
-        checked = [(footprint, record, _fails(job, tile, record)) for footprint, record in built]
-    lost = [failed(footprint, exc, "writing it to the stage") for footprint, _, exc in checked if exc is not None]
-    return (*_layer(job, tile, job.staging / name, [record for _, record, exc in checked if exc is None]), lost)
+        bad = {record.name: exc for _, record in built if (exc := _fails(job, tile, record)) is not None}
+    if not bad:
+        return writer, stats, []
+    lost = [failed(footprint, bad[record.name], "writing it to the stage") for footprint, record in built
+            if record.name in bad]
+    return (*_layer(job, tile, path, [record for _, record in built if record.name not in bad]), lost)
 
 
 def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[BuildingRecord]
@@ -191,17 +193,17 @@ def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[Bu
 
 
 def _fails(job: TileJob, tile: tuple[int, int], record: BuildingRecord) -> Exception | None:
-    """The error writing ``record`` alone in a layer raises (a scratch file, removed), or None."""
+    """The error writing ``record`` alone in a layer raises or leaves out (a scratch file, removed), or None."""
     scratch = job.staging / f"{temp_prefix(tile_name(tile))}check{job.suffix}"
     try:
-        _layer(job, tile, scratch, [record])
+        writer, _ = _layer(job, tile, scratch, [record])
     except ENVIRONMENT:
         raise
     except Exception as exc:
         return exc
     finally:
         scratch.unlink(missing_ok=True)
-    return None
+    return writer.failed[0][1] if writer and writer.failed else None
 
 
 def slimmed(result: TileResult, writer: StageWriter) -> TileResult:
