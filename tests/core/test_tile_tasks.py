@@ -136,3 +136,31 @@ def test_tile_results_hand_their_prototype_keys_to_the_root_writer(tmp_path):
     second = tiles.slimmed(tiles.TileResult(None, None, (window, door, *modules[1:]), (), ()), writer)
     assert first.prototypes == second.prototypes == ()
     assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 3
+
+
+def test_the_spill_file_of_the_packed_tiles_goes_with_the_run(small_scene, test_registry, monkeypatch, tmp_path):
+    """The tiles' packed work waits in a file of the temporary folder (the workers read their tiles from it), which
+    the run removes whether it ends well or not."""
+    import tempfile
+
+    from citygen.tilework import Spilled
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    build = tiles.build_tile
+    seen = []
+
+    def spying(job, work, builder=None):
+        seen.append(isinstance(work.packed, Spilled) and Path(work.packed.path).parent == folder)
+        return build(job, work, builder)
+    monkeypatch.setattr(tiles, "build_tile", spying)
+    assert generate_city(scene, registry=test_registry, jobs=1).written == 3
+    assert seen == [True] * 3 and list(folder.iterdir()) == []
+
+    def failing(job, work, builder=None):
+        raise OSError("disk full")
+    monkeypatch.setattr(tiles, "build_tile", failing)
+    with pytest.raises(OSError, match="disk full"):
+        generate_city(scene, registry=test_registry, jobs=1)
+    assert list(folder.iterdir()) == []
