@@ -305,7 +305,8 @@ class _Planned:
 
     It is all the main process keeps of the footprint import: planned in a forked child (:func:`run_apart`), the
     importer's objects (~5 kB a building: 20,000 buildings held ~60 MB after they were dropped, the allocator's
-    fragments) never enter the main process, nor the tile workers forked from it."""
+    fragments) never enter the main process, nor the tile workers forked from it; and the tiles' packed work waits
+    in the run's spill file (``works`` say where), read where each tile is built."""
 
     works: list[TileWork]
     ground: tuple[float, float, float, float, float] | None

@@ -4,8 +4,10 @@ This is how a city with tile layers is generated, by either executor: the local 
 (one job) or in worker processes (:func:`run_local`), the dask one on a cluster (:mod:`citygen.distributed`). The
 stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
 time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
-from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
-neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error
+from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`: on this machine where its
+bytes lie in the run's spill file, which the task reads; to dask, the bytes) and makes the masses and neighbour
+covers of its buildings itself. The main process keeps of each result only its figures for the root
+(:func:`slimmed`): what it holds does not grow with the city. A task builds its buildings with the same per-building seeds and error
 handling as the per-building path (a bad building skips itself: :meth:`~citygen.tilework.TileWork.items`,
 :func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes
 ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so the layer opens alone and
