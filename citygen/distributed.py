@@ -57,17 +57,17 @@ def dask_client(scheduler: str | None, workers: int) -> Iterator[Any]:
 
 
 def run_tiles(tiles: Sequence[TileWork], job: TileJob, workers: int,
-              progress: Callable[[int, int], None] | None = None, *, scheduler: str | None = None
-              ) -> list[TileResult]:
-    """Submit one task per tile (``tiles`` in tile order) and return their results in tile order."""
-    from citygen.tiles import build_tile, interned  # (the facade machinery: imported when a run needs it)
+              progress: Callable[[int, int], None] | None = None, *, scheduler: str | None = None,
+              take: Callable[[TileResult], TileResult] = lambda result: result) -> list[TileResult]:
+    """Submit one task per tile (``tiles`` in tile order, each with its packed bytes: a worker may be on another
+    machine) and return their results in tile order, each as ``take`` makes it when it comes in."""
+    from citygen.tiles import build_tile  # (the facade machinery: imported when a run needs it)
     total, done = sum(map(len, tiles)), 0
     results: dict[tuple[int, int], TileResult] = {}
-    keys: dict = {}
     with dask_client(scheduler, workers) as client:
         from dask.distributed import as_completed
 
-        futures = {client.submit(build_tile, job, work, pure=False): (work.tile, len(work)) for work in tiles}
+        futures = {client.submit(build_tile, job, work.loaded(), pure=False): (work.tile, len(work)) for work in tiles}
         for future in as_completed(futures):
             tile, size = futures[future]
             try:
@@ -78,7 +78,7 @@ def run_tiles(tiles: Sequence[TileWork], job: TileJob, workers: int,
                     raise
                 raise CitygenError(f"{tile_name(tile)} failed on its dask worker: {type(exc).__name__}: {exc}",
                                   hint="see the worker's log") from exc
-            results[tile] = interned(result, keys)
+            results[tile] = take(result)
             future.release()
             done += size
             if progress:

@@ -15,6 +15,7 @@ import os
 import pickle
 import re
 import sys
+import tempfile
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -33,11 +34,12 @@ from citygen.gltf import GLTF_SUFFIXES
 from citygen.lifeline import run_apart, stop_workers, tie_to_parent
 from citygen.mass import MassPlan
 from citygen.outpaths import check_writable
+from citygen.usd.publish import remove_stale_temporaries, temp_prefix
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tilework import TileWork, Work, tile_of, tile_works, work_items
+from citygen.tilework import Spill, TileWork, Work, failed, tile_of, tile_works, work_items
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
@@ -165,6 +167,32 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         raise CitygenError(f"the dask executor writes USD tile layers, not glTF ({Path(out).name})",
                            hint="use the local executor for .glb/.gltf, or write .usdc")
     check_stage_path(Path(out))
+    with _spill() as spill:
+        return _generate(scene, seed, Path(out), gltf, jobs, registry, progress, executor, scheduler, spill)
+
+
+@contextlib.contextmanager
+def _spill() -> Iterator[Spill]:
+    """A :class:`~citygen.tilework.Spill` file for the run's packed tiles in the system's temporary folder, removed
+    when the run ends (a killed run's is removed by the next run: :func:`~citygen.usd.publish.temp_prefix`)."""
+    folder = Path(tempfile.gettempdir())
+    remove_stale_temporaries(folder)
+    try:
+        fd, name = tempfile.mkstemp(prefix=temp_prefix("citygen-tiles"), dir=folder)
+    except OSError as exc:
+        raise ExportError(f"cannot make the temporary file of the city's tile work: {exc.strerror or exc}",
+                          where=str(folder), hint="check free disk space in the temporary folder (TMPDIR)") from None
+    os.close(fd)
+    try:
+        yield Spill(Path(name))
+    finally:
+        Path(name).unlink(missing_ok=True)
+
+
+def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registry: Registry,
+              progress: Callable[[int, int], None] | None, executor: str, scheduler: str | None, spill: Spill
+              ) -> Report:
+    """:func:`generate_city` once its arguments are checked, the packed tiles spilled to ``spill``."""
     report = Report()
     t0, c0 = time.perf_counter(), time.process_time()
     # a ruleset that does not load stops the run before any building (masses only: none is used)
@@ -174,7 +202,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
         from citygen.builder import load_rulesets
         rulesets = load_rulesets(scene, registry)
     roofs = registry.roof_builders
-    plan = functools.partial(_plan, scene, registry, roofs)
+    plan = functools.partial(_plan, scene, registry, roofs, spill)
     tr, cr = time.perf_counter(), time.process_time()
     planned = run_apart(plan)  # (the import's memory stays in a child process: see _Planned)
     apart = planned is not None
@@ -246,14 +274,28 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
             tw = time.thread_time()
             writer.add(outcome.record)
             usd += time.thread_time() - tw
-            report.written += 1
+            report.written += 1 - _left_out(writer, work, report)
         t3, c3 = time.perf_counter(), clock()
         report.stats = writer.close()
+        report.written -= _left_out(writer, work, report)
     t4, c4 = time.perf_counter(), clock()
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "buildings": t3 - t2, "usd": t4 - t3, "total": t4 - t0}
     report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
                   "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
+
+
+def _left_out(writer: Any, work: Sequence[Work], report: Report) -> int:
+    """How many buildings the stage writer has left out since the last call (its ``failed``: their writing raised),
+    each skipped in ``report`` with the reason, its id and source found in ``work``."""
+    lost = writer.failed
+    if not lost:
+        return 0
+    footprints = {item[3]: item[0] for item in work}
+    report.skipped += [failed(footprints[record.name], exc, "writing it to the stage") for record, exc in lost]
+    count = len(lost)
+    lost.clear()
+    return count
 
 
 @dataclass(frozen=True)
@@ -263,7 +305,8 @@ class _Planned:
 
     It is all the main process keeps of the footprint import: planned in a forked child (:func:`run_apart`), the
     importer's objects (~5 kB a building: 20,000 buildings held ~60 MB after they were dropped, the allocator's
-    fragments) never enter the main process, nor the tile workers forked from it."""
+    fragments) never enter the main process, nor the tile workers forked from it; and the tiles' packed work waits
+    in the run's spill file (``works`` say where), read where each tile is built."""
 
     works: list[TileWork]
     ground: tuple[float, float, float, float, float] | None
@@ -274,26 +317,27 @@ class _Planned:
     cpu: dict[str, float]
 
 
-def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any]) -> _Planned:
+def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any], spill: Spill) -> _Planned:
     """The scene's footprints imported, every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one
-    that cannot be is skipped) and its prim name given, and all of them packed in tiles."""
+    that cannot be is skipped) and its prim name given, and all of them packed in tiles, spilled to ``spill``."""
     t0, c0 = time.perf_counter(), time.process_time()
+    spill.reset()
     imported = import_footprints(scene, registry)
     report = Report(skipped=list(imported.skipped), warnings=list(imported.warnings))
     if not imported.footprints:
         report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
     t1, c1 = time.perf_counter(), time.process_time()
-    works, ground = _plan_masses(imported.footprints, scene, roofs, report)
+    works, ground = _plan_masses(imported.footprints, scene, roofs, report, spill)
     return _Planned(works, ground, imported.georef.to_dict() if imported.georef else {}, report.skipped,
                     report.warnings, {"import": t1 - t0, "masses": time.perf_counter() - t1},
                     {"import": c1 - c0, "masses": time.process_time() - c1})
 
 
-def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report
-                 ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
+def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report,
+                 spill: Spill | None = None) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
     """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
-    is skipped), its prim name given, and all of them packed in tiles; and the ground quad when the scene asks for
-    one."""
+    is skipped), its prim name given, and all of them packed in tiles (their bytes put in ``spill``, given one);
+    and the ground quad when the scene asks for one."""
     planned, plans, tiles = [], [], []
     for fp in footprints:
         try:
@@ -311,7 +355,7 @@ def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str,
     ground = _ground(plans) if scene.output.ground and plans else None
     taken: set[str] = set()
     names = [prim_name(fp.id, taken) for fp in planned]
-    return tile_works(planned, plans, names, tiles), ground
+    return tile_works(planned, plans, names, tiles, spill), ground
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
@@ -366,14 +410,14 @@ def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins:
     layer payloading them (and the ground) written here. Returns the wall and main-process CPU seconds of the
     ``buildings`` and ``usd`` phases, and the tasks' CPU: ``builds``, ``tile layers`` (writing them) and the part of
     both spent in ``workers``."""
-    from citygen.tiles import TileJob
+    from citygen.tiles import TileJob, slimmed
     t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
             writer.ground(*ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
-        results = runner(works, job, jobs, progress)
+        results = runner(works, job, jobs, progress, take=functools.partial(slimmed, writer=writer))
         t1, c1 = time.perf_counter(), time.process_time()
         for result in results:
             report.warnings += result.warnings

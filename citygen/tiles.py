@@ -4,8 +4,10 @@ This is how a city with tile layers is generated, by either executor: the local 
 (one job) or in worker processes (:func:`run_local`), the dask one on a cluster (:mod:`citygen.distributed`). The
 stage writer's work is then done where the buildings are built, next to them, and a worker holds one tile at a
 time: memory is bounded by the largest tile whatever the city's size, and the main process only payloads the layers
-from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`) and makes the masses and
-neighbour covers of its buildings itself. A task builds its buildings with the same per-building seeds and error
+from the root. A task is sent its tile's packed work (:class:`~citygen.tilework.TileWork`: on this machine where its
+bytes lie in the run's spill file, which the task reads; to dask, the bytes) and makes the masses and neighbour
+covers of its buildings itself. The main process keeps of each result only its figures for the root
+(:func:`slimmed`): what it holds does not grow with the city. A task builds its buildings with the same per-building seeds and error
 handling as the per-building path (a bad building skips itself: :meth:`~citygen.tilework.TileWork.items`,
 :func:`build_building`; one the stage writer fails on is found and left out, :func:`_write_tile`) and writes
 ``/World`` with the tile and the ``/Materials`` and ``/Prototypes`` its buildings use, so the layer opens alone and
@@ -30,7 +32,6 @@ from typing import Any
 from pxr import Work
 
 from citygen.builder import Builder, BuildingOutcome
-from citygen.errors import ExportError
 from citygen.footprints import Footprint, Skipped
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
@@ -41,7 +42,7 @@ from citygen.tilework import TileWork, failed
 from citygen.tilework import Work as Item  # (pxr's Work is USD's thread pool)
 from citygen.usd.library import library_name
 from citygen.usd.publish import temp_prefix
-from citygen.usd.writer import BuildingRecord, StageStats, StageWriter, tile_name
+from citygen.usd.writer import ENVIRONMENT, BuildingRecord, StageStats, StageWriter, tile_name
 
 
 @dataclass(frozen=True)
@@ -84,8 +85,6 @@ _BUILDERS = threading.local()
 #: 202 -> 584 MB from 10,000); replaced, it stays within ~30 MB of its start. A fresh worker costs ~0.1-0.3 s of CPU
 #: (its plugins and rulesets loaded again).
 BUILDINGS_PER_WORKER = 4000
-#: Errors of the machine, not of a building: a tile task that meets one while writing its layer stops with it.
-ENVIRONMENT = (OSError, MemoryError, ExportError)
 #: The last tiles, this many a worker, are handed out one at a time (see :func:`run_local`).
 TAIL = 4
 
@@ -163,18 +162,23 @@ def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> 
 def _write_tile(job: TileJob, tile: tuple[int, int], built: Sequence[tuple[Footprint, BuildingRecord]]
                 ) -> tuple[StageWriter | None, StageStats | None, list[Skipped]]:
     """The tile's layer written from ``built``'s records (no writer, no figures: none to write), and the buildings
-    left out. A record the stage writer fails on would fail the whole layer: then each record is written alone to
-    find those it fails on, which are skipped, and the layer written again without them. An error of the
-    machine's (:data:`ENVIRONMENT`: a full disk, no memory) is no building's: it stops the task."""
-    name = f"{tile_name(tile)}{job.suffix}"
+    left out: those the stage writer fails on (its :attr:`~citygen.usd.writer.StageWriter.failed`, or found by
+    writing each record alone when the layer fails as a whole), the layer written again without them, so its bytes
+    are those of a tile without them. An error of the machine's (:data:`~citygen.usd.writer.ENVIRONMENT`: a full
+    disk, no memory) is no building's: it stops the task."""
+    path = job.staging / f"{tile_name(tile)}{job.suffix}"
     try:
-        return (*_layer(job, tile, job.staging / name, [record for _, record in built]), [])
+        writer, stats = _layer(job, tile, path, [record for _, record in built])
+        bad = {record.name: exc for record, exc in writer.failed} if writer else {}
     except ENVIRONMENT:
         raise
     except Exception:
-        checked = [(footprint, record, _fails(job, tile, record)) for footprint, record in built]
-    lost = [failed(footprint, exc, "writing it to the stage") for footprint, _, exc in checked if exc is not None]
-    return (*_layer(job, tile, job.staging / name, [record for _, record, exc in checked if exc is None]), lost)
+        bad = {record.name: exc for _, record in built if (exc := _fails(job, tile, record)) is not None}
+    if not bad:
+        return writer, stats, []
+    lost = [failed(footprint, bad[record.name], "writing it to the stage") for footprint, record in built
+            if record.name in bad]
+    return (*_layer(job, tile, path, [record for _, record in built if record.name not in bad]), lost)
 
 
 def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[BuildingRecord]
@@ -191,36 +195,39 @@ def _layer(job: TileJob, tile: tuple[int, int], path: Path, records: Sequence[Bu
 
 
 def _fails(job: TileJob, tile: tuple[int, int], record: BuildingRecord) -> Exception | None:
-    """The error writing ``record`` alone in a layer raises (a scratch file, removed), or None."""
+    """The error writing ``record`` alone in a layer raises or leaves out (a scratch file, removed), or None."""
     scratch = job.staging / f"{temp_prefix(tile_name(tile))}check{job.suffix}"
     try:
-        _layer(job, tile, scratch, [record])
+        writer, _ = _layer(job, tile, scratch, [record])
     except ENVIRONMENT:
         raise
     except Exception as exc:
         return exc
     finally:
         scratch.unlink(missing_ok=True)
-    return None
+    return writer.failed[0][1] if writer and writer.failed else None
 
 
-def interned(result: TileResult, keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey]) -> TileResult:
-    """``result`` with each of its prototype keys replaced by the equal one in ``keys`` (added when new): results
-    unpickled from other processes, held until every tile is done, would each hold copies of the same element
-    keys (~100 per tile, ~0.4 kB each)."""
-    return replace(result, prototypes=tuple(keys.setdefault(key, key) for key in result.prototypes))
+def slimmed(result: TileResult, writer: StageWriter) -> TileResult:
+    """``result`` as the main process holds it until every tile is done: its prototype keys handed to the root's
+    ``writer`` as it comes in (:meth:`~citygen.usd.writer.StageWriter.take_prototypes`) and dropped, so what is
+    held does not grow with the keys (~1.8 module prototypes a building, ~250 bytes each)."""
+    writer.take_prototypes(result.prototypes)
+    return replace(result, prototypes=())
 
 
 def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Callable[[int, int], None] | None = None,
-              *, builder: Builder) -> list[TileResult]:
+              *, builder: Builder, take: Callable[[TileResult], TileResult] = lambda result: result
+              ) -> list[TileResult]:
     """Every tile's task, here (``jobs`` 1, or a single tile: with ``builder``) or in ``jobs`` worker processes
     (:func:`_init_worker`; each replaced after :data:`BUILDINGS_PER_WORKER` buildings), largest tile first so the
-    last ones to finish are small; results in tile order."""
+    last ones to finish are small; results in tile order, each as ``take`` makes it when it comes in
+    (:func:`slimmed`). The workers read their tiles' packed work from the spill file themselves."""
     total, done = sum(map(len, tiles)), 0
     if jobs <= 1 or len(tiles) < 2:
         results = []
         for items in tiles:
-            results.append(build_tile(job, items, builder))
+            results.append(take(build_tile(job, items, builder)))
             done += len(items)
             if progress:
                 progress(done, total)
@@ -229,7 +236,6 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
     found: dict[int, TileResult] = {}
     slots = [_Slot() for _ in range(min(jobs, len(tiles)))]
     pending: dict[Future, tuple[int, _Slot]] = {}
-    keys: dict[ProtoKey | ModuleKey, ProtoKey | ModuleKey] = {}
     queue = deque(order)  # (a few tiles in flight: an interrupted run has little queued to drop)
 
     def feed(slot: _Slot) -> None:
@@ -259,7 +265,7 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
                 k, slot = pending.pop(future)
-                found[k] = interned(future.result(), keys)
+                found[k] = take(future.result())
                 slot.busy -= 1
                 feed(slot)
                 done += len(tiles[k])

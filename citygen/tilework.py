@@ -1,10 +1,12 @@
 """The city's work cut into tiles: what the pipeline's main process holds per building, and what it sends a tile's
 task.
 
-The main process plans every building's mass (:class:`~citygen.mass.MassPlan`: outline, heights, roof -- a few
-objects each; tiling, the ground and the neighbour cover's neighbours need no more) and then keeps each tile's work
-pickled, as it is sent to a task anyway: a :class:`TileWork` packs one tile's buildings and the plans of the
-buildings of other tiles that may stand against them, ~0.45 kB a building where the objects took ~6 kB. Its
+The planning child plans every building's mass (:class:`~citygen.mass.MassPlan`: outline, heights, roof -- a few
+objects each; tiling, the ground and the neighbour cover's neighbours need no more) and packs each tile's work,
+pickled as it is sent to a task anyway: a :class:`TileWork` packs one tile's buildings and the plans of the
+buildings of other tiles that may stand against them, ~0.45 kB a building where the objects took ~6 kB. The packed
+tiles go to a spill file (:class:`Spill`) as they are made: the main process holds only where each tile's bytes are
+(a :class:`Spilled`, read back when the tile is built), so its memory does not grow with the city. Its
 :meth:`~TileWork.items` -- the masses with their faces and neighbour covers -- are made where the tile is built, one
 tile at a time, and are the same as the whole city's would be. A building whose mass or cover cannot be made is
 skipped there (:func:`failed`), the rest of its tile is built: both ways of building a city -- tile tasks and
@@ -16,7 +18,8 @@ import math
 import pickle
 from collections import defaultdict
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -29,15 +32,52 @@ Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
 
 
 @dataclass(frozen=True)
+class Spilled:
+    """Where one tile's packed bytes lie in a :class:`Spill` file: ``size`` bytes from ``offset``."""
+
+    path: str
+    offset: int
+    size: int
+
+    def read(self) -> bytes:
+        with open(self.path, "rb") as f:
+            f.seek(self.offset)
+            data = f.read(self.size)
+        if len(data) != self.size:
+            raise OSError(f"{self.path}: the spilled tile work ends {self.size - len(data)} bytes short")
+        return data
+
+
+@dataclass(frozen=True)
+class Spill:
+    """A file the packed tiles are appended to as they are made (by the planning child), and read back from where
+    each tile is built (this machine's processes): the main process keeps only each tile's :class:`Spilled`."""
+
+    path: Path
+
+    def reset(self) -> None:
+        """Empty the file (a planning that starts again)."""
+        self.path.write_bytes(b"")
+
+    def put(self, work: TileWork) -> TileWork:
+        """``work`` with its bytes appended to the file and replaced by where they lie."""
+        assert isinstance(work.packed, bytes)
+        with open(self.path, "ab") as f:
+            offset = f.tell()
+            f.write(work.packed)
+        return replace(work, packed=Spilled(str(self.path), offset, len(work.packed)))
+
+
+@dataclass(frozen=True)
 class TileWork:
     """One tile's work, packed: its buildings (footprint, mass plan, prim name; in prim name order) and the plans
-    of the buildings of other tiles around them (:func:`~citygen.mass.neighbours`), pickled; ``count``: how many
-    buildings, ``pitched``: how many of them carry a roof that is not flat (what a mass-only city's build costs,
-    :func:`citygen.lod1.build_cost`)."""
+    of the buildings of other tiles around them (:func:`~citygen.mass.neighbours`), pickled -- the bytes, or where
+    they lie in a :class:`Spill` file; ``count``: how many buildings, ``pitched``: how many of them carry a roof that
+    is not flat (what a mass-only city's build costs, :func:`citygen.lod1.build_cost`)."""
 
     tile: tuple[int, int]
     count: int
-    packed: bytes
+    packed: bytes | Spilled
     pitched: int = 0
 
     @classmethod
@@ -50,9 +90,13 @@ class TileWork:
     def __len__(self) -> int:
         return self.count
 
+    def loaded(self) -> TileWork:
+        """This work with its bytes in it (read from the spill file): what goes to another machine."""
+        return self if isinstance(self.packed, bytes) else replace(self, packed=self.packed.read())
+
     def unpacked(self) -> tuple[tuple[tuple[Footprint, MassPlan, str], ...], tuple[MassPlan, ...]]:
         """The buildings and the plans around them."""
-        return pickle.loads(self.packed)
+        return pickle.loads(self.loaded().packed)
 
     def items(self) -> tuple[list[Work], list[Skipped]]:
         """The builder's work items of this tile -- the masses with their faces and neighbour covers -- and the
@@ -106,9 +150,10 @@ def tile_of(plan: MassPlan, size: float) -> tuple[int, int]:
 
 
 def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names: Sequence[str],
-               tiles: Sequence[tuple[int, int]]) -> list[TileWork]:
+               tiles: Sequence[tuple[int, int]], spill: Spill | None = None) -> list[TileWork]:
     """The buildings (``footprints[k]``, ``plans[k]``, ``names[k]``) in their ``tiles[k]`` (:func:`tile_of`), in
-    tile order, each tile with the plans of its neighbours in other tiles."""
+    tile order, each tile with the plans of its neighbours in other tiles; each tile's bytes put in ``spill`` as it
+    is packed (given one)."""
     order = sorted(range(len(plans)), key=lambda k: (tiles[k], names[k]))
     members: dict[tuple[int, int], list[int]] = {}
     for k in order:
@@ -117,9 +162,12 @@ def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names
     for i, j in neighbours([plan.outline for plan in plans]).T.tolist():
         if tiles[i] != tiles[j]:
             others[tiles[i]].add(j)
-    return [TileWork.pack(tile, [(footprints[k], plans[k], names[k]) for k in ks],
-                          [plans[j] for j in sorted(others[tile])])
-            for tile, ks in members.items()]
+    works = []
+    for tile, ks in members.items():
+        work = TileWork.pack(tile, [(footprints[k], plans[k], names[k]) for k in ks],
+                             [plans[j] for j in sorted(others[tile])])
+        works.append(work if spill is None else spill.put(work))
+    return works
 
 
 def work_items(works: Sequence[TileWork]) -> tuple[list[Work], list[Skipped]]:

@@ -239,6 +239,7 @@ class GltfWriter(GltfScene):
             raise ExportError(f"unsupported glTF extension {self.path.suffix!r}", where=str(self.path),
                               hint=f"use one of {', '.join(GLTF_SUFFIXES)}")
         super().__init__(layer_data, materials)
+        self.failed: list[tuple[Any, Exception]] = []  # (the USD writer's buildings left out: this one leaves none)
 
     def __enter__(self) -> GltfWriter:
         return self

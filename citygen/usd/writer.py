@@ -51,6 +51,7 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
 from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
+from citygen.usd.distinct import DistinctCount
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.normals import face_normals
@@ -71,6 +72,11 @@ class BuildingRecord:
     geometry: BuildingGeometry
     attributes: Mapping[str, Any]
     pivot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+#: Errors of the machine, not of a building: writing a layer that meets one stops with it (a full disk, no memory);
+#: any other error writing a building is that building's (:meth:`StageWriter.add`, :func:`citygen.tiles.build_tile`).
+ENVIRONMENT = (OSError, MemoryError, ExportError)
 
 
 @dataclass(frozen=True)
@@ -182,7 +188,9 @@ class StageWriter:
         self.world_bounds: list[np.ndarray | None] = []
         self.seen_tiles: set[tuple[int, int]] = set()
         self.sublayers: list[tuple[Sdf.PrimSpec, str]] = []  # tile prims and their staged layers' names
-        self.tile_prototypes: set[ProtoKey | ModuleKey] = set()
+        self.failed: list[tuple[BuildingRecord, Exception]] = []  # (buildings left out: see _write_queued)
+        self.tile_prototypes: set[ProtoKey] = set()  # (the tile layers' element kinds: the element library's)
+        self.tile_modules = DistinctCount()  # (the tile layers' module prototypes, counted only)
         self.elements = elements(self.library, uvs)
         with Sdf.ChangeBlock():
             self.layer.customLayerData = {"citygen": _dictionary(self.layer_data)}
@@ -236,7 +244,9 @@ class StageWriter:
 
     def add(self, record: BuildingRecord) -> None:
         """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
-        records must come grouped by tile (a tile cannot be reopened)."""
+        records must come grouped by tile (a tile cannot be reopened). A building whose writing raises is left out
+        and listed in :attr:`failed` with the error, once its tile is finished (by a later ``add`` or
+        :meth:`close`)."""
         target = self._tile(record.tile)
         if isinstance(target, StageWriter):
             target.add(record)
@@ -245,16 +255,49 @@ class StageWriter:
 
     def _write_queued(self, target: Sdf.PrimSpec) -> None:
         """Author the open tile's buildings, in the order added: their face normals and their instancers' bounds
-        each in one batch."""
-        batches = [_mesh_batch(record.geometry, self.lod) for record in self.queued]
+        each in one batch. When that raises (not :data:`ENVIRONMENT`), what it authored of them is taken back and
+        each is authored alone; one that raises alone is taken back and listed in :attr:`failed` (the materials and
+        prototypes it defined stay, unused)."""
+        queued, self.queued = self.queued, []
+        mark = self._mark()
+        try:
+            self._author(target, queued)
+        except ENVIRONMENT:
+            raise
+        except Exception:
+            self._take_back(target, queued, mark)
+            for record in queued:
+                mark = self._mark()
+                try:
+                    self._author(target, [record])
+                except ENVIRONMENT:
+                    raise
+                except Exception as exc:
+                    self._take_back(target, [record], mark)
+                    self.failed.append((record, exc))
+
+    def _author(self, target: Sdf.PrimSpec, records: list[BuildingRecord]) -> None:
+        batches = [_mesh_batch(record.geometry, self.lod) for record in records]
         normals = iter(face_normals([mesh for batch in batches for mesh in batch]))
-        placed = self._placed(self.queued)
+        placed = self._placed(records)
         with Sdf.ChangeBlock():
-            for record, batch, (inst, inst_bound) in zip(self.queued, batches, placed):
+            for record, batch, (inst, inst_bound) in zip(records, batches, placed):
                 bound = _write_building(self, target, record, batch, [next(normals) for _ in batch], inst, inst_bound)
                 if bound is not None:
                     self.tile_bound = union([self.tile_bound, bound + np.asarray(record.pivot)])
-        self.queued = []
+
+    def _mark(self) -> tuple[dict[str, int], int, np.ndarray | None]:
+        """What :meth:`_take_back` restores: the counts, the prims authored, the open tile's bound."""
+        return dict(self.counts), self.author.prims, self.tile_bound
+
+    def _take_back(self, target: Sdf.PrimSpec, records: list[BuildingRecord],
+                   mark: tuple[dict[str, int], int, np.ndarray | None]) -> None:
+        """Remove the prims of ``records`` under ``target`` and restore the figures of ``mark``."""
+        for record in records:
+            child = target.nameChildren.get(record.name)
+            if child is not None:
+                target.RemoveNameChild(child)
+        self.counts, self.author.prims, self.tile_bound = dict(mark[0]), mark[1], mark[2]
 
     def _placed(self, records: list[BuildingRecord]) -> list[tuple[Instances, np.ndarray | None]]:
         """Each building's instances with its modules' elements lifted (:func:`lift_module_elements`), placed from
@@ -308,6 +351,7 @@ class StageWriter:
         (_, target), self.tile = self.tile, None
         if isinstance(target, StageWriter):
             stats = target.close()
+            self.failed += target.failed
             self.add_tile_layer(stats.path.name, stats, target.prototypes)
             return
         self._write_queued(target)
@@ -354,7 +398,19 @@ class StageWriter:
         self.author.prims += stats.prims
         for key in ("buildings", "meshes", "instances", "polygons"):
             self.counts[key] += getattr(stats, key)
-        self.tile_prototypes.update(prototypes)
+        self.take_prototypes(prototypes)
+
+    def take_prototypes(self, keys: Iterable[ProtoKey | ModuleKey]) -> None:
+        """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
+        the main process then holds no tile's keys): the element kinds, for the element library, and the module
+        prototypes, only counted (a city's are ~1.8 a building)."""
+        modules = []
+        for key in keys:
+            if isinstance(key, ProtoKey):
+                self.tile_prototypes.add(key)
+            else:
+                modules.append(key)
+        self.tile_modules.update(modules)
 
     def close(self) -> StageStats:
         """Write the last tile, publish the tiles under their content names and the element library (both runs'
@@ -390,13 +446,14 @@ class StageWriter:
         extent = None if bound is None else tuple(float(v) for v in bound.reshape(-1))
         return StageStats(path=self.path, buildings=self.counts["buildings"], prims=self.author.prims,
                           meshes=self.counts["meshes"], instances=self.counts["instances"],
-                          prototypes=len(self.prototypes) + len(self.tile_prototypes), polygons=self.counts["polygons"],
+                          prototypes=len(self.prototypes) + len(self.tile_prototypes) + len(self.tile_modules),
+                          polygons=self.counts["polygons"],
                           bytes=size, extent=extent)
 
     def _stage_library(self) -> str | None:
         """Write the element library of the tiles' element prototypes into the staging folder; its name, or None
         when the tiles use no elements."""
-        keys = [k for k in self.tile_prototypes if isinstance(k, ProtoKey)]
+        keys = list(self.tile_prototypes)
         if not keys:
             return None
         name = library_name(self.tile_suffix)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -106,27 +107,47 @@ def features_of(doc: Any, path: Path) -> list[Any]:
                          hint="give a FeatureCollection of Polygon/MultiPolygon features, or a CityJSON file")
 
 
+@dataclass(frozen=True)
+class SkippedFeature:
+    """An element of a GeoJSON ``features`` array that cannot become a building: its position and why."""
+
+    index: int
+    skipped: Skipped
+
+
+def read_feature(index: int, feature: Any, line: int | None, path: Path, options: ImportOptions
+                 ) -> RawFeature | SkippedFeature:
+    """Element ``index`` of a GeoJSON ``features`` array (starting at 1-based ``line`` of ``path``, if known) as the
+    importer keeps it: what :func:`load_json` stores in place of each element as it decodes them
+    (``each``), so a big file's features are never all held as JSON objects (~2 kB a feature) at once."""
+    where = f"{path.name}{'' if line is None else f':{line}'}, feature {index}"
+    if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
+        return SkippedFeature(index, Skipped(f"feature/{index}", "not a GeoJSON Feature object -- each element of "
+                                             "features must be {\"type\": \"Feature\", \"geometry\": ...}", where))
+    properties = feature.get("properties") if isinstance(feature.get("properties"), Mapping) else {}
+    fid = feature_id(feature, properties, index, options.id_property)
+    try:
+        cleaned = clean_rings(_geometry_polygons(feature.get("geometry")))
+    except FeatureProblem as problem:
+        return SkippedFeature(index, Skipped(fid, str(problem), where))
+    return RawFeature(index, fid, where, f"{path.name}#{index}", attributes_of(properties), cleaned.parts,
+                      cleaned.warnings)
+
+
 def import_geojson(doc: Any, path: Path, options: ImportOptions, lines: list[int] | None = None,
                    warnings: tuple[str, ...] = ()) -> ImportResult:
-    """Footprints from a decoded GeoJSON document; ``lines`` are the 1-based start lines of its features."""
+    """Footprints from a decoded GeoJSON document; ``lines`` are the 1-based start lines of its features, which
+    may already be read (:func:`read_feature`)."""
     features = features_of(doc, path)
     crs, crs_warnings = choose_crs(doc, options, str(path))
     raws: list[RawFeature] = []
     skipped: list[tuple[int, Skipped]] = []
     for index, feature in enumerate(features):
-        line = f":{lines[index]}" if lines and index < len(lines) else ""
-        where = f"{path.name}{line}, feature {index}"
-        if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
-            skipped.append((index, Skipped(f"feature/{index}", "not a GeoJSON Feature object -- each element of "
-                                           "features must be {\"type\": \"Feature\", \"geometry\": ...}", where)))
-            continue
-        properties = feature.get("properties") if isinstance(feature.get("properties"), Mapping) else {}
-        fid = feature_id(feature, properties, index, options.id_property)
-        try:
-            cleaned = clean_rings(_geometry_polygons(feature.get("geometry")))
-        except FeatureProblem as problem:
-            skipped.append((index, Skipped(fid, str(problem), where)))
-            continue
-        raws.append(RawFeature(index, fid, where, f"{path.name}#{index}", attributes_of(properties), cleaned.parts,
-                               cleaned.warnings))
+        if not isinstance(feature, RawFeature | SkippedFeature):
+            feature = read_feature(index, feature, lines[index] if lines and index < len(lines) else None, path,
+                                   options)
+        if isinstance(feature, SkippedFeature):
+            skipped.append((feature.index, feature.skipped))
+        else:
+            raws.append(feature)
     return assemble(raws, skipped, [*warnings, *crs_warnings], crs, options, path)

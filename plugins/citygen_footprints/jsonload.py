@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -24,14 +25,16 @@ def _expect(text: str, pos: int, char: str) -> int:
     return pos + 1
 
 
-def _scan_object(text: str, array_key: str) -> tuple[dict[str, Any], list[int]]:
-    """Decode a top-level object; for the array under ``array_key`` also return each element's start offset."""
+def _scan_object(text: str, array_key: str, each: Callable[[int, Any, int], Any] | None = None
+                 ) -> tuple[dict[str, Any], list[int]]:
+    """Decode a top-level object; for the array under ``array_key`` also return each element's 1-based start line,
+    and store ``each(index, element, line)`` in place of each element (given ``each``)."""
     pos = _expect(text, 0, "{")
     doc: dict[str, Any] = {}
-    starts: list[int] = []
+    lines: list[int] = []
     pos = _skip(text, pos)
     if pos < len(text) and text[pos] == "}":
-        return doc, starts
+        return doc, lines
     while True:
         key, pos = _DECODER.raw_decode(text, _skip(text, pos))
         if not isinstance(key, str):
@@ -39,16 +42,18 @@ def _scan_object(text: str, array_key: str) -> tuple[dict[str, Any], list[int]]:
         pos = _skip(text, _expect(text, pos, ":"))
         if key == array_key and pos < len(text) and text[pos] == "[":
             items: list[Any] = []
-            starts = []
+            lines, line, previous = [], 1, 0
             pos = _skip(text, pos + 1)
             if pos < len(text) and text[pos] == "]":
                 pos += 1
             else:
                 while True:
                     pos = _skip(text, pos)
-                    starts.append(pos)
+                    line += text.count("\n", previous, pos)
+                    lines.append(line)
+                    previous = pos
                     item, pos = _DECODER.raw_decode(text, pos)
-                    items.append(item)
+                    items.append(item if each is None else each(len(items), item, line))
                     pos = _skip(text, pos)
                     if pos < len(text) and text[pos] == ",":
                         pos += 1
@@ -66,7 +71,7 @@ def _scan_object(text: str, array_key: str) -> tuple[dict[str, Any], list[int]]:
         break
     if _skip(text, pos) != len(text):
         raise json.JSONDecodeError("Extra data", text, _skip(text, pos))
-    return doc, starts
+    return doc, lines
 
 
 def _read_text(path: Path) -> str:
@@ -94,25 +99,22 @@ def read_lines(path: Path) -> list[tuple[int, Any]]:
     return out
 
 
-def load_json(path: Path, array_key: str = "features") -> tuple[Any, list[int]]:
-    """The decoded document and the 1-based line of each element of its ``array_key`` array (if any).
+def load_json(path: Path, array_key: str = "features", each: Callable[[int, Any, int], Any] | None = None
+              ) -> tuple[Any, list[int]]:
+    """The decoded document and the 1-based line of each element of its ``array_key`` array (if any); with
+    ``each``, ``each(index, element, line)`` stands in the array for each element, called as it is decoded.
 
     Raises FootprintError naming ``file:line:column`` for unreadable files and JSON syntax errors.
     """
     text = _read_text(path)
     try:
         if text.lstrip().startswith("{"):
-            doc, starts = _scan_object(text, array_key)
+            doc, lines = _scan_object(text, array_key, each)
         else:
-            doc, starts = json.loads(text), []
+            doc, lines = json.loads(text), []
     except json.JSONDecodeError as exc:
         raise FootprintError(f"not valid JSON: {exc.msg}", where=SourceLocation(str(path), exc.lineno, exc.colno),
                              hint="fix the JSON syntax at that position") from None
     except RecursionError:
         raise FootprintError("JSON nested too deeply", where=str(path)) from None
-    lines, line, previous = [], 1, 0
-    for start in starts:
-        line += text.count("\n", previous, start)
-        lines.append(line)
-        previous = start
     return doc, lines

@@ -1,6 +1,7 @@
 """Registers the GeoJSON, CityJSON and OpenStreetMap footprint importers with citygen."""
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -11,7 +12,7 @@ from citygen.hookspecs import hookimpl
 from citygen.registry import FootprintImporter
 
 from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
-from citygen_footprints.geojson import import_geojson
+from citygen_footprints.geojson import import_geojson, read_feature
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
 from citygen_footprints.osm import SUFFIXES as OSM_SUFFIXES
@@ -26,7 +27,7 @@ def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
     parsed, warnings = parse_options(options)
     if path.name.lower().endswith(".jsonl"):
         return import_cityjson_seq(path, parsed, warnings)
-    doc, lines = load_json(path)
+    doc, lines = load_json(path, each=functools.partial(read_feature, path=path, options=parsed))  # (GeoJSON's)
     if isinstance(doc, Mapping) and doc.get("type") == "CityJSON":
         return import_cityjson(doc, path, parsed, warnings)
     if isinstance(doc, Mapping) and doc.get("type") in ("FeatureCollection", "Feature", "Polygon", "MultiPolygon"):

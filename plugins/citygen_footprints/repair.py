@@ -136,7 +136,7 @@ def build_polygon(parts: Sequence[Part], min_area: float, min_part_area: float,
 
     Invalid parts are repaired with ``shapely.make_valid`` when that keeps at least ``repair_ratio`` of the area
     the rings enclose; overlapping parts are merged; parts under ``min_part_area`` are dropped. Raises
-    FeatureProblem when the repair would lose too much or the total area is under ``min_area``.
+    FeatureProblem when the repair would lose too much or the total area, or the area kept, is under ``min_area``.
     """
     warnings: list[str] = []
     polygons: list[Polygon] = []
@@ -154,6 +154,10 @@ def build_polygon(parts: Sequence[Part], min_area: float, min_part_area: float,
         raise FeatureProblem(f"area {area:.3g} m² is below min_area = {min_area:g} m² (a sliver) "
                              "-- lower min_area in the scene to keep it")
     kept = [p for p in merged if p.area >= min_part_area] or [max(merged, key=lambda p: p.area)]
+    if len(kept) < len(merged) and sum(p.area for p in kept) < min_area:
+        raise FeatureProblem(f"area {sum(p.area for p in kept):.3g} m² is below min_area = {min_area:g} m² once its "
+                             f"parts smaller than {min_part_area:g} m² are dropped (slivers) -- lower min_area or "
+                             "part_area in the scene to keep it")
     if len(kept) < len(merged):
         warnings.append(f"dropped {len(merged) - len(kept)} part(s) smaller than {min_part_area:g} m²")
     oriented = [orient(p, sign=1.0) for p in kept]

@@ -11,7 +11,9 @@ problems, else fewer offending terminals); else the point's next alternatives ar
 last, e.g. the fewest tiles), and a point none of whose alternatives helps is left for the next point up. Choice points
 are keyed by symbol and region size, so regions that derive alike keep deriving alike (a row of equal bays stays
 equal). If no layout within the budget is plausible, the result is :func:`citygen.plausible.plain_wall` with the
-findings of the best one, and the building's fallback chain takes over.
+findings of the best one, and the building's fallback chain takes over. So is a face too large for the grammar's
+sizes (:class:`~citygen_split.derive.FaceTooLarge`: a ``too-large`` finding), as soon as its first derivation
+passes :data:`~citygen_split.derive.MAX_REGIONS`.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from citygen.layout import FacadeLayout, Region
 from citygen.plausible import DEFAULT_RULES, Finding, PlausibilityRules, check_plausible, plain_wall, summary
 from citygen.request import FacadeRequest, check_request
 from citygen_split.ast import Grammar
-from citygen_split.derive import PLUGIN_ID, PointKey, _Derivation, point_key
+from citygen_split.derive import PLUGIN_ID, FaceTooLarge, PointKey, _Derivation, point_key
 
 #: Most derivations one face may take (the first included).
 BUDGET = 24
@@ -49,7 +51,11 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
     the request's (the scene's), else the defaults."""
     rules = rules or request.plausibility or DEFAULT_RULES
     tried: set[PointKey] = set()
-    best = _attempt(grammar, request, {}, rules)  # moves are kept only when better: the last kept is the best
+    try:
+        best = _attempt(grammar, request, {}, rules)  # moves are kept only when better: the last kept is the best
+    except FaceTooLarge as exc:
+        findings = (Finding("too-large", f"{exc.message} -- {exc.hint}"),)
+        return Outcome(_plain(grammar, request, findings), findings=findings)
     derivations = 1
     while (best.findings or best.problems) and derivations < budget:
         key = _next_point(best, tried)
@@ -59,21 +65,30 @@ def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUD
         for j in dict.fromkeys(min(j, count - 1) for j in (k + 1, k + 2, k + 3, count - 1)):
             if derivations >= budget:
                 break
-            attempt = _attempt(grammar, request, {**best.alternatives, key: j}, rules)
+            try:
+                attempt = _attempt(grammar, request, {**best.alternatives, key: j}, rules)
+            except FaceTooLarge:  # (this alternative makes more: no better)
+                attempt = None
             derivations += 1
-            if attempt.score < best.score:
+            if attempt is not None and attempt.score < best.score:
                 best, moved = attempt, True
                 break
         if not moved:
             tried.add(key)
     if best.findings:
-        layout, _ = enforce_entrance(plain_wall(request, f"implausible layout: {summary(list(best.findings))}",
-                                                best.findings, kind=PLUGIN_ID, ruleset=grammar.source), request)
-        return Outcome(layout, best.alternatives, derivations, tuple(best.findings), best.problems)
+        return Outcome(_plain(grammar, request, best.findings), best.alternatives, derivations, best.findings,
+                       best.problems)
     layout = best.layout
     if best.alternatives:
         layout = layout.with_meta({**layout.meta, "alternatives": len(best.alternatives)})
     return Outcome(layout, best.alternatives, derivations, (), best.problems)
+
+
+def _plain(grammar: Grammar, request: FacadeRequest, findings: tuple[Finding, ...]) -> FacadeLayout:
+    """A plain wall (with the entrance's door) naming ``findings``."""
+    layout, _ = enforce_entrance(plain_wall(request, f"implausible layout: {summary(list(findings))}", findings,
+                                            kind=PLUGIN_ID, ruleset=grammar.source), request)
+    return layout
 
 
 @dataclass(frozen=True)

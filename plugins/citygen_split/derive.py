@@ -30,8 +30,18 @@ PLUGIN_ID = "split"
 _WALL = Terminal("wall")
 #: Deepest derivation allowed (a rule that splits into itself without shrinking hits this).
 MAX_DEPTH = 200
-#: Most regions one facade may produce.
-MAX_REGIONS = 500_000
+#: Most regions one face's derivation may make. A real facade makes a few thousand (a 100 m long, 10 storey face of
+#: the shipped apartment grammar ~3,000), a 10 km long one ~300,000 -- which the builder would then turn into
+#: geometry and the stage writer into prims, for minutes and gigabytes: past this the face is too large for the
+#: grammar's sizes (:class:`FaceTooLarge`).
+MAX_REGIONS = 100_000
+
+
+class FaceTooLarge(RulesetError):
+    """A derivation that would make more than :data:`MAX_REGIONS` regions (a 10 km long facade, a repeat of tiny
+    tiles): the face is too large for the grammar's sizes. Not the grammar's error:
+    :func:`~citygen_split.alternatives.derive_plausible` makes the face a plain wall with a ``too-large`` finding,
+    so the building's fallback ruleset takes over."""
 
 
 #: A choice point of a derivation: the rule's symbol and the region's size (regions of one symbol and size choose
@@ -126,9 +136,8 @@ class _Derivation:
                 original, size, first, n, source = done
                 self.count += size
                 if self.count > MAX_REGIONS:
-                    raise RulesetError(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
-                                       plugin=PLUGIN_ID, where=self.grammar.source,
-                                       hint="the face is too large for this grammar's sizes")
+                    raise self.too_large(f"derivation went beyond {MAX_REGIONS} regions at {symbol}",
+                                         self.grammar.source)
                 dx, dy = x - original.x, y - original.y
                 copy = original.moved(dx, dy)
                 if n == 1 and not original.children:
@@ -150,11 +159,13 @@ class _Derivation:
                       chain: tuple[str, ...]) -> Region:
         self.count += 1
         rule = self.table.get(symbol)
-        if depth > MAX_DEPTH or self.count > MAX_REGIONS:
-            limit = f"deeper than {MAX_DEPTH} levels" if depth > MAX_DEPTH else f"more than {MAX_REGIONS} regions"
-            raise RulesetError(f"derivation of rule {symbol} went {limit}", plugin=PLUGIN_ID,
+        if depth > MAX_DEPTH:
+            raise RulesetError(f"derivation of rule {symbol} went deeper than {MAX_DEPTH} levels", plugin=PLUGIN_ID,
                                where=rule.loc if rule else self.grammar.source,
                                hint="a rule probably splits into itself without its region getting smaller")
+        if self.count > MAX_REGIONS:
+            raise self.too_large(f"derivation of rule {symbol} went beyond {MAX_REGIONS} regions",
+                                 rule.loc if rule else self.grammar.source)
         if rule is None:  # the built-in Corner strip
             self.note(depth, symbol, x, y, w, h, "corner strip, wall")
             return self.leaf(Region.fast(x, y, w, h, symbol, label="wall"))
@@ -178,6 +189,14 @@ class _Derivation:
         if not children:  # (a grid whose regions are all empty: an unlabelled terminal, as the tree reads it)
             return self.leaf(Region.fast(x, y, w, h, symbol))
         return Region.fast(x, y, w, h, symbol, children=tuple(children))
+
+    def too_large(self, message: str, where: Any) -> FaceTooLarge:
+        """The :class:`FaceTooLarge` of this face: ``message``, the face's size, what to check."""
+        r = self.request
+        return FaceTooLarge(f"{message} on a face of {r.width:g} x {r.height:g} m: too large for the grammar's sizes",
+                            plugin=PLUGIN_ID, where=where,
+                            hint="check the footprint's size and units (a facade kilometres long), or make the "
+                                 "repeated sizes larger (tiles of a few centimetres)")
 
     def leaf(self, region: Region) -> Region:
         """``region``, a terminal, noted in :attr:`leaves` and :attr:`sources`."""
@@ -357,11 +376,11 @@ class _Derivation:
         return out
 
     def check_tiles(self, rule: Rule, tile: float, length: float) -> None:
-        """Refuse a repeat whose tiles are so small that their count alone passes :data:`MAX_REGIONS`."""
+        """Refuse a repeat whose tiles are so small that their count alone passes :data:`MAX_REGIONS`, before any is
+        made."""
         if not length / tile <= MAX_REGIONS:
-            raise RulesetError(f"repeat of rule {rule.symbol}: tiles of {tile:g} m would fill {length:g} m more than "
-                               f"{MAX_REGIONS} times", where=rule.loc, plugin=PLUGIN_ID,
-                               hint="make the repeated sizes larger")
+            raise self.too_large(f"repeat of rule {rule.symbol}: tiles of {tile:g} m would fill {length:g} m more "
+                                 f"than {MAX_REGIONS} times", rule.loc)
 
     def grid(self, body: Grid, x: float, y: float, w: float, h: float, floor: int, depth: int) -> list[Region]:
         cols, rows = body.totals

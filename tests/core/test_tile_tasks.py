@@ -122,15 +122,45 @@ def test_tile_workers_are_replaced_after_their_share_of_buildings_and_write_the_
     assert files() == alone and report.written == 3 and report.cpu["workers"] > 0
 
 
-def test_tile_results_share_their_equal_prototype_keys():
-    """Regression (main-process memory at scale): results unpickled from the workers, held until every tile is done,
-    each held its own copies of the same element keys; equal keys are now one object."""
-    import pickle
-
+def test_tile_results_hand_their_prototype_keys_to_the_root_writer(tmp_path):
+    """Regression (main-process memory at scale): results held until every tile is done held each tile's prototype
+    keys (~1.8 module keys a building); the root's writer now takes them as a result comes in -- the element kinds
+    kept for the library, the module prototypes counted -- and the result drops them."""
+    from citygen.geometry.modules import ModuleKey
     from citygen.geometry.prototypes import ProtoKey
-    key = ProtoKey("window", "glass", 120, 150, 5)
-    first, second = (pickle.loads(pickle.dumps(tiles.TileResult(None, None, (key,), (), ()))) for _ in range(2))
-    assert first.prototypes[0] is not second.prototypes[0]
-    keys: dict = {}
-    first, second = tiles.interned(first, keys), tiles.interned(second, keys)
-    assert first.prototypes[0] is second.prototypes[0] and first.prototypes == (key,)
+    from citygen.usd.writer import StageWriter
+    window, door = ProtoKey("window", "glass", 120, 150, 5), ProtoKey("door", "wood", 100, 210, 5)
+    modules = [ModuleKey(k, 300, 310, "plaster") for k in (7, 8, 9)]
+    writer = StageWriter(tmp_path / "city.usdc", tile_layers=True)
+    first = tiles.slimmed(tiles.TileResult(None, None, (window, *modules[:2]), (), ()), writer)
+    second = tiles.slimmed(tiles.TileResult(None, None, (window, door, *modules[1:]), (), ()), writer)
+    assert first.prototypes == second.prototypes == ()
+    assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 3
+
+
+def test_the_spill_file_of_the_packed_tiles_goes_with_the_run(small_scene, test_registry, monkeypatch, tmp_path):
+    """The tiles' packed work waits in a file of the temporary folder (the workers read their tiles from it), which
+    the run removes whether it ends well or not."""
+    import tempfile
+
+    from citygen.tilework import Spilled
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    scene = _scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    build = tiles.build_tile
+    seen = []
+
+    def spying(job, work, builder=None):
+        seen.append(isinstance(work.packed, Spilled) and Path(work.packed.path).parent == folder)
+        return build(job, work, builder)
+    monkeypatch.setattr(tiles, "build_tile", spying)
+    assert generate_city(scene, registry=test_registry, jobs=1).written == 3
+    assert seen == [True] * 3 and list(folder.iterdir()) == []
+
+    def failing(job, work, builder=None):
+        raise OSError("disk full")
+    monkeypatch.setattr(tiles, "build_tile", failing)
+    with pytest.raises(OSError, match="disk full"):
+        generate_city(scene, registry=test_registry, jobs=1)
+    assert list(folder.iterdir()) == []

@@ -31,6 +31,15 @@ def test_any_rings_give_a_valid_oriented_polygon_or_a_reason(ring_list):
         assert part.exterior.is_ccw and all(not hole.is_ccw for hole in part.interiors)
 
 
+def test_a_bow_tie_whose_kept_part_is_under_min_area_is_a_sliver():
+    """Regression (found by the property test above): a self-crossing ring of 1.25 m² repaired into two parts under
+    min_part_area kept the larger, 0.75 m², under min_area."""
+    cleaned = clean_rings([[[[0.0, 0.0], [0.0, -1.0], [2.0, 3.0], [1.0, 0.0]]]])
+    with pytest.raises(FeatureProblem, match="area 0.75 m² is below min_area = 1 m² once its parts smaller than 1 m² "
+                                             "are dropped"):
+        build_polygon(cleaned.parts, min_area=1.0, min_part_area=1.0, repair_ratio=0.9)
+
+
 def test_clockwise_input_is_reoriented():
     polygon, notes = build_polygon([[_closed([(0, 0), (0, 10), (10, 10), (10, 0)])]], 1.0, 1.0, 0.9)
     assert polygon.exterior.is_ccw and notes == ()

@@ -140,3 +140,19 @@ def test_the_scene_s_plausibility_rules_travel_with_the_request():
     assert KIND.generate(g, req).meta.get("fallback")
     relaxed = PlausibilityRules.from_mapping({"min_size": {"window": [0.1, 0.3]}})
     assert not KIND.generate(g, replace(req, plausibility=relaxed)).meta.get("fallback")
+
+
+@pytest.mark.parametrize("ruleset, width", [("apartment", 10_000.0), ("tiny repeat", 200.0)])
+def test_a_face_too_large_for_the_grammar_is_a_plain_wall_with_a_finding(ruleset, width):
+    """Regression (issue 24): the derivation's only guard was an error past 500,000 regions, which a 10 km facade
+    of the shipped grammars stays under (~300,000 regions, then geometry and prims for minutes and gigabytes), and
+    a ruleset with a tiny repeat made up to that many. Past 100,000 regions -- or a repeat that would, found before
+    its tiles are made -- the face is a plain wall with a ``too-large`` finding, at once (no alternatives tried),
+    so the building's fallback ruleset takes over."""
+    g = load(REPO / "rulesets" / "apartment.grammar") if ruleset == "apartment" else grammar(
+        "X --> repeat(x) { 0.001: A }")
+    outcome = derive_plausible(g, request(width, 30.0, tuple(3.0 * k for k in range(11))))
+    assert outcome.derivations == 1 and [f.code for f in outcome.findings] == ["too-large"]
+    assert len(outcome.layout.leaves) == 1 and outcome.layout.meta["fallback"].startswith("implausible layout: too-large")
+    assert f"on a face of {width:g} x 30 m: too large for the grammar's sizes -- check the footprint's size" \
+        in outcome.findings[0].message
