@@ -22,6 +22,10 @@ Ring = np.ndarray  #: (n, 2) float array, closed (first == last), no consecutive
 Part = list[Ring]  #: exterior ring then holes
 
 
+#: Metres: the grid a union of parts is snapped to when floating point leaves it invalid (:func:`_union`).
+GRID = 1e-6
+
+
 class FeatureProblem(Exception):
     """This feature cannot become a footprint; the message says why and what to do."""
 
@@ -109,6 +113,13 @@ def _polygonal(geom: shapely.Geometry) -> list[Polygon]:
     return [g for sub in getattr(geom, "geoms", []) for g in _polygonal(sub)]
 
 
+def _union(polygons: list[Polygon]) -> shapely.Geometry:
+    """The union of ``polygons``; where floating point leaves it invalid (a sliver of one part ending a
+    1e-16 m off another's edge: "nested shells"), the union on a micrometre grid."""
+    union = shapely.union_all(polygons)
+    return union if union.is_valid else shapely.union_all(polygons, grid_size=GRID)
+
+
 def _enclosed_area(ring: Ring) -> float:
     """Area of all faces the ring's linework encloses (what the author drew, however it crosses itself)."""
     return sum(face.area for face in shapely.ops.polygonize(shapely.union_all([LineString(ring)])))
@@ -145,7 +156,7 @@ def build_polygon(parts: Sequence[Part], min_area: float, min_part_area: float,
         polygons.extend(repaired)
         if note:
             warnings.append(note)
-    merged = _polygonal(shapely.union_all(polygons)) if len(polygons) > 1 else polygons
+    merged = _polygonal(_union(polygons)) if len(polygons) > 1 else polygons
     area = sum(p.area for p in merged)
     if not math.isfinite(area):
         raise FeatureProblem(f"its area is {area} m² (coordinates too large to measure it) "

@@ -40,6 +40,16 @@ def test_a_bow_tie_whose_kept_part_is_under_min_area_is_a_sliver():
         build_polygon(cleaned.parts, min_area=1.0, min_part_area=1.0, repair_ratio=0.9)
 
 
+def test_parts_whose_union_floating_point_leaves_with_nested_shells_give_a_valid_polygon():
+    """Regression (found by the property test above): three self-crossing rings repaired into parts whose union
+    ended a sliver 1e-16 m off the large part's edge, an invalid MultiPolygon ("nested shells")."""
+    ring_list = [[(0, 0), (0, 1), (1, 3)], [(0, 6), (0, 0), (0, -1), (1, 0), (-3, -3)],
+                 [(0, 6), (-4, 3), (0, -4), (0, 0), (-3, -3)]]
+    cleaned = clean_rings([[[list(map(float, p)) for p in r]] for r in ring_list])
+    polygon, _ = build_polygon(cleaned.parts, min_area=1.0, min_part_area=1.0, repair_ratio=0.9)
+    assert polygon.is_valid and polygon.area == pytest.approx(22.336, abs=1e-3)
+
+
 def test_clockwise_input_is_reoriented():
     polygon, notes = build_polygon([[_closed([(0, 0), (0, 10), (10, 10), (10, 0)])]], 1.0, 1.0, 0.9)
     assert polygon.exterior.is_ccw and notes == ()
