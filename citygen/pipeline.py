@@ -34,12 +34,12 @@ from citygen.gltf import GLTF_SUFFIXES
 from citygen.lifeline import run_apart, stop_workers, tie_to_parent
 from citygen.mass import MassPlan
 from citygen.outpaths import check_writable
-from citygen.usd.publish import remove_stale_temporaries, temp_prefix
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
 from citygen.tilework import Spill, TileWork, Work, failed, tile_of, tile_works, work_items
+from citygen.usd.publish import remove_stale_temporaries, temp_prefix
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
 if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)

@@ -108,7 +108,6 @@ def tile_name(tile: tuple[int, int]) -> str:
 
 
 @functools.lru_cache(maxsize=4096)  # (every building has the same dozen keys)
-@functools.lru_cache(maxsize=1024)
 def attribute_name(key: str) -> str:
     """``citygen:<key>``, each ``:``-separated part of ``key`` a valid identifier (a kept tag ``ref:bag-id``
     becomes ``citygen:tag:ref:bag_id``)."""
