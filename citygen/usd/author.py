@@ -1,7 +1,9 @@
 """Thin Sdf authoring helpers on one layer: prims, attributes, meshes with face normals and UVs, and materials.
 
 Authoring goes through the Sdf API in change blocks (no composed stage while writing), which is what keeps a
-100k-building city writable.
+100k-building city writable. Specs are authored one by one, never copied with ``Sdf.CopySpec``: the copy orders a
+spec's fields by the addresses of their names' tokens, which vary with the process's history, and the .usdc bytes
+with them (the text does not change): tiles written by different workers differed from run to run.
 """
 from __future__ import annotations
 
@@ -47,37 +49,9 @@ def tokens(*values: str) -> Vt.TokenArray:
     return Vt.TokenArray(list(values))
 
 
-#: The attributes whose values differ from mesh to mesh, in the order :func:`_mesh_template` authors them.
-_MESH_VALUES = ("points", "faceVertexCounts", "faceVertexIndices", "extent", "primvars:normals",
-                "primvars:normals:indices", "primvars:st")
-
-
-@functools.lru_cache(maxsize=64)
-def _mesh_template(st: bool, binding: bool, label: str | None) -> tuple[Sdf.Layer, Sdf.Path]:
-    """A Mesh spec holding everything meshes of one kind share (attribute types and variability, interpolations,
-    subdivision scheme, applied schemas, an empty material binding, the semantic label): :meth:`Author.mesh` copies
-    it in one C++ call (``Sdf.CopySpec``) and sets the values of :data:`_MESH_VALUES`, which costs about half of
-    authoring its dozen specs one by one from Python."""
-    layer = Sdf.Layer.CreateAnonymous("mesh_template")
-    prim = Sdf.PrimSpec(layer, "Mesh", Sdf.SpecifierDef, "Mesh")
-    for name, vtype in (("points", T.Point3fArray), ("faceVertexCounts", T.IntArray),
-                        ("faceVertexIndices", T.IntArray), ("extent", T.Float3Array)):
-        Sdf.AttributeSpec(prim, name, vtype)
-    Author.attr(prim, "subdivisionScheme", T.Token, "none", True)
-    Sdf.AttributeSpec(prim, "primvars:normals", T.Normal3fArray).SetInfo("interpolation", "uniform")
-    Sdf.AttributeSpec(prim, "primvars:normals:indices", T.IntArray)
-    if st:
-        Sdf.AttributeSpec(prim, "primvars:st", T.TexCoord2fArray).SetInfo("interpolation", "faceVarying")
-    schemas = []
-    if binding:
-        schemas.append("MaterialBindingAPI")
-        Sdf.RelationshipSpec(prim, "material:binding")
-    if label is not None:
-        schemas.append("SemanticsLabelsAPI:class")
-        Author.attr(prim, "semantics:labels:class", T.TokenArray, tokens(label), True)
-    if schemas:
-        Author.api(prim, *schemas)
-    return layer, prim.path
+#: A mesh's array attributes and their types, in the order :meth:`Author.mesh` authors them.
+_MESH_ARRAYS = (("points", T.Point3fArray), ("faceVertexCounts", T.IntArray), ("faceVertexIndices", T.IntArray),
+                ("extent", T.Float3Array))
 
 
 def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
@@ -153,6 +127,12 @@ class Author:
         return spec
 
     @staticmethod
+    def _primvar(prim: Sdf.PrimSpec, name: str, vtype, interpolation: str, value) -> None:
+        spec = Sdf.AttributeSpec(prim, name, vtype)
+        spec.SetInfo("interpolation", interpolation)
+        spec.default = value
+
+    @staticmethod
     def rel(prim: Sdf.PrimSpec, name: str, targets: Iterable[Sdf.Path]) -> None:
         Sdf.RelationshipSpec(prim, name).targetPathList.explicitItems = list(targets)
 
@@ -197,18 +177,23 @@ class Author:
                 return None
             mesh = self.arrays([(mesh, mat)], normals and [normals], offset)[0]
         self.prims += 1
-        binding = looks is not None and mat is not None
-        layer, template = _mesh_template(mesh.st is not None, binding, label)
-        path = parent.path.AppendChild(name)
-        Sdf.CopySpec(layer, template, self.layer, path)
-        at = self.layer.GetAttributeAtPath
-        for prop, value in zip(_MESH_VALUES, (mesh.points, mesh.counts, mesh.indices, mesh.extent, mesh.normals,
-                                              mesh.normal_indices, mesh.st)):
-            if value is not None:
-                at(path.AppendProperty(prop)).default = value
-        if binding:
-            self.layer.GetRelationshipAtPath(path.AppendProperty("material:binding")).targetPathList \
-                .explicitItems = [looks.AppendChild(look_name(mat))]
+        prim = Sdf.PrimSpec(parent, name, Sdf.SpecifierDef, "Mesh")
+        for (prop, vtype), value in zip(_MESH_ARRAYS, (mesh.points, mesh.counts, mesh.indices, mesh.extent)):
+            Sdf.AttributeSpec(prim, prop, vtype).default = value
+        self.attr(prim, "subdivisionScheme", T.Token, "none", True)
+        self._primvar(prim, "primvars:normals", T.Normal3fArray, "uniform", mesh.normals)
+        self.attr(prim, "primvars:normals:indices", T.IntArray, mesh.normal_indices)
+        if mesh.st is not None:
+            self._primvar(prim, "primvars:st", T.TexCoord2fArray, "faceVarying", mesh.st)
+        schemas = []
+        if looks is not None and mat is not None:
+            schemas.append("MaterialBindingAPI")
+            self.rel(prim, "material:binding", [looks.AppendChild(look_name(mat))])
+        if label is not None:
+            schemas.append("SemanticsLabelsAPI:class")
+            self.attr(prim, "semantics:labels:class", T.TokenArray, tokens(label), True)
+        if schemas:
+            self.api(prim, *schemas)
         return mesh.bound
 
     def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:

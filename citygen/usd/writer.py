@@ -589,19 +589,20 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
 
 def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes: Mapping[Any, Sdf.Path],
                bound: np.ndarray | None) -> None:
-    """A PointInstancer ``Elements`` under ``parent`` whose prototypes reference the shared ``/Prototypes``: its
-    prototype prims copied from :func:`_instancer_template`, then each given its reference."""
+    """A PointInstancer ``Elements`` under ``parent`` whose prototypes, ``Prototypes/p<k>``, are instanceable Xforms
+    referencing the shared ``/Prototypes`` (one prototype per element kind: DCCs load it once).
+
+    Authored spec by spec, never with ``Sdf.CopySpec`` from a template: that copy orders each spec's fields by the
+    addresses of their names' tokens in the process, so the .usdc bytes (not the text) would depend on the process's
+    history (see :mod:`citygen.usd.author`)."""
     names = _ref_names(len(inst.protos))
-    layer, template = _instancer_template(len(inst.protos))
-    path = parent.path.AppendChild("Elements")
-    Sdf.CopySpec(layer, template, author.layer, path)
-    author.prims += len(names) + 2
-    pi = author.layer.GetPrimAtPath(path)
-    holder = path.AppendChild("Prototypes")
-    at = author.layer.GetPrimAtPath
+    pi = author.prim(parent, "Elements", "PointInstancer")
+    holder = author.prim(pi, "Prototypes", "Scope")
     for name, key in zip(names, inst.protos):
-        author.reference(at(holder.AppendChild(name)), prototypes[key])
-    base = holder.StripAllVariantSelections()  # (inside a LOD variant: the targets are composed paths)
+        ref = author.prim(holder, name, "Xform")
+        author.reference(ref, prototypes[key])
+        ref.SetInfo("instanceable", True)
+    base = holder.path.StripAllVariantSelections()  # (inside a LOD variant: the targets are composed paths)
     author.rel(pi, "prototypes", [base.AppendChild(name) for name in names])
     author.attr(pi, "protoIndices", T.IntArray, Vt.IntArray.FromNumpy(inst.proto_indices.astype(np.int32)))
     author.attr(pi, "positions", T.Point3fArray, Vt.Vec3fArray.FromNumpy(np.asarray(inst.positions, np.float32)))
@@ -609,21 +610,6 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
     author.attr(pi, "scales", T.Float3Array, Vt.Vec3fArray.FromNumpy(inst.scales.astype(np.float32)))
     if bound is not None:
         author.attr(pi, "extent", T.Float3Array, bound_value(bound))
-
-
-@functools.lru_cache(maxsize=256)
-def _instancer_template(n: int) -> tuple[Sdf.Layer, Sdf.Path]:
-    """A PointInstancer ``Elements`` holding ``Prototypes/p0`` .. ``p<n-1>``, instanceable Xforms (one shared
-    prototype per element kind: DCCs load it once): :func:`_instancer` copies it in one C++ call
-    (``Sdf.CopySpec``) instead of authoring ``n`` prims one by one from Python."""
-    layer = Sdf.Layer.CreateAnonymous("instancer_template")
-    pi = Sdf.PrimSpec(layer, "Elements", Sdf.SpecifierDef, "PointInstancer")
-    holder = Sdf.PrimSpec(pi, "Prototypes", Sdf.SpecifierDef, "Scope")
-    for name in _ref_names(n):
-        ref = Sdf.PrimSpec(holder, name, Sdf.SpecifierDef, "Xform")
-        Author.reference(ref, PROTOTYPES)  # (a placeholder, replaced: it keeps the fields in the order as before)
-        ref.SetInfo("instanceable", True)
-    return layer, pi.path
 
 
 def _rows(arrays: list[np.ndarray], width: int) -> np.ndarray:
