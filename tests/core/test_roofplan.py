@@ -16,7 +16,7 @@ from citygen.footprints import Footprint
 from citygen.mass import neighbour_cover
 from citygen.pipeline import import_footprints
 from citygen.registry import default_registry
-from citygen.roofplan import MIN_WALL_SHARE, ROOF_SHARE, ROOF_STOREYS, plan_mass, split_height
+from citygen.roofplan import MIN_STOREY, MIN_WALL_SHARE, ROOF_SHARE, ROOF_STOREYS, plan_mass, split_height
 from citygen.scene import load_scene
 from citygen_footprints.heights import HeightSettings, parse_length, resolve_height
 
@@ -140,6 +140,22 @@ def test_untagged_roofs_are_capped_at_one_storey_and_a_quarter_of_the_total(hels
         if fp.height_source == "default":  # the scene's 18 m is a total: the roof is inside it
             assert mass.height + rise == pytest.approx(helsinki.scene.defaults.default_height)
     assert max(m.roof.height or 0.0 for m in helsinki.masses) < 8.0
+
+
+def test_an_untagged_roof_leaves_the_data_storeys_their_height(helsinki):
+    """Bug fixture: way/396371524 (apartments, height = 18, building:levels = 6, untagged roof) had a 3.3 m roof
+    over six 2.45 m storeys, too low for the apartment ground floor's door and transom: the face fell back to a
+    plain wall. The roof now leaves each storey 2.8 m and the building still tops out at 18 m."""
+    fid = "way/396371524"
+    fp = helsinki.footprints[helsinki.index[fid]]
+    record, mass = helsinki.build(fid)
+    assert (fp.levels, fp.height) == (6, 18.0)
+    assert mass.height == pytest.approx(6 * MIN_STOREY) and mass.roof_source == "pitch, capped"
+    assert top(record.geometry) == pytest.approx(18.0, abs=0.01)
+    low = [fp.id for fp, m in zip(helsinki.footprints, helsinki.masses)
+           if fp.height_is_total and fp.levels and m.roof_source.startswith("pitch")
+           and m.height / fp.levels < MIN_STOREY - 1e-9 and (m.roof.height or 0.0) > 0]
+    assert low == []  # (a total too low for its storeys gets a flat roof: the data's height wins)
 
 
 def test_a_part_that_is_all_roof_keeps_its_lifted_base():
