@@ -4,7 +4,9 @@
   adjacent faces sit at the same heights.
 * **Entrance** -- exactly one door per building, on the widest street-facing face whose foot is free (else the
   widest facade face with a free foot; none when every foot is hidden, e.g. a tower rising from a lower block, or
-  when the building is lifted off the ground, ``Footprint.lift``: it has no street faces and no taller ground floor).
+  when the building is lifted off the ground, ``Footprint.lift``: it has no street faces and no taller ground floor;
+  none either when its ground floor is lower than ``DOOR_STOREY``, the plausibility rules' door height: a 1.8 m
+  shed had every face fall back to a plain wall for the door it could not hold).
 * **Corners** -- a wall strip at each corner, the same width on both faces meeting there, so openings of two faces
   never collide at a corner and corners meet with equal margins.
 
@@ -31,6 +33,8 @@ from citygen.scene import Defaults
 PARTY_RISE = 1.0
 #: ... unless at least this width (m) of it rises above them.
 MIN_SEEN = 2.0
+#: The least ground floor (m) an entrance door goes into (``PlausibilityRules.door_min_height``).
+DOOR_STOREY = 1.9
 
 
 @dataclass(frozen=True)
@@ -114,6 +118,8 @@ def face_roles(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: De
     door_candidates = np.flatnonzero(street & (widths >= 1.5))
     if door_candidates.size == 0:
         door_candidates = np.flatnonzero(facade & free_foot & (widths >= 1.5))
+    if floor_lines[1] - floor_lines[0] < DOOR_STOREY:  # (no face can hold a door: none is asked for)
+        door_candidates = door_candidates[:0]
     entrance = int(door_candidates[np.argmax(widths[door_candidates])]) if door_candidates.size else None
     return FaceRoles(floor_lines, party, facade, street, entrance)
 

@@ -14,9 +14,10 @@ The roof's height above the walls, first that applies:
 6. an untagged roof (shape from the scene): its rise at the scene's pitch, at most ``ROOF_STOREYS`` storeys and
    ``ROOF_SHARE`` of the total.
 
-A roof of rule 5 or 6 on a total height whose storeys the data count (``building:levels``) also leaves each
-storey at least ``MIN_STOREY``: the data's storeys stay storeys (6 levels in 18 m under a one-storey roof were
-2.45 m each, too low for a door and its transom), down to a flat roof.
+A roof of rule 5 or 6 on a total height also leaves each storey at least ``MIN_STOREY`` -- the storeys the data
+count (``building:levels``), else one --, down to a flat roof: the data's storeys stay storeys (6 levels in 18 m
+under a one-storey roof were 2.45 m each, too low for a door and its transom; Delft's 2.5 m sheds got 1.9 m walls
+under a gable, too low for a door).
 
 "Of the total" is of walls + roof where only the walls are known (level counts).
 
@@ -47,7 +48,7 @@ ROOF_SHARE = 0.25
 TAGGED_SHARE = 0.5
 #: A roof from the data leaves at least this share of a given total height to the walls.
 MIN_WALL_SHARE = 0.1
-#: A roof at the scene's pitch leaves each of the data's storeys at least this tall (metres).
+#: A roof at the scene's pitch leaves each storey under it at least this tall (metres).
 MIN_STOREY = 2.8
 
 
@@ -100,8 +101,8 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
         tagged = attrs.get("roof:shape") not in (None, "")
         share = TAGGED_SHARE if tagged else ROOF_SHARE
         most = share * total if total is not None else share / (1 - share) * footprint.height
-        if total is not None and footprint.levels:
-            most = min(most, max(0.0, total - footprint.levels * MIN_STOREY))
+        if total is not None:
+            most = min(most, max(0.0, total - (footprint.levels or 1) * MIN_STOREY))
         rise = min(natural, most) if tagged else min(natural, ROOF_STOREYS * storey, most)
         source = "pitch" if rise >= natural else "pitch, capped"
     warnings = []
