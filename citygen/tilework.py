@@ -16,16 +16,19 @@ from __future__ import annotations
 
 import math
 import pickle
+import tempfile
+from array import array
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+import shapely
 
 from citygen.errors import CitygenError
 from citygen.footprints import Footprint, Skipped
-from citygen.mass import Mass, MassPlan, neighbour_cover, neighbours
+from citygen.mass import COVER_OFFSET, Mass, MassPlan, neighbour_cover, neighbours
 
 #: A work item of the builder: footprint, mass, neighbour cover, prim name, tile.
 Work = tuple[Footprint, Mass, np.ndarray, str, tuple[int, int]]
@@ -153,7 +156,7 @@ def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names
                tiles: Sequence[tuple[int, int]], spill: Spill | None = None) -> list[TileWork]:
     """The buildings (``footprints[k]``, ``plans[k]``, ``names[k]``) in their ``tiles[k]`` (:func:`tile_of`), in
     tile order, each tile with the plans of its neighbours in other tiles; each tile's bytes put in ``spill`` as it
-    is packed (given one)."""
+    is packed (given one). The whole city at once, in memory: what :class:`Strips` gives a strip at a time."""
     order = sorted(range(len(plans)), key=lambda k: (tiles[k], names[k]))
     members: dict[tuple[int, int], list[int]] = {}
     for k in order:
@@ -168,6 +171,72 @@ def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names
                              [plans[j] for j in sorted(others[tile])])
         works.append(work if spill is None else spill.put(work))
     return works
+
+
+class Strips:
+    """The city's planned buildings put aside as they are planned, then packed in tiles a strip at a time: what the
+    planning child holds of the whole city is ~0.1 kB a building (tile, bounds, prim name, where its record lies),
+    never the footprints and plans themselves.
+
+    :meth:`add` appends a building's footprint, plan and prim name to a temporary file; :meth:`works` packs the
+    tiles a strip of ``columns`` tile columns at a time, in tile order: the strip's buildings and the plans of those
+    that may stand against them (:func:`~citygen.mass.neighbours`, found from the bounds alone: wherever they lie,
+    in the strip or not) read back, packed, spilled and dropped. The tiles are :func:`tile_works`' for the whole
+    city (tests/core/test_tilework.py)."""
+
+    def __init__(self) -> None:
+        self.scratch = tempfile.TemporaryFile()  # (no name: gone when closed, or when the process ends)
+        self.tiles = array("q")  # (column, row) a building
+        self.bounds = array("d")  # (x0, y0, x1, y1) of its outline
+        self.places = array("q")  # (offset, size) of its record in the scratch file
+        self.names: list[str] = []
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def close(self) -> None:
+        self.scratch.close()
+
+    def add(self, footprint: Footprint, plan: MassPlan, name: str, tile: tuple[int, int]) -> None:
+        data = pickle.dumps((footprint, plan, name), protocol=pickle.HIGHEST_PROTOCOL)
+        self.places.extend((self.scratch.seek(0, 2), len(data)))
+        self.scratch.write(data)
+        self.tiles.extend(tile)
+        self.bounds.extend(plan.outline.bounds)
+        self.names.append(name)
+
+    def _record(self, k: int) -> tuple[Footprint, MassPlan, str]:
+        self.scratch.seek(self.places[2 * k])
+        return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
+
+    def works(self, spill: Spill | None = None, columns: int = 1) -> Iterator[TileWork]:
+        """The tiles' packed work, in tile order, a strip of ``columns`` tile columns at a time (each tile's bytes
+        put in ``spill``, given one)."""
+        if not self.names:
+            return
+        tiles = np.frombuffer(self.tiles, dtype=np.int64).reshape(-1, 2)
+        bounds = np.frombuffer(self.bounds, dtype=np.float64).reshape(-1, 4)
+        reach = 2 * COVER_OFFSET  # (as :func:`~citygen.mass.neighbours` widens them)
+        widened = bounds + np.array([-reach, -reach, reach, reach])
+        strip_of = np.searchsorted(np.unique(tiles[:, 0]), tiles[:, 0]) // columns
+        for strip in range(int(strip_of.max()) + 1):
+            ks = np.flatnonzero(strip_of == strip)
+            near = np.flatnonzero((bounds[:, 2] >= widened[ks, 0].min()) & (bounds[:, 0] <= widened[ks, 2].max()))
+            tree = shapely.STRtree(shapely.box(*bounds[near].T))
+            at, hit = tree.query(shapely.box(*widened[ks].T))
+            i, j = ks[at], near[hit]
+            keep = (i != j) & np.any(tiles[i] != tiles[j], axis=1)
+            others: defaultdict[tuple[int, int], set[int]] = defaultdict(set)
+            for a, b in zip(i[keep].tolist(), j[keep].tolist()):
+                others[tuple(self.tiles[2 * a:2 * a + 2])].add(b)
+            members: defaultdict[tuple[int, int], list[int]] = defaultdict(list)
+            for k in ks.tolist():
+                members[tuple(self.tiles[2 * k:2 * k + 2])].append(k)
+            for tile in sorted(members):
+                ordered = sorted(members[tile], key=self.names.__getitem__)
+                work = TileWork.pack(tile, [self._record(k) for k in ordered],
+                                     [self._record(k)[1] for k in sorted(others[tile])])
+                yield work if spill is None else spill.put(work)
 
 
 def work_items(works: Sequence[TileWork]) -> tuple[list[Work], list[Skipped]]:
