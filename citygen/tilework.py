@@ -86,9 +86,17 @@ class TileWork:
     @classmethod
     def pack(cls, tile: tuple[int, int], buildings: Sequence[tuple[Footprint, MassPlan, str]],
              around: Sequence[MassPlan] = ()) -> TileWork:
+        return cls.of_pickles(tile, [(_pickled((footprint, name)), _pickled(plan)) for footprint, plan, name in buildings],
+                              [_pickled(plan) for plan in around],
+                              sum(plan.roof.height is not None for _, plan, _ in buildings))
+
+    @classmethod
+    def of_pickles(cls, tile: tuple[int, int], buildings: Sequence[tuple[bytes, bytes]], around: Sequence[bytes],
+                   pitched: int) -> TileWork:
+        """The work of ``tile`` from its buildings' pickled ``(footprint, prim name)`` and plan, and the pickled
+        plans ``around`` them (what :class:`Strips` holds on disk: copied, never unpickled to be packed)."""
         return cls(tile, len(buildings), pickle.dumps((tuple(buildings), tuple(around)),
-                                                      protocol=pickle.HIGHEST_PROTOCOL),
-                   sum(plan.roof.height is not None for _, plan, _ in buildings))
+                                                      protocol=pickle.HIGHEST_PROTOCOL), pitched)
 
     def __len__(self) -> int:
         return self.count
@@ -99,7 +107,12 @@ class TileWork:
 
     def unpacked(self) -> tuple[tuple[tuple[Footprint, MassPlan, str], ...], tuple[MassPlan, ...]]:
         """The buildings and the plans around them."""
-        return pickle.loads(self.loaded().packed)
+        buildings, around = pickle.loads(self.loaded().packed)
+        made = []
+        for pair, plan in buildings:
+            footprint, name = pickle.loads(pair)
+            made.append((footprint, pickle.loads(plan), name))
+        return tuple(made), tuple(map(pickle.loads, around))
 
     def items(self) -> tuple[list[Work], list[Skipped]]:
         """The builder's work items of this tile -- the masses with their faces and neighbour covers -- and the
@@ -118,6 +131,10 @@ class TileWork:
             else:
                 items.append((footprint, mass, cover, name, self.tile))
         return items, skipped
+
+
+def _pickled(value: object) -> bytes:
+    return pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def covers(masses: Sequence[Mass], around: Sequence[MassPlan]) -> list[np.ndarray | Exception]:
@@ -175,20 +192,22 @@ def tile_works(footprints: Sequence[Footprint], plans: Sequence[MassPlan], names
 
 class Strips:
     """The city's planned buildings put aside as they are planned, then packed in tiles a strip at a time: what the
-    planning child holds of the whole city is ~0.1 kB a building (tile, bounds, prim name, where its record lies),
+    planning child holds of the whole city is ~0.1 kB a building (tile, bounds, prim name, where its pickles lie),
     never the footprints and plans themselves.
 
-    :meth:`add` appends a building's footprint, plan and prim name to a temporary file; :meth:`works` packs the
-    tiles a strip of ``columns`` tile columns at a time, in tile order: the strip's buildings and the plans of those
-    that may stand against them (:func:`~citygen.mass.neighbours`, found from the bounds alone: wherever they lie,
-    in the strip or not) read back, packed, spilled and dropped. The tiles are :func:`tile_works`' for the whole
-    city (tests/core/test_tilework.py)."""
+    :meth:`add` appends a building's pickled footprint and prim name, and its pickled plan, to a temporary file;
+    :meth:`works` packs the tiles a strip of ``columns`` tile columns at a time, in tile order: the strip's buildings
+    and the plans of those that may stand against them (:func:`~citygen.mass.neighbours`, found from the bounds
+    alone: wherever they lie, in the strip or not), copied from the file (:meth:`TileWork.of_pickles`), spilled and
+    dropped. The tiles are :func:`tile_works`' for the whole city, byte for byte (tests/core/test_tilework.py)."""
 
     def __init__(self) -> None:
         self.scratch = tempfile.TemporaryFile()  # (no name: gone when closed, or when the process ends)
+        self.end = 0
         self.tiles = array("q")  # (column, row) a building
         self.bounds = array("d")  # (x0, y0, x1, y1) of its outline
-        self.places = array("q")  # (offset, size) of its record in the scratch file
+        self.places = array("q")  # (offset, footprint's size, plan's size) of its pickles in the scratch file
+        self.pitched = bytearray()  # (its roof is not flat)
         self.names: list[str] = []
 
     def __len__(self) -> int:
@@ -198,16 +217,21 @@ class Strips:
         self.scratch.close()
 
     def add(self, footprint: Footprint, plan: MassPlan, name: str, tile: tuple[int, int]) -> None:
-        data = pickle.dumps((footprint, plan, name), protocol=pickle.HIGHEST_PROTOCOL)
-        self.places.extend((self.scratch.seek(0, 2), len(data)))
-        self.scratch.write(data)
+        pair, planned = _pickled((footprint, name)), _pickled(plan)
+        self.scratch.write(pair + planned)
+        self.places.extend((self.end, len(pair), len(planned)))
+        self.end += len(pair) + len(planned)
         self.tiles.extend(tile)
         self.bounds.extend(plan.outline.bounds)
+        self.pitched.append(plan.roof.height is not None)
         self.names.append(name)
 
-    def _record(self, k: int) -> tuple[Footprint, MassPlan, str]:
-        self.scratch.seek(self.places[2 * k])
-        return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
+    def _pickles(self, k: int) -> tuple[bytes, bytes]:
+        """Building ``k``'s pickled footprint and prim name, and its pickled plan."""
+        offset, pair, plan = self.places[3 * k:3 * k + 3]
+        self.scratch.seek(offset)
+        data = self.scratch.read(pair + plan)
+        return data[:pair], data[pair:]
 
     def works(self, spill: Spill | None = None, columns: int = 1) -> Iterator[TileWork]:
         """The tiles' packed work, in tile order, a strip of ``columns`` tile columns at a time (each tile's bytes
@@ -222,20 +246,20 @@ class Strips:
         for strip in range(int(strip_of.max()) + 1):
             ks = np.flatnonzero(strip_of == strip)
             near = np.flatnonzero((bounds[:, 2] >= widened[ks, 0].min()) & (bounds[:, 0] <= widened[ks, 2].max()))
-            tree = shapely.STRtree(shapely.box(*bounds[near].T))
-            at, hit = tree.query(shapely.box(*widened[ks].T))
+            at, hit = shapely.STRtree(shapely.box(*bounds[near].T)).query(shapely.box(*widened[ks].T))
             i, j = ks[at], near[hit]
             keep = (i != j) & np.any(tiles[i] != tiles[j], axis=1)
             others: defaultdict[tuple[int, int], set[int]] = defaultdict(set)
             for a, b in zip(i[keep].tolist(), j[keep].tolist()):
-                others[tuple(self.tiles[2 * a:2 * a + 2])].add(b)
+                others[tuple(tiles[a].tolist())].add(b)
             members: defaultdict[tuple[int, int], list[int]] = defaultdict(list)
             for k in ks.tolist():
-                members[tuple(self.tiles[2 * k:2 * k + 2])].append(k)
+                members[tuple(tiles[k].tolist())].append(k)
             for tile in sorted(members):
                 ordered = sorted(members[tile], key=self.names.__getitem__)
-                work = TileWork.pack(tile, [self._record(k) for k in ordered],
-                                     [self._record(k)[1] for k in sorted(others[tile])])
+                work = TileWork.of_pickles(tile, [self._pickles(k) for k in ordered],
+                                           [self._pickles(k)[1] for k in sorted(others[tile])],
+                                           sum(self.pitched[k] for k in ordered))
                 yield work if spill is None else spill.put(work)
 
 

@@ -50,26 +50,26 @@ class RawFeature:
 
 class Heads:
     """What fixing the frame and the ids needs of every feature, ~0.1 kB each (the feature itself lies elsewhere):
-    its index, id, first corner, bounds and first corner outside the lon/lat range (if any)."""
+    its index, id, first corner and bounds."""
 
     def __init__(self) -> None:
         self.index = array("q")
         self.ids: list[str] = []
         self.corners = array("d")  # (first x, first y, min x, min y, max x, max y) a feature
-        self.stray: dict[int, tuple[float, float]] = {}  # (feature k's first corner outside lon/lat)
 
     def __len__(self) -> int:
         return len(self.ids)
 
     def add(self, feature: RawFeature) -> None:
         points = _points(feature)
-        k = len(self.ids)
         self.index.append(feature.index)
         self.ids.append(feature.id)
         self.corners.extend([*points[0].tolist(), *points.min(axis=0).tolist(), *points.max(axis=0).tolist()])
-        outside = outside_lonlat(points)
-        if outside.any():
-            self.stray[k] = tuple(points[np.argmax(outside)].tolist())
+
+    def outside(self, k: int) -> bool:
+        """Whether a corner of feature ``k`` is outside the lon/lat range (its bounds are)."""
+        x0, y0, x1, y1 = self.bounds(k)
+        return x0 < -180 or x1 > 180 or y0 < -90 or y1 > 90
 
     def first(self, k: int) -> tuple[float, float]:
         return self.corners[6 * k], self.corners[6 * k + 1]
@@ -80,7 +80,8 @@ class Heads:
 
 def _points(feature: RawFeature) -> np.ndarray:
     """Every corner of the feature's rings, ``(n, 2)``, in ring order."""
-    return np.concatenate([np.asarray(r, dtype=float).reshape(-1, 2) for p in feature.parts for r in p])
+    rings = [np.asarray(r, dtype=float).reshape(-1, 2) for p in feature.parts for r in p]
+    return rings[0] if len(rings) == 1 else np.concatenate(rings)
 
 
 def unique_ids(ids: list[str], where: Callable[[int], str]) -> list[str]:
@@ -119,14 +120,23 @@ def _stray_lonlat(heads: Heads, load: Callable[[int], RawFeature]) -> tuple[list
     ``make_frame`` refuses the file (most likely projected metres without a declared CRS). Returns the kept
     features (positions in ``heads``) and the skipped ones."""
     kept = list(range(len(heads)))
-    if not heads.stray or 2 * len(heads.stray) >= len(heads):
+    bad = [k for k in kept if heads.outside(k)]
+    if not bad or 2 * len(bad) >= len(heads):
         return kept, []
     skipped = []
-    for k, (x, y) in heads.stray.items():
+    for k in bad:
+        x, y = _stray(load(k))
         skipped.append((heads.index[k], Skipped(heads.ids[k], f"coordinates such as ({x:.6g}, {y:.6g}) are outside "
                                                 "the lon/lat range of the rest of the file -- fix them in the source "
                                                 "data", load(k).where)))
-    return [k for k in kept if k not in heads.stray], skipped
+    gone = set(bad)
+    return [k for k in kept if k not in gone], skipped
+
+
+def _stray(feature: RawFeature) -> tuple[float, float]:
+    """The feature's first corner outside the lon/lat range."""
+    points = _points(feature)
+    return tuple(points[np.argmax(outside_lonlat(points))].tolist())
 
 
 def _far_apart(heads: Heads, kept: list[int], lonlat: bool, load: Callable[[int], RawFeature]
@@ -220,7 +230,7 @@ def assembled(heads: Heads, load: Callable[[int], RawFeature], skipped: Sequence
         out_skipped += stray
     kept, far = _far_apart(heads, kept, lonlat, load)
     out_skipped += far
-    frame = make_frame(crs, _frame_points(heads, kept), options.origin, str(path), options.crs_check)
+    frame = make_frame(crs, _frame_points(heads, kept, load), options.origin, str(path), options.crs_check)
     ordered: list[Skipped] = []
 
     def footprints() -> Iterator[Footprint]:
@@ -236,17 +246,13 @@ def assembled(heads: Heads, load: Callable[[int], RawFeature], skipped: Sequence
     return FootprintStream(footprints(), ordered, out_warnings, frame.georef)
 
 
-def _frame_points(heads: Heads, kept: Sequence[int]) -> np.ndarray:
-    """Points standing for the ``kept`` features' corners in :func:`make_frame`: per feature its first corner
-    outside the lon/lat range (if any) and its bounds' two corners -- the same bounds, and the same first corner
+def _frame_points(heads: Heads, kept: Sequence[int], load: Callable[[int], RawFeature]) -> np.ndarray:
+    """Points standing for the ``kept`` features' corners in :func:`make_frame`: the first corner outside the
+    lon/lat range (if any) and each feature's bounds' two corners -- the same bounds, and the same first corner
     outside the range, as all of their corners."""
-    points: list[tuple[float, float]] = []
-    for k in kept:
-        if k in heads.stray:
-            points.append(heads.stray[k])
-        x0, y0, x1, y1 = heads.bounds(k)
-        points += [(x0, y0), (x1, y1)]
-    return np.array(points, dtype=float).reshape(-1, 2)
+    first = next((k for k in kept if heads.outside(k)), None)
+    corners = np.frombuffer(heads.corners, dtype=float).reshape(-1, 6)[np.asarray(kept, dtype=np.intp), 2:]
+    return np.concatenate([np.zeros((0, 2)) if first is None else [_stray(load(first))], corners.reshape(-1, 2)])
 
 
 def _footprint(feature: RawFeature, parts: tuple[Part, ...], options: ImportOptions, out_warnings: list[str],

@@ -165,6 +165,7 @@ def stream_geojson(path: Path, options: ImportOptions, warnings: tuple[str, ...]
     not decode): :func:`import_geojson` and the other readers take it whole."""
     scratch = tempfile.TemporaryFile()  # (no name: gone when closed, or when the process ends)
     heads, places, skipped = Heads(), array("q"), []
+    end = [0]  # (the scratch file's size)
 
     def keep(index: int, element: Any, line: int) -> None:
         feature = read_feature(index, element, line, path, options)
@@ -172,8 +173,9 @@ def stream_geojson(path: Path, options: ImportOptions, warnings: tuple[str, ...]
             skipped.append((feature.index, feature.skipped))
             return
         data = pickle.dumps(feature, protocol=pickle.HIGHEST_PROTOCOL)
-        places.extend((scratch.seek(0, 2), len(data)))
+        places.extend((end[0], len(data)))
         scratch.write(data)
+        end[0] += len(data)
         heads.add(feature)
 
     doc = stream_object(path, "features", keep, "FeatureCollection")
