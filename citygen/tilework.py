@@ -2,10 +2,11 @@
 task.
 
 The planning child plans every building's mass (:class:`~citygen.mass.MassPlan`: outline, heights, roof -- a few
-objects each; tiling, the ground and the neighbour cover's neighbours need no more) and packs each tile's work,
-pickled as it is sent to a task anyway: a :class:`TileWork` packs one tile's buildings and the plans of the
-buildings of other tiles that may stand against them, ~0.45 kB a building where the objects took ~6 kB. The packed
-tiles go to a spill file (:class:`Spill`) as they are made: the main process holds only where each tile's bytes are
+objects each; tiling, the ground and the neighbour cover's neighbours need no more) as the importer hands the
+footprints over, puts each building aside in a temporary file (:class:`Strips`, keeping ~0.1 kB of it) and, once
+all are planned, packs each tile's work a strip of tile columns at a time, pickled as it is sent to a task anyway:
+a :class:`TileWork` packs one tile's buildings and the plans of the buildings of other tiles that may stand
+against them, ~0.8 kB a building where the objects took ~6 kB. The packed tiles go to a spill file (:class:`Spill`) as they are made: the main process holds only where each tile's bytes are
 (a :class:`Spilled`, read back when the tile is built), so its memory does not grow with the city. Its
 :meth:`~TileWork.items` -- the masses with their faces and neighbour covers -- are made where the tile is built, one
 tile at a time, and are the same as the whole city's would be. A building whose mass or cover cannot be made is
