@@ -331,7 +331,8 @@ def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any], spill: Spill)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     return _Planned(works, ground, imported.georef.to_dict() if imported.georef else {},
                     [*imported.skipped, *report.skipped], [*imported.warnings, *report.warnings],
-                    {"import": clock.wall, "masses": wall - clock.wall}, {"import": clock.cpu, "masses": cpu - clock.cpu})
+                    {"import": clock.wall, "masses": wall - clock.wall},
+                    {"import": clock.cpu, "masses": cpu - clock.cpu})
 
 
 class _Clock:
@@ -355,11 +356,10 @@ class _Clock:
 
 
 def _plan_masses(footprints: Iterable[Footprint], scene: Scene, roofs: dict[str, Any], report: Report,
-                 spill: Spill | None = None, columns: int = 1
-                 ) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
+                 spill: Spill | None = None) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
     """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
-    is skipped), its prim name given, and all of them packed in tiles, ``columns`` tile columns at a time (their
-    bytes put in ``spill``, given one); and the ground quad when the scene asks for one. Only ~0.1 kB a building
+    is skipped), its prim name given, and all of them packed in tiles a tile column at a time (their bytes put in
+    ``spill``, given one); and the ground quad when the scene asks for one. Only ~0.1 kB a building
     stays in memory (:class:`~citygen.tilework.Strips`)."""
     strips = Strips()
     kinds = AttributeKinds()
@@ -384,7 +384,7 @@ def _plan_masses(footprints: Iterable[Footprint], scene: Scene, roofs: dict[str,
             base = min(base, plan.base)
         report.warnings += notes + kinds.warnings(scene)
         ground = _ground(strips.bounds, base) if scene.output.ground and len(strips) else None
-        return list(strips.works(spill, columns)), ground
+        return list(strips.works(spill)), ground
     finally:
         strips.close()
 

@@ -6,7 +6,8 @@ objects each; tiling, the ground and the neighbour cover's neighbours need no mo
 footprints over, puts each building aside in a temporary file (:class:`Strips`, keeping ~0.1 kB of it) and, once
 all are planned, packs each tile's work a strip of tile columns at a time, pickled as it is sent to a task anyway:
 a :class:`TileWork` packs one tile's buildings and the plans of the buildings of other tiles that may stand
-against them, ~0.8 kB a building where the objects took ~6 kB. The packed tiles go to a spill file (:class:`Spill`) as they are made: the main process holds only where each tile's bytes are
+against them, ~0.8 kB a building where the objects took ~6 kB. The packed tiles go to a spill file
+(:class:`Spill`) as they are made: the main process holds only where each tile's bytes are
 (a :class:`Spilled`, read back when the tile is built), so its memory does not grow with the city. Its
 :meth:`~TileWork.items` -- the masses with their faces and neighbour covers -- are made where the tile is built, one
 tile at a time, and are the same as the whole city's would be. A building whose mass or cover cannot be made is
@@ -87,7 +88,8 @@ class TileWork:
     @classmethod
     def pack(cls, tile: tuple[int, int], buildings: Sequence[tuple[Footprint, MassPlan, str]],
              around: Sequence[MassPlan] = ()) -> TileWork:
-        return cls.of_pickles(tile, [(_pickled((footprint, name)), _pickled(plan)) for footprint, plan, name in buildings],
+        return cls.of_pickles(tile, [(_pickled((footprint, name)), _pickled(plan))
+                                     for footprint, plan, name in buildings],
                               [_pickled(plan) for plan in around],
                               sum(plan.roof.height is not None for _, plan, _ in buildings))
 
@@ -203,7 +205,7 @@ class Strips:
     dropped. The tiles are :func:`tile_works`' for the whole city, byte for byte (tests/core/test_tilework.py)."""
 
     def __init__(self) -> None:
-        self.scratch = tempfile.TemporaryFile()  # (no name: gone when closed, or when the process ends)
+        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
         self.end = 0
         self.tiles = array("q")  # (column, row) a building
         self.bounds = array("d")  # (x0, y0, x1, y1) of its outline

@@ -163,7 +163,7 @@ def stream_geojson(path: Path, options: ImportOptions, warnings: tuple[str, ...]
     its :class:`~citygen_footprints.assemble.Heads` kept; then, once the ids and the frame are fixed, the features
     taken back from the file as the footprints are used. ``None`` when the file is not a FeatureCollection (or does
     not decode): :func:`import_geojson` and the other readers take it whole."""
-    scratch = tempfile.TemporaryFile()  # (no name: gone when closed, or when the process ends)
+    scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
     heads, places, skipped = Heads(), array("q"), []
     end = [0]  # (the scratch file's size)
 

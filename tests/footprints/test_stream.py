@@ -5,10 +5,10 @@ from __future__ import annotations
 import json
 
 import pytest
-
-from citygen.errors import FootprintError
 from citygen_footprints import jsonload
 from citygen_footprints.plugin import read_footprints, stream_footprints
+
+from citygen.errors import FootprintError
 
 from .conftest import BAD, DELFT, HELSINKI, write_json
 
@@ -37,7 +37,8 @@ def _odd_lonlat(tmp_path):
     """A lon/lat file with a duplicate id, a stray coordinate, a building 2,000 km away and a bad geometry."""
     features = [_feature("a", _lonlat(24.95, 60.17), height=12), _feature("a", _lonlat(24.951, 60.17)),
                 _feature("stray", [[24.95, 60.17], [1e9, 60.17], [24.9502, 60.1702], [24.95, 60.17]]),
-                _feature("far", _lonlat(-10.0, 40.0)), _feature("c", _lonlat(24.952, 60.171), **{"building:levels": "x"}),
+                _feature("far", _lonlat(-10.0, 40.0)),
+                _feature("c", _lonlat(24.952, 60.171), **{"building:levels": "x"}),
                 {"type": "Feature", "properties": {"id": "line"}, "geometry": {"type": "LineString",
                                                                               "coordinates": [[0, 0], [1, 1]]}},
                 _feature("d", _lonlat(24.953, 60.171))]
