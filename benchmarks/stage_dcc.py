@@ -56,7 +56,7 @@ def records(scene):
                        for m in masses]), key=lambda w: (w[4], w[3]))
     out = [o.record for o in _run(work, scene, scene.seed, 2, registry, None, None, load_rulesets(scene, registry))
            if o.record]
-    return out, _ground(masses)
+    return out, _ground([v for m in masses for v in m.outline.bounds], min(m.base for m in masses))
 
 
 def write(scene, recs, ground, path: Path, **options) -> tuple[float, int]:

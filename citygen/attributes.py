@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from citygen.footprints import Footprint
-from citygen.mass import Mass
+from citygen.mass import Mass, MassPlan
 from citygen.rng import derive_rng
 from citygen.scene import Scene
 from citygen.usd.materials import WALL_PALETTE, colour_material
@@ -23,31 +23,39 @@ def assign_attributes(footprint: Footprint, mass: Mass) -> dict[str, Any]:
     return {**footprint.attributes, "levels": footprint.levels, "height": footprint.height, "area": mass.outline.area}
 
 
-def condition_warnings(scene: Scene, footprints: Sequence[Footprint], masses: Sequence[Mass]) -> list[str]:
-    """What is wrong with the scene's ``when`` tests against these footprints, as warnings: an attribute no
-    footprint has (a misspelling, with the nearest names), and text compared with an attribute that is a number
-    on every footprint that has it (never equal)."""
-    if not footprints:
-        return []
-    seen: dict[str, list[Any]] = {}
-    for footprint, mass in zip(footprints, masses):
+class AttributeKinds:
+    """The attributes the city's footprints carry, seen one footprint at a time (:meth:`add`), and per attribute
+    whether it is a number on every footprint that has it: what :meth:`warnings` checks the scene's ``when`` tests
+    against, without holding the footprints."""
+
+    def __init__(self) -> None:
+        self.numeric: dict[str, bool] = {}  # (attribute -> a number on every footprint so far)
+
+    def add(self, footprint: Footprint, mass: Mass | MassPlan) -> None:
         for key, value in assign_attributes(footprint, mass).items():
             if value is not None:
-                seen.setdefault(key, []).append(value)
-    found = []
-    for number, assignment in enumerate(scene.assignments, 1):
-        where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
-        for condition in assignment.conditions:
-            values = seen.get(condition.key)
-            if values is None:
-                near = difflib.get_close_matches(condition.key, list(seen), n=3)
-                found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
-                             + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
-            elif condition.op == "in" and all(_is_number(v) for v in values) and not any(
-                    _is_number(v) or _numeric_text(v) for v in condition.values):
-                found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
-                             f"{condition.key}, a number on every footprint: it never matches")
-    return found
+                self.numeric[key] = self.numeric.get(key, True) and _is_number(value)
+
+    def warnings(self, scene: Scene) -> list[str]:
+        """What is wrong with the scene's ``when`` tests against the footprints seen: an attribute none has (a
+        misspelling, with the nearest names), and text compared with an attribute that is a number on every
+        footprint that has it (never equal)."""
+        if not self.numeric:
+            return []
+        found = []
+        for number, assignment in enumerate(scene.assignments, 1):
+            where = f"{scene.path.name}:{assignment.line}: [[assign]] #{number}"
+            for condition in assignment.conditions:
+                numeric = self.numeric.get(condition.key)
+                if numeric is None:
+                    near = difflib.get_close_matches(condition.key, list(self.numeric), n=3)
+                    found.append(f"{where}: no footprint has attribute {condition.key!r}, so the rule matches none"
+                                 + (f" (did you mean {', '.join(map(repr, near))}?)" if near else ""))
+                elif condition.op == "in" and numeric and not any(
+                        _is_number(v) or _numeric_text(v) for v in condition.values):
+                    found.append(f"{where}: when {condition.key} = {list(condition.values)!r} compares text with "
+                                 f"{condition.key}, a number on every footprint: it never matches")
+        return found
 
 
 def _is_number(value: Any) -> bool:

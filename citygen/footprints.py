@@ -1,7 +1,7 @@
 """Footprints: building outlines in a local metric frame, as importers hand them to the pipeline."""
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -69,3 +69,26 @@ class ImportResult:
     skipped: tuple[Skipped, ...] = ()
     warnings: tuple[str, ...] = ()
     georef: GeoReference | None = None
+
+
+@dataclass(frozen=True)
+class FootprintStream:
+    """What an importer reads, handed over footprint by footprint: ``footprints`` is iterated once, in the order an
+    :class:`ImportResult` would hold them; the features it skips and the warnings it meets are appended to
+    ``skipped`` (in file order once it is used up) and ``warnings`` as it goes. ``georef`` is known from the start
+    (an importer that streams reads its file twice: first what fixes the frame and the ids, then the footprints)."""
+
+    footprints: Iterator[Footprint]
+    skipped: list[Skipped]
+    warnings: list[str]
+    georef: GeoReference | None = None
+
+    @classmethod
+    def of(cls, result: ImportResult) -> FootprintStream:
+        """A whole import handed over as a stream (an importer that cannot stream its format)."""
+        return cls(iter(result.footprints), list(result.skipped), list(result.warnings), result.georef)
+
+    def collected(self) -> ImportResult:
+        """The whole import: every footprint in memory at once."""
+        footprints = tuple(self.footprints)
+        return ImportResult(footprints, tuple(self.skipped), tuple(self.warnings), self.georef)

@@ -18,7 +18,7 @@ import sys
 import tempfile
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -26,19 +26,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from citygen.attributes import condition_warnings
+from citygen.attributes import AttributeKinds
 from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
-from citygen.footprints import Footprint, ImportResult, Skipped
+from citygen.footprints import Footprint, FootprintStream, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
 from citygen.lifeline import run_apart, stop_workers, tie_to_parent
-from citygen.mass import MassPlan
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
-from citygen.tilework import Spill, TileWork, Work, failed, tile_of, tile_works, work_items
+from citygen.tilework import Spill, Strips, TileWork, Work, failed, tile_of, work_items
 from citygen.usd.publish import remove_stale_temporaries, temp_prefix
 from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
 
@@ -318,44 +317,76 @@ class _Planned:
 
 
 def _plan(scene: Scene, registry: Registry, roofs: dict[str, Any], spill: Spill) -> _Planned:
-    """The scene's footprints imported, every building's mass planned (:func:`~citygen.roofplan.mass_plan`; one
-    that cannot be is skipped) and its prim name given, and all of them packed in tiles, spilled to ``spill``."""
+    """The scene's footprints imported one by one (:func:`stream_footprints`), every building's mass planned
+    (:func:`~citygen.roofplan.mass_plan`; one that cannot be is skipped) and its prim name given, and all of them
+    packed in tiles a strip at a time (:class:`~citygen.tilework.Strips`), spilled to ``spill``."""
     t0, c0 = time.perf_counter(), time.process_time()
     spill.reset()
-    imported = import_footprints(scene, registry)
-    report = Report(skipped=list(imported.skipped), warnings=list(imported.warnings))
-    if not imported.footprints:
-        report.warnings.append(f"{scene.footprints.name}: no footprint to build; the stage is empty")
-    t1, c1 = time.perf_counter(), time.process_time()
-    works, ground = _plan_masses(imported.footprints, scene, roofs, report, spill)
-    return _Planned(works, ground, imported.georef.to_dict() if imported.georef else {}, report.skipped,
-                    report.warnings, {"import": t1 - t0, "masses": time.perf_counter() - t1},
-                    {"import": c1 - c0, "masses": time.process_time() - c1})
+    imported = stream_footprints(scene, registry)  # (a streaming importer's first pass)
+    clock = _Clock(time.perf_counter() - t0, time.process_time() - c0)
+    report = Report()
+    works, ground = _plan_masses(clock.timed(imported.footprints), scene, roofs, report, spill)
+    if not clock.count:
+        report.warnings.insert(0, f"{scene.footprints.name}: no footprint to build; the stage is empty")
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return _Planned(works, ground, imported.georef.to_dict() if imported.georef else {},
+                    [*imported.skipped, *report.skipped], [*imported.warnings, *report.warnings],
+                    {"import": clock.wall, "masses": wall - clock.wall},
+                    {"import": clock.cpu, "masses": cpu - clock.cpu})
 
 
-def _plan_masses(footprints: Sequence[Footprint], scene: Scene, roofs: dict[str, Any], report: Report,
+class _Clock:
+    """The wall and CPU seconds spent in an iterator's ``next`` (a streamed import's, between plans; added to those
+    it starts with), and how many items it gave."""
+
+    def __init__(self, wall: float = 0.0, cpu: float = 0.0) -> None:
+        self.wall, self.cpu = wall, cpu
+        self.count = 0
+
+    def timed(self, items: Iterator[Any]) -> Iterator[Any]:
+        while True:
+            t, c = time.perf_counter(), time.process_time()
+            item = next(items, _Clock)
+            self.wall += time.perf_counter() - t
+            self.cpu += time.process_time() - c
+            if item is _Clock:
+                return
+            self.count += 1
+            yield item
+
+
+def _plan_masses(footprints: Iterable[Footprint], scene: Scene, roofs: dict[str, Any], report: Report,
                  spill: Spill | None = None) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
     """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
-    is skipped), its prim name given, and all of them packed in tiles (their bytes put in ``spill``, given one);
-    and the ground quad when the scene asks for one."""
-    planned, plans, tiles = [], [], []
-    for fp in footprints:
-        try:
-            plan, notes = mass_plan(fp, scene, roofs)
-            tiles.append(tile_of(plan, scene.output.tile_size))
-            plans.append(plan)
-            planned.append(fp)
-            report.warnings += notes
-        except CitygenError as exc:
-            report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
-        except Exception as exc:  # a bug skips one building, not the city, and says it is one
-            report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
-                                          fp.source))
-    report.warnings += condition_warnings(scene, planned, plans)  # (of a mass, it reads the outline's area)
-    ground = _ground(plans) if scene.output.ground and plans else None
+    is skipped), its prim name given, and all of them packed in tiles a tile column at a time (their bytes put in
+    ``spill``, given one); and the ground quad when the scene asks for one. Only ~0.1 kB a building
+    stays in memory (:class:`~citygen.tilework.Strips`)."""
+    strips = Strips()
+    kinds = AttributeKinds()
+    notes: list[str] = []
     taken: set[str] = set()
-    names = [prim_name(fp.id, taken) for fp in planned]
-    return tile_works(planned, plans, names, tiles, spill), ground
+    base = np.inf
+    try:
+        for fp in footprints:
+            try:
+                plan, found = mass_plan(fp, scene, roofs)
+                tile = tile_of(plan, scene.output.tile_size)
+            except CitygenError as exc:
+                report.skipped.append(Skipped(fp.id, f"cannot build its mass: {exc}", fp.source))
+                continue
+            except Exception as exc:  # a bug skips one building, not the city, and says it is one
+                report.skipped.append(Skipped(fp.id, f"internal error {type(exc).__name__} building its mass: {exc}",
+                                              fp.source))
+                continue
+            notes += found
+            kinds.add(fp, plan)  # (of a mass, it reads the outline's area)
+            strips.add(fp, plan, prim_name(fp.id, taken), tile)
+            base = min(base, plan.base)
+        report.warnings += notes + kinds.warnings(scene)
+        ground = _ground(strips.bounds, base) if scene.output.ground and len(strips) else None
+        return list(strips.works(spill)), ground
+    finally:
+        strips.close()
 
 
 def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
@@ -378,12 +409,22 @@ def check_stage_path(out: Path) -> None:
 
 def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportResult:
     """The scene's footprint file through its importer (``format`` or the file's suffix), the scene's
-    ``[defaults]`` heights and ``[footprints]`` keys as its options: what :func:`generate_city` builds."""
+    ``[defaults]`` heights and ``[footprints]`` keys as its options: the footprints :func:`generate_city` builds."""
+    return _imported(scene, registry, "read")
+
+
+def stream_footprints(scene: Scene, registry: Registry | None = None) -> FootprintStream:
+    """:func:`import_footprints` handed over one by one (the importer's
+    :meth:`~citygen.registry.FootprintImporter.stream`): what :func:`generate_city` plans the city from."""
+    return _imported(scene, registry, "stream")
+
+
+def _imported(scene: Scene, registry: Registry | None, how: str) -> Any:
     options = {"default_height": scene.defaults.default_height, "floor_height": scene.defaults.floor_height,
                **scene.footprint_options}
     importer = (registry or default_registry()).importer_for(scene.footprints, options.pop("format", None))
     try:
-        return importer.read(scene.footprints, options)
+        return getattr(importer, how)(scene.footprints, options)
     except SceneError as exc:  # an option the importer refuses: at its line in the scene's [footprints]
         key = next((k for k in scene.footprint_options if re.search(rf"\b{re.escape(k)}\b", exc.message)), None)
         line = key_line(scene, "footprints", key) if key else None
@@ -393,12 +434,13 @@ def import_footprints(scene: Scene, registry: Registry | None = None) -> ImportR
                          hint=exc.hint) from None
 
 
-def _ground(masses: Sequence[MassPlan]) -> tuple[float, float, float, float, float]:
-    """The ground quad: the masses' bounds plus ``GROUND_MARGIN`` on every side, at the lowest base."""
-    bounds = np.array([m.outline.bounds for m in masses])
-    x0, y0 = bounds[:, :2].min(axis=0) - GROUND_MARGIN
-    x1, y1 = bounds[:, 2:].max(axis=0) + GROUND_MARGIN
-    return float(x0), float(y0), float(x1), float(y1), float(min(m.base for m in masses))
+def _ground(bounds: Sequence[float], base: float) -> tuple[float, float, float, float, float]:
+    """The ground quad: the masses' ``bounds`` (``x0, y0, x1, y1`` a mass, flat) plus ``GROUND_MARGIN`` on every
+    side, at the lowest ``base``."""
+    box = np.asarray(bounds, dtype=float).reshape(-1, 4)
+    x0, y0 = box[:, :2].min(axis=0) - GROUND_MARGIN
+    x1, y1 = box[:, 2:].max(axis=0) + GROUND_MARGIN
+    return float(x0), float(y0), float(x1), float(y1), float(base)
 
 
 def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,

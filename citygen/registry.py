@@ -23,7 +23,7 @@ from citygen.roof import inscribed_radius
 if TYPE_CHECKING:
     from shapely.geometry import MultiPolygon, Polygon
 
-    from citygen.footprints import ImportResult
+    from citygen.footprints import FootprintStream, ImportResult
     from citygen.geometry.building import MeshData
     from citygen.layout import FacadeLayout
     from citygen.request import FacadeRequest
@@ -78,6 +78,13 @@ class FootprintImporter(ABC):
     @abstractmethod
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
         """Footprints in a local metric frame plus per-feature problems; never raises for one bad feature."""
+
+    def stream(self, path: Path, options: dict[str, Any]) -> FootprintStream:
+        """:meth:`read`'s footprints handed over one by one (:class:`~citygen.footprints.FootprintStream`): what the
+        pipeline plans a city from. An importer that can read its format without holding every footprint at once
+        overrides it; by default the whole :meth:`read` is handed over."""
+        from citygen.footprints import FootprintStream
+        return FootprintStream.of(self.read(path, options))
 
 
 class RoofBuilder(ABC):

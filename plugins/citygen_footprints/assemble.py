@@ -6,13 +6,14 @@ height rules are the same for every format.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from array import array
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from citygen.footprints import Footprint, ImportResult, Skipped
+from citygen.footprints import Footprint, FootprintStream, ImportResult, Skipped
 from pyproj import CRS
 
 from citygen_footprints.frame import is_geographic, make_frame, outside_lonlat
@@ -47,24 +48,60 @@ class RawFeature:
     base: float = 0.0
 
 
-def unique_ids(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[str]]:
-    """Suffix repeated ids in file order (``way/1``, ``way/1#2``, ...) so every footprint id is unique."""
-    taken = {f.id for f in features}
+class Heads:
+    """What fixing the frame and the ids needs of every feature, ~0.1 kB each (the feature itself lies elsewhere):
+    its index, id, first corner and bounds."""
+
+    def __init__(self) -> None:
+        self.index = array("q")
+        self.ids: list[str] = []
+        self.corners = array("d")  # (first x, first y, min x, min y, max x, max y) a feature
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def add(self, feature: RawFeature) -> None:
+        points = _points(feature)
+        self.index.append(feature.index)
+        self.ids.append(feature.id)
+        self.corners.extend([*points[0].tolist(), *points.min(axis=0).tolist(), *points.max(axis=0).tolist()])
+
+    def outside(self, k: int) -> bool:
+        """Whether a corner of feature ``k`` is outside the lon/lat range (its bounds are)."""
+        x0, y0, x1, y1 = self.bounds(k)
+        return x0 < -180 or x1 > 180 or y0 < -90 or y1 > 90
+
+    def first(self, k: int) -> tuple[float, float]:
+        return self.corners[6 * k], self.corners[6 * k + 1]
+
+    def bounds(self, k: int) -> tuple[float, float, float, float]:
+        return tuple(self.corners[6 * k + 2:6 * k + 6])
+
+
+def _points(feature: RawFeature) -> np.ndarray:
+    """Every corner of the feature's rings, ``(n, 2)``, in ring order."""
+    rings = [np.asarray(r, dtype=float).reshape(-1, 2) for p in feature.parts for r in p]
+    return rings[0] if len(rings) == 1 else np.concatenate(rings)
+
+
+def unique_ids(ids: list[str], where: Callable[[int], str]) -> list[str]:
+    """Suffix repeated ids in file order (``way/1``, ``way/1#2``, ...) so every footprint id is unique (``ids``
+    renamed in place; ``where(k)``: where feature ``k`` is); the warnings."""
+    taken = set(ids)
     seen: set[str] = set()
-    out, warnings = [], []
-    for f in features:
-        if f.id in seen:
+    warnings = []
+    for k, fid in enumerate(ids):
+        if fid in seen:
             n = 2
-            while f"{f.id}#{n}" in taken:
+            while f"{fid}#{n}" in taken:
                 n += 1
-            new = f"{f.id}#{n}"
+            new = f"{fid}#{n}"
             taken.add(new)
-            warnings.append(f"{f.id} ({f.where}): duplicate id, renamed to {new} -- make ids unique in the source "
+            warnings.append(f"{fid} ({where(k)}): duplicate id, renamed to {new} -- make ids unique in the source "
                             "or set id_property to a unique property")
-            f = replace(f, id=new)
-        seen.add(f.id)
-        out.append(f)
-    return out, warnings
+            ids[k] = fid = new
+        seen.add(fid)
+    return warnings
 
 
 def _project(features: Sequence[RawFeature], frame) -> list[tuple[Part, ...]]:
@@ -77,58 +114,68 @@ def _project(features: Sequence[RawFeature], frame) -> list[tuple[Part, ...]]:
     return [tuple([next(pieces) for _ in part] for part in f.parts) for f in features]
 
 
-def _stray_lonlat(features: Sequence[RawFeature]) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
+def _stray_lonlat(heads: Heads, load: Callable[[int], RawFeature]) -> tuple[list[int], list[tuple[int, Skipped]]]:
     """Features of a lon/lat file with coordinates outside the lon/lat range are skipped when they are fewer than
     half of the features (bad coordinates in a few buildings); when as many or more, all are kept and
-    ``make_frame`` refuses the file (most likely projected metres without a declared CRS)."""
-    bad = [f for f in features if any(outside_lonlat(np.asarray(r, dtype=float).reshape(-1, 2)).any()
-                                      for p in f.parts for r in p)]
-    if not bad or 2 * len(bad) >= len(features):
-        return list(features), []
+    ``make_frame`` refuses the file (most likely projected metres without a declared CRS). Returns the kept
+    features (positions in ``heads``) and the skipped ones."""
+    kept = list(range(len(heads)))
+    bad = [k for k in kept if heads.outside(k)]
+    if not bad or 2 * len(bad) >= len(heads):
+        return kept, []
     skipped = []
-    for f in bad:
-        points = np.concatenate([np.asarray(r, dtype=float).reshape(-1, 2) for p in f.parts for r in p])
-        x, y = points[np.argmax(outside_lonlat(points))]
-        skipped.append((f.index, Skipped(f.id, f"coordinates such as ({x:.6g}, {y:.6g}) are outside the lon/lat "
-                                               "range of the rest of the file -- fix them in the source data",
-                                         f.where)))
-    gone = {id(f) for f in bad}
-    return [f for f in features if id(f) not in gone], skipped
+    for k in bad:
+        x, y = _stray(load(k))
+        skipped.append((heads.index[k], Skipped(heads.ids[k], f"coordinates such as ({x:.6g}, {y:.6g}) are outside "
+                                                "the lon/lat range of the rest of the file -- fix them in the source "
+                                                "data", load(k).where)))
+    gone = set(bad)
+    return [k for k in kept if k not in gone], skipped
 
 
-def _far_apart(features: Sequence[RawFeature], lonlat: bool
-               ) -> tuple[list[RawFeature], list[tuple[int, Skipped]]]:
+def _stray(feature: RawFeature) -> tuple[float, float]:
+    """The feature's first corner outside the lon/lat range."""
+    points = _points(feature)
+    return tuple(points[np.argmax(outside_lonlat(points))].tolist())
+
+
+def _far_apart(heads: Heads, kept: list[int], lonlat: bool, load: Callable[[int], RawFeature]
+               ) -> tuple[list[int], list[tuple[int, Skipped]]]:
     """Features with a coordinate far from the median of the features' first corners -- in a metric file (projected
     or unknown CRS) more than ``MAX_DISTANCE`` units in x or y, in a ``lonlat`` file more than
     ``MAX_SPREAD_LONLAT`` metres on the sphere -- are skipped when fewer than half of the features (bad coordinates
-    in a few buildings would otherwise drag the frame's centre away from the rest); else all are kept."""
-    if not features:
+    in a few buildings would otherwise drag the frame's centre away from the rest); else all are kept. A metric
+    file's reach comes from each feature's bounds (the same figure), a lon/lat file's from its corners."""
+    if not kept:
         return [], []
-    rings = [[np.asarray(r, dtype=float).reshape(-1, 2) for p in f.parts for r in p] for f in features]
-    centre = np.median([r[0][0] for r in rings], axis=0)
+    centre = np.median([heads.first(k) for k in kept], axis=0)
     limit = MAX_SPREAD_LONLAT if lonlat else MAX_DISTANCE
     reach, corners = [], []
-    for f in rings:
-        points = np.concatenate(f)
-        distance = _sphere_distance(points, centre) if lonlat else np.abs(points - centre).max(axis=1)
-        far = int(np.argmax(distance))  # (the first NaN, if any)
-        reach.append(float(distance[far]))
-        corners.append(points[far])
-    bad = [k for k, d in enumerate(reach) if not d <= limit]
-    if not bad or 2 * len(bad) >= len(features):
-        return list(features), []
-    skipped = []
-    for k in bad:
+    for k in kept:
         if lonlat:
-            reason = (f"its corner at ({corners[k][0]:.7g}, {corners[k][1]:.7g}) lies {reach[k] / 1e3:,.0f} km from "
+            points = _points(load(k))
+            distance = _sphere_distance(points, centre)
+            far = int(np.argmax(distance))  # (the first NaN, if any)
+            reach.append(float(distance[far]))
+            corners.append(points[far])
+        else:
+            reach.append(float(np.abs(np.asarray(heads.bounds(k)).reshape(2, 2) - centre).max()))
+    bad = [i for i, d in enumerate(reach) if not d <= limit]
+    if not bad or 2 * len(bad) >= len(kept):
+        return kept, []
+    skipped = []
+    for i in bad:
+        k = kept[i]
+        if lonlat:
+            reason = (f"its corner at ({corners[i][0]:.7g}, {corners[i][1]:.7g}) lies {reach[i] / 1e3:,.0f} km from "
                       f"the other buildings (more than {limit / 1e3:,.0f} km) -- fix its coordinates in the source "
                       "data")
         else:
-            reason = (f"its coordinates lie {reach[k]:.3g} units of the file's CRS from the other buildings (more "
+            reason = (f"its coordinates lie {reach[i]:.3g} units of the file's CRS from the other buildings (more "
                       f"than {limit:g}) -- fix them in the source data")
-        skipped.append((features[k].index, Skipped(features[k].id, reason, features[k].where)))
+        skipped.append((heads.index[k], Skipped(heads.ids[k], reason, load(k).where)))
     gone = set(bad)
-    return [f for k, f in enumerate(features) if k not in gone], skipped
+    return [k for i, k in enumerate(kept) if i not in gone], skipped
 
 
 def _sphere_distance(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
@@ -151,6 +198,10 @@ def _out_of_reach(parts: Sequence[Part], base: float, top: float) -> str | None:
     return None
 
 
+#: Features projected and repaired at a time (one batch through the projection, as many footprints held).
+BATCH = 1024
+
+
 def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skipped]], warnings: Sequence[str],
              crs: CRS | None, options: ImportOptions, path: Path) -> ImportResult:
     """Project, repair and measure ``features``; every problem becomes a Skipped or a warning, never an abort.
@@ -158,45 +209,78 @@ def assemble(features: Sequence[RawFeature], skipped: Sequence[tuple[int, Skippe
     ``skipped`` holds (feature index, Skipped) of features the reader already rejected; the result lists all
     skipped features in file order.
     """
-    features, id_warnings = unique_ids(features)
-    out_warnings = list(warnings) + id_warnings
+    heads = Heads()
+    for feature in features:
+        heads.add(feature)
+    return assembled(heads, features.__getitem__, skipped, warnings, crs, options, path).collected()
+
+
+def assembled(heads: Heads, load: Callable[[int], RawFeature], skipped: Sequence[tuple[int, Skipped]],
+              warnings: Sequence[str], crs: CRS | None, options: ImportOptions, path: Path) -> FootprintStream:
+    """:func:`assemble` as a stream, from the features' ``heads`` (what fixes the ids and the frame) and ``load(k)``,
+    which gives feature ``k`` again (from wherever it was put: only a :data:`BATCH` of them is held at a time)."""
+    ids = list(heads.ids)
+    out_warnings = [*warnings, *unique_ids(ids, lambda k: load(k).where)]
+    heads.ids = ids
     out_skipped = list(skipped)
     lonlat = crs is not None and is_geographic(crs)
+    kept = list(range(len(heads)))
     if lonlat and options.crs_check:
-        features, stray = _stray_lonlat(features)
+        kept, stray = _stray_lonlat(heads, load)
         out_skipped += stray
-    features, far = _far_apart(features, lonlat)
+    kept, far = _far_apart(heads, kept, lonlat, load)
     out_skipped += far
-    points = np.concatenate([r for f in features for p in f.parts for r in p]) if features else np.zeros((0, 2))
-    frame = make_frame(crs, points, options.origin, str(path), options.crs_check)
-    footprints = []
-    for feature, parts in zip(features, _project(features, frame), strict=True):
-        label = f"{feature.id} ({feature.where})"
-        out_warnings.extend(f"{label}: {w}" for w in feature.warnings)
-        try:
-            polygon, notes = build_polygon(parts, options.min_area, options.part_area, options.repair_min_area_ratio)
-        except FeatureProblem as problem:
-            out_skipped.append((feature.index, Skipped(feature.id, str(problem), feature.where)))
-            continue
-        out_warnings.extend(f"{label}: {w}" for w in notes)
-        height = feature.height or infer_height(resolve_height(feature.attributes, label, options.heights),
-                                                feature.attributes, _least_width(polygon), options.heights)
-        out_warnings.extend(height.warnings)
-        base = feature.base + height.base_offset
-        if problem := _out_of_reach(parts, base, base + height.height):
-            out_skipped.append((feature.index, Skipped(feature.id, problem, feature.where)))
-            continue
-        if height.rejected and options.bad_height == "skip":
-            reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
-                      "bad_height = \"fallback\" to use the next height source")
-            out_skipped.append((feature.index, Skipped(feature.id, reason, feature.where)))
-            continue
-        footprints.append(Footprint(id=feature.id, polygon=polygon, height=height.height,
-                                    height_source=height.source, levels=height.levels,
-                                    base=base, attributes=dict(feature.attributes),
-                                    source=feature.source, lift=height.base_offset, height_is_total=height.total))
-    ordered = tuple(s for _, s in sorted(out_skipped, key=lambda item: item[0]))
-    return ImportResult(tuple(footprints), ordered, tuple(out_warnings), frame.georef)
+    frame = make_frame(crs, _frame_points(heads, kept, load), options.origin, str(path), options.crs_check)
+    ordered: list[Skipped] = []
+
+    def footprints() -> Iterator[Footprint]:
+        for start in range(0, len(kept), BATCH):
+            batch = [load(k) for k in kept[start:start + BATCH]]
+            batch = [f if f.id == ids[k] else replace(f, id=ids[k]) for f, k in zip(batch, kept[start:start + BATCH])]
+            for feature, parts in zip(batch, _project(batch, frame), strict=True):
+                footprint = _footprint(feature, parts, options, out_warnings, out_skipped)
+                if footprint is not None:
+                    yield footprint
+        ordered[:] = [s for _, s in sorted(out_skipped, key=lambda item: item[0])]
+
+    return FootprintStream(footprints(), ordered, out_warnings, frame.georef)
+
+
+def _frame_points(heads: Heads, kept: Sequence[int], load: Callable[[int], RawFeature]) -> np.ndarray:
+    """Points standing for the ``kept`` features' corners in :func:`make_frame`: the first corner outside the
+    lon/lat range (if any) and each feature's bounds' two corners -- the same bounds, and the same first corner
+    outside the range, as all of their corners."""
+    first = next((k for k in kept if heads.outside(k)), None)
+    corners = np.frombuffer(heads.corners, dtype=float).reshape(-1, 6)[np.asarray(kept, dtype=np.intp), 2:]
+    return np.concatenate([np.zeros((0, 2)) if first is None else [_stray(load(first))], corners.reshape(-1, 2)])
+
+
+def _footprint(feature: RawFeature, parts: tuple[Part, ...], options: ImportOptions, out_warnings: list[str],
+               out_skipped: list[tuple[int, Skipped]]) -> Footprint | None:
+    """One feature's footprint in the local frame (``parts`` projected), its warnings and skip put in the lists."""
+    label = f"{feature.id} ({feature.where})"
+    out_warnings.extend(f"{label}: {w}" for w in feature.warnings)
+    try:
+        polygon, notes = build_polygon(parts, options.min_area, options.part_area, options.repair_min_area_ratio)
+    except FeatureProblem as problem:
+        out_skipped.append((feature.index, Skipped(feature.id, str(problem), feature.where)))
+        return None
+    out_warnings.extend(f"{label}: {w}" for w in notes)
+    height = feature.height or infer_height(resolve_height(feature.attributes, label, options.heights),
+                                            feature.attributes, _least_width(polygon), options.heights)
+    out_warnings.extend(height.warnings)
+    base = feature.base + height.base_offset
+    if problem := _out_of_reach(parts, base, base + height.height):
+        out_skipped.append((feature.index, Skipped(feature.id, problem, feature.where)))
+        return None
+    if height.rejected and options.bad_height == "skip":
+        reason = (f"unusable height data ({', '.join(height.rejected)}) -- fix the tags, or set "
+                  "bad_height = \"fallback\" to use the next height source")
+        out_skipped.append((feature.index, Skipped(feature.id, reason, feature.where)))
+        return None
+    return Footprint(id=feature.id, polygon=polygon, height=height.height, height_source=height.source,
+                     levels=height.levels, base=base, attributes=dict(feature.attributes), source=feature.source,
+                     lift=height.base_offset, height_is_total=height.total)
 
 
 def _least_width(polygon) -> float:

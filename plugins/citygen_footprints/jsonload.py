@@ -118,3 +118,111 @@ def load_json(path: Path, array_key: str = "features", each: Callable[[int, Any,
     except RecursionError:
         raise FootprintError("JSON nested too deeply", where=str(path)) from None
     return doc, lines
+
+
+#: Characters read from a file at a time by :func:`stream_object` (at least: a value longer than the buffer doubles
+#: the read, so a long value costs a few decode attempts, not one per chunk).
+CHUNK = 1 << 20
+
+
+class _Reader:
+    """A text file read in chunks, decoded value by value: only the chunk being decoded is held."""
+
+    def __init__(self, file) -> None:
+        self.file, self.buf, self.pos, self.eof = file, "", 0, False
+        self.line, self.counted = 1, 0  # (1-based line at buf[counted])
+
+    def more(self) -> bool:
+        """Append the next chunk (dropping what is decoded); False at the end of the file."""
+        chunk = self.file.read(max(CHUNK, len(self.buf) - self.pos))
+        if not chunk:
+            self.eof = True
+            return False
+        self.line += self.buf.count("\n", self.counted, self.pos)
+        self.buf, self.pos, self.counted = self.buf[self.pos:] + chunk, 0, 0
+        return True
+
+    def peek(self) -> str:
+        """The next character that is not whitespace ("" at the end of the file)."""
+        while True:
+            self.pos = _skip(self.buf, self.pos)
+            if self.pos < len(self.buf) or not self.more():
+                return self.buf[self.pos:self.pos + 1]
+
+    def take(self, char: str) -> None:
+        if self.peek() != char:
+            raise json.JSONDecodeError(f"Expecting {char!r}", self.buf, self.pos)
+        self.pos += 1
+
+    def decode(self) -> Any:
+        """The next JSON value (read on until it is whole: a number is whole once something follows it)."""
+        self.peek()
+        while True:
+            try:
+                value, end = _DECODER.raw_decode(self.buf, self.pos)
+                if end < len(self.buf) or self.eof:
+                    self.pos = end
+                    return value
+            except json.JSONDecodeError:
+                if self.eof:
+                    raise
+            self.more()
+
+    def line_here(self) -> int:
+        """The 1-based line of the next character."""
+        self.line += self.buf.count("\n", self.counted, self.pos)
+        self.counted = self.pos
+        return self.line
+
+
+def stream_object(path: Path, array_key: str, each: Callable[[int, Any, int], Any], kind: str
+                  ) -> dict[str, Any] | None:
+    """A top-level object of ``type`` ``kind`` read a chunk at a time: ``each(index, element, line)`` is called for
+    each element of its ``array_key`` array as it is decoded, and the members other than that array are returned
+    (the array as ``[]``) -- the file's text and its elements are never all in memory. ``None`` when the file is not
+    such an object (another type, not an object, the array twice) or cannot be read or decoded: :func:`load_json`
+    reads it whole then, with its errors (file:line:column)."""
+    try:
+        with open(path, encoding="utf-8-sig") as file:
+            return _stream(_Reader(file), array_key, each, kind)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        return None
+
+
+def _stream(reader: _Reader, array_key: str, each: Callable[[int, Any, int], Any], kind: str
+            ) -> dict[str, Any] | None:
+    if reader.peek() != "{":
+        return None
+    reader.pos += 1
+    doc: dict[str, Any] = {}
+    if reader.peek() == "}":
+        return None
+    while True:
+        key = reader.decode()
+        if not isinstance(key, str) or key in doc:
+            return None
+        reader.take(":")
+        if key == array_key and reader.peek() == "[":
+            reader.pos += 1
+            doc[key], index = [], 0
+            if reader.peek() == "]":
+                reader.pos += 1
+            else:
+                while True:
+                    reader.peek()
+                    line = reader.line_here()
+                    each(index, reader.decode(), line)
+                    index += 1
+                    if reader.peek() != ",":
+                        reader.take("]")
+                        break
+                    reader.pos += 1
+        else:
+            doc[key] = reader.decode()
+            if key == "type" and doc[key] != kind:
+                return None
+        if reader.peek() != ",":
+            reader.take("}")
+            break
+        reader.pos += 1
+    return doc if reader.peek() == "" and doc.get("type") == kind and isinstance(doc.get(array_key), list) else None

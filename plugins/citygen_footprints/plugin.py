@@ -7,12 +7,12 @@ from pathlib import Path
 from typing import Any
 
 from citygen.errors import FootprintError
-from citygen.footprints import ImportResult
+from citygen.footprints import FootprintStream, ImportResult
 from citygen.hookspecs import hookimpl
 from citygen.registry import FootprintImporter
 
 from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
-from citygen_footprints.geojson import import_geojson, read_feature
+from citygen_footprints.geojson import import_geojson, read_feature, stream_geojson
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
 from citygen_footprints.osm import SUFFIXES as OSM_SUFFIXES
@@ -40,6 +40,18 @@ def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
                               "(an Overpass [out:json] result)")
 
 
+def stream_footprints(path: Path, options: Mapping[str, Any]) -> FootprintStream:
+    """:func:`read_footprints` as a stream: a GeoJSON FeatureCollection is read twice and never held whole
+    (:func:`~citygen_footprints.geojson.stream_geojson`); CityJSON and OSM JSON files are read whole."""
+    path = Path(path)
+    if not path.name.lower().endswith(".jsonl"):
+        parsed, warnings = parse_options(options)
+        stream = stream_geojson(path, parsed, warnings)
+        if stream is not None:
+            return stream
+    return FootprintStream.of(read_footprints(path, options))
+
+
 class GeoJSONImporter(FootprintImporter):
     id = "geojson"
     suffixes = (".geojson", ".json")
@@ -47,6 +59,9 @@ class GeoJSONImporter(FootprintImporter):
 
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
         return read_footprints(path, options)
+
+    def stream(self, path: Path, options: dict[str, Any]) -> FootprintStream:
+        return stream_footprints(path, options)
 
 
 class CityJSONImporter(FootprintImporter):

@@ -5,13 +5,14 @@ from __future__ import annotations
 import pickle
 
 import numpy as np
-from shapely.geometry import Polygon
+import pytest
+from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.footprints import Footprint
 from citygen.mass import MassPlan, build_mass, neighbour_cover, neighbours
 from citygen.roofplan import mass_plan, plan_mass
 from citygen.scene import load_scene
-from citygen.tilework import Spill, Spilled, tile_of, tile_works, work_items
+from citygen.tilework import Spill, Spilled, Strips, tile_of, tile_works, work_items
 
 
 def _row(n: int = 9) -> list[Footprint]:
@@ -93,3 +94,61 @@ def test_the_packed_tiles_are_spilled_and_read_back_where_a_tile_is_built(small_
     assert [w.loaded() for w in spilled] == held
     assert spill.path.stat().st_size == sum(len(w.packed) for w in held) > len(pickle.dumps(spilled))
     assert work_items(spilled)[0][3][3] == work_items(held)[0][3][3] == "b3"
+
+
+def _city(seed: int = 3) -> list[Footprint]:
+    """Rows of houses of random widths sharing party walls (across any tile border), some set back, a few long
+    slabs reaching over several tiles, and an L-shaped MultiPolygon."""
+    rng = np.random.default_rng(seed)
+    prints = []
+    for row in range(6):
+        x = -37.0
+        while x < 120.0:
+            width = rng.uniform(4, 14) if rng.random() > 0.1 else rng.uniform(40, 70)
+            y = 13.0 * row - 30.0 + (0.25 if rng.random() < 0.2 else 0.0)
+            prints.append(Footprint(id=f"r{row}x{x:.2f}", polygon=Polygon([(x, y), (x + width, y),
+                                                                            (x + width, y + 11), (x, y + 11)]),
+                                    height=float(rng.uniform(5, 20)), height_source="height", height_is_total=True))
+            x += width + (0.0 if rng.random() < 0.8 else 0.5)
+    prints.append(Footprint(id="ell", polygon=MultiPolygon([Polygon([(130, 0), (150, 0), (150, 8), (130, 8)]),
+                                                           Polygon([(130, 9), (138, 9), (138, 30), (130, 30)])]),
+                            height=9.0, height_source="height", height_is_total=True))
+    return prints
+
+
+@pytest.mark.parametrize("size", [7.0, 20.0, 55.0, 500.0])
+@pytest.mark.parametrize("columns", [1, 2, 3, 1000])
+def test_planning_in_strips_gives_the_tiles_of_the_whole_city(small_scene, tmp_path, size, columns):
+    """Issue 24 (planning in bounded memory): the buildings put aside as planned and packed a strip of tile columns
+    at a time give the whole city's tiles byte for byte -- the same members in the same order, and the same
+    neighbours from other tiles (across the strip's borders too: party walls, slabs over several tiles)."""
+    prints = _city()
+    plans = _plans(small_scene, prints)
+    names = [p.id for p in prints]
+    tiles = [tile_of(plan, size) for plan in plans]
+    whole = tile_works(prints, plans, names, tiles)
+    strips = Strips()
+    for footprint, plan, name, tile in zip(prints, plans, names, tiles):
+        strips.add(footprint, plan, name, tile)
+    spill = Spill(tmp_path / "tiles.spill")
+    spill.reset()
+    assert list(strips.works(columns=columns)) == whole
+    assert [w.loaded() for w in strips.works(spill, columns)] == whole
+    strips.close()
+    crossing = sum(len(w.unpacked()[1]) for w in whole)
+    assert crossing > (0 if size == 500.0 else 10)  # (neighbours across tile borders: what the strips must find)
+
+
+def test_a_city_planned_in_strips_builds_the_items_of_the_whole_city(small_scene):
+    prints = _city(5)
+    plans = _plans(small_scene, prints)
+    names = [p.id for p in prints]
+    tiles = [tile_of(plan, 20.0) for plan in plans]
+    strips = Strips()
+    for footprint, plan, name, tile in zip(prints, plans, names, tiles):
+        strips.add(footprint, plan, name, tile)
+    streamed, whole = work_items(list(strips.works()))[0], work_items(tile_works(prints, plans, names, tiles))[0]
+    strips.close()
+    assert [item[3] for item in streamed] == [item[3] for item in whole]
+    assert all(np.array_equal(a[2], b[2]) and a[1] == b[1] for a, b in zip(streamed, whole))
+    assert len(streamed) == len(prints)

@@ -1,0 +1,112 @@
+"""The GeoJSON importer's stream (issue 24, planning in bounded memory): a FeatureCollection read twice, a chunk of
+text at a time, gives the footprints, skips (with their lines) and warnings of the whole read, in the same order."""
+from __future__ import annotations
+
+import json
+
+import pytest
+from citygen_footprints import jsonload
+from citygen_footprints.plugin import read_footprints, stream_footprints
+
+from citygen.errors import FootprintError
+
+from .conftest import BAD, DELFT, HELSINKI, write_json
+
+
+def _feature(fid, ring, **properties):
+    return {"type": "Feature", "properties": {"id": fid, **properties},
+            "geometry": {"type": "Polygon", "coordinates": [ring]}}
+
+
+def _square(x, y, size=10.0):
+    return [[x, y], [x + size, y], [x + size, y + size], [x, y + size], [x, y]]
+
+
+def _lonlat(x, y):
+    return [[x, y], [x + 2e-4, y], [x + 2e-4, y + 1e-4], [x, y + 1e-4], [x, y]]
+
+
+def _far_projected(tmp_path):
+    """Four buildings in EPSG:3067, one 1e15 units away, the crs member after the features."""
+    features = [_feature(f"b{k}", _square(385_000 + x, 6_672_000)) for k, x in enumerate((0, 20, 1e15, 40))]
+    return {"type": "FeatureCollection", "features": features,
+            "crs": {"type": "name", "properties": {"name": "EPSG:3067"}}}
+
+
+def _odd_lonlat(tmp_path):
+    """A lon/lat file with a duplicate id, a stray coordinate, a building 2,000 km away and a bad geometry."""
+    features = [_feature("a", _lonlat(24.95, 60.17), height=12), _feature("a", _lonlat(24.951, 60.17)),
+                _feature("stray", [[24.95, 60.17], [1e9, 60.17], [24.9502, 60.1702], [24.95, 60.17]]),
+                _feature("far", _lonlat(-10.0, 40.0)),
+                _feature("c", _lonlat(24.952, 60.171), **{"building:levels": "x"}),
+                {"type": "Feature", "properties": {"id": "line"}, "geometry": {"type": "LineString",
+                                                                              "coordinates": [[0, 0], [1, 1]]}},
+                _feature("d", _lonlat(24.953, 60.171))]
+    return {"type": "FeatureCollection", "features": features}
+
+
+@pytest.mark.parametrize("chunk", [64, 4096, jsonload.CHUNK])
+@pytest.mark.parametrize("source", ["helsinki", "bad", "far_projected", "odd_lonlat", "empty"])
+def test_a_streamed_feature_collection_is_the_whole_read(tmp_path, monkeypatch, source, chunk):
+    """The stream's footprints, skipped features (their lines too) and warnings are the whole read's, whatever
+    the chunk of text read at a time (64 characters: every feature crosses a chunk's end)."""
+    monkeypatch.setattr(jsonload, "CHUNK", chunk)
+    if source == "helsinki":
+        path = HELSINKI
+    elif source == "bad":
+        path = BAD
+    else:
+        doc = {"far_projected": _far_projected, "odd_lonlat": _odd_lonlat,
+               "empty": lambda _: {"type": "FeatureCollection", "features": []}}[source](tmp_path)
+        path = tmp_path / "city.geojson"
+        path.write_text(json.dumps(doc, indent=1))  # (a feature over several lines: their lines are reported)
+    whole = read_footprints(path, {})
+    stream = stream_footprints(path, {})
+    assert stream.georef == whole.georef
+    streamed = stream.collected()
+    assert [f.id for f in streamed.footprints] == [f.id for f in whole.footprints]
+    assert streamed == whole
+    if source == "odd_lonlat":
+        assert {s.id for s in whole.skipped} == {"stray", "far", "line"}
+        assert any("duplicate id" in w for w in whole.warnings)
+
+
+def test_a_file_that_is_not_a_feature_collection_is_read_whole(tmp_path):
+    """CityJSON, a single Feature, a bare Polygon: not streamed, the whole read handed over."""
+    feature = write_json(tmp_path / "one.geojson", _feature("x", _lonlat(24.95, 60.17)))
+    polygon = write_json(tmp_path / "bare.geojson", {"type": "Polygon", "coordinates": [_lonlat(24.95, 60.17)]})
+    for path in (DELFT, feature, polygon):
+        if path.exists():
+            assert stream_footprints(path, {}).collected() == read_footprints(path, {})
+
+
+@pytest.mark.parametrize("text", ['{"type": "FeatureCollection", "features": [{"type": "Feature",}]}',
+                                  '{"type": "FeatureCollection", "features": []} trailing',
+                                  '{"type": "FeatureCollection", "features": [1 2]}'])
+def test_a_file_that_does_not_decode_raises_the_whole_reads_error(tmp_path, text):
+    path = tmp_path / "bad.geojson"
+    path.write_text(text)
+    with pytest.raises(FootprintError) as whole:
+        read_footprints(path, {})
+    with pytest.raises(FootprintError) as streamed:
+        stream_footprints(path, {})
+    assert str(streamed.value) == str(whole.value)
+
+
+def test_the_stream_keeps_no_feature_text(tmp_path, monkeypatch):
+    """The first pass decodes a chunk at a time: the reader's buffer holds at most about two chunks or twice the
+    longest feature, never the file."""
+    longest = []
+    grow = jsonload._Reader.more
+
+    def more(reader):
+        found = grow(reader)
+        longest.append(len(reader.buf))
+        return found
+
+    monkeypatch.setattr(jsonload, "CHUNK", 1024)
+    monkeypatch.setattr(jsonload._Reader, "more", more)
+    stream_footprints(HELSINKI, {})
+    features = json.loads(HELSINKI.read_text(encoding="utf-8"))["features"]
+    feature = max(len(json.dumps(f)) for f in features)  # (about: the file's spacing may differ)
+    assert max(longest) <= 2 * (feature + 1024) < HELSINKI.stat().st_size / 20
