@@ -8,7 +8,9 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    lie in the gaps between them. A gap much longer than the others' pitch holds floors whose windows the parser
    missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
-   few. An attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
+   few; where that period is the rows' pitch (or two or three of them) it also checks the rows
+   (:mod:`citygen_photo.lattice`: a strip between floors dropped, a row the intensity bands repeat put back). An
+   attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
    shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
    lowest row at least half a floor tall is. A floor line between two rows sits in the wall band between them,
    the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
