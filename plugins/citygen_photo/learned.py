@@ -13,7 +13,7 @@ from citygen_photo.doors import axis_door, mirror_axis, repeats_floor_above
 from citygen_photo.photo import FLOOR_RANGE, MI_WORK, WORK, PhotoAnalysis, _work, luminance
 from citygen_photo.regular import Box
 from citygen_photo.regular import facade_layout, regular_facade
-from citygen_photo.symmetry import detect_symmetry, irreducible, quantize, validated_period
+from citygen_photo.symmetry import band_similarity, detect_symmetry, irreducible, quantize, validated_period
 
 #: Least facade size (pixels) the parser works on.
 LEAST = 48
@@ -34,10 +34,14 @@ def analyse_learned(image: np.ndarray, source: str = "<photo>", *, width: float 
     h, w = prob.shape[:2]
     f = H / h  # crop pixels per working pixel
     small, g = _work(luminance(image), MI_WORK)
-    vsym = detect_symmetry(quantize(small), int(FLOOR_RANGE[0] * small.shape[0]),
-                           int(FLOOR_RANGE[1] * small.shape[0]))
+    q = quantize(small)
+    vsym = detect_symmetry(q, int(FLOOR_RANGE[0] * small.shape[0]), int(FLOOR_RANGE[1] * small.shape[0]))
     period = validated_period(vsym, irreducible(vsym)) * g / f if vsym.found else None
-    facade = regular_facade(prob, period, _axis_door(image, h))
+    k = f / g  # MI-image pixels per working pixel
+
+    def similar(y0: float, y1: float, shift: float) -> float:
+        return band_similarity(q, round(y0 * k), round(y1 * k), round(shift * k))
+    facade = regular_facade(prob, period, _axis_door(image, h), similar)
     pitch = facade.pitch or period
     if not width and not pitch:
         raise LayoutError("no floors found: no rows of windows and no repetition of floors", where=source,

@@ -8,7 +8,9 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    lie in the gaps between them. A gap much longer than the others' pitch holds floors whose windows the parser
    missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
-   few. An attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
+   few; where that period is the rows' pitch (or two or three of them) it also checks the rows
+   (:mod:`citygen_photo.lattice`: a strip between floors dropped, a row the intensity bands repeat put back). An
+   attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
    shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
    lowest row at least half a floor tall is. A floor line between two rows sits in the wall band between them,
    the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
@@ -35,6 +37,7 @@ from scipy.ndimage import gaussian_filter1d, uniform_filter
 
 from citygen.layout import FacadeLayout, Region
 from citygen_photo.labels import CMP_LABELS
+from citygen_photo.lattice import Similarity, lattice_rows
 
 WINDOW, DOOR, SHOP, BLIND, BALCONY = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind", "balcony"))
 #: A row or column belongs to a run of windows where its profile exceeds this share of the profile's high value.
@@ -153,11 +156,13 @@ def _with_missing_rows(rows: list[Span], pitch: float) -> list[Span]:
 
 
 def regular_facade(prob: np.ndarray, period: float | None = None,
-                   door: Callable[[float], Box | None] | None = None) -> RegularFacade:
+                   door: Callable[[float], Box | None] | None = None,
+                   similar: Similarity | None = None) -> RegularFacade:
     """The structure of a facade from its label probabilities ``prob`` (h, w, 12); ``period``: the floor period
     (working pixels) by mutual information, used where the rows of windows alone cannot tell the pitch; ``door``:
     the entrance door of a ground floor starting at a given line (working pixels), found by other means, taken
-    before the door probability's."""
+    before the door probability's; ``similar``: the MI of two intensity bands of the photo, with which the rows are
+    checked against the floor period's lattice (:func:`citygen_photo.lattice.lattice_rows`)."""
     h, w, _ = prob.shape
     window = prob[..., WINDOW] + prob[..., BLIND]  # (a window behind closed blinds is a window of the layout)
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
@@ -165,7 +170,8 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     if shops is not None:
         rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
     pitch = _pitch(rows, period)
-    rows = _with_attic(window, synchronised(_with_missing_rows(rows, pitch)), pitch)
+    rows = synchronised(_with_missing_rows(rows, pitch))
+    rows = _with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch)
     openings = gaussian_filter1d((window + prob[..., BALCONY] + prob[..., DOOR]).mean(axis=1), 1.0)
     lines = [0.0, *(_wall_line(openings, upper, lower) for upper, lower in zip(rows, rows[1:]))]
     ground_top = None

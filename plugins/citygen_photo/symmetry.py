@@ -83,6 +83,16 @@ def symmetry_scores(q: np.ndarray, heights: np.ndarray, bins: int = BINS) -> np.
     return scores
 
 
+def band_similarity(q: np.ndarray, y0: int, y1: int, shift: int, bins: int = BINS) -> float:
+    """Eq. 1 between the quantised bands of rows ``[y0, y1)`` and ``[y0 + shift, y1 + shift)`` of ``q``; NaN when
+    either band is empty or leaves the image."""
+    rows = q.shape[0]
+    if y1 <= y0 or min(y0, y0 + shift) < 0 or max(y1, y1 + shift) > rows:
+        return float("nan")
+    codes = q[y0:y1] * bins + q[y0 + shift:y1 + shift]
+    return float(mutual_information(np.bincount(codes.ravel(), minlength=bins * bins).astype(float), bins))
+
+
 def detect_symmetry(q: np.ndarray, lo: int, hi: int, bins: int = BINS) -> Symmetry:
     """Best period per line (§2.2) and the period of the repetition (our simplification of §2.3)."""
     rows = q.shape[0]

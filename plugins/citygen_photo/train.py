@@ -84,11 +84,13 @@ def fit(x: np.ndarray, y: np.ndarray, hidden: tuple[int, ...], seed: int) -> Sta
 
 
 def train(photos: list[tuple[np.ndarray, np.ndarray]], samples: int, stages: int, hidden: tuple[int, ...],
-          seed: int) -> FacadeParser:
+          seed: int, draw: np.ndarray | None = None) -> FacadeParser:
     """The parser's ``stages`` perceptrons fitted in turn on ``samples`` pixels drawn per photo (the same pixels
-    for every stage), and the prior that undoes the drawing's label weights."""
+    for every stage), and the prior that undoes the drawing's label weights; ``draw``: each photo's share of all
+    the pixels drawn instead (sums to 1)."""
     rng = np.random.default_rng(seed)
-    picks = [sample(lab, samples, rng) for _, lab in photos]
+    per_photo = [samples] * len(photos) if draw is None else np.round(draw * samples * len(photos)).astype(int)
+    picks = [sample(lab, max(int(n), 1), rng) for (_, lab), n in zip(photos, per_photo)]
     y = np.concatenate([lab.ravel()[p] for (_, lab), p in zip(photos, picks)]) - 1
     fitted: list[Stage] = []
     previous: list[np.ndarray | None] = [None] * len(photos)
@@ -138,12 +140,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int, default=SAMPLES, help="pixels drawn per photo")
     parser.add_argument("--stages", type=int, default=STAGES, help="auto-context stages")
     parser.add_argument("--hidden", type=int, nargs="+", default=list(HIDDEN), help="hidden layer sizes")
+    parser.add_argument("--per-kind", type=float, metavar="EVEN",
+                        help="pixels per photo in proportion to the U-Net's per-kind draw weight with this EVEN "
+                             "(citygen_photo.train_unet.draw_weights): balcony and blind photos give more")
     add_training_arguments(parser)
     args = parser.parse_args(argv)
     photos = training_photos(args)
     if not photos:
         return 2
-    model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed)
+    draw = None
+    if args.per_kind is not None:
+        from citygen_photo.train_unet import draw_weights
+        draw = draw_weights(photos, args.per_kind, per_kind=True)
+    model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed, draw)
     arrays = {"prior": model.prior}
     for k, stage in enumerate(model.stages, start=1):
         arrays.update(stage.arrays(f"s{k}"))

@@ -43,9 +43,16 @@ GAMMA = 1.25
 _HELD_OUT_KIND = (CMP_LABELS.index("balcony") + 1, CMP_LABELS.index("blind") + 1)
 
 
-def draw_weights(photos: list[tuple[np.ndarray, np.ndarray]], even: float = EVEN) -> np.ndarray:
-    """Each photo's probability of being drawn: its balcony + blind pixel share plus ``even`` times the mean."""
-    share = np.array([np.isin(lab, _HELD_OUT_KIND).mean() for _, lab in photos])
+def draw_weights(photos: list[tuple[np.ndarray, np.ndarray]], even: float = EVEN,
+                 per_kind: bool = False) -> np.ndarray:
+    """Each photo's probability of being drawn: its balcony + blind pixel share plus ``even`` times the mean.
+    ``per_kind``: each kind's share counts over its own mean share (blinds, rarer than balconies in CMP, then come
+    up as often as balconies), plus ``even`` times the mean of that sum."""
+    if per_kind:
+        shares = np.array([[np.mean(lab == kind) for kind in _HELD_OUT_KIND] for _, lab in photos])
+        share = (shares / np.maximum(shares.mean(axis=0), 1e-9)).sum(axis=1)
+    else:
+        share = np.array([np.isin(lab, _HELD_OUT_KIND).mean() for _, lab in photos])
     weight = share + even * share.mean() + 1e-9
     return weight / weight.sum()
 
@@ -88,7 +95,7 @@ def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.nd
 
 def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
           features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
-          power: float = WEIGHT_POWER, even: float = EVEN, seed: int = 7) -> FacadeUNet:
+          power: float = WEIGHT_POWER, even: float = EVEN, per_kind: bool = False, seed: int = 7) -> FacadeUNet:
     """The network fitted on ``photos`` (working image, label map) from ``seed``."""
     import torch
     from torch import nn
@@ -106,7 +113,7 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
     loss_fn = nn.CrossEntropyLoss(weight=torch.tensor(weight, dtype=torch.float32))
     optimiser = torch.optim.Adam(net.parameters(), lr=2e-3, weight_decay=1e-5)
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
-    draw = draw_weights(photos, even)
+    draw = draw_weights(photos, even, per_kind)
     column = (float(mean[COLUMN]), float(std[COLUMN])) if features else (0.0, 1.0)
     t0, running = time.process_time(), 0.0
     for step in range(steps):
@@ -178,13 +185,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--power", type=float, default=WEIGHT_POWER, help="label weight = share ** -power")
     parser.add_argument("--even", type=float, default=EVEN,
                         help="photo draw weight = balcony + blind share + EVEN x the mean share")
+    parser.add_argument("--per-kind", action="store_true",
+                        help="draw weight from the balcony and the blind share each over its own mean")
     add_training_arguments(parser)
     args = parser.parse_args(argv)
     photos = training_photos(args)
     if not photos:
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
-                  batch=args.batch, crop=args.crop, power=args.power, even=args.even, seed=args.seed)
+                  batch=args.batch, crop=args.crop, power=args.power, even=args.even, per_kind=args.per_kind,
+                  seed=args.seed)
     return save(model, model.arrays(), args)
 
 

@@ -78,6 +78,20 @@ def test_training_is_reproducible_and_learns_two_labels():
     assert matrix[2, 2] / matrix[2].sum() > 0.8  # the synthetic windows are learned
 
 
+def test_per_photo_draw_shares_set_the_pixels_drawn_from_each_photo():
+    pytest.importorskip("sklearn")
+    from citygen_photo.train import train
+    photos = labelled_photos(3)
+
+    def weights(model):
+        return [w for stage in model.stages for w, _ in stage.layers]
+    even = train(photos, 600, 1, (8,), seed=3)
+    assert all(np.array_equal(a, b) for a, b in zip(weights(even), weights(
+        train(photos, 600, 1, (8,), seed=3, draw=np.full(3, 1 / 3)))))  # equal shares: the plain drawing
+    skewed = train(photos, 600, 1, (8,), seed=3, draw=np.array([0.8, 0.1, 0.1]))
+    assert not all(np.array_equal(a, b) for a, b in zip(weights(even), weights(skewed)))
+
+
 @pytest.mark.skipif(not (CMP / "cmp_b0031.jpg").is_file(), reason="CMP photos (shared data) not available")
 @pytest.mark.parametrize("number, floors", [(28, 4), (31, 4)])
 def test_floors_and_window_pixels_of_held_out_photos(number, floors):

@@ -124,3 +124,15 @@ def test_the_shipped_unet_is_small_and_parses_a_synthetic_facade():
         inside[round(y0 * f) + 1:round(y1 * f) - 1, round(x0 * f) + 1:round(x1 * f) - 1] = True
     window = prob[..., CMP_LABELS.index("window")]
     assert window[inside].mean() > 2 * window[~inside].mean()
+
+
+def test_per_kind_draws_give_the_rarer_kind_the_same_mass_as_the_commoner():
+    photos = labelled_photos(4)
+    balcony, blind = CMP_LABELS.index("balcony") + 1, CMP_LABELS.index("blind") + 1
+    for i, (kind, rows) in enumerate(((balcony, 8), (blind, 2)), start=1):  # balconies 4 times the blinds' share
+        lab = photos[i][1].copy()
+        lab[:rows] = kind
+        photos[i] = (photos[i][0], lab)
+    pooled, per_kind = draw_weights(photos, even=0.0), draw_weights(photos, even=0.0, per_kind=True)
+    assert pooled[1] > 2 * pooled[2]  # pooled shares: the balcony photo dominates
+    assert per_kind[1] == pytest.approx(per_kind[2]) and per_kind[0] == pytest.approx(0, abs=1e-6)
