@@ -73,11 +73,13 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lift
 
 def party_walls(cover: np.ndarray, widths: np.ndarray, height: float) -> np.ndarray:
     """Per face, whether it is a party wall: ``cover`` (per face, or per face and bin, from
-    :func:`citygen.mass.neighbour_cover`) reaches within ``PARTY_RISE`` of ``height`` on all but less than
-    ``MIN_SEEN`` metres of its width."""
+    :func:`citygen.mass.neighbour_cover`) reaches within ``PARTY_RISE`` of ``height`` somewhere, and on all but
+    less than ``MIN_SEEN`` metres of its width (a face narrower than that is one only where a neighbour reaches
+    its top: a lower one leaves it free above)."""
     cover = face_bins(cover)
-    seen = (cover < height - PARTY_RISE).mean(axis=1) * np.asarray(widths, dtype=float)
-    return (cover > 0.0).any(axis=1) & (seen < MIN_SEEN)
+    topped = cover >= height - PARTY_RISE
+    seen = (~topped).mean(axis=1) * np.asarray(widths, dtype=float)
+    return (cover > 0.0).any(axis=1) & topped.any(axis=1) & (seen < MIN_SEEN)
 
 
 def face_bins(cover: np.ndarray) -> np.ndarray:

@@ -3,10 +3,13 @@
     pip install bpy
     python docs/render_city.py out/helsinki.usdc docs/img/helsinki.jpg [--distance 0.35] [--elevation 30]
                                [--azimuth -60] [--samples 12]
+    python docs/render_city.py out/helsinki.usdc street.jpg --eye -60 -330 1.7 --target -118 -371 12 --lens 24
+
 
 Run it in its own interpreter: bpy bundles its own USD, which must not meet usd-core in one process. The camera
 looks at the median of the meshes' bounds from ``distance`` times the city's x extent, ``elevation`` degrees above
-the ground, from ``azimuth`` degrees (counter-clockwise from +x); one sun, a plain sky.
+the ground, from ``azimuth`` degrees (counter-clockwise from +x); or from ``--eye`` towards ``--target`` (the
+stage's metres, z up: a street-level look at a building); one sun, a plain sky.
 """
 from __future__ import annotations
 
@@ -27,6 +30,9 @@ def main() -> None:
     parser.add_argument("--azimuth", type=float, default=-60.0)
     parser.add_argument("--samples", type=int, default=12)
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 720))
+    parser.add_argument("--eye", type=float, nargs=3, metavar=("X", "Y", "Z"))
+    parser.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "Z"))
+    parser.add_argument("--lens", type=float, default=35.0, help="focal length, mm")
     args = parser.parse_args()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     assert bpy.ops.wm.usd_import(filepath=args.stage, mtl_name_collision_mode="REFERENCE_EXISTING") == {"FINISHED"}
@@ -36,9 +42,11 @@ def main() -> None:
     centre = mathutils.Vector((statistics.median(xs), statistics.median(ys), 10.0))
     d, el, az = args.distance * (max(xs) - min(xs)), math.radians(args.elevation), math.radians(args.azimuth)
     camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    camera.data.lens, camera.data.clip_end = 35.0, 20000.0
+    camera.data.lens, camera.data.clip_end = args.lens, 20000.0
     camera.location = centre + d * mathutils.Vector((math.cos(az) * math.cos(el), math.sin(az) * math.cos(el),
                                                      math.sin(el)))
+    if args.eye and args.target:
+        camera.location, centre = mathutils.Vector(args.eye), mathutils.Vector(args.target)
     camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
     sun.data.energy, sun.rotation_euler = 3.5, (math.radians(50), 0.0, math.radians(30))

@@ -154,6 +154,18 @@ def test_party_walls_are_covered_to_the_top_on_all_but_a_sliver():
     assert party_walls(bins, widths[:2], 10.0).tolist() == [True, False]
 
 
+def test_a_narrow_face_above_a_lower_neighbour_is_no_party_wall():
+    """Helsinki Cathedral's drum (way/234870674: 23 faces of 1.95 m, 32.6 m of wall) stands in a part 18 m tall:
+    every face was a party wall (less than MIN_SEEN of width seen, counted across the width alone), so the drum
+    got no facade and its roof took every face for a gable. A face is one only where the neighbour reaches its top."""
+    narrow = np.full(3, 1.95)
+    assert party_walls(np.array([18.0, 0.0, 32.0]), narrow, 32.64).tolist() == [False, False, True]
+    bins = np.zeros((2, 4))
+    bins[0] = 18.0  # a lower neighbour across the whole width
+    bins[1, :2] = 32.64  # half the width walled to the top: the 0.98 m left is too little to dress
+    assert party_walls(bins, narrow[:2], 32.64).tolist() == [False, True]
+
+
 @st.composite
 def terraces(draw):
     """A row of 2-5 attached houses of random widths and depths along a rotated street; returns the house outlines
