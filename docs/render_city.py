@@ -54,7 +54,8 @@ def main() -> None:
         scene.collection.objects.link(obj)
     scene.camera = camera
     scene.world = bpy.data.worlds.new("sky")
-    scene.world.color = (0.6, 0.7, 0.85)
+    sky = scene.world.node_tree.nodes["Background"]  # (a world's plain colour does not light a Cycles render)
+    sky.inputs["Color"].default_value, sky.inputs["Strength"].default_value = (0.6, 0.7, 0.85, 1.0), 1.0
     scene.render.engine, scene.cycles.device, scene.cycles.samples = "CYCLES", "CPU", args.samples
     scene.render.resolution_x, scene.render.resolution_y = args.size
     if args.out.lower().endswith((".jpg", ".jpeg")):
