@@ -6,6 +6,8 @@ height rules are the same for every format.
 """
 from __future__ import annotations
 
+import pickle
+import tempfile
 from array import array
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -76,6 +78,28 @@ class Heads:
 
     def bounds(self, k: int) -> tuple[float, float, float, float]:
         return tuple(self.corners[6 * k + 2:6 * k + 6])
+
+
+class Aside:
+    """Features put aside as a streaming reader reads them: each pickled to an anonymous temporary file, only its
+    :class:`Heads` kept (``heads``); :meth:`load` gives feature ``k`` back once the ids and the frame are fixed."""
+
+    def __init__(self) -> None:
+        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
+        self.places = array("q")  # (offset, size) a feature
+        self.end = 0
+        self.heads = Heads()
+
+    def add(self, feature: RawFeature) -> None:
+        data = pickle.dumps(feature, protocol=pickle.HIGHEST_PROTOCOL)
+        self.places.extend((self.end, len(data)))
+        self.scratch.write(data)
+        self.end += len(data)
+        self.heads.add(feature)
+
+    def load(self, k: int) -> RawFeature:
+        self.scratch.seek(self.places[2 * k])
+        return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
 
 
 def _points(feature: RawFeature) -> np.ndarray:

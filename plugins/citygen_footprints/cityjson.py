@@ -15,14 +15,14 @@ from typing import Any
 import numpy as np
 import shapely
 from citygen.errors import FootprintError
-from citygen.footprints import ImportResult, Skipped
+from citygen.footprints import FootprintStream, ImportResult, Skipped
 from pyproj import CRS
 from shapely.geometry import Polygon
 
-from citygen_footprints.assemble import RawFeature, assemble
+from citygen_footprints.assemble import Aside, RawFeature, assemble, assembled
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.heights import Height, resolve_height
-from citygen_footprints.jsonload import read_lines
+from citygen_footprints.jsonload import iter_lines
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.repair import FeatureProblem
 
@@ -247,23 +247,33 @@ def import_cityjson(doc: Mapping[str, Any], path: Path, options: ImportOptions,
 def import_cityjson_seq(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
     """Footprints from CityJSON Text Sequences (``.city.jsonl``): a CityJSON header line, then one
     CityJSONFeature per line with its own vertices (quantised with the header's transform)."""
-    lines = read_lines(path)
-    if not lines or not isinstance(lines[0][1], Mapping) or lines[0][1].get("type") != "CityJSON":
+    return stream_cityjson_seq(path, options, warnings).collected()
+
+
+def stream_cityjson_seq(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> FootprintStream:
+    """:func:`import_cityjson_seq` as a stream: the file read a line at a time, each line's buildings put
+    :class:`~citygen_footprints.assemble.Aside`, then handed over as footprints once the ids and the frame are fixed
+    (a 3D BAG tile set of any size is never in memory at once)."""
+    lines = iter_lines(path)
+    first = next(lines, None)
+    if first is None or not isinstance(first[1], Mapping) or first[1].get("type") != "CityJSON":
         raise FootprintError("a CityJSONSeq file must start with a CityJSON header line", where=f"{path}:1",
                              hint="the first line holds type, version, transform and metadata")
-    header = lines[0][1]
+    header = first[1]
     notes = list(warnings)
     crs = _crs(header, path, options, notes)
-    raws, skipped, open_bottom, start = [], [], 0, 0
-    for number, feature in lines[1:]:
+    aside, skipped, open_bottom, start = Aside(), [], 0, 0
+    for number, feature in lines:
         if not isinstance(feature, Mapping) or not isinstance(feature.get("CityObjects"), Mapping):
             notes.append(f"{path.name}:{number}: not a CityJSONFeature (no CityObjects); line ignored")
             continue
         vertices = _vertices({"vertices": feature.get("vertices", []), "transform": header.get("transform")},
                              path)
-        more = collect_buildings(feature["CityObjects"], vertices, path, options, start, number)
-        raws += more[0]
-        skipped += more[1]
-        open_bottom += more[2]
+        raws, rejected, opened = collect_buildings(feature["CityObjects"], vertices, path, options, start, number)
+        for raw in raws:
+            aside.add(raw)
+        skipped += rejected
+        open_bottom += opened
         start += len(feature["CityObjects"])
-    return assemble(raws, skipped, notes + _open_bottom_note(path, open_bottom), crs, options, path)
+    return assembled(aside.heads, aside.load, skipped, notes + _open_bottom_note(path, open_bottom), crs, options,
+                     path)

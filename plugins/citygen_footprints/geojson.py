@@ -2,10 +2,7 @@
 from __future__ import annotations
 
 import math
-import pickle
 import re
-import tempfile
-from array import array
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +12,7 @@ from citygen.errors import FootprintError
 from citygen.footprints import FootprintStream, ImportResult, Skipped
 from pyproj import CRS
 
-from citygen_footprints.assemble import Heads, RawFeature, assemble, assembled
+from citygen_footprints.assemble import Aside, RawFeature, assemble, assembled
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.jsonload import stream_object
 from citygen_footprints.options import ImportOptions
@@ -159,33 +156,22 @@ def import_geojson(doc: Any, path: Path, options: ImportOptions, lines: list[int
 
 def stream_geojson(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> FootprintStream | None:
     """A GeoJSON FeatureCollection's footprints as a stream, the file read twice: first feature by feature
-    (:func:`~citygen_footprints.jsonload.stream_object`), each :func:`read_feature` put in a temporary file and only
-    its :class:`~citygen_footprints.assemble.Heads` kept; then, once the ids and the frame are fixed, the features
+    (:func:`~citygen_footprints.jsonload.stream_object`), each :func:`read_feature` put
+    :class:`~citygen_footprints.assemble.Aside`; then, once the ids and the frame are fixed, the features
     taken back from the file as the footprints are used. ``None`` when the file is not a FeatureCollection (or does
     not decode): :func:`import_geojson` and the other readers take it whole."""
-    scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
-    heads, places, skipped = Heads(), array("q"), []
-    end = [0]  # (the scratch file's size)
+    aside, skipped = Aside(), []
 
     def keep(index: int, element: Any, line: int) -> None:
         feature = read_feature(index, element, line, path, options)
         if isinstance(feature, SkippedFeature):
             skipped.append((feature.index, feature.skipped))
-            return
-        data = pickle.dumps(feature, protocol=pickle.HIGHEST_PROTOCOL)
-        places.extend((end[0], len(data)))
-        scratch.write(data)
-        end[0] += len(data)
-        heads.add(feature)
+        else:
+            aside.add(feature)
 
     doc = stream_object(path, "features", keep, "FeatureCollection")
     if doc is None:
-        scratch.close()
+        aside.scratch.close()
         return None
     crs, crs_warnings = choose_crs(doc, options, str(path))
-
-    def load(k: int) -> RawFeature:
-        scratch.seek(places[2 * k])
-        return pickle.loads(scratch.read(places[2 * k + 1]))
-
-    return assembled(heads, load, skipped, [*warnings, *crs_warnings], crs, options, path)
+    return assembled(aside.heads, aside.load, skipped, [*warnings, *crs_warnings], crs, options, path)

@@ -1,8 +1,9 @@
 """Reading a JSON document with clear errors (file:line:column) and the line where each feature starts."""
 from __future__ import annotations
 
+import codecs
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -78,25 +79,53 @@ def _read_text(path: Path) -> str:
     try:
         return path.read_text(encoding="utf-8-sig")
     except OSError as exc:
-        raise FootprintError(f"cannot read footprint file: {exc.strerror or exc}", where=str(path),
-                             hint="check the [footprints] path in the scene") from None
+        raise _unreadable(path, exc) from None
     except UnicodeDecodeError as exc:
         raise FootprintError(f"not UTF-8 text (byte {exc.start})", where=str(path),
                              hint="GeoJSON and CityJSON files are UTF-8 JSON") from None
 
 
-def read_lines(path: Path) -> list[tuple[int, Any]]:
-    """(1-based line number, decoded value) of every non-blank line of a JSON Lines file."""
-    out = []
-    for number, line in enumerate(_read_text(path).splitlines(), start=1):
-        if not line.strip():
-            continue
-        try:
-            out.append((number, json.loads(line)))
-        except json.JSONDecodeError as exc:
-            raise FootprintError(f"not valid JSON: {exc.msg}", where=SourceLocation(str(path), number, exc.colno),
-                                 hint="each line of a JSON Lines file must be one JSON value") from None
-    return out
+def iter_lines(path: Path) -> Iterator[tuple[int, Any]]:
+    """(1-based line number, decoded value) of every non-blank line of a JSON Lines file, read a line at a time
+    (lines end at ``\\n``; a UTF-8 byte order mark at the start is skipped)."""
+    try:
+        file = open(path, "rb")  # noqa: SIM115 (closed below, also when the caller stops early)
+    except OSError as exc:
+        raise _unreadable(path, exc) from None
+    with file:
+        offset = 0
+        for number, raw in enumerate(_lines_of(file, path), start=1):
+            start = 3 if offset == 0 and raw.startswith(codecs.BOM_UTF8) else 0
+            try:
+                line = raw[start:].decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise FootprintError(f"not UTF-8 text (byte {offset + start + exc.start})",
+                                     where=SourceLocation(str(path), number, None),
+                                     hint="GeoJSON and CityJSON files are UTF-8 JSON") from None
+            offset += len(raw)
+            if not line.strip():
+                continue
+            try:
+                value = json.loads(line)
+            except json.JSONDecodeError as exc:
+                raise FootprintError(f"not valid JSON: {exc.msg}", where=SourceLocation(str(path), number, exc.colno),
+                                     hint="each line of a JSON Lines file must be one JSON value") from None
+            except RecursionError:
+                raise FootprintError("JSON nested too deeply", where=SourceLocation(str(path), number, None)) from None
+            yield number, value
+
+
+def _lines_of(file, path: Path) -> Iterator[bytes]:
+    try:
+        yield from file
+    except OSError as exc:
+        raise _unreadable(path, exc) from None
+
+
+def _unreadable(path: Path, exc: OSError) -> FootprintError:
+    return FootprintError(f"cannot read footprint file: {exc.strerror or exc}", where=str(path),
+                          hint="check the [footprints] path in the scene")
+
 
 
 def load_json(path: Path, array_key: str = "features", each: Callable[[int, Any, int], Any] | None = None

@@ -11,7 +11,7 @@ from citygen.footprints import FootprintStream, ImportResult
 from citygen.hookspecs import hookimpl
 from citygen.registry import FootprintImporter
 
-from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq
+from citygen_footprints.cityjson import import_cityjson, import_cityjson_seq, stream_cityjson_seq
 from citygen_footprints.geojson import import_geojson, read_feature, stream_geojson
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
@@ -42,14 +42,14 @@ def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
 
 def stream_footprints(path: Path, options: Mapping[str, Any]) -> FootprintStream:
     """:func:`read_footprints` as a stream: a GeoJSON FeatureCollection is read twice and never held whole
-    (:func:`~citygen_footprints.geojson.stream_geojson`); CityJSON and OSM JSON files are read whole."""
+    (:func:`~citygen_footprints.geojson.stream_geojson`), a CityJSONSeq file a line at a time
+    (:func:`~citygen_footprints.cityjson.stream_cityjson_seq`); CityJSON and OSM JSON files are read whole."""
     path = Path(path)
-    if not path.name.lower().endswith(".jsonl"):
-        parsed, warnings = parse_options(options)
-        stream = stream_geojson(path, parsed, warnings)
-        if stream is not None:
-            return stream
-    return FootprintStream.of(read_footprints(path, options))
+    parsed, warnings = parse_options(options)
+    if path.name.lower().endswith(".jsonl"):
+        return stream_cityjson_seq(path, parsed, warnings)
+    stream = stream_geojson(path, parsed, warnings)
+    return stream if stream is not None else FootprintStream.of(read_footprints(path, options))
 
 
 class GeoJSONImporter(FootprintImporter):
@@ -71,6 +71,9 @@ class CityJSONImporter(FootprintImporter):
 
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
         return read_footprints(path, options)
+
+    def stream(self, path: Path, options: dict[str, Any]) -> FootprintStream:
+        return stream_footprints(path, options)
 
 
 class OSMImporter(FootprintImporter):

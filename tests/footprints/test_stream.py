@@ -110,3 +110,46 @@ def test_the_stream_keeps_no_feature_text(tmp_path, monkeypatch):
     features = json.loads(HELSINKI.read_text(encoding="utf-8"))["features"]
     feature = max(len(json.dumps(f)) for f in features)  # (about: the file's spacing may differ)
     assert max(longest) <= 2 * (feature + 1024) < HELSINKI.stat().st_size / 20
+
+
+def test_a_cityjson_sequence_streams_a_line_at_a_time(tmp_path, monkeypatch):
+    """CityJSONSeq (3D BAG's download format) is read a line at a time, never whole, and gives the buildings of the
+    same CityJSON file."""
+    if not DELFT.exists():
+        pytest.skip("Delft CityJSON fixture not present")
+    from .test_cityjson import _as_sequence
+    path = _as_sequence(json.loads(DELFT.read_text()), tmp_path / "delft.city.jsonl")
+    longest = max(len(line) for line in path.read_text().splitlines())
+    decoded = []
+    loads = json.loads
+    monkeypatch.setattr(jsonload, "_read_text", lambda *_: pytest.fail("the sequence was read whole"))
+    monkeypatch.setattr(jsonload.json, "loads", lambda text, **kw: decoded.append(len(text)) or loads(text, **kw))
+    stream = stream_footprints(path, {})
+    streamed = stream.collected()
+    monkeypatch.undo()
+    assert max(decoded) <= longest + 1 < path.stat().st_size / 20
+    whole = read_footprints(DELFT, {})
+    assert stream.georef == whole.georef
+    assert [(f.id, f.polygon.wkb, f.height, f.base) for f in streamed.footprints] == [
+        (f.id, f.polygon.wkb, f.height, f.base) for f in whole.footprints]
+
+
+def test_a_cityjson_sequence_line_is_cut_only_at_a_newline(tmp_path):
+    """A CityJSONSeq line holding U+2028 in a name (valid JSON, written unescaped) was cut there by
+    ``str.splitlines``: "not valid JSON" for a good file. Lines now end at newlines only; CRLF endings and a byte
+    order mark are read too, and a byte that is not UTF-8 names its line and offset."""
+    header = {"type": "CityJSON", "version": "2.0", "transform": {"scale": [1, 1, 1], "translate": [0, 0, 0]},
+              "CityObjects": {}, "vertices": []}
+    solid = {"type": "Solid", "lod": "1", "boundaries": [[[[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]],
+                                                           [[1, 2, 6, 5]], [[2, 3, 7, 6]], [[3, 0, 4, 7]]]]}
+    box = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [0, 0, 9], [10, 0, 9], [10, 10, 9], [0, 10, 9]]
+    feature = {"type": "CityJSONFeature", "id": "b1", "vertices": box, "CityObjects": {
+        "b1": {"type": "Building", "attributes": {"name": "Hof\u2028van Delft"}, "geometry": [solid]}}}
+    text = json.dumps(header) + "\r\n" + json.dumps(feature, ensure_ascii=False) + "\r\n"
+    path = tmp_path / "odd.city.jsonl"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    read = read_footprints(path, {"crs": "EPSG:28992"})
+    assert [(f.id, f.attributes["name"], f.height) for f in read.footprints] == [("b1", "Hof\u2028van Delft", 9.0)]
+    path.write_bytes(text.encode() + b'{"type": "CityJSONFeature", "id": "\xff"}\n')
+    with pytest.raises(FootprintError, match=r"odd.city.jsonl:3: not UTF-8 text \(byte \d+\)"):
+        read_footprints(path, {})
