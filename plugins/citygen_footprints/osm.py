@@ -13,18 +13,21 @@ Overpass export, a file saved by an editor, concatenated extracts) is read from 
 """
 from __future__ import annotations
 
+import pickle
 import tempfile
+from array import array
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import shapely
 from citygen.errors import FootprintError
-from citygen.footprints import ImportResult, Skipped
+from citygen.footprints import FootprintStream, ImportResult, Skipped
 from shapely.geometry import Polygon
 
-from citygen_footprints.assemble import RawFeature, assemble
+from citygen_footprints.assemble import Aside, RawFeature, assembled
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.osm_json import osm_json_elements
@@ -52,6 +55,45 @@ class _Area:
     @property
     def is_part(self) -> bool:
         return "building" not in self.tags or self.tags["building"] == "no"
+
+
+class _Areas:
+    """Building areas put aside as libosmium hands them over (pickled to an anonymous temporary file), with what
+    ordering them and matching parts to outlines needs: each one's place in the file, id, whether it is a part, and
+    its bounds. :meth:`load` gives area ``k`` back."""
+
+    def __init__(self) -> None:
+        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
+        self.places = array("q")  # (offset, size) an area
+        self.end = 0
+        self.index = array("q")
+        self.ids: list[str] = []
+        self.part = bytearray()
+        self.bounds = array("d")  # (min lon, min lat, max lon, max lat) an area
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def add(self, area: _Area) -> None:
+        data = pickle.dumps(area, protocol=pickle.HIGHEST_PROTOCOL)
+        self.places.extend((self.end, len(data)))
+        self.scratch.write(data)
+        self.end += len(data)
+        self.index.append(area.index)
+        self.ids.append(area.id)
+        self.part.append(area.is_part)
+        corners = [c for p in area.polygons for c in p[0]] or [(0.0, 0.0)]
+        lon, lat = zip(*corners)
+        self.bounds.extend((min(lon), min(lat), max(lon), max(lat)))
+
+    def load(self, k: int) -> _Area:
+        self.scratch.seek(self.places[2 * k])
+        return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
+
+    def ordered(self, leave_out: set[str]) -> list[int]:
+        """The areas in file order, those whose ids are in ``leave_out`` left out."""
+        keep = [k for k, oid in enumerate(self.ids) if oid not in leave_out]
+        return sorted(keep, key=self.index.__getitem__)
 
 
 def _osmium():
@@ -99,28 +141,28 @@ def _objects(osmium, path: Path, areas: bool = True, source: Path | None = None)
         raise _read_error(exc, source or path) from exc
 
 
-def read_areas(path: Path) -> tuple[list[_Area], list[tuple[int, Skipped]], list[str]]:
-    """Building areas in file order, the buildings that could not be assembled (with why), and a note when the
-    file was read from a sorted copy."""
+def read_areas(path: Path) -> tuple[_Areas, list[int], list[tuple[int, Skipped]], list[str]]:
+    """Building areas put aside and their order in the file, the buildings that could not be assembled (with
+    why), and a note when the file was read from a sorted copy."""
     osmium = _osmium()
     deleted = deleted_marks(path)
     if deleted:
         why = f"{len(deleted)} objects marked deleted by an editor (left out)"
     else:
         try:
-            areas, skipped, why = _scan(osmium, path, path)
+            areas, order, skipped, why = _scan(osmium, path, path)
             if why is None:
-                return areas, skipped, []
+                return areas, order, skipped, []
         except FootprintError as err:
             if not _order_error(err):
                 raise
             why = "objects out of order or repeated (the last of each kept)"
-    areas, skipped = _via_copy(osmium, plain(_objects(osmium, path, areas=False), deleted), path)
-    return areas, skipped, [f"{path.name}: {why} -- read from a copy sorted as libosmium needs (nodes, ways, "
-                            "relations, each by id; `osmium sort` makes one ahead)"]
+    areas, order, skipped = _via_copy(osmium, plain(_objects(osmium, path, areas=False), deleted), path)
+    return areas, order, skipped, [f"{path.name}: {why} -- read from a copy sorted as libosmium needs (nodes, "
+                                   "ways, relations, each by id; `osmium sort` makes one ahead)"]
 
 
-def _via_copy(osmium, elements, source: Path) -> tuple[list[_Area], list[tuple[int, Skipped]]]:
+def _via_copy(osmium, elements, source: Path) -> tuple[_Areas, list[int], list[tuple[int, Skipped]]]:
     """``read_areas`` of ``source`` from a sorted copy of its ``elements`` (see ``osm_sorted.sorted_copy``)."""
     with tempfile.TemporaryDirectory(prefix="citygen-osm-") as tmp:
         copy = Path(tmp) / "sorted.osm.pbf"
@@ -129,8 +171,8 @@ def _via_copy(osmium, elements, source: Path) -> tuple[list[_Area], list[tuple[i
         except OverflowError as exc:
             raise FootprintError(f"cannot read the OpenStreetMap file: {exc}", where=str(source),
                                  hint="renumber the file's objects (`osmium renumber`)") from exc
-        areas, skipped, _ = _scan(osmium, copy, source, names)
-    return areas, skipped
+        areas, order, skipped, _ = _scan(osmium, copy, source, names)
+    return areas, order, skipped
 
 
 def _order_error(err: FootprintError) -> bool:
@@ -140,13 +182,13 @@ def _order_error(err: FootprintError) -> bool:
 
 
 def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]] | None = None
-          ) -> tuple[list[_Area], list[tuple[int, Skipped]], str | None]:
+          ) -> tuple[_Areas, list[int], list[tuple[int, Skipped]], str | None]:
     """``read_areas`` of the file ``source`` read from ``path``, and why its objects are not in the order
     libosmium needs (None when they are: nodes before ways before relations, no negative id; libosmium itself
     stops at ids out of order). ``names``: for a file read from its sorted copy, each way's and relation's name
     and place in ``source``, by its name in the copy."""
     where = source.name
-    areas: list[_Area] = []
+    areas = _Areas()
     skipped: dict[str, Skipped] = {}
     order: dict[str, int] = {}  # building ways and multipolygon relations, and their areas, by place in the file
     made: set[str] = set()
@@ -162,11 +204,11 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
             if _is_building(obj.tags):
                 oid = named(f"{'way' if obj.from_way() else 'relation'}/{obj.orig_id()}")
                 made.add(oid)
-                areas.append(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
+                areas.add(_Area(order[oid], oid, dict(obj.tags), _rings(obj)))
             continue
         rank = _RANK[obj.type_str()]
         if rank < last or obj.id < 0:  # (the file is read again from a sorted copy: stop here)
-            return [], [], "negative ids (an editor's new objects)" if obj.id < 0 else \
+            return areas, [], [], "negative ids (an editor's new objects)" if obj.id < 0 else \
                 "nodes or ways after the ways or relations that use them (as in Overpass exports)"
         last = rank
         if not obj.visible:  # (deleted: an osmChange <delete>, visible="false")
@@ -194,41 +236,60 @@ def _scan(osmium, path: Path, source: Path, names: Mapping[str, tuple[str, int]]
             if oid.startswith("relation/") else "fewer than three distinct nodes, or a self-crossing libosmium rejects"
         skipped[oid] = Skipped(oid, f"its outline could not be assembled into an area ({what}) -- use a complete "
                                     "extract or fix the outline in OSM", f"{where}, {oid}")
-    areas = sorted((a for a in areas if a.id not in invisible), key=lambda a: a.index)
-    return areas, sorted(((order[oid], s) for oid, s in skipped.items()), key=lambda item: item[0]), None
+    return (areas, areas.ordered(invisible), sorted(((order[oid], s) for oid, s in skipped.items()),
+                                                  key=lambda item: item[0]), None)
 
 
-def _with_parts(areas: list[_Area]) -> tuple[list[_Area], list[str]]:
-    """Simple 3D Buildings: outlines that hold parts are replaced by them; parts take the outline's other tags."""
-    outlines = [a for a in areas if not a.is_part]
-    parts = [a for a in areas if a.is_part]
+def _hosts(areas: _Areas, order: list[int]) -> dict[int, int]:
+    """Simple 3D Buildings: per part (its position in ``areas``), the outline holding the largest share of its area,
+    at least ``PART_SHARE``; of outlines holding as much (nested or overlapping outlines: a church and its tower,
+    both tagged ``building``), one not tagged ``building:part`` itself, then the smallest, then the one later in the
+    file. Outlines are found by
+    their bounds and loaded only as candidates: the city's shapes are never all in memory."""
+    outlines = [k for k in order if not areas.part[k]]
+    parts = [k for k in order if areas.part[k]]
     if not outlines or not parts:
-        return areas, []
-    shapes = [_shape(a) for a in outlines]
-    tree = shapely.STRtree(shapes)
-    host: dict[str, int] = {}
+        return {}
+    bounds = np.frombuffer(areas.bounds, dtype=float).reshape(-1, 4)
+    tree = shapely.STRtree(shapely.box(*bounds[outlines].T))
+    hosts: dict[int, int] = {}
     for part in parts:
-        shape = _shape(part)
+        shape = _shape(areas.load(part))
         if shape.is_empty or shape.area == 0:
             continue
-        best, best_share = None, PART_SHARE
-        for k in tree.query(shape, predicate="intersects"):
-            share = shapes[k].intersection(shape).area / shape.area
-            if share >= best_share:
-                best, best_share = int(k), share
+        best, best_key = None, (PART_SHARE, False, -np.inf, -1)
+        for k in (outlines[i] for i in tree.query(shapely.box(*bounds[part]))):
+            outline = areas.load(k)
+            found = _shape(outline)
+            if not found.intersects(shape):
+                continue
+            key = (round(found.intersection(shape).area / shape.area, 9),
+                   outline.tags.get("building:part", "no") == "no", -found.area, areas.index[k])
+            if key >= best_key:
+                best, best_key = k, key
         if best is not None:
-            host[part.id] = best
-    drawn = set(host.values())
-    out = [a for k, a in enumerate(outlines) if k not in drawn]
-    for part in parts:
-        k = host.get(part.id)
-        if k is not None:
-            inherited = {key: v for key, v in outlines[k].tags.items() if not key.startswith(OWN_KEYS)}
-            part = replace(part, tags={**inherited, **part.tags, "building:outline": outlines[k].id})
-        out.append(part)
-    note = [f"{len(drawn)} building outlines are drawn by their {len(host)} building:part areas (Simple 3D "
+            hosts[part] = best
+    return hosts
+
+
+def _with_parts(areas: _Areas, order: list[int]) -> tuple[list[int], dict[int, int], list[str]]:
+    """Simple 3D Buildings: outlines that hold parts are replaced by them (the areas drawn, in file order, and
+    each hosted part's outline); parts take the outline's other tags (:func:`_area`)."""
+    hosts = _hosts(areas, order)
+    drawn = set(hosts.values())
+    note = [f"{len(drawn)} building outlines are drawn by their {len(hosts)} building:part areas (Simple 3D "
             "Buildings); set osm_parts = \"ignore\" to keep the outlines instead"] if drawn else []
-    return sorted(out, key=lambda a: a.index), note
+    return [k for k in order if k not in drawn], hosts, note
+
+
+def _area(areas: _Areas, k: int, host: int | None) -> _Area:
+    """Area ``k``, a part with the tags of its ``host`` outline that are not its own shape's and height's."""
+    area = areas.load(k)
+    if host is None:
+        return area
+    outline = areas.load(host)
+    inherited = {key: v for key, v in outline.tags.items() if not key.startswith(OWN_KEYS)}
+    return replace(area, tags={**inherited, **area.tags, "building:outline": outline.id})
 
 
 def _shape(area: _Area) -> shapely.Geometry:
@@ -236,10 +297,10 @@ def _shape(area: _Area) -> shapely.Geometry:
     return shapely.make_valid(shapely.MultiPolygon(polys)) if polys else Polygon()
 
 
-def import_osm(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> ImportResult:
-    """Footprints from an OpenStreetMap file (always lon/lat, EPSG:4326)."""
-    areas, skipped, notes = read_areas(path)
-    return _footprints(areas, skipped, notes, path, options, warnings)
+def stream_osm(path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()) -> FootprintStream:
+    """Footprints from an OpenStreetMap file (always lon/lat, EPSG:4326), as a stream: the areas libosmium
+    assembles are put aside as they come, and handed over as footprints once the ids and the frame are fixed."""
+    return _footprints(*read_areas(path), path, options, warnings)
 
 
 def import_osm_json(doc: Mapping[str, Any], path: Path, options: ImportOptions, warnings: tuple[str, ...] = ()
@@ -247,22 +308,24 @@ def import_osm_json(doc: Mapping[str, Any], path: Path, options: ImportOptions, 
     """Footprints from an OSM JSON document (``osm_json``), read from a sorted copy as an OpenStreetMap file."""
     osmium = _osmium()
     elements, problems = osm_json_elements(doc, path.name)
-    areas, skipped = _via_copy(osmium, elements, path)
-    return _footprints(areas, skipped, problems, path, options, warnings)
+    areas, order, skipped = _via_copy(osmium, elements, path)
+    return _footprints(areas, order, skipped, problems, path, options, warnings).collected()
 
 
-def _footprints(areas: list[_Area], skipped: list[tuple[int, Skipped]], notes: list[str], path: Path,
-                options: ImportOptions, warnings: tuple[str, ...]) -> ImportResult:
-    """The footprints of building ``areas`` read from ``path`` (Simple 3D Buildings parts applied)."""
+def _footprints(areas: _Areas, order: list[int], skipped: list[tuple[int, Skipped]], notes: list[str], path: Path,
+                options: ImportOptions, warnings: tuple[str, ...]) -> FootprintStream:
+    """The footprints of the building ``areas`` (in ``order``) read from ``path`` (Simple 3D Buildings parts
+    applied), each put :class:`~citygen_footprints.assemble.Aside` as a feature."""
     if options.osm_parts == "replace":
-        areas, parts = _with_parts(areas)
+        order, hosts, parts = _with_parts(areas, order)
         notes = [*notes, *parts]
     else:
-        areas = [a for a in areas if not a.is_part]
+        order, hosts = [k for k in order if not areas.part[k]], {}
     crs_warnings = [] if options.crs is None else [
         f"{path.name}: OpenStreetMap data is always lon/lat; the scene's crs {options.crs} is ignored"]
-    raws: list[RawFeature] = []
-    for area in areas:
+    aside = Aside()
+    for k in order:
+        area = _area(areas, k, hosts.get(k))
         where = f"{path.name}, {area.id}"
         attributes: dict[str, Any] = {**area.tags, "osm_type": area.id.split("/")[0],
                                       "osm_id": int(area.id.split("/")[1])}
@@ -271,7 +334,8 @@ def _footprints(areas: list[_Area], skipped: list[tuple[int, Skipped]], notes: l
         except FeatureProblem as problem:
             skipped.append((area.index, Skipped(area.id, str(problem), where)))
             continue
-        raws.append(RawFeature(area.index, area.id, where, f"{path.name}#{area.id}", attributes, cleaned.parts,
-                               cleaned.warnings))
-    return assemble(raws, skipped, [*warnings, *crs_warnings, *notes], parse_crs("EPSG:4326", str(path)),
-                    options, path)
+        aside.add(RawFeature(area.index, area.id, where, f"{path.name}#{area.id}", attributes, cleaned.parts,
+                             cleaned.warnings))
+    areas.scratch.close()
+    return assembled(aside.heads, aside.load, skipped, [*warnings, *crs_warnings, *notes],
+                     parse_crs("EPSG:4326", str(path)), options, path)

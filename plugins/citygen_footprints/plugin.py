@@ -16,7 +16,7 @@ from citygen_footprints.geojson import import_geojson, read_feature, stream_geoj
 from citygen_footprints.jsonload import load_json
 from citygen_footprints.options import parse_options
 from citygen_footprints.osm import SUFFIXES as OSM_SUFFIXES
-from citygen_footprints.osm import import_osm, import_osm_json
+from citygen_footprints.osm import import_osm_json, stream_osm
 from citygen_footprints.osm_json import is_osm_json
 
 
@@ -43,7 +43,8 @@ def read_footprints(path: Path, options: Mapping[str, Any]) -> ImportResult:
 def stream_footprints(path: Path, options: Mapping[str, Any]) -> FootprintStream:
     """:func:`read_footprints` as a stream: a GeoJSON FeatureCollection is read twice and never held whole
     (:func:`~citygen_footprints.geojson.stream_geojson`), a CityJSONSeq file a line at a time
-    (:func:`~citygen_footprints.cityjson.stream_cityjson_seq`); CityJSON and OSM JSON files are read whole."""
+    (:func:`~citygen_footprints.cityjson.stream_cityjson_seq`); CityJSON and OSM JSON files are read whole
+    (OpenStreetMap files stream through their own importer, :func:`~citygen_footprints.osm.stream_osm`)."""
     path = Path(path)
     parsed, warnings = parse_options(options)
     if path.name.lower().endswith(".jsonl"):
@@ -82,8 +83,11 @@ class OSMImporter(FootprintImporter):
     description = "OpenStreetMap XML / PBF (needs pyosmium: citygen[osm]): building ways, multipolygons, S3DB parts"
 
     def read(self, path: Path, options: dict[str, Any]) -> ImportResult:
+        return self.stream(path, options).collected()
+
+    def stream(self, path: Path, options: dict[str, Any]) -> FootprintStream:
         parsed, warnings = parse_options(options)
-        return import_osm(Path(path), parsed, warnings)
+        return stream_osm(Path(path), parsed, warnings)
 
 
 @hookimpl
