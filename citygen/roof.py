@@ -124,7 +124,8 @@ def _number(value: Any) -> float | None:
     if isinstance(value, (int, float)):
         return float(value) if math.isfinite(value) else None
     match = _NUMBER.match(str(value))
-    return float(match[1]) if match else None
+    number = float(match[1]) if match else math.nan  # (digits beyond float range read as inf)
+    return number if math.isfinite(number) else None
 
 
 def parse_direction(value: Any) -> float | None:

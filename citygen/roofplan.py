@@ -21,6 +21,7 @@ under a gable, too low for a door).
 
 "Of the total" is of walls + roof where only the walls are known (level counts).
 
+Where only the walls are known, a roof from the data is at most ``MAX_ROOF`` tall (a warning names the building).
 Where the total is given, the roof leaves at least ``MIN_WALL_SHARE`` of it to the walls (a warning when tagged
 roof data exceed the total; a part that is all roof keeps a low wall). The roof is then built to exactly that
 height, so a tagged building's highest point is its base plus its ``height``.
@@ -50,6 +51,9 @@ TAGGED_SHARE = 0.5
 MIN_WALL_SHARE = 0.1
 #: A roof at the scene's pitch leaves each storey under it at least this tall (metres).
 MIN_STOREY = 2.8
+#: A roof from the data on walls of known height (no total) is at most this tall (metres; the tallest spires are
+#: ~150 m): more is a tagging error, capped with a warning.
+MAX_ROOF = 300.0
 
 
 @dataclass(frozen=True)
@@ -107,6 +111,10 @@ def split_height(footprint: Footprint, outline: Polygon | MultiPolygon, scene: S
         source = "pitch" if rise >= natural else "pitch, capped"
     warnings = []
     walls = footprint.height
+    if total is None and rise > MAX_ROOF:
+        warnings.append(f"{footprint.id}: a {rise:.4g} m roof ({source}) is no roof; it is {MAX_ROOF:g} m -- check its "
+                        "roof tags")
+        rise = MAX_ROOF
     if total is not None:
         most = (1 - MIN_WALL_SHARE) * total
         if rise > most:

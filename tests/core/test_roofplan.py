@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from citygen_footprints.heights import HeightSettings, parse_length, resolve_height
+from shapely.geometry import box
 
 from citygen.builder import Builder
 from citygen.coordinator import plan_building
@@ -16,9 +18,17 @@ from citygen.footprints import Footprint
 from citygen.mass import neighbour_cover
 from citygen.pipeline import import_footprints
 from citygen.registry import default_registry
-from citygen.roofplan import MIN_STOREY, MIN_WALL_SHARE, ROOF_SHARE, ROOF_STOREYS, plan_mass, split_height
+from citygen.roofplan import (
+    MAX_ROOF,
+    MIN_STOREY,
+    MIN_WALL_SHARE,
+    ROOF_SHARE,
+    ROOF_STOREYS,
+    mass_plan,
+    plan_mass,
+    split_height,
+)
 from citygen.scene import load_scene
-from citygen_footprints.heights import HeightSettings, parse_length, resolve_height
 
 REPO = Path(__file__).resolve().parents[2]
 STOCKMANN = "way/122595241"  # height = "39", no roof tags: the scene's hipped roof, capped
@@ -71,12 +81,13 @@ def test_every_height_tagged_helsinki_building_tops_out_at_its_height(helsinki):
 
 
 def test_simple_3d_buildings_parts_top_out_at_their_height():
-    """The OSM file's buildings and building parts with a ``height`` (28, lifted parts among them: ``min_height``
-    lifts the base, ``height`` is still measured from the ground) top out at ground + height."""
+    """The OSM file's buildings and building parts with a ``height`` (29, the cathedral's drum among them; lifted
+    parts too: ``min_height`` lifts the base, ``height`` is still measured from the ground) top out at ground +
+    height."""
     pytest.importorskip("osmium")
     city = City(REPO / "scenes" / "helsinki_osm.toml")
     tagged = [fp for fp in city.footprints if fp.attributes.get("height") not in (None, "")]
-    assert len(tagged) == 28 and sum(fp.lift > 0 for fp in tagged) >= 3
+    assert len(tagged) == 29 and sum(fp.lift > 0 for fp in tagged) >= 3
     for fp in tagged:
         record, _ = city.build(fp.id)
         assert top(record.geometry) == pytest.approx(fp.base - fp.lift + parse_length(fp.attributes["height"]),
@@ -236,3 +247,19 @@ def test_delft_sheds_get_walls_a_door_fits_in_or_no_door(tmp_path):
     report = generate_city(scene, jobs=1)
     assert report.faces["plain"] == 0 and report.faces["dressed"] > 600
     assert not [w for w in report.warnings if "door" in w]
+
+
+def test_roof_tags_beyond_float_range_or_reason_give_a_finite_roof():
+    """Fuzzing (an OSM city, seed 12): ``roof:levels`` of 401 digits on a part with ``building:levels = 3`` read as
+    inf and gave the roof non-finite points; so did such a ``roof:height``. Digits beyond float range are no number;
+    a finite but absurd roof from the data on walls of known height is capped at MAX_ROOF with a warning."""
+    scene = load_scene(REPO / "scenes" / "helsinki.toml")
+    roofs = default_registry().roof_builders
+    huge = "1" + "0" * 400
+    for tag, value in (("roof:levels", huge), ("roof:height", huge), ("roof:height", "1" + "0" * 40)):
+        fp = Footprint("way/17425859", box(0, 0, 10, 8), 9.0, "building:levels", levels=3,
+                       attributes={"building:levels": "3", "roof:shape": "gabled", tag: value})
+        plan, notes = mass_plan(fp, scene, roofs)
+        assert 0 < plan.roof.height <= MAX_ROOF and plan.height == 9.0
+        assert bool(notes) == (value != huge) and all("check its roof tags" in n for n in notes)
+
