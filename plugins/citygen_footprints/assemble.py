@@ -80,26 +80,40 @@ class Heads:
         return tuple(self.corners[6 * k + 2:6 * k + 6])
 
 
-class Aside:
-    """Features put aside as a streaming reader reads them: each pickled to an anonymous temporary file, only its
-    :class:`Heads` kept (``heads``); :meth:`load` gives feature ``k`` back once the ids and the frame are fixed."""
+class Pickles:
+    """Objects pickled one after another to an anonymous temporary file (gone when closed or the process ends):
+    what a streaming reader puts aside; :meth:`load` gives object ``k`` back."""
 
     def __init__(self) -> None:
-        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
-        self.places = array("q")  # (offset, size) a feature
+        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (closed by close(), or with the process)
+        self.places = array("q")  # (offset, size) an object
         self.end = 0
-        self.heads = Heads()
 
-    def add(self, feature: RawFeature) -> None:
-        data = pickle.dumps(feature, protocol=pickle.HIGHEST_PROTOCOL)
+    def put(self, value: Any) -> None:
+        data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
         self.places.extend((self.end, len(data)))
         self.scratch.write(data)
         self.end += len(data)
-        self.heads.add(feature)
 
-    def load(self, k: int) -> RawFeature:
+    def load(self, k: int) -> Any:
         self.scratch.seek(self.places[2 * k])
         return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
+
+    def close(self) -> None:
+        self.scratch.close()
+
+
+class Aside(Pickles):
+    """Features put aside as a streaming reader reads them, only their :class:`Heads` kept (``heads``): ``load(k)``
+    gives feature ``k`` back once the ids and the frame are fixed."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.heads = Heads()
+
+    def add(self, feature: RawFeature) -> None:
+        self.put(feature)
+        self.heads.add(feature)
 
 
 def _points(feature: RawFeature) -> np.ndarray:

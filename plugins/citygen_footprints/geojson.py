@@ -171,7 +171,7 @@ def stream_geojson(path: Path, options: ImportOptions, warnings: tuple[str, ...]
 
     doc = stream_object(path, "features", keep, "FeatureCollection")
     if doc is None:
-        aside.scratch.close()
+        aside.close()
         return None
     crs, crs_warnings = choose_crs(doc, options, str(path))
     return assembled(aside.heads, aside.load, skipped, [*warnings, *crs_warnings], crs, options, path)

@@ -13,7 +13,6 @@ Overpass export, a file saved by an editor, concatenated extracts) is read from 
 """
 from __future__ import annotations
 
-import pickle
 import tempfile
 from array import array
 from collections.abc import Mapping
@@ -27,7 +26,7 @@ from citygen.errors import FootprintError
 from citygen.footprints import FootprintStream, ImportResult, Skipped
 from shapely.geometry import Polygon
 
-from citygen_footprints.assemble import Aside, RawFeature, assembled
+from citygen_footprints.assemble import Aside, Pickles, RawFeature, assembled
 from citygen_footprints.frame import parse_crs
 from citygen_footprints.options import ImportOptions
 from citygen_footprints.osm_json import osm_json_elements
@@ -57,38 +56,25 @@ class _Area:
         return "building" not in self.tags or self.tags["building"] == "no"
 
 
-class _Areas:
-    """Building areas put aside as libosmium hands them over (pickled to an anonymous temporary file), with what
-    ordering them and matching parts to outlines needs: each one's place in the file, id, whether it is a part, and
-    its bounds. :meth:`load` gives area ``k`` back."""
+class _Areas(Pickles):
+    """Building areas put aside as libosmium hands them over, with what ordering them and matching parts to
+    outlines needs: each one's place in the file, id, whether it is a part, and its bounds."""
 
     def __init__(self) -> None:
-        self.scratch = tempfile.TemporaryFile()  # noqa: SIM115 (no name: gone when closed or the process ends)
-        self.places = array("q")  # (offset, size) an area
-        self.end = 0
+        super().__init__()
         self.index = array("q")
         self.ids: list[str] = []
         self.part = bytearray()
         self.bounds = array("d")  # (min lon, min lat, max lon, max lat) an area
 
-    def __len__(self) -> int:
-        return len(self.ids)
-
     def add(self, area: _Area) -> None:
-        data = pickle.dumps(area, protocol=pickle.HIGHEST_PROTOCOL)
-        self.places.extend((self.end, len(data)))
-        self.scratch.write(data)
-        self.end += len(data)
+        self.put(area)
         self.index.append(area.index)
         self.ids.append(area.id)
         self.part.append(area.is_part)
         corners = [c for p in area.polygons for c in p[0]] or [(0.0, 0.0)]
         lon, lat = zip(*corners)
         self.bounds.extend((min(lon), min(lat), max(lon), max(lat)))
-
-    def load(self, k: int) -> _Area:
-        self.scratch.seek(self.places[2 * k])
-        return pickle.loads(self.scratch.read(self.places[2 * k + 1]))
 
     def ordered(self, leave_out: set[str]) -> list[int]:
         """The areas in file order, those whose ids are in ``leave_out`` left out."""
@@ -336,6 +322,6 @@ def _footprints(areas: _Areas, order: list[int], skipped: list[tuple[int, Skippe
             continue
         aside.add(RawFeature(area.index, area.id, where, f"{path.name}#{area.id}", attributes, cleaned.parts,
                              cleaned.warnings))
-    areas.scratch.close()
+    areas.close()
     return assembled(aside.heads, aside.load, skipped, [*warnings, *crs_warnings, *notes],
                      parse_crs("EPSG:4326", str(path)), options, path)
