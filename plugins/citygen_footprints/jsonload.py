@@ -127,7 +127,6 @@ def _unreadable(path: Path, exc: OSError) -> FootprintError:
                           hint="check the [footprints] path in the scene")
 
 
-
 def load_json(path: Path, array_key: str = "features", each: Callable[[int, Any, int], Any] | None = None
               ) -> tuple[Any, list[int]]:
     """The decoded document and the 1-based line of each element of its ``array_key`` array (if any); with
