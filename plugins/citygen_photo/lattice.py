@@ -51,10 +51,10 @@ def on_lattice(rows: list[Span], pitch: float) -> list[Span]:
 def lattice_rows(rows: list[Span], pitch: float, period: float | None, similar: Similarity | None,
                  bottom: float) -> list[Span]:
     """``rows`` (top to bottom, working pixels) checked against the pitch's lattice where the MI ``period``
-    confirms it: rows squeezed between floors dropped, rows put back one pitch at a time above the top row (down to the photo's
-    top) and below the bottom row (above ``bottom``, the ground floor's band of shops or the photo's bottom)
-    while ``similar`` finds the floor band there repeating its neighbour's. Unchanged with fewer than three
-    rows."""
+    confirms it: rows squeezed between floors dropped, rows put back one pitch at a time above the top row (down
+    to the photo's top) and below the bottom row (above ``bottom``, the ground floor's band of shops or the photo's
+    bottom) while ``similar`` finds the floor band there repeating its neighbour's. Unchanged with fewer than
+    three rows."""
     if len(rows) < 3 or similar is None or not confirms(pitch, period):
         return rows
     rows = on_lattice(rows, pitch)
