@@ -230,14 +230,22 @@ def _hosts(areas: _Areas, order: list[int]) -> dict[int, int]:
     """Simple 3D Buildings: per part (its position in ``areas``), the outline holding the largest share of its area,
     at least ``PART_SHARE``; of outlines holding as much (nested or overlapping outlines: a church and its tower,
     both tagged ``building``), one not tagged ``building:part`` itself, then the smallest, then the one later in the
-    file. Outlines are found by
-    their bounds and loaded only as candidates: the city's shapes are never all in memory."""
+    file. Outlines are found by their bounds and loaded only as candidates, each once: only the shapes of outlines
+    near parts are held, never the city's."""
     outlines = [k for k in order if not areas.part[k]]
     parts = [k for k in order if areas.part[k]]
     if not outlines or not parts:
         return {}
     bounds = np.frombuffer(areas.bounds, dtype=float).reshape(-1, 4)
     tree = shapely.STRtree(shapely.box(*bounds[outlines].T))
+    candidates: dict[int, tuple[shapely.Geometry, bool]] = {}  # (outlines near a part: its shape, is no part)
+
+    def candidate(k: int) -> tuple[shapely.Geometry, bool]:
+        if k not in candidates:
+            outline = areas.load(k)
+            candidates[k] = (_shape(outline), outline.tags.get("building:part", "no") == "no")
+        return candidates[k]
+
     hosts: dict[int, int] = {}
     for part in parts:
         shape = _shape(areas.load(part))
@@ -245,12 +253,10 @@ def _hosts(areas: _Areas, order: list[int]) -> dict[int, int]:
             continue
         best, best_key = None, (PART_SHARE, False, -np.inf, -1)
         for k in (outlines[i] for i in tree.query(shapely.box(*bounds[part]))):
-            outline = areas.load(k)
-            found = _shape(outline)
+            found, pure = candidate(k)
             if not found.intersects(shape):
                 continue
-            key = (round(found.intersection(shape).area / shape.area, 9),
-                   outline.tags.get("building:part", "no") == "no", -found.area, areas.index[k])
+            key = (round(found.intersection(shape).area / shape.area, 9), pure, -found.area, areas.index[k])
             if key >= best_key:
                 best, best_key = k, key
         if best is not None:

@@ -157,7 +157,7 @@ def test_a_cityjson_sequence_line_is_cut_only_at_a_newline(tmp_path):
 
 def test_an_osm_stream_holds_no_area_until_its_footprints_are_used():
     """OpenStreetMap files stream: the building areas libosmium assembles, then their features, are put aside in a
-    temporary file as they come (a 40,000-building .osm.pbf: +63 MB instead of +188 MB), and the stream gives the
+    temporary file as they come (a 40,000-building .osm.pbf: +71 MB instead of +188 MB), and the stream gives the
     whole read's footprints."""
     import gc
 
