@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from citygen.footprints import Footprint
-from citygen.mass import Mass
+from citygen.mass import Mass, on_grid
 from citygen.request import FaceContext, FacadeRequest
 from citygen.scene import Defaults
 
@@ -56,7 +56,10 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lift
 
     A taller ground floor (``ground_floor_height``) is used when the building has at least three floors, the
     upper floors stay at least 2.4 m high and it is not ``lifted`` off the ground; everything always ends exactly at
-    ``height``.
+    ``height``. The storeys above the lowest are equal to the last bit, so they derive alike (a grammar derives a
+    storey's subtree once and places copies): their height and ``height`` are rounded to a grid of :data:`GRID`
+    metres (:data:`citygen.mass.GRID`) and the lowest storey takes the rest, within micrometres of its plan (a ``height``
+    off the grid leaves the top storey within micrometres of the others).
     """
     if levels is None or levels < 1:
         levels = round(height / defaults.floor_height)
@@ -66,9 +69,11 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lift
     typical = height / levels
     ground = min(defaults.ground_floor_height, 1.3 * typical)
     if levels >= 3 and ground > typical and (height - ground) / (levels - 1) >= 2.4 and not lifted:
-        step = (height - ground) / (levels - 1)
-        return (0.0, *(float(ground + i * step) for i in range(levels - 1)), float(height))
-    return tuple(float(v) for v in np.linspace(0.0, height, levels + 1))
+        step = on_grid((height - ground) / (levels - 1))
+    else:
+        step = on_grid(typical)
+    lowest = on_grid(height) - (levels - 1) * step
+    return (0.0, *(lowest + i * step for i in range(levels - 1)), float(height))
 
 
 def party_walls(cover: np.ndarray, widths: np.ndarray, height: float) -> np.ndarray:

@@ -141,6 +141,17 @@ def _ring_faces(coords: np.ndarray, ring: int, first_index: int, base: float, he
             for i, ((x, y), (ux, uy), w) in enumerate(zip(pts.tolist(), u.tolist(), width.tolist()))]
 
 
+#: The grid of wall and storey heights: 2**-20 m (about a micrometre). Multiples of it below 2**33 m are exact
+#: floats, and so are their sums and differences: walls on it get storeys equal to the last bit
+#: (:func:`citygen.coordinator.plan_floor_lines`).
+GRID = 2.0 ** -20
+
+
+def on_grid(length: float) -> float:
+    """``length`` rounded to a multiple of :data:`GRID`."""
+    return round(length / GRID) * GRID
+
+
 @dataclass(frozen=True)
 class MassPlan:
     """A mass before its wall faces are made: what the pipeline's main process holds of every building of the city

@@ -36,7 +36,7 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from citygen.errors import FootprintError
 from citygen.footprints import Footprint
-from citygen.mass import Mass, MassPlan, clean_outline
+from citygen.mass import Mass, MassPlan, clean_outline, on_grid
 from citygen.registry import RoofBuilder
 from citygen.roof import RoofSpec, roof_angle, roof_levels, roof_spec
 from citygen.scene import Scene
@@ -148,7 +148,7 @@ def mass_plan(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilde
                              f"frame", hint="check the source's coordinates, their units and CRS")
     outline = clean_outline(footprint.polygon)
     split = split_height(footprint, outline, scene, roofs)
-    return MassPlan(outline, footprint.base, float(split.walls), split.roof, split.source), split.warnings
+    return MassPlan(outline, footprint.base, on_grid(split.walls), split.roof, split.source), split.warnings
 
 
 def plan_mass(footprint: Footprint, scene: Scene, roofs: Mapping[str, RoofBuilder]) -> tuple[Mass, tuple[str, ...]]:

@@ -224,8 +224,18 @@ class Grammar:
         """Symbols whose derivation depends only on the region's size and floor (not on its position or on
         per-region draws): no ``floors`` and no ``each`` rule is reachable from them. The derivation derives their
         subtrees once per size (computed once per grammar, not per face)."""
+        return self._closed({rule.symbol for rule in self.rules if _position_dependent(rule.body)})
+
+    @cached_property
+    def floor_invariant(self) -> frozenset[str]:
+        """:attr:`translation_invariant` symbols from which no condition naming ``floor`` is reachable: their
+        subtrees derive alike on every floor, so the derivation derives them once per size for the whole face."""
+        return self._closed({rule.symbol for rule in self.rules if _reads(rule.body, "floor")}
+                            | (self.table.keys() - self.translation_invariant))
+
+    def _closed(self, variant: set[str]) -> frozenset[str]:
+        """The symbols from which no symbol of ``variant`` (nor an undefined one) is reachable."""
         graph = {rule.symbol: [s for s, _ in successors(rule.body)] for rule in self.rules}
-        variant = {rule.symbol for rule in self.rules if _position_dependent(rule.body)}
         changed = True
         while changed:
             changed = False
@@ -266,4 +276,20 @@ def _position_dependent(body: Body) -> bool:
     if isinstance(body, Case):
         return any(_position_dependent(b) for _, b in body.branches) or (
             body.otherwise is not None and _position_dependent(body.otherwise))
+    return False
+
+
+def _reads(body: Body, name: str) -> bool:
+    """Whether a condition of ``body`` (a ``case``) reads the variable ``name``."""
+    return isinstance(body, Case) and any(_names(cond, name) for cond, _ in body.branches)
+
+
+def _names(expr: Expr, name: str) -> bool:
+    """Whether ``expr`` reads the variable ``name``."""
+    if isinstance(expr, Var):
+        return expr.name == name
+    if isinstance(expr, Unary):
+        return _names(expr.operand, name)
+    if isinstance(expr, Binary):
+        return _names(expr.left, name) or _names(expr.right, name)
     return False

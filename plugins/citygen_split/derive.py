@@ -93,8 +93,9 @@ class _Derivation:
         self.trace: list[str] = []
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
+        self.floorless = frozenset() if trace else grammar.floor_invariant  # (cached with floor -1)
         #: (subtree, its size in regions, position of its first terminal, its terminal count, and for a terminal
-        #: its index among :attr:`sources`)
+        #: its index among :attr:`sources`) by (symbol, size, floor; -1 for a :attr:`floorless` symbol)
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
         self.templates: dict[str, tuple[Terminal, dict[str, Any]]] = {}  # (body, its regions' fields)
         #: Fields of the terminal regions of reusable symbols whose rule is a plain terminal (the fast path of
@@ -130,7 +131,7 @@ class _Derivation:
     def region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
                chain: tuple[str, ...]) -> Region:
         if symbol in self.reusable:
-            key = (symbol, w, h, floor)
+            key = (symbol, w, h, -1 if symbol in self.floorless else floor)
             done = self.cache.get(key)
             if done is not None:  # regions of equal symbol, size and floor derive alike: a moved copy
                 original, size, first, n, source = done
@@ -213,7 +214,7 @@ class _Derivation:
         if depth > MAX_DEPTH or count >= MAX_REGIONS:  # (the general path raises the error)
             return self.region(symbol, x, y, w, h, floor, depth, ())
         self.count = count + 1
-        key = (symbol, w, h, floor)
+        key = (symbol, w, h, -1)  # (a plain terminal reads no floor)
         done = self.cache.get(key)
         region = _new(Region)
         if done is not None:  # (:func:`_moved` of a terminal)

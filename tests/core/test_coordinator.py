@@ -5,7 +5,7 @@ from shapely.geometry import Polygon
 
 from citygen.coordinator import plan_building, plan_floor_lines
 from citygen.footprints import Footprint
-from citygen.mass import build_mass
+from citygen.mass import build_mass, on_grid
 from citygen.scene import Defaults
 
 
@@ -21,7 +21,18 @@ def test_floor_lines_always_cover_the_wall(height, levels):
     lines = np.array(plan_floor_lines(height, levels, Defaults()))
     assert lines[0] == 0.0 and abs(lines[-1] - height) < 1e-9
     assert np.all(np.diff(lines) > 0)
-    assert len(lines) == 2 or np.all(np.diff(lines) >= 2.4 - 1e-9)
+    assert len(lines) == 2 or np.all(np.diff(lines) >= 2.4 - 1e-5)  # (the lowest storey within micrometres)
+
+
+@given(st.floats(5.0, 200.0), st.one_of(st.none(), st.integers(2, 60)), st.booleans())
+def test_storeys_above_the_lowest_are_equal_to_the_last_bit(height, levels, lifted):
+    """Equal storeys derive once and are copied (issue 24): on walls of a height on the grid (as every planned mass
+    is, :func:`citygen.roofplan.mass_plan`) the storeys above the lowest are bit-equal, and the lines still end
+    exactly at the wall's top."""
+    height = on_grid(height)
+    lines = plan_floor_lines(height, levels, Defaults(ground_floor_height=4.2), lifted)
+    storeys = {b - a for a, b in zip(lines[1:], lines[2:])}
+    assert lines[-1] == height and len(storeys) <= 1
 
 
 @settings(max_examples=60, deadline=None)

@@ -258,6 +258,20 @@ def test_region_limit_counts_every_region_of_copied_subtrees(monkeypatch):
         derive(g, request(10, 3))
 
 
+def test_a_floor_condition_keeps_its_subtree_per_floor_and_the_rest_is_copied_across_floors():
+    """Storeys of equal height share the subtrees no ``floor`` condition reaches (issue 24); a symbol that reads
+    ``floor`` (and every symbol above it) is derived per floor, so its floors still differ."""
+    g = grammar("X --> floors { *: Row }\nRow --> repeat(x) { 2: Bay }\nBay --> case floor == 1: Entry\n else: Win\n"
+                "Entry --> terminal(door)\nWin --> split(y) { 1: Sill | '1: Glass }\nSill --> terminal(sill)\n"
+                "Glass --> terminal(window)")
+    assert g.floor_invariant >= {"Win", "Sill", "Glass", "Entry"} and not {"X", "Row", "Bay"} & g.floor_invariant
+    assert {"Row", "Bay"} <= g.translation_invariant
+    layout = derive(g, request(6, 9, (0.0, 3.0, 6.0, 9.0)))
+    rows = [[t.label for t in layout.terminals() if lo <= t.y < lo + 3] for lo in (0.0, 3.0, 6.0)]
+    assert rows == [["sill", "window"] * 3, ["door"] * 3, ["sill", "window"] * 3]
+    assert check_partition(layout) == []
+
+
 def test_non_positive_facade_is_an_error():
     with pytest.raises(RulesetError, match="not positive"):
         derive(grammar("X --> A"), request(0, 3))
