@@ -407,6 +407,7 @@ class _Derivation:
         cl, cr = self.corners
         left = min(max(cl - x, 0.0), w)
         right = min(max(x + w - (face_w - cr), 0.0), w - left)
+        corner = self.terminals.get("Corner")
         out = []
         for lo, hi in zip(cuts[:-1], cuts[1:]):
             if hi - lo <= 0:
@@ -415,12 +416,14 @@ class _Derivation:
             symbol = next(i.symbol for i in body.items
                           if i.floor is None or i.floor == k or (i.floor < 0 and i.floor + count == k))
             if left > 0:
-                out.append(self.region("Corner", x, lo, left, hi - lo, k, depth, ()))
+                out.append(self.region("Corner", x, lo, left, hi - lo, k, depth, ()) if corner is None else
+                           self.terminal("Corner", corner, x, lo, left, hi - lo, k, depth))
             middle = (x + w - right if right > 0 else x + w) - (x + left)
             if middle > 0:
                 out.append(self.region(symbol, x + left, lo, middle, hi - lo, k, depth, ()))
             if right > 0:
-                out.append(self.region("Corner", x + w - right, lo, right, hi - lo, k, depth, ()))
+                out.append(self.region("Corner", x + w - right, lo, right, hi - lo, k, depth, ()) if corner is None
+                           else self.terminal("Corner", corner, x + w - right, lo, right, hi - lo, k, depth))
         return out
 
 
@@ -466,6 +469,8 @@ def _terminal_fields(grammar: Grammar, asset: Callable[[str | None], str | None]
                                                 material=rule.body.material, asset=asset(rule.body.asset))
                    for rule in grammar.table.values()
                    if isinstance(rule.body, Terminal) and rule.symbol in grammar.translation_invariant}
+        if "Corner" not in grammar.table:  # (the built-in corner strip: wall)
+            fields_["Corner"] = Region.template("Corner", label="wall")
         made = _TERMINALS[id(grammar)] = (grammar, fields_)
     return made[1]
 
