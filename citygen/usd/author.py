@@ -37,10 +37,10 @@ def _schemas(names: tuple[str, ...]) -> Sdf.TokenListOp:
 
 
 @functools.lru_cache(maxsize=4096)
-def _reference(target: Sdf.Path) -> Sdf.ReferenceListOp:
-    """The list op prepending an internal reference to ``target`` (made once: every building references its
-    prototypes and look set)."""
-    return Sdf.ReferenceListOp.Create(prependedItems=[Sdf.Reference(primPath=target)])
+def _reference(target: Sdf.Path, asset: str) -> Sdf.ReferenceListOp:
+    """The list op prepending a reference to ``target`` in ``asset`` (this layer: "") (made once: every building
+    references its prototypes and look set)."""
+    return Sdf.ReferenceListOp.Create(prependedItems=[Sdf.Reference(asset, target)])
 
 
 @functools.lru_cache(maxsize=1024)
@@ -137,9 +137,9 @@ class Author:
         Sdf.RelationshipSpec(prim, name).targetPathList.explicitItems = list(targets)
 
     @staticmethod
-    def reference(prim: Sdf.PrimSpec, target: Sdf.Path) -> None:
-        """An internal reference to ``target`` (prepended)."""
-        prim.SetInfo("references", _reference(target))
+    def reference(prim: Sdf.PrimSpec, target: Sdf.Path, asset: str = "") -> None:
+        """A reference to ``target`` in the layer ``asset`` (default: an internal reference), prepended."""
+        prim.SetInfo("references", _reference(target, asset))
 
     @staticmethod
     def api(prim: Sdf.PrimSpec, *schemas: str) -> None:

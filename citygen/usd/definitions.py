@@ -3,8 +3,8 @@ element kind or module once, authored in batches), and the element prototypes a 
 it writes.
 
 A layer with an element library (a tile layer, see :mod:`citygen.usd.library`) does not hold its element
-prototypes: each ``/Prototypes/<element>`` is one prim referencing the library's, so the elements of a city are
-authored once, not once per tile.
+prototypes: its instances reference the library's (:class:`~citygen.usd.writer.StageWriter`), so the elements of a
+city are authored once, not once per tile.
 """
 from __future__ import annotations
 
@@ -34,7 +34,6 @@ class Prototype:
     label: str
     meshes: list[tuple[str, str, str | None, MeshData]]  # prim name, material, semantic label, mesh
     bound: np.ndarray | None
-    element: bool = False
     arrays: list[MeshArrays] | None = None
 
 
@@ -61,7 +60,7 @@ def prepare_elements(keys: Iterable[ProtoKey], into: dict[ProtoKey, Prototype],
     welded = iter(MeshData.many_from_quads([p.quads for ps in parts for p in ps]))
     for key, ps in zip(keys, parts):
         meshes = [(p.name, p.material, None, next(welded)) for p in ps]
-        into[key] = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]), element=True)
+        into[key] = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
 
 
 def meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
@@ -70,12 +69,10 @@ def meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
 
 
 class Definitions:
-    """A layer's ``/Materials`` and ``/Prototypes``. ``element_library``: the file name (beside the layer) of the
-    element library its element prototypes reference instead of holding them."""
+    """A layer's ``/Materials`` and ``/Prototypes``."""
 
-    def __init__(self, author: Author, element_library: str | None = None) -> None:
+    def __init__(self, author: Author) -> None:
         self.author = author
-        self.element_library = element_library
         self.defined: set[str] = set()
         self.materials_root: Sdf.PrimSpec | None = None
         self.protos_root: Sdf.PrimSpec | None = None
@@ -99,7 +96,7 @@ class Definitions:
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(author.layer, PROTOTYPES.name, "", Sdf.SpecifierClass)
-        fresh = [p for _, p in self.pending if p.arrays is None and not (p.element and self.element_library)]
+        fresh = [p for _, p in self.pending if p.arrays is None]
         kept = [[(m, mat) for _, mat, _, m in p.meshes if len(m.counts)] for p in fresh]
         prepared = iter(author.arrays([m for ms in kept for m in ms], face_normals([m for ms in kept for m, _ in ms])))
         for p, ms in zip(fresh, kept):
@@ -107,10 +104,6 @@ class Definitions:
         with Sdf.ChangeBlock():
             for path, p in self.pending:
                 proto = author.prim(self.protos_root, path.name, "Xform")
-                if p.element and self.element_library:
-                    proto.SetInfo("references", Sdf.ReferenceListOp.Create(
-                        prependedItems=[Sdf.Reference(f"./{self.element_library}", path)]))
-                    continue
                 author.api(proto, "SemanticsLabelsAPI:class")
                 author.attr(proto, "semantics:labels:class", T.TokenArray, tokens(p.label), uniform=True)
                 used = sorted({mat for _, mat, _, _ in p.meshes})

@@ -1,9 +1,10 @@
 """The element library of a stage with tile layers: ``<stem>_tiles/elements.usdc``, every element prototype (window,
 door, sill, balcony kinds) the city's tiles use, once, with the materials and look sets they bind. A tile layer's
-``/Prototypes/<element>`` references it (``@./elements.usdc@</Prototypes/<element>>``), so a tile still opens alone
+instances of an element reference it (``@./elements.usdc@</Prototypes/<element>>``), so a tile still opens alone
 (beside the library) and a building referenced from a tile brings its elements along; the city's elements are
 authored and stored once instead of once per tile (the Helsinki demo's tiles held 1,918 element prototypes of 688
-kinds).
+kinds), and the instances of an element in every tile share one USD prototype, which an importer converts once
+(Blender makes a material of each material of each prototype it imports).
 
 The library's name is fixed, so its publication keeps :mod:`citygen.usd.publish`'s promise (the current root always
 composes whole) in two steps: before the new root replaces the old one, the published library holds the union of

@@ -16,12 +16,13 @@ Layout of the stage::
     /Prototypes                 class: one prototype per element kind / module (meshes only: the building places a
                                 module's elements, citygen.geometry.lift), each with its own Looks
 
-A building is an asset: everything it binds and instances is under it or reached through internal references,
-so a reference to it from another stage brings its looks and prototypes along.
+A building is an asset: everything it binds and instances is under it or reached through internal references
+(with tile layers, its elements through references into the element library beside its tile), so a reference to it
+from another stage brings its looks and prototypes along.
 
 With tile layers, each tile is a stage of its own (``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc``: ``/World`` with the
-tile, ``/Materials`` and the ``/Prototypes`` it uses, its element prototypes references into the city's element
-library ``<stem>_tiles/elements.usdc``, :mod:`citygen.usd.library`), written as soon as the tile is complete
+tile, ``/Materials`` and the module ``/Prototypes`` it uses; its instances of elements reference the city's element
+library ``<stem>_tiles/elements.usdc`` directly, :mod:`citygen.usd.library`), written as soon as the tile is complete
 (memory stays bounded by one tile) and payloaded by the root's tile prim, so ``Usd.Stage.Open(root,
 Usd.Stage.LoadNone)`` opens the city with its bounds only. The dask executor writes its tiles with the same code, so
 every tile layer opens alone. The digest of its bytes names a tile so a run never overwrites a tile the current root
@@ -178,8 +179,9 @@ class StageWriter:
         self.layer = Sdf.Layer.CreateAnonymous(".usda")
         self.author = Author(self.layer, uvs, self.library, self.path.parent)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
-        self.definitions = Definitions(self.author, element_library)
-        self.prototypes: dict[ProtoKey | ModuleKey, Sdf.Path] = {}
+        self.definitions = Definitions(self.author)
+        self.element_library = f"./{element_library}" if element_library else ""
+        self.prototypes: dict[ProtoKey | ModuleKey, tuple[str, Sdf.Path]] = {}  # the layer and path instances reference
         self.bounds: dict[ProtoKey | ModuleKey, np.ndarray | None] = {}
         self.queued: list[BuildingRecord] = []  # the open tile's buildings, authored when it is finished
         self.tile: tuple[tuple[int, int], Sdf.PrimSpec | StageWriter] | None = None
@@ -220,9 +222,15 @@ class StageWriter:
         self.counts["polygons"] += 1
 
     def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
-        """Give each of ``keys`` its ``/Prototypes`` path in this layer (:attr:`prototypes`) and its bound; the
-        geometry of element prototypes new to the process is prepared in one batch, the prims authored with the
-        layer's other new prototypes when the tile is finished (:class:`~citygen.usd.definitions.Definitions`)."""
+        """Give each of ``keys`` its ``/Prototypes`` path (:attr:`prototypes`: in this layer, or for an element kind of
+        a layer with an element library, in the library) and its bound; the geometry of element prototypes new to
+        the process is prepared in one batch, the prims this layer holds authored with its other new prototypes when
+        the tile is finished (:class:`~citygen.usd.definitions.Definitions`).
+
+        Instances reference a library's element directly, not through a prim of this layer: the instances of an
+        element in every tile then share one USD prototype, and Blender's importer makes one material per material
+        of each prototype it imports (with its default ``MAKE_UNIQUE``: 9,648 materials and 2.35 GB for the
+        demo's tiles through per-tile prims, 6,119 and 1.82 GB so; docs/performance.md)."""
         fresh = [k for k in keys if k not in self.prototypes]
         if not fresh:
             return
@@ -238,8 +246,11 @@ class StageWriter:
                 proto = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
             else:
                 proto = self.elements[key]
+                if self.element_library:
+                    self.prototypes[key], self.bounds[key] = (self.element_library, path), proto.bound
+                    continue
             self.definitions.pending.append((path, proto))
-            self.prototypes[key], self.bounds[key] = path, proto.bound
+            self.prototypes[key], self.bounds[key] = ("", path), proto.bound
 
     def add(self, record: BuildingRecord) -> None:
         """Add one building (authored with the rest of its tile when the tile is finished, :meth:`_write_queued`);
@@ -587,10 +598,11 @@ def _write_building(writer: StageWriter, parent: Sdf.PrimSpec, record: BuildingR
     return building
 
 
-def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes: Mapping[Any, Sdf.Path],
-               bound: np.ndarray | None) -> None:
+def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances,
+               prototypes: Mapping[Any, tuple[str, Sdf.Path]], bound: np.ndarray | None) -> None:
     """A PointInstancer ``Elements`` under ``parent`` whose prototypes, ``Prototypes/p<k>``, are instanceable Xforms
-    referencing the shared ``/Prototypes`` (one prototype per element kind: DCCs load it once).
+    referencing the shared ``/Prototypes`` (one prototype per element kind: DCCs load it once) of this layer or
+    of the element library (``prototypes``: the layer and path of each).
 
     Authored spec by spec, never with ``Sdf.CopySpec`` from a template: that copy orders each spec's fields by the
     addresses of their names' tokens in the process, so the .usdc bytes (not the text) would depend on the process's
@@ -600,7 +612,8 @@ def _instancer(author: Author, parent: Sdf.PrimSpec, inst: Instances, prototypes
     holder = author.prim(pi, "Prototypes", "Scope")
     for name, key in zip(names, inst.protos):
         ref = author.prim(holder, name, "Xform")
-        author.reference(ref, prototypes[key])
+        asset, path = prototypes[key]
+        author.reference(ref, path, asset)
         ref.SetInfo("instanceable", True)
     base = holder.path.StripAllVariantSelections()  # (inside a LOD variant: the targets are composed paths)
     author.rel(pi, "prototypes", [base.AppendChild(name) for name in names])

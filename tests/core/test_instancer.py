@@ -40,7 +40,7 @@ def test_instancers_keep_their_own_references():
     author = Author(layer)
     for name, target in (("A", "/Prototypes/window"), ("B", "/Prototypes/door")):
         parent = Sdf.PrimSpec(layer, name, Sdf.SpecifierDef, "Xform")
-        _instancer(author, parent, _instances(1), {"k0": Sdf.Path(target)}, None)
+        _instancer(author, parent, _instances(1), {"k0": ("", Sdf.Path(target))}, None)
     protos = Sdf.PrimSpec(layer, "Prototypes", Sdf.SpecifierClass)
     for target in ("window", "door"):
         Sdf.PrimSpec(protos, target, Sdf.SpecifierDef, "Xform")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pxr import Sdf, Usd, UsdGeom
+from pxr import Pcp, Sdf, Usd, UsdGeom
 
 from citygen.errors import ExportError
 from citygen.geometry.building import BuildingGeometry, Instances
@@ -76,15 +76,29 @@ def _library(path: Path) -> set[str]:
 
 
 def _elements_used(tiles: Path) -> set[str]:
-    """The element prototypes the tile layers in ``tiles`` reference from the library."""
+    """The element prototypes the tile layers in ``tiles`` reference from the library (their instances do; the
+    layers' own ``/Prototypes`` are modules)."""
     used = set()
     for tile in tiles.glob("Tile_*"):
         layer = Sdf.Layer.OpenAsAnonymous(str(tile))
-        for proto in layer.GetPrimAtPath("/Prototypes").nameChildren:
-            refs = proto.referenceList.prependedItems
-            assert not refs or (refs[0].assetPath == "./elements.usda" and not proto.nameChildren)
-            used |= {str(r.primPath.name) for r in refs}
+        for spec in _specs(layer.pseudoRoot):
+            refs = spec.referenceList.prependedItems
+            if refs and refs[0].assetPath:
+                assert spec.instanceable and refs[0].assetPath == "./elements.usda" and not spec.nameChildren
+                used.add(str(refs[0].primPath.name))
+        protos = layer.GetPrimAtPath("/Prototypes")
+        assert protos is None or all(p.name.startswith("module_") for p in protos.nameChildren)
     return used
+
+
+def _specs(spec: Sdf.PrimSpec):
+    """``spec`` and every prim spec under it, inside variants too."""
+    yield spec
+    for child in spec.nameChildren:
+        yield from _specs(child)
+    for variant_set in spec.variantSets:
+        for variant in variant_set.variants:
+            yield from _specs(variant.primSpec)
 
 
 def test_tiles_reference_each_element_from_one_library(small_scene, test_registry):
@@ -98,6 +112,26 @@ def test_tiles_reference_each_element_from_one_library(small_scene, test_registr
     for name in sorted(_library(library)):
         stage.DefinePrim(f"/Check/{name}").GetReferences().AddReference(str(library), f"/Prototypes/{name}")
     assert_resolves(stage)
+
+
+def test_the_instances_of_an_element_share_one_prototype_across_tiles(small_scene, test_registry):
+    """Was: each tile's instances referenced a ``/Prototypes/<element>`` prim of their tile (which referenced the
+    library), so USD made a prototype of each element per tile, and Blender's default import a material of each
+    of its materials per tile (the demo: 9,648 materials, 2.35 GB; docs/performance.md)."""
+    scene = load_scene(_scene(small_scene, '[output]\npath = "out/small.usdc"\ntile_size = 20\ntile_layers = true\n'))
+    generate_city(scene, registry=test_registry)
+    stage = Usd.Stage.Open(str(scene.output.path))
+    per_element: dict[str, set[str]] = {}
+    tiles_of: dict[str, set[str]] = {}
+    for prototype in stage.GetPrototypes():
+        for instance in prototype.GetInstances():
+            refs = [a for a in Usd.PrimCompositionQuery(instance).GetCompositionArcs()
+                    if a.GetArcType() == Pcp.ArcTypeReference]
+            name = str(refs[0].GetTargetPrimPath().name)
+            per_element.setdefault(name, set()).add(str(prototype.GetPath()))
+            tiles_of.setdefault(name, set()).add(str(instance.GetPath()).split("/")[2])
+    assert max(len(t) for t in tiles_of.values()) > 1  # an element placed in several tiles
+    assert all(len(p) == 1 for p in per_element.values()), per_element
 
 
 def test_a_building_referenced_from_its_tile_layer_brings_its_elements_along(small_scene, test_registry):
