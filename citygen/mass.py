@@ -7,6 +7,7 @@ shorter than the tolerance are absorbed into their neighbours instead of becomin
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -148,8 +149,8 @@ GRID = 2.0 ** -20
 
 
 def on_grid(length: float) -> float:
-    """``length`` rounded to a multiple of :data:`GRID`."""
-    return round(length / GRID) * GRID
+    """``length`` rounded to a multiple of :data:`GRID` (a non-finite one as it is: its checks come later)."""
+    return round(length / GRID) * GRID if math.isfinite(length) else float(length)
 
 
 @dataclass(frozen=True)

@@ -1,3 +1,4 @@
+import math
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -95,3 +96,10 @@ def test_a_building_part_lifted_off_the_ground_has_no_door_and_no_tall_ground_fl
     grounded = Footprint(id="g", polygon=foot.polygon, height=12, height_source="height", levels=4, base=16.0)
     plan = plan_building(grounded, build_mass(grounded), np.zeros(4), Defaults(ground_floor_height=4.4), 1)
     assert plan.entrance_face is not None and plan.floor_lines[1] > 3.0
+
+
+def test_a_non_finite_wall_height_passes_the_grid_unchanged():
+    """Bug fixture: ``on_grid`` raised OverflowError / ValueError on inf / NaN, which a reader's footprint may carry
+    to :func:`citygen.roofplan.mass_plan` before the checks that name the building."""
+    assert on_grid(float("inf")) == float("inf") and math.isnan(on_grid(float("nan")))
+    assert on_grid(3.3) == round(3.3 * 2 ** 20) / 2 ** 20
