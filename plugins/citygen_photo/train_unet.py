@@ -9,7 +9,8 @@ photos, each with probability proportional to its balcony + blind pixel share pl
 (the held-out kind -- French windows behind railings, closed shutters -- comes up more often without dropping the
 photos that have none), jitters its colours (a gain per channel and a gamma), mirrors it left-right half the time,
 and cuts a random ``--crop``-pixel window; Adam descends on the cross-entropy with label weights
-``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), whose exported ``prior`` turns the
+``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), each multiplied by its ``--boost``
+factor (e.g. ``--boost blind=3``: a rare label weighted above its share), whose exported ``prior`` turns the
 outputs back into probabilities. ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
 on cmp_b0261-0300; ``--exclude`` leaves photos out (the balcony fold).
 """
@@ -57,6 +58,29 @@ def draw_weights(photos: list[tuple[np.ndarray, np.ndarray]], even: float = EVEN
     return weight / weight.sum()
 
 
+def boosted(weight: np.ndarray, boost: dict[str, float]) -> np.ndarray:
+    """The label weights ``weight`` (one per CMP label) with each label named in ``boost`` multiplied by its
+    factor."""
+    unknown = sorted(set(boost) - set(CMP_LABELS))
+    if unknown:
+        raise ValueError(f"--boost names no CMP label: {', '.join(unknown)} (labels: {', '.join(CMP_LABELS)})")
+    factor = np.array([boost.get(name, 1.0) for name in CMP_LABELS])
+    return weight * factor
+
+
+def parse_boost(text: str) -> tuple[str, float]:
+    """``LABEL=FACTOR`` of ``--boost`` as (label, factor); a clear error otherwise."""
+    name, _, value = text.partition("=")
+    try:
+        factor = float(value)
+    except ValueError:
+        factor = -1.0
+    if name not in CMP_LABELS or factor <= 0:
+        raise argparse.ArgumentTypeError(f"--boost {text!r}: want LABEL=FACTOR with a CMP label "
+                                         f"({', '.join(CMP_LABELS)}) and a factor > 0, e.g. blind=3")
+    return name, factor
+
+
 def jittered(work: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """``work`` (H, W, 3) in 0..1 with a random gamma and a random gain per channel, clipped to 0..1."""
     gamma = GAMMA ** rng.uniform(-1, 1)
@@ -95,8 +119,10 @@ def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.nd
 
 def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
           features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
-          power: float = WEIGHT_POWER, even: float = EVEN, per_kind: bool = False, seed: int = 7) -> FacadeUNet:
-    """The network fitted on ``photos`` (working image, label map) from ``seed``."""
+          power: float = WEIGHT_POWER, boost: dict[str, float] | None = None, even: float = EVEN,
+          per_kind: bool = False, seed: int = 7) -> FacadeUNet:
+    """The network fitted on ``photos`` (working image, label map) from ``seed``; ``boost`` multiplies the named
+    labels' loss weights."""
     import torch
     from torch import nn
     torch.set_num_threads(1)
@@ -109,7 +135,7 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
         mean, std = flat.mean(axis=0).astype(np.float32), (flat.std(axis=0) + 1e-6).astype(np.float32)
         feats = [((f - mean) / std).astype(np.float32) for f in feats]
     net = build_network(BASE_INPUTS + mean.size, channels)
-    weight = label_weights(photos, power)
+    weight = boosted(label_weights(photos, power), boost or {})
     loss_fn = nn.CrossEntropyLoss(weight=torch.tensor(weight, dtype=torch.float32))
     optimiser = torch.optim.Adam(net.parameters(), lr=2e-3, weight_decay=1e-5)
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
@@ -183,6 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batch", type=int, default=BATCH)
     parser.add_argument("--crop", type=int, default=CROP, help="crop side, working pixels (a multiple of 8)")
     parser.add_argument("--power", type=float, default=WEIGHT_POWER, help="label weight = share ** -power")
+    parser.add_argument("--boost", type=parse_boost, action="append", default=[], metavar="LABEL=FACTOR",
+                        help="multiply a label's loss weight (repeatable), e.g. blind=3")
     parser.add_argument("--even", type=float, default=EVEN,
                         help="photo draw weight = balcony + blind share + EVEN x the mean share")
     parser.add_argument("--per-kind", action="store_true",
@@ -193,8 +221,8 @@ def main(argv: list[str] | None = None) -> int:
     if not photos:
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
-                  batch=args.batch, crop=args.crop, power=args.power, even=args.even, per_kind=args.per_kind,
-                  seed=args.seed)
+                  batch=args.batch, crop=args.crop, power=args.power, boost=dict(args.boost), even=args.even,
+                  per_kind=args.per_kind, seed=args.seed)
     return save(model, model.arrays(), args)
 
 
