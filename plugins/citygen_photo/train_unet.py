@@ -11,7 +11,8 @@ photos that have none), jitters its colours (a gain per channel and a gamma), mi
 and cuts a random ``--crop``-pixel window; Adam descends on the cross-entropy with label weights
 ``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), each multiplied by its ``--boost``
 factor (e.g. ``--boost blind=3``: a rare label weighted above its share), whose exported ``prior`` turns the
-outputs back into probabilities. ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
+outputs back into probabilities. ``--close-shutters SHARE`` closes that share of a blind photo's windows with its
+own open shutters (:mod:`citygen_photo.shutters`; the closed kind is rare in CMP). ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
 on cmp_b0261-0300; ``--exclude`` leaves photos out (the balcony fold).
 """
 from __future__ import annotations
@@ -26,6 +27,7 @@ import numpy as np
 from citygen_photo.features import pixel_features
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.parser import UNET_PATH
+from citygen_photo.shutters import ShutterParts, closed_shutters, shutter_parts
 from citygen_photo.train import DEFAULT_DATA, add_training_arguments, save, training_photos
 from citygen_photo.train_fcn import COLUMN, label_weights
 from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, FacadeUNet, base_input, layer_shapes
@@ -89,14 +91,18 @@ def jittered(work: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.ndarray] | None,
                weights: np.ndarray, rng: np.random.Generator, batch: int, crop: int,
-               column: tuple[float, float] = (0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
+               column: tuple[float, float] = (0.0, 1.0), shutters: list[ShutterParts] | None = None,
+               close: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """One training batch: inputs ``(batch, C, crop, crop)`` float32 and labels ``(batch, crop, crop)`` (ids - 1;
     pixels padded onto a photo smaller than the crop are -100, ignored by the loss). ``features``: the photos'
     standardised pixel features or None; ``column`` the (mean, std) they were standardised with in the column
-    position's channel, which a mirrored photo flips."""
+    position's channel, which a mirrored photo flips. ``shutters``: each photo's blind and window parts, whose
+    windows are closed with probability ``close`` (:func:`citygen_photo.shutters.closed_shutters`)."""
     xs, ys = [], []
     for i in rng.choice(len(photos), size=batch, p=weights):
         work, lab = photos[i]
+        if shutters is not None:
+            work, lab = closed_shutters(work, lab, shutters[i], rng, close)
         x = base_input(jittered(work, rng))
         if features is not None:
             x = np.concatenate([x, features[i]], axis=-1)
@@ -120,9 +126,12 @@ def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.nd
 def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
           features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
           power: float = WEIGHT_POWER, boost: dict[str, float] | None = None, even: float = EVEN,
-          per_kind: bool = False, seed: int = 7) -> FacadeUNet:
+          per_kind: bool = False, close: float = 0.0, seed: int = 7) -> FacadeUNet:
     """The network fitted on ``photos`` (working image, label map) from ``seed``; ``boost`` multiplies the named
-    labels' loss weights."""
+    labels' loss weights, ``close`` is the share of a blind photo's windows closed with its own shutters."""
+    if close and features:
+        raise ValueError("--close-shutters changes the photo's pixels after its pixel features are computed: "
+                         "use it without --features")
     import torch
     from torch import nn
     torch.set_num_threads(1)
@@ -140,10 +149,11 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
     optimiser = torch.optim.Adam(net.parameters(), lr=2e-3, weight_decay=1e-5)
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
     draw = draw_weights(photos, even, per_kind)
+    shutters = [shutter_parts(lab) for _, lab in photos] if close else None
     column = (float(mean[COLUMN]), float(std[COLUMN])) if features else (0.0, 1.0)
     t0, running = time.process_time(), 0.0
     for step in range(steps):
-        x, y = draw_batch(photos, feats, draw, rng, batch, crop, column)
+        x, y = draw_batch(photos, feats, draw, rng, batch, crop, column, shutters, close)
         loss = loss_fn(net(torch.from_numpy(x)), torch.from_numpy(y))
         optimiser.zero_grad()
         loss.backward()
@@ -215,6 +225,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="photo draw weight = balcony + blind share + EVEN x the mean share")
     parser.add_argument("--per-kind", action="store_true",
                         help="draw weight from the balcony and the blind share each over its own mean")
+    parser.add_argument("--close-shutters", type=float, default=0.0, metavar="SHARE",
+                        help="close this share of a blind photo's windows with its own shutters (0 to 1)")
     add_training_arguments(parser)
     args = parser.parse_args(argv)
     photos = training_photos(args)
@@ -222,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
                   batch=args.batch, crop=args.crop, power=args.power, boost=dict(args.boost), even=args.even,
-                  per_kind=args.per_kind, seed=args.seed)
+                  per_kind=args.per_kind, close=args.close_shutters, seed=args.seed)
     return save(model, model.arrays(), args)
 
 
