@@ -12,7 +12,9 @@ and cuts a random ``--crop``-pixel window; Adam descends on the cross-entropy wi
 ``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), each multiplied by its ``--boost``
 factor (e.g. ``--boost blind=3``: a rare label weighted above its share), whose exported ``prior`` turns the
 outputs back into probabilities. ``--close-shutters SHARE`` closes that share of a blind photo's windows with its
-own open shutters (:mod:`citygen_photo.shutters`; the closed kind is rare in CMP). ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
+own open shutters (:mod:`citygen_photo.shutters`; the closed kind is rare in CMP). ``--init MODEL.npz`` starts
+from a trained U-Net of the same widths instead of random weights (fine-tuning, e.g. with ``--lr 5e-4``).
+``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
 on cmp_b0261-0300; ``--exclude`` leaves photos out (the balcony fold).
 """
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 
 from citygen_photo.features import pixel_features
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.parser import UNET_PATH
+from citygen_photo.parser import UNET_PATH, load_parser
 from citygen_photo.shutters import ShutterParts, closed_shutters, shutter_parts
 from citygen_photo.train import DEFAULT_DATA, add_training_arguments, save, training_photos
 from citygen_photo.train_fcn import COLUMN, label_weights
@@ -35,6 +37,7 @@ from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, FacadeUNet, base_i
 #: Defaults of the shipped model: level widths, steps, photos per step, crop side (working pixels), label weights.
 CHANNELS = (16, 32, 48, 64)
 STEPS = 2400
+LEARNING_RATE = 2e-3
 BATCH = 6
 CROP = 128
 WEIGHT_POWER = 0.5
@@ -126,9 +129,15 @@ def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.nd
 def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
           features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
           power: float = WEIGHT_POWER, boost: dict[str, float] | None = None, even: float = EVEN,
-          per_kind: bool = False, close: float = 0.0, seed: int = 7) -> FacadeUNet:
+          per_kind: bool = False, close: float = 0.0, lr: float = LEARNING_RATE, init: FacadeUNet | None = None,
+          seed: int = 7) -> FacadeUNet:
     """The network fitted on ``photos`` (working image, label map) from ``seed``; ``boost`` multiplies the named
-    labels' loss weights, ``close`` is the share of a blind photo's windows closed with its own shutters."""
+    labels' loss weights, ``close`` is the share of a blind photo's windows closed with its own shutters; ``init``
+    a trained network to start from (its widths ``channels``, no pixel features), ``lr`` Adam's first step."""
+    if init is not None and (init.channels != tuple(channels) or init.feature_mean.size or features):
+        raise ValueError(f"--init: the network's widths {init.channels} (pixel features: "
+                         f"{bool(init.feature_mean.size)}) differ from the training's {tuple(channels)} "
+                         f"({features}); give --channels as the model's, without --features")
     if close and features:
         raise ValueError("--close-shutters changes the photo's pixels after its pixel features are computed: "
                          "use it without --features")
@@ -144,9 +153,11 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
         mean, std = flat.mean(axis=0).astype(np.float32), (flat.std(axis=0) + 1e-6).astype(np.float32)
         feats = [((f - mean) / std).astype(np.float32) for f in feats]
     net = build_network(BASE_INPUTS + mean.size, channels)
+    if init is not None:
+        loaded(net, init)
     weight = boosted(label_weights(photos, power), boost or {})
     loss_fn = nn.CrossEntropyLoss(weight=torch.tensor(weight, dtype=torch.float32))
-    optimiser = torch.optim.Adam(net.parameters(), lr=2e-3, weight_decay=1e-5)
+    optimiser = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=1e-5)
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
     draw = draw_weights(photos, even, per_kind)
     shutters = [shutter_parts(lab) for _, lab in photos] if close else None
@@ -196,6 +207,16 @@ def build_network(inputs: int, channels: tuple[int, ...]):
     return UNet()
 
 
+def loaded(net, model: FacadeUNet) -> None:
+    """Set the PyTorch module ``net``'s weights to those of ``model`` (the inverse of :func:`exported`)."""
+    import torch
+    with torch.no_grad():
+        for conv, (w, b) in zip(net.convs, model.layers):
+            kernel = w.transpose(3, 2, 0, 1) if w.ndim == 4 else w.T[:, :, None, None]
+            conv.weight.copy_(torch.from_numpy(np.ascontiguousarray(kernel)))
+            conv.bias.copy_(torch.from_numpy(b))
+
+
 def exported(net, channels: tuple[int, ...], mean: np.ndarray, std: np.ndarray, prior: np.ndarray) -> FacadeUNet:
     """The numpy parser of the PyTorch module ``net``, its weights rounded to float16 as stored."""
     import torch
@@ -227,14 +248,24 @@ def main(argv: list[str] | None = None) -> int:
                         help="draw weight from the balcony and the blind share each over its own mean")
     parser.add_argument("--close-shutters", type=float, default=0.0, metavar="SHARE",
                         help="close this share of a blind photo's windows with its own shutters (0 to 1)")
+    parser.add_argument("--lr", type=float, default=LEARNING_RATE, help="Adam's learning rate (cosine decay)")
+    parser.add_argument("--init", type=Path, metavar="MODEL.npz",
+                        help="start from this trained U-Net (fine-tuning) instead of random weights")
     add_training_arguments(parser)
     args = parser.parse_args(argv)
+    init = None
+    if args.init is not None:
+        init = load_parser(args.init)
+        if not isinstance(init, FacadeUNet):
+            print(f"--init {args.init}: not a U-Net's weights (train one with this script)", file=sys.stderr)
+            return 2
     photos = training_photos(args)
     if not photos:
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
                   batch=args.batch, crop=args.crop, power=args.power, boost=dict(args.boost), even=args.even,
-                  per_kind=args.per_kind, close=args.close_shutters, seed=args.seed)
+                  per_kind=args.per_kind, close=args.close_shutters, lr=args.lr, init=init,
+                  seed=args.seed)
     return save(model, model.arrays(), args)
 
 

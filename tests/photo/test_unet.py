@@ -157,3 +157,17 @@ def test_boost_option_reads_label_and_factor_and_names_the_labels_on_bad_input()
     for bad in ("blind", "blind=x", "blind=0", "shutter=2"):
         with pytest.raises(argparse.ArgumentTypeError, match="LABEL=FACTOR"):
             parse_boost(bad)
+
+
+def test_training_from_a_trained_network_starts_at_its_weights_and_refuses_other_widths():
+    pytest.importorskip("torch")
+    from citygen_photo.train_unet import train
+    photos = labelled_photos(2)
+    first = train(photos, channels=(8, 8, 8), steps=20, batch=2, crop=48, seed=3)
+    same = train(photos, channels=(8, 8, 8), steps=0, batch=2, crop=48, init=first, seed=5)
+    assert all(np.array_equal(wa, wb) and np.array_equal(ba, bb)
+               for (wa, ba), (wb, bb) in zip(first.layers, same.layers))
+    tuned = train(photos, channels=(8, 8, 8), steps=5, batch=2, crop=48, lr=1e-3, init=first, seed=5)
+    assert not all(np.array_equal(wa, wb) for (wa, _), (wb, _) in zip(first.layers, tuned.layers))
+    with pytest.raises(ValueError, match="widths"):
+        train(photos, channels=(8, 8, 16), steps=1, batch=2, crop=48, init=first)
