@@ -138,6 +138,8 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
         raise ValueError(f"--init: the network's widths {init.channels} (pixel features: "
                          f"{bool(init.feature_mean.size)}) differ from the training's {tuple(channels)} "
                          f"({features}); give --channels as the model's, without --features")
+    if not 0 <= close <= 1:
+        raise ValueError(f"--close-shutters {close}: a share of the windows, from 0 to 1")
     if close and features:
         raise ValueError("--close-shutters changes the photo's pixels after its pixel features are computed: "
                          "use it without --features")

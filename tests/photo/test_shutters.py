@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from citygen_photo.shutters import BLIND, WINDOW, closed_shutters, shutter_parts
-from citygen_photo.train_unet import draw_batch
+from citygen_photo.train_unet import draw_batch, train
 from tests.photo.synthetic import labelled_photos
 
 
@@ -55,3 +56,11 @@ def test_a_batch_with_closed_shutters_has_blind_labels_and_none_without():
     blind, window = BLIND - 1, WINDOW - 1  # the batch's labels are ids - 1
     assert (closed == window).sum() == 0 and (closed == blind).sum() > (kept == blind).sum()
     assert (kept == window).sum() > 0
+
+
+def test_a_share_outside_zero_to_one_or_with_pixel_features_is_refused_before_training():
+    photos = labelled_photos(1)
+    with pytest.raises(ValueError, match="from 0 to 1"):
+        train(photos, close=1.5, steps=1)
+    with pytest.raises(ValueError, match="without --features"):
+        train(photos, close=0.5, features=True, steps=1)
