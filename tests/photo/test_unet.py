@@ -2,13 +2,15 @@
 (citygen_photo.train_unet; the network itself needs PyTorch)."""
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 import pytest
 
 from citygen_photo.features import FEATURES, pixel_features
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.train_fcn import COLUMN
-from citygen_photo.train_unet import draw_batch, draw_weights, jittered
+from citygen_photo.train_fcn import COLUMN, label_weights
+from citygen_photo.train_unet import boosted, draw_batch, draw_weights, jittered, parse_boost
 from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, base_input, layer_shapes
 from tests.photo.synthetic import labelled_photos
 
@@ -136,3 +138,36 @@ def test_per_kind_draws_give_the_rarer_kind_the_same_mass_as_the_commoner():
     pooled, per_kind = draw_weights(photos, even=0.0), draw_weights(photos, even=0.0, per_kind=True)
     assert pooled[1] > 2 * pooled[2]  # pooled shares: the balcony photo dominates
     assert per_kind[1] == pytest.approx(per_kind[2]) and per_kind[0] == pytest.approx(0, abs=1e-6)
+
+
+def test_a_boost_multiplies_only_the_named_labels_loss_weight():
+    photos = labelled_photos(2)
+    weight = label_weights(photos, 0.5)
+    out = boosted(weight, {"blind": 3.0, "balcony": 2.0})
+    factor = np.ones(len(CMP_LABELS))
+    factor[CMP_LABELS.index("blind")], factor[CMP_LABELS.index("balcony")] = 3.0, 2.0
+    assert np.allclose(out, weight * factor)
+    assert np.array_equal(boosted(weight, {}), weight)
+    with pytest.raises(ValueError, match="shutter"):
+        boosted(weight, {"shutter": 2.0})
+
+
+def test_boost_option_reads_label_and_factor_and_names_the_labels_on_bad_input():
+    assert parse_boost("blind=3") == ("blind", 3.0)
+    for bad in ("blind", "blind=x", "blind=0", "shutter=2"):
+        with pytest.raises(argparse.ArgumentTypeError, match="LABEL=FACTOR"):
+            parse_boost(bad)
+
+
+def test_training_from_a_trained_network_starts_at_its_weights_and_refuses_other_widths():
+    pytest.importorskip("torch")
+    from citygen_photo.train_unet import train
+    photos = labelled_photos(2)
+    first = train(photos, channels=(8, 8, 8), steps=20, batch=2, crop=48, seed=3)
+    same = train(photos, channels=(8, 8, 8), steps=0, batch=2, crop=48, init=first, seed=5)
+    assert all(np.array_equal(wa, wb) and np.array_equal(ba, bb)
+               for (wa, ba), (wb, bb) in zip(first.layers, same.layers))
+    tuned = train(photos, channels=(8, 8, 8), steps=5, batch=2, crop=48, lr=1e-3, init=first, seed=5)
+    assert not all(np.array_equal(wa, wb) for (wa, _), (wb, _) in zip(first.layers, tuned.layers))
+    with pytest.raises(ValueError, match="widths"):
+        train(photos, channels=(8, 8, 16), steps=1, batch=2, crop=48, init=first)
