@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from shapely.geometry import Polygon
@@ -41,6 +41,9 @@ from citygen.roof import check_budget
 DENSE_PAIRS = 40_000
 #: The nearest edges of each reflex vertex that make that first guess.
 NEAR_EDGES = 8
+#: Up to this many vertices the next event is found in plain Python (:meth:`_Wavefront.small_event`): a building's
+#: wavefront is small, and numpy's overhead per call is most of its cost there.
+SMALL_FRONT = 48
 
 
 class SkeletonError(ValueError):
@@ -75,6 +78,11 @@ class _Vertex:
     e_in: int
     e_out: int
     spike: bool = False
+    #: ``(*p0, t0, *vel, e_in, e_out)``: the vertex's row of :meth:`_Wavefront.front`
+    row: tuple[float, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "row", (*self.p0, self.t0, *self.vel, self.e_in, self.e_out))
 
     def at(self, t: float) -> np.ndarray:
         return np.array([self.p0[0] + (t - self.t0) * self.vel[0], self.p0[1] + (t - self.t0) * self.vel[1]])
@@ -101,6 +109,8 @@ class _Wavefront:
         self.flats: list[tuple[int, ...]] = []
         self.edge_nodes = []
         self.rings: list[list[_Vertex]] = []
+        self._front: tuple | None = None  # (key, value) of the last :meth:`front`
+        self._lines: tuple | None = None  # D, N, C, W as lists of Python floats (:meth:`lines`)
         first = 0
         for r in rings:
             n = len(r)
@@ -165,18 +175,44 @@ class _Wavefront:
 
     # -- events -------------------------------------------------------------------------------------------------
 
+    def front(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The wavefront at ``t`` as arrays over its vertices, ring after ring: ``(pos, vel, nxt, e_in, e_out)``,
+        ``nxt`` the index of each vertex's successor in its ring. Kept until the rings or ``t`` change: the clean-up
+        after an event (:meth:`roomy`) and the search for the next one (:meth:`next_event`) share it."""
+        verts = tuple(v for ring in self.rings for v in ring)
+        key = (t, tuple(map(len, self.rings)), verts)
+        if self._front is not None and self._front[0] == key:
+            return self._front[1]
+        rows = np.array([v.row for v in verts]).reshape(-1, 7)
+        sizes = np.array(key[1])
+        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        nxt = first + (np.arange(len(verts)) - first + 1) % np.repeat(sizes, sizes)
+        vel = np.ascontiguousarray(rows[:, 3:5])
+        pos = rows[:, 0:2] + (t - rows[:, 2])[:, None] * vel
+        value = (pos, vel, nxt, rows[:, 5].astype(np.int64), rows[:, 6].astype(np.int64))
+        self._front = (key, value)
+        return value
+
+    def where(self, k: int) -> tuple[int, int]:
+        """Ring and place in it of the ``k``-th vertex of :meth:`front`."""
+        for r, ring in enumerate(self.rings):
+            if k < len(ring):
+                return r, k
+            k -= len(ring)
+        raise IndexError(k)
+
+    def lines(self) -> tuple[list, list, list, list]:
+        """The edges' ``D``, ``N``, ``C`` and ``W`` as lists of Python floats."""
+        if self._lines is None:
+            self._lines = (self.D.tolist(), self.N.tolist(), self.C.tolist(), self.W.tolist())
+        return self._lines
+
     def next_event(self, t: float) -> tuple[float, int, tuple] | None:
         """Earliest event at or after ``t``: ``(time, kind, where)`` with kind 0 (edge event, wins ties) or 1
-        (split event); every vertex against every edge at once, in numpy."""
-        verts = [v for ring in self.rings for v in ring]
-        where = [(r, i) for r, ring in enumerate(self.rings) for i in range(len(ring))]
-        sizes = np.array([len(ring) for ring in self.rings])
-        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        local = np.arange(len(verts)) - first
-        nxt = first + (local + 1) % np.repeat(sizes, sizes)
-        vel = np.array([v.vel for v in verts])
-        pos = np.array([v.p0 for v in verts]) + (t - np.array([v.t0 for v in verts]))[:, None] * vel
-        e_in, e_out = np.array([v.e_in for v in verts]), np.array([v.e_out for v in verts])
+        (split event); every vertex against every edge at once, in numpy (a small wavefront: :meth:`small_event`)."""
+        if sum(map(len, self.rings)) <= SMALL_FRONT:
+            return self.small_event(t)
+        pos, vel, nxt, e_in, e_out = self.front(t)
         best = None
         d = self.D[e_out]
         length = np.einsum("ij,ij->i", d, pos[nxt] - pos)
@@ -190,23 +226,81 @@ class _Wavefront:
         if len(shrinking):
             te = t + np.maximum(length[shrinking], 0.0) / -rate[shrinking]
             k = int(np.argmin(te))
-            best = (float(te[k]), 0, where[shrinking[k]])
+            best = (float(te[k]), 0, self.where(int(shrinking[k])))
         a, b = self.D[e_in], self.D[e_out]
         reflex = np.flatnonzero(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0] < -1e-9)
         if not len(reflex):
             return best
-        context = (pos, vel, nxt, e_out, t, where)
-        if len(reflex) * len(verts) <= DENSE_PAIRS:
-            split = self._split_event(np.repeat(reflex, len(verts)), np.tile(np.arange(len(verts)), len(reflex)),
-                                      *context)
+        context = (pos, vel, nxt, e_out, t)
+        n = len(pos)
+        if len(reflex) * n <= DENSE_PAIRS:
+            split = self._split_event(np.repeat(reflex, n), np.tile(np.arange(n), len(reflex)), *context)
         else:
             split = self._split_event(*self._near_pairs(reflex, best, *context), *context)
         if split is not None and (best is None or split[0] < best[0]):
             best = split
         return best
 
+    def small_event(self, t: float) -> tuple[float, int, tuple] | None:
+        """:meth:`next_event` in plain Python floats, for a small wavefront: the same operations in the same order
+        (a dot product of two rows in numpy is ``x0 * y0 + x1 * y1``), the same scan order and tie-breaking, so the
+        same event to the last bit, at a fraction of the cost."""
+        D, N, C, W = self.lines()
+        verts = [v for ring in self.rings for v in ring]
+        nxt: list[int] = []
+        for ring in self.rings:
+            first = len(nxt)
+            nxt += range(first + 1, first + len(ring))
+            nxt.append(first)
+        pos = [(v.p0[0] + (t - v.t0) * v.vel[0], v.p0[1] + (t - v.t0) * v.vel[1]) for v in verts]
+        best = None
+        short = 1e-7 * self.scale
+        for k, v in enumerate(verts):  # edge events: the earliest, the first of equal ones
+            j = nxt[k]
+            (dx, dy), p, q, u, w = D[v.e_out], pos[k], pos[j], v.vel, verts[j].vel
+            length = dx * (q[0] - p[0]) + dy * (q[1] - p[1])
+            rate = dx * (w[0] - u[0]) + dy * (w[1] - u[1])
+            if length < short and abs(rate) <= 1e-12:
+                rate = -1.0  # (see :meth:`next_event`)
+            if rate < -1e-12:
+                te = t + max(length, 0.0) / -rate
+                if best is None or te < best[0]:
+                    best = (te, k)
+        eps, split = self.eps, None
+        edges = [(*N[v.e_out], C[v.e_out], W[v.e_out], W[v.e_out] * t) for v in verts]
+        for k, v in enumerate(verts):  # split events: reflex vertex k against every edge j
+            (ax, ay), (bx, by) = D[v.e_in], D[v.e_out]
+            if not ax * by - ay * bx < -1e-9:
+                continue
+            (x0, y0), (vx, vy) = pos[k], v.vel
+            for j, (nx, ny, c, w, wt) in enumerate(edges):
+                rate = (vx * nx + vy * ny) - w
+                if not rate < -1e-12:
+                    continue
+                dist = (x0 * nx + y0 * ny) - c - wt
+                m = nxt[j]
+                if not dist >= -eps or j == k or m == k:
+                    continue
+                x = verts[j]
+                e = x.e_out
+                dt = max(dist, 0.0) / -rate
+                (fx, fy), (jx, jy), (jvx, jvy), (mx, my), (mvx, mvy) = D[e], pos[j], x.vel, pos[m], verts[m].vel
+                px, py = jx + dt * jvx, jy + dt * jvy
+                along = (x0 + dt * vx - px) * fx + (y0 + dt * vy - py) * fy
+                span = (mx + dt * mvx - px) * fx + (my + dt * mvy - py) * fy
+                if not (along >= -eps and along <= span + eps):
+                    continue
+                if dt <= eps and ((along <= eps and (vx - jvx) * fx + (vy - jvy) * fy < -1e-12)
+                                  or (along >= span - eps and (vx - mvx) * fx + (vy - mvy) * fy > 1e-12)):
+                    continue  # (see :meth:`_split_event`)
+                if split is None or dt < split[0]:
+                    split = (dt, k, j)
+        if split is not None and (best is None or t + split[0] < best[0]):
+            return t + split[0], 1, (*self.where(split[1]), *self.where(split[2]))
+        return None if best is None else (best[0], 0, self.where(best[1]))
+
     def _split_event(self, pv: np.ndarray, pj: np.ndarray, pos: np.ndarray, vel: np.ndarray, nxt: np.ndarray,
-                     e_out: np.ndarray, t: float, where: list) -> tuple[float, int, tuple] | None:
+                     e_out: np.ndarray, t: float) -> tuple[float, int, tuple] | None:
         """The earliest split event among the pairs (reflex vertex ``pv``, edge from vertex ``pj`` to its next); of
         simultaneous ones, that of the lowest vertex, then edge (the first of a dense scan)."""
         n_f, c_f, w_f = self.N[e_out[pj]], self.C[e_out[pj]], self.W[e_out[pj]]
@@ -233,10 +327,10 @@ class _Wavefront:
             return None
         first = inside[dt[inside] == dt[inside].min()]  # ties: the first pair of a dense scan
         k = first[np.lexsort((jj[first], v[first]))[0]]
-        return t + float(dt[k]), 1, (*where[v[k]], *where[jj[k]])
+        return t + float(dt[k]), 1, (*self.where(int(v[k])), *self.where(int(jj[k])))
 
     def _near_pairs(self, reflex: np.ndarray, edge: tuple[float, int, tuple] | None, pos: np.ndarray,
-                    vel: np.ndarray, nxt: np.ndarray, e_out: np.ndarray, t: float, where: list
+                    vel: np.ndarray, nxt: np.ndarray, e_out: np.ndarray, t: float
                     ) -> tuple[np.ndarray, np.ndarray]:
         """The (reflex vertex, edge) pairs that can meet before the next event, for a big wavefront: a first
         guess of that event (the earlier of the next edge event and the split events of each reflex vertex with
@@ -248,7 +342,7 @@ class _Wavefront:
         tree = cKDTree(mid)
         k = min(NEAR_EDGES, len(pos))
         _, near = tree.query(pos[reflex], k=k)
-        guess = self._split_event(np.repeat(reflex, k), np.asarray(near).ravel(), pos, vel, nxt, e_out, t, where)
+        guess = self._split_event(np.repeat(reflex, k), np.asarray(near).ravel(), pos, vel, nxt, e_out, t)
         times = [e[0] for e in (edge, guess) if e is not None]
         if not times:  # nothing to bound the search with: every pair
             return np.repeat(reflex, len(pos)), np.tile(np.arange(len(pos)), len(reflex))
@@ -296,6 +390,7 @@ class _Wavefront:
         self.C, self.W = np.append(self.C, normal @ np.asarray(self.nodes[node])), np.append(self.W, 0.0)
         self.arcs.append(set())
         self.edge_nodes.append((node, None))
+        self._lines = None
         return len(self.W) - 1
 
     def split_event(self, t: float, r: int, i: int, s: int, j: int) -> None:
@@ -387,16 +482,18 @@ class _Wavefront:
 
     def roomy(self, t: float) -> np.ndarray:
         """Per ring, whether its area at ``t`` is clearly (twice) above what :meth:`collapsed` calls none: one
-        vectorised shoelace over every ring, so only the few small rings get the exact test."""
+        vectorised shoelace over every ring, so only the few small rings get the exact test. A small wavefront
+        whose rings all have clearly more area (``4e-9`` of the scale squared, in Python floats; the two sums of
+        at most ``SMALL_FRONT`` cross products differ only by their order, by far less than the margin) skips it."""
+        if 0 < sum(map(len, self.rings)) <= SMALL_FRONT and all(
+                abs(0.5 * _ring_cross(ring, t)) >= 4e-9 * self.scale ** 2 for ring in self.rings):
+            return np.ones(len(self.rings), dtype=bool)
         sizes = np.array([len(ring) for ring in self.rings])
         if not len(sizes) or sizes.min() == 0:
             return np.zeros(len(sizes), dtype=bool)
-        verts = [v for ring in self.rings for v in ring]
-        p0, t0 = np.array([v.p0 for v in verts]), np.array([v.t0 for v in verts])
-        pos = p0 + (t - t0)[:, None] * np.array([v.vel for v in verts])
+        pos, _, nxt, _, _ = self.front(t)
         first = np.cumsum(sizes) - sizes
         start = np.repeat(first, sizes)
-        nxt = start + (np.arange(len(verts)) - start + 1) % np.repeat(sizes, sizes)
         rel = pos - pos[start]
         cross = rel[:, 0] * rel[nxt, 1] - rel[nxt, 0] * rel[:, 1]
         return np.abs(0.5 * np.add.reduceat(cross, first)) >= 2e-9 * self.scale ** 2
@@ -569,6 +666,14 @@ class _Wavefront:
                 return tuple(self.with_holes(e, path))
             path.append(cur)
         raise SkeletonError(f"face of edge {e} does not close")
+
+
+def _ring_cross(ring: list[_Vertex], t: float) -> float:
+    """Twice the signed area of ``ring`` at ``t`` (shoelace about its first vertex), in Python floats."""
+    p = [(v.p0[0] + (t - v.t0) * v.vel[0], v.p0[1] + (t - v.t0) * v.vel[1]) for v in ring]
+    x0, y0 = p[0]
+    rel = [(x - x0, y - y0) for x, y in p]
+    return sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(rel, rel[1:] + rel[:1]))
 
 
 def _signed_area(p: np.ndarray) -> float:
