@@ -41,7 +41,7 @@ from citygen_roofs.osm_shapes import (ButterflyRoof, CrosspitchedRoof, SaltboxRo
                                       SideHippedRoof)
 from citygen_roofs.pitched import (DomeRoof, GabledRoof, GambrelRoof, HalfHippedRoof, HippedRoof,  # noqa: E402
                                    MansardRoof, RoofError, RoundRoof)
-from tests.roofs.test_builders import _flat_to_rounding, _open_edges, _outline_edges, _same_edges  # noqa: E402
+from tests.roofs.test_builders import _plumb_to_rounding, _open_edges, _outline_edges, _same_edges  # noqa: E402
 
 SKELETON = (HippedRoof(), GabledRoof(), HalfHippedRoof(), MansardRoof(), GambrelRoof(), DomeRoof(), RoundRoof())
 #: the roofs of planar pieces (citygen_roofs.osm_shapes); their party walls and orientations are drawn from a
@@ -262,7 +262,7 @@ def _closed(mesh, outline: Polygon) -> bool:
     n = np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]])
     ulp = 4 * float(np.spacing(np.abs(mesh.points).max()))  # float32 rounding of the points, a few units
     longest = np.max([np.linalg.norm(p[tris[:, k]] - p[tris[:, k - 1]], axis=1) for k in range(3)], axis=0)
-    down = (n[:, 2] < -ulp * longest) & ~_flat_to_rounding(mesh, n)
+    down = (n[:, 2] < -ulp * longest) & ~_plumb_to_rounding(mesh, n)
     if np.any(down) or abs(n[:, 2].sum() / 2 - outline.area) > ulp * outline.length:
         return False
     try:

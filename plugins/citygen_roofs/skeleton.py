@@ -44,6 +44,8 @@ NEAR_EDGES = 8
 #: Up to this many vertices the next event is found in plain Python (:meth:`_Wavefront.small_event`): a building's
 #: wavefront is small, and numpy's overhead per call is most of its cost there.
 SMALL_FRONT = 48
+#: Up to this many (reflex vertex, edge) pairs a small wavefront's split events are found in plain Python too.
+SMALL_PAIRS = 128
 
 
 class SkeletonError(ValueError):
@@ -137,7 +139,7 @@ class _Wavefront:
     def antiparallel(self, v: _Vertex) -> bool:
         return v.spike
 
-    def meet(self, v: _Vertex, u: _Vertex, t: float) -> np.ndarray:
+    def meet(self, v: _Vertex, u: _Vertex, t: float) -> tuple[float, float] | np.ndarray:
         """Where ``v`` and ``u`` meet at an edge event: where the offset lines of the collapsing edge and its
         neighbours cross at ``t`` (exact, so positions do not drift from event to event); the midpoint of the two
         vertices where those lines are nearly parallel."""
@@ -148,7 +150,12 @@ class _Wavefront:
                 ca, cb = self.C[a] + self.W[a] * t, self.C[b] + self.W[b] * t
                 points.append(((ca * self.N[b][1] - cb * self.N[a][1]) / det,
                                (self.N[a][0] * cb - self.N[b][0] * ca) / det))
-        return np.mean(points, axis=0) if points else (v.at(t) + u.at(t)) / 2
+        if not points:
+            return (v.at(t) + u.at(t)) / 2
+        x = y = 0.0  # their mean as numpy takes it: summed from +0.0 (a -0.0 comes out +0.0), then divided
+        for px, py in points:
+            x, y = x + px, y + py
+        return x / len(points), y / len(points)
 
     def node(self, p: np.ndarray, t: float) -> int:
         """The node at ``p`` and time ``t`` (reusing one within tolerance: simultaneous events meet in one node; a
@@ -266,12 +273,20 @@ class _Wavefront:
                 te = t + max(length, 0.0) / -rate
                 if best is None or te < best[0]:
                     best = (te, k)
+        reflex = [k for k, v in enumerate(verts)
+                  if D[v.e_in][0] * D[v.e_out][1] - D[v.e_in][1] * D[v.e_out][0] < -1e-9]
+        if len(reflex) * len(verts) > SMALL_PAIRS:  # split events: many pairs, in numpy
+            front = self.front(t)
+            n = len(verts)
+            split = self._split_event(np.repeat(reflex, n), np.tile(np.arange(n), len(reflex)), *front[:3],
+                                      front[4], t)
+            if split is not None and (best is None or split[0] < best[0]):
+                return split
+            return None if best is None else (best[0], 0, self.where(best[1]))
         eps, split = self.eps, None
         edges = [(*N[v.e_out], C[v.e_out], W[v.e_out], W[v.e_out] * t) for v in verts]
-        for k, v in enumerate(verts):  # split events: reflex vertex k against every edge j
-            (ax, ay), (bx, by) = D[v.e_in], D[v.e_out]
-            if not ax * by - ay * bx < -1e-9:
-                continue
+        for k in reflex:  # split events: reflex vertex k against every edge j
+            v = verts[k]
             (x0, y0), (vx, vy) = pos[k], v.vel
             for j, (nx, ny, c, w, wt) in enumerate(edges):
                 rate = (vx * nx + vy * ny) - w
@@ -284,6 +299,8 @@ class _Wavefront:
                 x = verts[j]
                 e = x.e_out
                 dt = max(dist, 0.0) / -rate
+                if (split is not None and dt >= split[0]) or (best is not None and t + dt >= best[0]):
+                    continue  # (it can be neither the earliest split event, nor the first of equal ones, nor win)
                 (fx, fy), (jx, jy), (jvx, jvy), (mx, my), (mvx, mvy) = D[e], pos[j], x.vel, pos[m], verts[m].vel
                 px, py = jx + dt * jvx, jy + dt * jvy
                 along = (x0 + dt * vx - px) * fx + (y0 + dt * vy - py) * fy
