@@ -9,10 +9,11 @@ edges. Two kinds of event change its topology:
   edge belongs to another ring, e.g. a courtyard's, joins the two rings).
 
 The next event is found by testing every vertex and edge of the current wavefront (``O(n^2)`` per event, in
-numpy): cheap for building footprints, and no priority queue that could go stale after simultaneous events. A
-ring left with two vertices, or a thin ring with no area left, ends in skeleton arcs (a ridge); a vertex between
-two antiparallel edges (a zero-width spike) is folded back at once. Every arc the wavefront's vertices trace
-borders the faces of their two edges, so each input edge's *face* is collected from those arcs.
+numpy; a small wavefront in plain Python floats, the same operations): cheap for building footprints, and no
+priority queue that could go stale after simultaneous events. A ring left with two vertices, or a thin ring with
+no area left, ends in skeleton arcs (a ridge); a vertex between two antiparallel edges (a zero-width spike) is
+folded back at once. Every arc the wavefront's vertices trace borders the faces of their two edges, so each input
+edge's *face* is collected from those arcs.
 
 Weighted (edges of speed 0 stand still): a ring none of whose edges moves (a region walled in by standing edges
 that no moving edge reaches) ends as a *plateau* at the time its last moving edge vanished; a standing edge swept
@@ -501,10 +502,13 @@ class _Wavefront:
         """Per ring, whether its area at ``t`` is clearly (twice) above what :meth:`collapsed` calls none: one
         vectorised shoelace over every ring, so only the few small rings get the exact test. A small wavefront
         whose rings all have clearly more area (``4e-9`` of the scale squared, in Python floats; the two sums of
-        at most ``SMALL_FRONT`` cross products differ only by their order, by far less than the margin) skips it."""
-        if 0 < sum(map(len, self.rings)) <= SMALL_FRONT and all(
-                abs(0.5 * _ring_cross(ring, t)) >= 4e-9 * self.scale ** 2 for ring in self.rings):
-            return np.ones(len(self.rings), dtype=bool)
+        at most ``SMALL_FRONT`` cross products differ only by their order, by far less than the margin) or one or
+        two vertices (no area: both sums are 0) skips it."""
+        if 0 < sum(map(len, self.rings)) <= SMALL_FRONT and all(self.rings):
+            clear = [len(ring) > 2 and abs(0.5 * _ring_cross(ring, t)) >= 4e-9 * self.scale ** 2
+                     for ring in self.rings]
+            if all(c or len(ring) <= 2 for c, ring in zip(clear, self.rings)):
+                return np.array(clear, dtype=bool)
         sizes = np.array([len(ring) for ring in self.rings])
         if not len(sizes) or sizes.min() == 0:
             return np.zeros(len(sizes), dtype=bool)

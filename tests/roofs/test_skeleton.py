@@ -180,7 +180,7 @@ def _same_skeleton(a, b):
 def test_small_wavefront_search_in_python_finds_the_events_numpy_finds(polygon):
     """A small wavefront's next event is searched in plain Python floats (speed); the numpy search of a big one must
     give the very same skeleton, to the last bit, or a building's roof would change with its size class."""
-    import citygen_roofs.skeleton as skeleton
+    from citygen_roofs import skeleton
     weights = np.where(np.arange(sum(len(r.coords) - 1 for r in (polygon.exterior, *polygon.interiors))) % 5 == 2,
                        0.0, 1.0)
     for w in (None, weights):
