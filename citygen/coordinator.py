@@ -57,8 +57,8 @@ def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lift
     A taller ground floor (``ground_floor_height``) is used when the building has at least three floors, the
     upper floors stay at least 2.4 m high and it is not ``lifted`` off the ground; everything always ends exactly at
     ``height``. The storeys above the lowest are equal to the last bit, so they derive alike (a grammar derives a
-    storey's subtree once and places copies): their height and ``height`` are rounded to a grid of :data:`GRID`
-    metres (:data:`citygen.mass.GRID`) and the lowest storey takes the rest, within micrometres of its plan (a ``height``
+    storey's subtree once and places copies): their height and ``height`` are rounded to the grid of
+    :data:`citygen.mass.GRID` and the lowest storey takes the rest, within micrometres of its plan (a ``height``
     off the grid leaves the top storey within micrometres of the others).
     """
     if levels is None or levels < 1:

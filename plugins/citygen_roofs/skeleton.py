@@ -372,8 +372,8 @@ class _Wavefront:
         found = tree.query_ball_point(pos[reflex], horizon * speed[reflex] + cut)
         counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
         pv = np.concatenate([np.repeat(reflex, len(far)), np.repeat(reflex, counts)]).astype(np.int64)
-        pj = np.concatenate([np.tile(far, len(reflex)),
-                             np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))])
+        near = np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
+        pj = np.concatenate([np.tile(far, len(reflex)), near])
         return pv, pj  # (a pair may come twice: harmless)
 
     def edge_event(self, t: float, r: int, i: int) -> None:
