@@ -37,7 +37,7 @@ def library_name(suffix: str) -> str:
 def write_library(path: Path, keys: Iterable[ProtoKey], materials: Mapping[str, Material], uvs: bool,
                   up_axis: str) -> int:
     """Write the element library of ``keys`` (in name order) to ``path``; return the number of prims."""
-    layer = Sdf.Layer.CreateAnonymous(".usda")
+    layer = Sdf.Layer.CreateAnonymous(path.suffix)  # (crate data for a .usdc: see StageWriter)
     author = Author(layer, uvs, materials, path.parent)
     definitions = Definitions(author)
     store = elements(materials, uvs)

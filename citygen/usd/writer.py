@@ -176,7 +176,8 @@ class StageWriter:
         self.staging: Path | None = None
         self.started = time.time()  # (tiles older than this that the new root does not list are removed)
         remove_stale_temporaries(self.path.parent)
-        self.layer = Sdf.Layer.CreateAnonymous(".usda")
+        # (authored in the data of the format written: a crate layer exports without a copy into crate data first)
+        self.layer = Sdf.Layer.CreateAnonymous(self.tile_suffix)
         self.author = Author(self.layer, uvs, self.library, self.path.parent)
         self.counts = {"buildings": 0, "meshes": 0, "instances": 0, "polygons": 0}
         self.definitions = Definitions(self.author)
