@@ -25,7 +25,9 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
     counts = np.asarray(counts, dtype=np.int64)
     if not counts.size:
         return np.zeros((0, 3))
-    pts = np.asarray(points, dtype=float)
+    pts = np.asarray(points)
+    if pts.dtype != np.float32:  # (float32 points are gathered as they are and widened in the subtraction)
+        pts = np.asarray(pts, dtype=float)
     indices = np.asarray(indices)
     start = np.cumsum(counts) - counts
     if counts.min() >= 3 and counts.max() <= 4:
@@ -37,7 +39,7 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
         other = np.flatnonzero(~small)
         corner = np.repeat(start[other] - np.cumsum(counts[other]) + counts[other], counts[other]) + \
             np.arange(counts[other].sum())
-        normal[other] = _newell_normals(pts, counts[other], indices[corner])
+        normal[other] = _newell_normals(np.asarray(pts, dtype=float), counts[other], indices[corner])
     length = np.sqrt(np.einsum("ij,ij->i", normal, normal))
     flat = length <= 1e-12
     normal[flat] = (0.0, 0.0, 1.0)
@@ -47,12 +49,14 @@ def polygon_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray)
 
 def _diagonal_normals(pts: np.ndarray, counts: np.ndarray, indices: np.ndarray, start: np.ndarray) -> np.ndarray:
     """Unnormalised normals of triangles and quads (``start``: each one's first corner in ``indices``): the cross
-    product of the diagonals from corner 0 to 2 and from corner 1 to the last, on contiguous coordinate columns
-    (gathers of ``(n, 3)`` rows, strided columns and np.cross take twice as long)."""
-    x, y, z = (np.ascontiguousarray(column) for column in pts.T)
+    product of the diagonals from corner 0 to 2 and from corner 1 to the last, in float64. The corners are gathered
+    from each coordinate column of ``pts`` as stored (float32 points: half the bytes to gather) and widened by the
+    subtraction, which gives the bits of a subtraction of float64 copies (gathers of ``(n, 3)`` rows and np.cross
+    take twice as long)."""
+    columns = [pts[:, axis] for axis in range(3)]
     i0, i1, i2, i3 = indices[start], indices[start + 1], indices[start + 2], indices[start + counts - 1]
-    ax, ay, az = x[i2] - x[i0], y[i2] - y[i0], z[i2] - z[i0]
-    bx, by, bz = x[i3] - x[i1], y[i3] - y[i1], z[i3] - z[i1]
+    ax, ay, az = (np.subtract(c[i2], c[i0], dtype=np.float64) for c in columns)
+    bx, by, bz = (np.subtract(c[i3], c[i1], dtype=np.float64) for c in columns)
     normal = np.empty((len(start), 3))
     normal[:, 0], normal[:, 1], normal[:, 2] = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
     return normal
@@ -80,7 +84,8 @@ def face_normals(meshes: Sequence[MeshData]) -> list[tuple[np.ndarray, np.ndarra
     offsets = np.cumsum([0] + [len(m.points) for m in meshes[:-1]])
     points = np.concatenate([m.points for m in meshes])
     counts = np.concatenate([m.counts for m in meshes])
-    indices = np.concatenate([np.asarray(m.indices, dtype=np.int64) + o for m, o in zip(meshes, offsets)])
+    indices = np.concatenate([m.indices for m in meshes]).astype(np.int64)
+    indices += np.repeat(offsets, [len(m.indices) for m in meshes])
     side = int(2 / STEP) + 1  # grid values -1/STEP .. 1/STEP, shifted to 0 .. side - 1
     grid = np.rint(polygon_normals(points, counts, indices) * (1 / STEP)).astype(np.int64) + side // 2
     key = (grid[:, 0] * side + grid[:, 1]) * side + grid[:, 2]
