@@ -65,7 +65,8 @@ class TileJob:
 @dataclass(frozen=True)
 class TileResult:
     """What a tile task sends back: its layer file (``None`` when no building was written), its report items and
-    the CPU seconds it took: ``builds`` for the buildings, ``layer_cpu`` for writing its layer."""
+    the CPU seconds it took: ``builds`` for the buildings (their masses and neighbour covers, made in the task, and
+    their builds), ``layer_cpu`` for writing its layer."""
 
     layer: str | None
     stats: StageStats | None
@@ -143,7 +144,7 @@ def build_tile(job: TileJob, work: TileWork, builder: Builder | None = None) -> 
     warnings: list[str] = []
     faces: Counter[str] = Counter()
     built: list[tuple[Footprint, BuildingRecord]] = []
-    builds = 0.0
+    builds = time.thread_time() - start  # (the masses and neighbour covers: the buildings' work, not the layer's)
     for item in items:
         outcome = build_building(builder, item)
         builds += outcome.cpu
