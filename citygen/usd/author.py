@@ -25,6 +25,7 @@ T = Sdf.ValueTypeNames
 _UNIFORM, _VARYING = Sdf.VariabilityUniform, Sdf.VariabilityVarying
 
 
+@functools.lru_cache(maxsize=1024)  # (a mesh's binding names its material's look: every mesh asks)
 def look_name(name: str) -> str:
     """The prim name of a material name (a scene may name one ``brick-red``)."""
     return Tf.MakeValidIdentifier(name)
@@ -49,9 +50,11 @@ def tokens(*values: str) -> Vt.TokenArray:
     return Vt.TokenArray(list(values))
 
 
-#: A mesh's array attributes and their types, in the order :meth:`Author.mesh` authors them.
-_MESH_ARRAYS = (("points", T.Point3fArray), ("faceVertexCounts", T.IntArray), ("faceVertexIndices", T.IntArray),
-                ("extent", T.Float3Array))
+_POINTS, _INTS, _FLOAT3S, _NORMALS = T.Point3fArray, T.IntArray, T.Float3Array, T.Normal3fArray
+_TOKEN, _TOKENS = T.Token, T.TokenArray
+#: A mesh's ``apiSchemas`` by (bound to a material, labelled).
+_MESH_SCHEMAS = {(True, True): _schemas(("MaterialBindingAPI", "SemanticsLabelsAPI:class")),
+                 (True, False): _schemas(("MaterialBindingAPI",)), (False, True): _schemas(("SemanticsLabelsAPI:class",))}
 
 
 def bound_value(bound: np.ndarray) -> Vt.Vec3fArray:
@@ -85,13 +88,13 @@ def mesh_arrays(meshes: Sequence[MeshData], normals: Sequence[tuple[np.ndarray, 
     pts = np.ascontiguousarray(pts, dtype=np.float32)
     ends = np.cumsum(sizes)
     starts = ends - sizes
-    low, high = np.minimum.reduceat(pts, starts), np.maximum.reduceat(pts, starts)
+    bounds = np.stack([np.minimum.reduceat(pts, starts), np.maximum.reduceat(pts, starts)], axis=1)  # float32
     out = []
-    for k, (mesh, (values, index)) in enumerate(zip(meshes, normals)):
-        bound = np.array([low[k], high[k]])
+    for k, (mesh, (values, index), start, end) in enumerate(zip(meshes, normals, starts.tolist(), ends.tolist())):
+        bound = bounds[k]
         out.append(MeshArrays(
-            Vt.Vec3fArray.FromNumpy(pts[starts[k]:ends[k]]), Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)),
-            Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)), bound_value(bound), bound,
+            Vt.Vec3fArray.FromNumpy(pts[start:end]), Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.counts)),
+            Vt.IntArray.FromNumpy(np.ascontiguousarray(mesh.indices)), Vt.Vec3fArray.FromNumpy(bound), bound,
             Vt.Vec3fArray.FromNumpy(values), Vt.IntArray.FromNumpy(index),
             Vt.Vec2fArray.FromNumpy(planar_st(mesh.points, mesh.counts, mesh.indices)) if st and st[k] else None))
     return out
@@ -177,23 +180,27 @@ class Author:
                 return None
             mesh = self.arrays([(mesh, mat)], normals and [normals], offset)[0]
         self.prims += 1
+        attribute = Sdf.AttributeSpec  # (the specs in the order of the stage's bytes: see the module's docstring)
         prim = Sdf.PrimSpec(parent, name, Sdf.SpecifierDef, "Mesh")
-        for (prop, vtype), value in zip(_MESH_ARRAYS, (mesh.points, mesh.counts, mesh.indices, mesh.extent)):
-            Sdf.AttributeSpec(prim, prop, vtype).default = value
-        self.attr(prim, "subdivisionScheme", T.Token, "none", True)
-        self._primvar(prim, "primvars:normals", T.Normal3fArray, "uniform", mesh.normals)
-        self.attr(prim, "primvars:normals:indices", T.IntArray, mesh.normal_indices)
+        attribute(prim, "points", _POINTS).default = mesh.points
+        attribute(prim, "faceVertexCounts", _INTS).default = mesh.counts
+        attribute(prim, "faceVertexIndices", _INTS).default = mesh.indices
+        attribute(prim, "extent", _FLOAT3S).default = mesh.extent
+        attribute(prim, "subdivisionScheme", _TOKEN, _UNIFORM, False).default = "none"
+        normals = attribute(prim, "primvars:normals", _NORMALS)
+        normals.SetInfo("interpolation", "uniform")
+        normals.default = mesh.normals
+        attribute(prim, "primvars:normals:indices", _INTS).default = mesh.normal_indices
         if mesh.st is not None:
             self._primvar(prim, "primvars:st", T.TexCoord2fArray, "faceVarying", mesh.st)
-        schemas = []
-        if looks is not None and mat is not None:
-            schemas.append("MaterialBindingAPI")
-            self.rel(prim, "material:binding", [looks.AppendChild(look_name(mat))])
+        bound = looks is not None and mat is not None
+        if bound:
+            Sdf.RelationshipSpec(prim, "material:binding").targetPathList.explicitItems = [
+                looks.AppendChild(look_name(mat))]
         if label is not None:
-            schemas.append("SemanticsLabelsAPI:class")
-            self.attr(prim, "semantics:labels:class", T.TokenArray, tokens(label), True)
-        if schemas:
-            self.api(prim, *schemas)
+            attribute(prim, "semantics:labels:class", _TOKENS, _UNIFORM, False).default = tokens(label)
+        if bound or label is not None:
+            prim.SetInfo("apiSchemas", _MESH_SCHEMAS[bound, label is not None])
         return mesh.bound
 
     def looks(self, parent: Sdf.PrimSpec, names: Iterable[str]) -> Sdf.Path:
