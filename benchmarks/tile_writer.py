@@ -6,8 +6,8 @@ element library the main process writes, on a scene's real building records (def
 The scene is generated once (one job, in this process) while every tile task's writer call (its job, tile and
 building records) is recorded, with the sha256 of the layer it wrote; ``--cache FILE`` pickles them so later runs
 skip the generation. Then the recorded tiles are written again ``--repeat`` times, each time as a fresh worker
-would (the process's prepared element prototypes forgotten first), and the element library of their element kinds
-as the main process writes it. Printed: the CPU (process_time) of the tile layers and of the library, best and
+would (the process's prepared element prototypes forgotten first, USD's work done in this thread), and the element
+library of their element kinds as the main process writes it. Printed: the CPU (process_time) of the tile layers and of the library, best and
 median, and whether every layer's bytes are the recorded ones. ``--profile`` writes them once more under cProfile
 and prints the total function calls (deterministic: the figure to compare between two versions of the writer
 whatever the machine's load) and the ``N`` functions of most own time.
@@ -24,6 +24,8 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+
+from pxr import Work
 
 import citygen.tiles
 from citygen.geometry.prototypes import ProtoKey
@@ -69,6 +71,7 @@ def write_all(recorded: dict, folder: Path) -> tuple[float, float, bool]:
     definitions._ELEMENTS.clear()
     same = True
     keys: set[ProtoKey] = set()
+    Work.SetConcurrencyLimit(1)  # (as in a tile worker: citygen.tiles._init_worker)
     c0 = time.process_time()
     for job, tile, records, digest in recorded["tiles"]:
         job = dataclasses.replace(job, staging=folder)
@@ -76,6 +79,7 @@ def write_all(recorded: dict, folder: Path) -> tuple[float, float, bool]:
         keys.update(k for k in writer.prototypes if isinstance(k, ProtoKey))
         same &= _digest(writer.path) == digest
     c1 = time.process_time()
+    Work.SetMaximumConcurrencyLimit()
     definitions._ELEMENTS.clear()  # (the main process prepares the library's elements itself)
     job = recorded["tiles"][0][0]
     output = job.scene.output
