@@ -295,3 +295,28 @@ def test_a_tile_layers_bytes_do_not_depend_on_the_tiles_its_process_wrote_before
     tile(tmp_path / "other.usdc", 3.0004)
     assert wall_end(tmp_path / "other.usdc") == pytest.approx(3.0004)
     assert tile(tmp_path / "again.usdc", 3.0) == first
+
+
+def test_layers_authored_in_crate_data_write_the_bytes_of_layers_authored_in_sdf_data(small_scene, test_registry,
+                                                                                       monkeypatch):
+    """A ``.usdc`` layer is authored in crate data (its export then copies crate data, ~2x cheaper than SdfData):
+    fields keep the order they were authored in, so every file (root, tiles, element library) has the bytes the
+    same city authored in SdfData (``.usda`` anonymous layers, as before) exports to."""
+    def files(folder: Path) -> dict[str, bytes]:
+        return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+    scene = _scene(small_scene, '[output]\npath = "crate/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    generate_city(load_scene(scene), registry=test_registry, jobs=1)
+    anonymous, asked = Sdf.Layer.CreateAnonymous, []
+
+    def in_sdf_data(tag: str = "") -> Sdf.Layer:
+        asked.append(tag)
+        return anonymous(".usda" if tag == ".usdc" else tag)
+
+    monkeypatch.setattr(Sdf.Layer, "CreateAnonymous", in_sdf_data)
+    scene = _scene(small_scene, '[output]\npath = "data/small.usdc"\ntile_size = 20\ntile_layers = true\n')
+    generate_city(load_scene(scene), registry=test_registry, jobs=1)
+    crate, data = files(small_scene.parent / "crate"), files(small_scene.parent / "data")
+    assert len(crate) == 5 and sum(name.startswith("small_tiles/Tile_") for name in crate) == 3
+    assert asked.count(".usdc") == 5  # (the root, three tiles and the library)
+    assert crate == data
