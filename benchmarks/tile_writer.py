@@ -75,7 +75,7 @@ def write_all(recorded: dict, folder: Path) -> tuple[float, float, bool]:
     c0 = time.process_time()
     for job, tile, records, digest in recorded["tiles"]:
         job = dataclasses.replace(job, staging=folder)
-        writer, stats = citygen.tiles._layer(job, tile, folder / f"tile{job.suffix}", records)
+        writer, _ = citygen.tiles._layer(job, tile, folder / f"tile{job.suffix}", records)
         keys.update(k for k in writer.prototypes if isinstance(k, ProtoKey))
         same &= _digest(writer.path) == digest
     c1 = time.process_time()
