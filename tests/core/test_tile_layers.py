@@ -16,7 +16,7 @@ from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
 from citygen.usd import writer as writer_module
-from citygen.usd.publish import current_umask
+from citygen.temporaries import current_umask
 from citygen.usd.writer import BuildingRecord, StageWriter
 from tests.usd_util import assert_resolves, buildings
 
