@@ -398,14 +398,18 @@ class StageWriter:
     def take_prototypes(self, keys: Iterable[ProtoKey | ModuleKey]) -> None:
         """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
         the main process then holds no tile's keys): the element kinds, for the element library, and the module
-        prototypes, only counted (a city's are ~1.8 a building)."""
-        modules = []
+        prototypes, only counted (a city's are ~1.8 a building). The element kinds new to the run are prepared for
+        the library now (:func:`prepare_elements`), while the workers still build: the library's writing at the
+        end only authors them."""
+        modules, kinds = [], []
         for key in keys:
             if isinstance(key, ProtoKey):
-                self.tile_prototypes.add(key)
+                kinds.append(key)
             else:
                 modules.append(key)
         self.tile_modules.update(modules)
+        prepare_elements([k for k in kinds if k not in self.tile_prototypes], self.elements, self.library)
+        self.tile_prototypes.update(kinds)
 
     def close(self) -> StageStats:
         """Write the last tile, publish the tiles under their content names and the element library (both runs'

@@ -295,3 +295,23 @@ def test_a_tile_layers_bytes_do_not_depend_on_the_tiles_its_process_wrote_before
     tile(tmp_path / "other.usdc", 3.0004)
     assert wall_end(tmp_path / "other.usdc") == pytest.approx(3.0004)
     assert tile(tmp_path / "again.usdc", 3.0) == first
+
+
+def test_the_root_prepares_each_element_kind_of_the_library_as_the_tile_results_come_in(tmp_path):
+    """The element library's prototypes are made while the workers still build (the library's writing at the end
+    of the run only authors them): each new kind once, the modules only counted; the library holds them all."""
+    from citygen.geometry.modules import ModuleKey
+    from citygen.geometry.prototypes import ProtoKey
+
+    # (kinds no other test prepares: the prepared elements are the process's)
+    window, door = ProtoKey("window", "glass", 123, 157, 5), ProtoKey("door", "wood", 101, 213, 5)
+    with StageWriter(tmp_path / "city.usdc", tile_layers=True) as writer:
+        assert door not in writer.elements
+        writer.take_prototypes([window, ModuleKey(7, 300, 300, "brick")])
+        prepared = writer.elements[window]
+        writer.take_prototypes([window, door])
+        assert writer.elements[window] is prepared and door in writer.elements
+        assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 1
+        writer.close()
+    library = Sdf.Layer.OpenAsAnonymous(str(tmp_path / "city_tiles" / "elements.usdc"))
+    assert {p.name for p in library.GetPrimAtPath("/Prototypes").nameChildren} == {window.name, door.name}
