@@ -40,7 +40,7 @@ class Row:
 
     def __post_init__(self) -> None:
         if self.eq and self.rhs == 0.0 and self.prefix + len(self.coefs) == 2:
-            full = {**{i: float(self.sign) for i in range(self.prefix)}, **self.coefs}
+            full = {**dict.fromkeys(range(self.prefix), float(self.sign)), **self.coefs} if self.prefix else self.coefs
             if sorted(full.values()) == [-1.0, 1.0]:
                 self.pair = tuple(full)
 
@@ -260,6 +260,9 @@ class _Layout:
 
     def _order(self, cands: list) -> list:
         """Stochastic order of the successor set: ⊣ is favoured once the sampled sizes fill the region."""
+        if len(cands) < 2:  # (one order; the stream advances as for the draw below)
+            self.ctx.rng.random(len(cands))
+            return cands
         st = self.st
         filled = (sum(st.xbar) * self._mult()) / self.total if self.total > 0 else 1.0
         stretch = sum(st.hi) * self._mult() >= self.total
@@ -270,9 +273,8 @@ class _Layout:
             else:
                 mean = self.ctx.compiled.size(sym, self.axis).mean * self._mult()
                 weights.append(1.0 if filled + mean / max(self.total, 1e-9) <= 1.05 else 0.05)
-        w = np.asarray(weights)
-        keys = self.ctx.rng.random(len(cands)) ** (1.0 / w)  # weighted random permutation
-        return [cands[i] for i in np.argsort(-keys)]
+        keys = self.ctx.rng.random(len(cands)) ** (1.0 / np.asarray(weights))  # weighted random permutation
+        return [cands[i] for i in np.argsort(-keys).tolist()]
 
     def _extend(self, state, rstate) -> Iterator[Solution]:
         ctx, st = self.ctx, self.st
@@ -380,8 +382,13 @@ class _Layout:
 
     def _activate(self, end: int, complete: bool = False) -> None:
         """Rows of alignment / same-size occurrences whose pattern ends at arrangement position ``end``."""
+        elems = self.st.elems
+        last = BEGIN if end == 0 else elems[end - 1][0] if end <= len(elems) else END if complete else None
+        refs = self.ctx.compiled.by_last.get(last)
+        if not refs:
+            return
         toks = self._tokens(complete)
-        for ref in self.ctx.compiled.by_last.get(toks[end], ()):
+        for ref in refs:
             items = ref.pattern.items
             start = end - len(items) + 1
             if start < 0 or any(toks[start + j] not in items[j] for j in range(len(items))):
@@ -475,14 +482,17 @@ class _Layout:
             if float(np.dot(np.asarray(weights[:-1]), st.x)) + weights[-1] * last <= self.total + 1e-9:
                 st.x = np.append(st.x, last)  # no newly active row: the previous optimum is still optimal
                 return True
-        group = None
+        group = None  # union-find forest of merged variables; a root is its set's least element
         general = []
         for r in rows:
             if r.pair is not None:
                 if group is None:
                     group = list(range(n))
                 u, v = _find(group, r.pair[0]), _find(group, r.pair[1])
-                group[max(u, v)] = min(u, v)
+                if u < v:
+                    group[v] = u
+                elif v < u:
+                    group[u] = v
             else:
                 general.append(r)
         xbar = np.array(st.xbar)
@@ -493,7 +503,9 @@ class _Layout:
             member = None
             w, gx, glo, ghi = ew, xbar, st.lo, st.hi
         else:
-            gid = [_find(group, i) for i in range(n)]
+            gid = group  # (parents precede their children: each element's root in one pass)
+            for i, parent in enumerate(group):
+                gid[i] = gid[parent]
             col = {g: k for k, g in enumerate(sorted(set(gid)))}
             m = len(col)
             mem = [col[g] for g in gid]
@@ -506,17 +518,17 @@ class _Layout:
                     glo[g] = a
                 if b < ghi[g]:
                     ghi[g] = b
-        counts = [(0,) * m]  # counts[p][g]: how many of the first p elements are in group g
+        counts = {1: [(0.0,) * m], -1: [(0.0,) * m]}  # counts[sign][p][g]: sign * elements of group g before p
         if any(r.prefix for r in general):
             count = [0] * m
             for g in mem:
                 count[g] += 1
-                counts.append(tuple(count))
+                counts[1].append(tuple(map(float, count)))
+                counts[-1].append(tuple(float(-c) for c in count))
         seen: set[tuple] = set()
         eq_rows, le_rows = [], []
         for r in general:
-            sign = r.sign
-            vec = [float(sign * c) for c in counts[r.prefix]] if r.prefix else [0.0] * m
+            vec = list(counts[r.sign][r.prefix])
             for i, c in r.coefs.items():
                 vec[mem[i]] += c
             key = (r.eq, r.rhs, *vec)
