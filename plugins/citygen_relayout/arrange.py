@@ -518,17 +518,17 @@ class _Layout:
                     glo[g] = a
                 if b < ghi[g]:
                     ghi[g] = b
-        counts = {1: [(0.0,) * m], -1: [(0.0,) * m]}  # counts[sign][p][g]: sign * elements of group g before p
+        counts = [(0,) * m]  # counts[p][g]: how many of the first p elements are in group g
         if any(r.prefix for r in general):
             count = [0] * m
             for g in mem:
                 count[g] += 1
-                counts[1].append(tuple(map(float, count)))
-                counts[-1].append(tuple(float(-c) for c in count))
+                counts.append(tuple(count))
         seen: set[tuple] = set()
         eq_rows, le_rows = [], []
         for r in general:
-            vec = list(counts[r.sign][r.prefix])
+            sign = r.sign
+            vec = [float(sign * c) for c in counts[r.prefix]] if r.prefix else [0.0] * m
             for i, c in r.coefs.items():
                 vec[mem[i]] += c
             key = (r.eq, r.rhs, *vec)
