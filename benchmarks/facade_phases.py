@@ -92,7 +92,7 @@ def _work(scene_path: Path) -> tuple[object, list[tuple]]:
     from citygen.registry import default_registry
     from citygen.roofplan import plan_mass
     from citygen.scene import load_scene
-    from citygen.usd.writer import prim_name
+    from citygen.usd.names import prim_name
 
     scene = load_scene(scene_path)
     registry = default_registry()

@@ -25,7 +25,8 @@ from citygen.pipeline import _ground, _run, import_footprints
 from citygen.registry import default_registry
 from citygen.roofplan import plan_mass
 from citygen.scene import load_scene
-from citygen.usd.writer import StageWriter, prim_name
+from citygen.usd.names import prim_name
+from citygen.usd.writer import StageWriter
 
 REPO = Path(__file__).resolve().parents[1]
 BLENDER = """

@@ -12,7 +12,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from citygen.errors import CitygenError
-from citygen.usd.writer import tile_name
+from citygen.usd.names import tile_name
 
 if TYPE_CHECKING:
     from citygen.tiles import TileJob, TileResult

@@ -13,6 +13,7 @@ repairs the layout generically and says what it did, so the building still gets 
 """
 from __future__ import annotations
 
+import operator
 from dataclasses import replace
 
 import numpy as np
@@ -35,7 +36,7 @@ def enforce_entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[Faca
         centre = layout.width / 2
         keep = min(doors, key=lambda r: abs(r.x + r.w / 2 - centre)) if wanted else None
         drop = {id(r) for r in doors if r is not keep}
-        root = _map_terminals(layout.root, lambda r: [replace(r, label="wall", depth=0.0, asset=None)]
+        root = _map_terminals(layout.root, lambda r: [replace(r, label="wall", depth=0.0, asset=None, key=None)]
                               if id(r) in drop else [r])
         return replace(layout, root=root), f"turned {len(drop)} extra door(s) into wall"
     door = _door_rect(layout, request)
@@ -47,26 +48,30 @@ def enforce_entrance(layout: FacadeLayout, request: FacadeRequest) -> tuple[Faca
     layers = root.children
     if layers and all(c.layer is not None for c in layers):  # a layer stack: the door in the front layer,
         last = len(layers) - 1                             # the hole in the others occluded (no label)
-        root = replace(root, children=tuple(
-            replace(c, children=(*c.children, replace(hole, layer=c.layer, **({} if i == last else
-                                                                            {"label": None, "depth": 0.0}))))
+        root = replace(root, key=None, children=tuple(
+            replace(c, key=None, children=(*c.children, replace(hole, layer=c.layer, **({} if i == last else
+                                                                                     {"label": None, "depth": 0.0}))))
             for i, c in enumerate(layers)))
     else:
-        root = replace(root, children=(*root.children, hole))
+        root = replace(root, children=(*root.children, hole), key=None)
     return replace(layout, root=root), f"carved an entrance door at x={x0:.2f}..{x1:.2f}"
 
 
 def _map_terminals(region: Region, fn) -> Region:
-    """``region`` with every terminal replaced by ``fn(terminal)`` (a list: one region, pieces, or none)."""
+    """``region`` with every terminal replaced by ``fn(terminal)`` (a list: itself, a changed region without its
+    ``key``, pieces, or none). A subtree that changes loses its key (the module hint of a subtree whose copies
+    elsewhere in the building stay as they were); the others stay the same objects."""
 
     def walk(r: Region) -> list[Region]:
         if r.children:
             children = tuple(c for child in r.children for c in walk(child))
-            return [replace(r, children=children)] if children else []
+            if len(children) == len(r.children) and all(map(operator.is_, children, r.children)):
+                return [r]
+            return [replace(r, children=children, key=None)] if children else []
         pieces = fn(r)
         if len(pieces) <= 1:
             return pieces
-        return [replace(r, label=None, depth=0.0, children=tuple(pieces))]
+        return [replace(r, label=None, depth=0.0, children=tuple(pieces), key=None)]
 
     result = walk(region)
     return result[0] if result else replace(region, children=())
@@ -104,4 +109,5 @@ def _cut(region: Region, rect: tuple[float, float, float, float]) -> list[Region
     base = replace(region, label="wall", depth=0.0, asset=None, material=None) if opening else region
     cx0, cx1 = max(rx0, x0), min(rx1, x1)
     boxes = [(rx0, ry0, x0, ry1), (x1, ry0, rx1, ry1), (cx0, ry0, cx1, y0), (cx0, y1, cx1, ry1)]
-    return [replace(base, x=a, y=b, w=c - a, h=d - b) for a, b, c, d in boxes if c - a > 1e-9 and d - b > 1e-9]
+    return [replace(base, x=a, y=b, w=c - a, h=d - b, key=None) for a, b, c, d in boxes
+            if c - a > 1e-9 and d - b > 1e-9]

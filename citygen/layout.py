@@ -31,6 +31,8 @@ LABELS = ("wall", "window", "door", "balcony", "sill", "cornice", "pillar", "sho
 
 #: Labels of openings and attachments that belong to one floor and must not straddle a floor line.
 FLOOR_BOUND_LABELS = frozenset({"window", "door", "balcony", "sill", "blind", "shop"})
+#: Metres a region may stand out of (or into) its wall: the rulesets' and layouts' depths are refused beyond it.
+MAX_DEPTH = 100.0
 
 
 @dataclass(frozen=True)
@@ -152,6 +154,8 @@ class Region:
             numbers[key] = float(value)
         if numbers["w"] < 0 or numbers["h"] < 0:
             raise fail(f"has a negative size {numbers['w']:g} x {numbers['h']:g}")
+        if abs(numbers["depth"]) > MAX_DEPTH:
+            raise fail(f"has depth = {numbers['depth']:g} m, beyond +-{MAX_DEPTH:g} m")
         texts = {}
         for key in ("symbol", "label", "material", "asset", "layer"):
             value = data.get(key)

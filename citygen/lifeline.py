@@ -17,7 +17,7 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from typing import TypeVar
 
@@ -65,25 +65,42 @@ def stop_workers(pool: ProcessPoolExecutor, grace: float = 2.0) -> None:
     pool.shutdown(wait=False, cancel_futures=True)
 
 
-def run_apart(fn: Callable[[], T]) -> T | None:
-    """``fn()`` computed in a child process forked from this one (and tied to it), its result pickled back: what
-    ``fn`` allocates on the way -- a city's imported footprints -- never stays in this process's memory, nor in
-    the memory of workers forked from it later. ``None`` where this process cannot fork (not Linux) or when the
-    child failed: the caller then calls ``fn`` itself, which raises the error where it is reported."""
+@contextlib.contextmanager
+def apart(fn: Callable[[], T]) -> Iterator[Callable[[], T | None]]:
+    """``fn()`` started now in a child process forked from this one (and tied to it); yields the call that waits for
+    its result, pickled back. What ``fn`` allocates on the way -- a city's imported footprints -- never stays in
+    this process's memory, nor in the memory of workers forked from it later; and this process goes on meanwhile.
+    The result is ``None`` where this process cannot fork (not Linux) or when the child failed: the caller then
+    calls ``fn`` itself, which raises the error where it is reported. Leaving the block kills the child if it has
+    not answered (the caller met an error of its own)."""
     if not sys.platform.startswith("linux"):
-        return None
+        yield lambda: None
+        return
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
     child = context.Process(target=_apart, args=(fn, send, os.getpid()), daemon=True)
     child.start()
     send.close()
+
+    def result() -> T | None:
+        try:
+            return receive.recv()
+        except EOFError:  # (it ended without an answer: killed, out of memory)
+            return None
+
     try:
-        return receive.recv()
-    except EOFError:  # (it ended without an answer: killed, out of memory)
-        return None
+        yield result
     finally:
+        if child.is_alive():
+            child.kill()  # (harmless once it has answered: it only exits then)
         receive.close()
         child.join()
+
+
+def run_apart(fn: Callable[[], T]) -> T | None:
+    """``fn()`` computed apart (:func:`apart`), waited for at once."""
+    with apart(fn) as result:
+        return result()
 
 
 def _apart(fn: Callable[[], object], send, parent: int) -> None:

@@ -25,7 +25,7 @@ from citygen.lod1stage import MassWriter, Part, write_outcomes
 from citygen.registry import RoofBuilder
 from citygen.scene import Scene
 from citygen.tilework import TileWork
-from citygen.usd.writer import tile_name
+from citygen.usd.names import tile_name
 
 #: Buildings from which a helper process writes half of the tile layers (below it, the fork and the pipe cost
 #: more than half of the work saves: a mass-only building costs ~1.7 ms to build and write).

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from citygen.errors import ExportError
-from citygen.usd.publish import current_umask, temp_prefix
+from citygen.temporaries import current_umask, temp_prefix
 
 
 def check_writable(path: str | Path, what: str) -> None:

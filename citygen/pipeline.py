@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import importlib
 import itertools
 from collections import Counter
 import os
@@ -31,19 +32,21 @@ from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, FootprintStream, ImportResult, Skipped
 from citygen.gltf import GLTF_SUFFIXES
-from citygen.lifeline import run_apart, stop_workers, tie_to_parent
+from citygen.lifeline import apart, stop_workers, tie_to_parent
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
 from citygen.rng import MAX_SEED
 from citygen.roofplan import mass_plan
 from citygen.scene import AUTO_TILE_LAYERS, Scene, key_line
+from citygen.temporaries import remove_stale_temporaries, temp_prefix
 from citygen.tilework import Spill, Strips, TileWork, Work, failed, tile_of, work_items
-from citygen.usd.publish import remove_stale_temporaries, temp_prefix
-from citygen.usd.writer import SUFFIXES, StageStats, StageWriter, prim_name
+from citygen.usd.names import SUFFIXES, prim_name
 
-if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does)
+if TYPE_CHECKING:  # (the facade machinery is imported where a run needs it: a mass-only run never does; the
+    # stage writer once the footprints' planning is forked off: see _generate)
     from citygen.builder import Builder, BuildingOutcome
     from citygen.tiles import TileResult
+    from citygen.usd.writer import StageStats
 
 #: Metres the ground quad (``[output] ground = true``) reaches beyond the buildings.
 GROUND_MARGIN = 20.0
@@ -173,7 +176,7 @@ def generate_city(scene: Scene, *, seed: int | None = None, out: Path | None = N
 @contextlib.contextmanager
 def _spill() -> Iterator[Spill]:
     """A :class:`~citygen.tilework.Spill` file for the run's packed tiles in the system's temporary folder, removed
-    when the run ends (a killed run's is removed by the next run: :func:`~citygen.usd.publish.temp_prefix`)."""
+    when the run ends (a killed run's is removed by the next run: :func:`~citygen.temporaries.temp_prefix`)."""
     folder = Path(tempfile.gettempdir())
     remove_stale_temporaries(folder)
     try:
@@ -194,17 +197,22 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
     """:func:`generate_city` once its arguments are checked, the packed tiles spilled to ``spill``."""
     report = Report()
     t0, c0 = time.perf_counter(), time.process_time()
-    # a ruleset that does not load stops the run before any building (masses only: none is used)
-    if scene.output.masses:
-        rulesets = {}
-    else:
-        from citygen.builder import load_rulesets
-        rulesets = load_rulesets(scene, registry)
     roofs = registry.roof_builders
     plan = functools.partial(_plan, scene, registry, roofs, spill)
     tr, cr = time.perf_counter(), time.process_time()
-    planned = run_apart(plan)  # (the import's memory stays in a child process: see _Planned)
-    apart = planned is not None
+    # the footprints are planned in a child process (their memory stays there: see _Planned) forked before this
+    # process loads the rulesets and imports USD, which it does meanwhile
+    with apart(plan) as planning:
+        # a ruleset that does not load stops the run before any building (masses only: none is used)
+        if scene.output.masses:
+            rulesets = {}
+        else:
+            from citygen.builder import load_rulesets
+            rulesets = load_rulesets(scene, registry)
+        importlib.import_module("citygen.usd.writer")  # (USD, while the child plans)
+        loading = time.process_time() - cr  # (in the total, not in the masses phase: the child's alone)
+        planned = planning()
+    planned_apart = planned is not None
     if planned is None:
         planned = plan()
     report.skipped += planned.skipped
@@ -212,7 +220,7 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
     works, ground, georef = planned.works, planned.ground, planned.georef
     t1 = tr + planned.timings["import"]
     c1 = cr + planned.cpu["import"]
-    borrowed = planned.cpu["import"] + planned.cpu["masses"] if apart else 0.0  # (the child's CPU)
+    borrowed = planned.cpu["import"] + planned.cpu["masses"] if planned_apart else 0.0  # (the child's CPU)
 
     def clock() -> float:
         """This process's CPU seconds, and the planning child's."""
@@ -242,7 +250,7 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
         timings, cpu = _generate_masses(works, scene, seed, roofs, jobs, plugins, Path(out), layer_data, tiled, report,
                                         progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
-        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": clock() - c0}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1 - loading, **cpu, "total": clock() - c0}
         return report
     if by_tasks:
         if executor == "dask":
@@ -254,7 +262,7 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
         timings, cpu, tasks = _generate_tiles(works, scene, seed, plugins, Path(out).absolute(), layer_data, jobs,
                                               runner, report, progress, ground)
         report.timings = {"import": t1 - t0, "masses": t2 - t1, **timings, "total": time.perf_counter() - t0}
-        report.cpu = {"import": c1 - c0, "masses": c2 - c1, **cpu, "total": clock() - c0, **tasks}
+        report.cpu = {"import": c1 - c0, "masses": c2 - c1 - loading, **cpu, "total": clock() - c0, **tasks}
         return report
     usd = builds = 0.0  # CPU seconds: the writer's add calls (this thread), the builds (wherever they ran)
     with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
@@ -279,7 +287,7 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
         report.written -= _left_out(writer, work, report)
     t4, c4 = time.perf_counter(), clock()
     report.timings = {"import": t1 - t0, "masses": t2 - t1, "buildings": t3 - t2, "usd": t4 - t3, "total": t4 - t0}
-    report.cpu = {"import": c1 - c0, "masses": c2 - c1, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
+    report.cpu = {"import": c1 - c0, "masses": c2 - c1 - loading, "buildings": c3 - c2 - usd, "usd": usd + c4 - c3,
                   "total": c4 - c0, "builds": builds, "workers": builds if _in_workers(jobs, len(work)) else 0.0}
     return report
 
@@ -302,10 +310,10 @@ class _Planned:
     """The city planned by :func:`_plan`: its tiles' work, the ground quad, the georeference, the skipped
     footprints and warnings met, and the wall and CPU seconds of the ``import`` and ``masses`` phases.
 
-    It is all the main process keeps of the footprint import: planned in a forked child (:func:`run_apart`), the
-    importer's objects (~5 kB a building: 20,000 buildings held ~60 MB after they were dropped, the allocator's
-    fragments) never enter the main process, nor the tile workers forked from it; and the tiles' packed work waits
-    in the run's spill file (``works`` say where), read where each tile is built."""
+    It is all the main process keeps of the footprint import: planned in a forked child
+    (:func:`~citygen.lifeline.apart`), the importer's objects (~5 kB a building: 20,000 buildings held ~60 MB after
+    they were dropped, the allocator's fragments) never enter the main process, nor the tile workers forked from it;
+    and the tiles' packed work waits in the run's spill file (``works`` say where), read where each tile is built."""
 
     works: list[TileWork]
     ground: tuple[float, float, float, float, float] | None
@@ -394,6 +402,7 @@ def _writer(out: Path, scene: Scene, layer_data: dict[str, Any], tiled: bool):
     if Path(out).suffix.lower() in GLTF_SUFFIXES:
         from citygen.gltf.writer import GltfWriter
         return GltfWriter(out, layer_data=layer_data, materials=scene.materials)
+    from citygen.usd.writer import StageWriter
     return StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                        uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials)
 
@@ -453,6 +462,7 @@ def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins:
     ``buildings`` and ``usd`` phases, and the tasks' CPU: ``builds``, ``tile layers`` (writing them) and the part of
     both spent in ``workers``."""
     from citygen.tiles import TileJob, slimmed
+    from citygen.usd.writer import StageWriter
     t0, c0 = time.perf_counter(), time.process_time()
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:

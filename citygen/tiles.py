@@ -17,7 +17,6 @@ travel back (a :class:`TileResult`).
 from __future__ import annotations
 
 import hashlib
-import itertools
 import os
 import pickle
 import threading
@@ -38,11 +37,12 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.lifeline import stop_workers, tie_to_parent
 from citygen.registry import load_registry
 from citygen.scene import Scene
+from citygen.temporaries import temp_prefix
 from citygen.tilework import TileWork, failed
 from citygen.tilework import Work as Item  # (pxr's Work is USD's thread pool)
 from citygen.usd.library import library_name
-from citygen.usd.publish import temp_prefix
-from citygen.usd.writer import ENVIRONMENT, BuildingRecord, StageStats, StageWriter, tile_name
+from citygen.usd.names import tile_name
+from citygen.usd.writer import ENVIRONMENT, BuildingRecord, StageStats, StageWriter
 
 
 @dataclass(frozen=True)

@@ -21,10 +21,11 @@ from pathlib import Path
 from pxr import Sdf, Tf
 
 from citygen.geometry.prototypes import ProtoKey
+from citygen.temporaries import temp_prefix
 from citygen.usd.author import Author
 from citygen.usd.definitions import PROTOTYPES, Definitions, elements, prepare_elements
 from citygen.usd.materials import Material
-from citygen.usd.publish import export_layer, temp_prefix, write_layer
+from citygen.usd.publish import export_layer, write_layer
 
 STEM = "elements"
 

@@ -1,9 +1,7 @@
 """Publishing a stage's files so that no moment, crash or ``kill -9`` leaves a root composing the wrong tiles, and
 no temporary file outlives the next run.
 
-*Temporaries* are named ``.<name>.citygen-<pid>-<random><suffix>`` (:func:`temp_prefix`), beside their target: a
-later run removes those whose process is gone (:func:`remove_stale_temporaries`), and never those of a writer
-still running.
+Every file is written as a temporary beside its target and renamed (:mod:`citygen.temporaries`).
 
 *Tile layers* are published under content names, ``<stem>_tiles/Tile_<i>_<j>.<digest>.usdc`` (:func:`publish_tile`):
 a new run's tiles never overwrite a tile the current root lists (equal names mean equal bytes), so the old root
@@ -16,7 +14,6 @@ import contextlib
 import hashlib
 import os
 import re
-import shutil
 import tempfile
 from collections.abc import Collection
 from pathlib import Path
@@ -24,51 +21,13 @@ from pathlib import Path
 from pxr import Sdf, Tf
 
 from citygen.errors import ExportError
+from citygen.temporaries import TEMPORARY, current_umask, remove_stale_temporaries, temp_prefix
 
 #: Modification time given to the files packed into a .usdz (its zip records them): 2000-01-01, so the same city
 #: packs to the same bytes.
 PACKED_MTIME = 946684800
-_TEMPORARY = re.compile(r"^\..+\.citygen-(\d+)-")
 #: Hex digits of the content digest in a published tile's name.
 DIGEST_DIGITS = 12
-
-
-def temp_prefix(name: str) -> str:
-    """The prefix of a temporary for file or folder ``name`` written by this process (for ``tempfile``)."""
-    return f".{name}.citygen-{os.getpid()}-"
-
-
-def current_umask() -> int:
-    """The process's file mode creation mask (read without changing it)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return umask
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # someone else's live process
-        return True
-    return True
-
-
-def remove_stale_temporaries(folder: Path) -> list[Path]:
-    """Remove the temporaries in ``folder`` (files or folders named by :func:`temp_prefix`) whose process no
-    longer runs; return what was removed. Nothing else is touched."""
-    removed = []
-    with contextlib.suppress(OSError):
-        for entry in folder.iterdir():
-            match = _TEMPORARY.match(entry.name)
-            if match and int(match[1]) != os.getpid() and not _alive(int(match[1])):
-                if entry.is_dir() and not entry.is_symlink():
-                    shutil.rmtree(entry, ignore_errors=True)
-                else:
-                    entry.unlink(missing_ok=True)
-                removed.append(entry)
-    return removed
 
 
 def publish_tile(staged: Path, tiles_dir: Path) -> str:
@@ -93,7 +52,7 @@ def remove_unlisted_tiles(tiles_dir: Path, listed: Collection[str], since: float
     remove_stale_temporaries(tiles_dir)
     with contextlib.suppress(OSError):
         for entry in tiles_dir.iterdir():
-            if entry.name in listed or _TEMPORARY.match(entry.name) or not entry.is_file():
+            if entry.name in listed or TEMPORARY.match(entry.name) or not entry.is_file():
                 continue
             with contextlib.suppress(OSError):
                 if entry.stat().st_mtime < since:

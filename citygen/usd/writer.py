@@ -49,17 +49,17 @@ from citygen.geometry.building import BuildingGeometry, Instances, MeshData, Mod
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
 from citygen.geometry.prototypes import ProtoKey
+from citygen.temporaries import current_umask, remove_stale_temporaries, temp_prefix
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
 from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
 from citygen.usd.distinct import DistinctCount
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
+from citygen.usd.names import SUFFIXES, prim_name, tile_name
 from citygen.usd.normals import face_normals
-from citygen.usd.publish import (PACKED_MTIME, current_umask, publish_tile, remove_stale_temporaries,
-                                 remove_unlisted_tiles, temp_prefix, write_layer)
+from citygen.usd.publish import PACKED_MTIME, publish_tile, remove_unlisted_tiles, write_layer
 
-SUFFIXES = (".usda", ".usdc", ".usdz")
 LOD_SET, LOD_FULL, LOD_MASS = "LOD", "LOD0", "LOD1"
 
 
@@ -91,21 +91,6 @@ class StageStats:
     polygons: int
     bytes: int
     extent: tuple[float, ...] | None = field(default=None)  # the world bound: min x, y, z, max x, y, z
-
-
-def prim_name(raw: str, taken: set[str]) -> str:
-    """A valid, unique prim name for a stable id (``way/123`` -> ``way_123``; collisions get ``_2``, ``_3``)."""
-    base = Tf.MakeValidIdentifier(raw) or "_"
-    name, k = base, 2
-    while name in taken:
-        name, k = f"{base}_{k}", k + 1
-    taken.add(name)
-    return name
-
-
-def tile_name(tile: tuple[int, int]) -> str:
-    """The prim (and layer file) name of a tile: ``Tile_<i>_<j>``, ``m`` for a minus sign."""
-    return f"Tile_{tile[0]}_{tile[1]}".replace("-", "m")
 
 
 @functools.lru_cache(maxsize=4096)  # (every building has the same dozen keys)
@@ -374,7 +359,7 @@ class StageWriter:
 
     def staging_folder(self) -> Path:
         """The hidden folder beside ``path`` that tile layers are written to until :meth:`close` publishes them
-        (named by :func:`~citygen.usd.publish.temp_prefix`, so a later run removes it if this one is killed)."""
+        (named by :func:`~citygen.temporaries.temp_prefix`, so a later run removes it if this one is killed)."""
         if self.tiles_dir is None:
             raise ExportError("this stage has no tile layers", where=str(self.path), hint="pass tile_layers=True")
         if self.staging is None:
@@ -414,14 +399,18 @@ class StageWriter:
     def take_prototypes(self, keys: Iterable[ProtoKey | ModuleKey]) -> None:
         """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
         the main process then holds no tile's keys): the element kinds, for the element library, and the module
-        prototypes, only counted (a city's are ~1.8 a building)."""
-        modules = []
+        prototypes, only counted (a city's are ~1.8 a building). The element kinds new to the run are prepared for
+        the library now (:func:`prepare_elements`), while the workers still build: the library's writing at the
+        end only authors them."""
+        modules, kinds = [], []
         for key in keys:
             if isinstance(key, ProtoKey):
-                self.tile_prototypes.add(key)
+                kinds.append(key)
             else:
                 modules.append(key)
         self.tile_modules.update(modules)
+        prepare_elements([k for k in kinds if k not in self.tile_prototypes], self.elements, self.library)
+        self.tile_prototypes.update(kinds)
 
     def close(self) -> StageStats:
         """Write the last tile, publish the tiles under their content names and the element library (both runs'

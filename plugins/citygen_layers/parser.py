@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 from citygen.errors import ParseError, SourceLocation, read_user_text
+from citygen.layout import MAX_DEPTH
 from citygen.nesting import Depth
 from citygen_layers.model import (
     Alt, Counter, Layer, Node, Pattern, Rep, Ruleset, Seq, ShapeSpec, SolveOptions, Sym, Symbol,
@@ -123,6 +124,15 @@ def _number(text: str, loc: SourceLocation, what: str) -> float:
     return value
 
 
+def _depth(text: str, loc: SourceLocation, what: str) -> float:
+    """:func:`_number` for a depth: at most :data:`~citygen.layout.MAX_DEPTH` metres either way."""
+    value = _number(text, loc, what)
+    if abs(value) > MAX_DEPTH:
+        raise ParseError(f"{what} {value:g} m is beyond +-{MAX_DEPTH:g} m", where=loc,
+                         hint="a depth is an offset from the wall in metres (a balcony 1.2, a recessed window -0.25)")
+    return value
+
+
 def _words(line: str) -> list[tuple[str, int]]:
     return [(m.group(), m.start() + 1) for m in re.finditer(r"\S+", line)]
 
@@ -210,7 +220,7 @@ class _FileParser:
                 continue
             key, value, _ = self._pair(word, col, n)
             if key in ("size", "depth"):
-                attrs[key] = _number(value, self.loc(n, col), key)
+                attrs[key] = (_depth if key == "depth" else _number)(value, self.loc(n, col), key)
                 if key == "size" and attrs[key] < 0:  # type: ignore[operator]
                     raise ParseError("size must be non-negative", where=self.loc(n, col))
             elif key in ("label", "material", "asset"):
@@ -297,7 +307,7 @@ class _FileParser:
             if attrs[key][0] not in self.patterns:
                 raise ParseError(f"unknown pattern {attrs[key][0]!r}", where=self.loc(n, attrs[key][1]),
                                  hint="define patterns before the layers that use them")
-        depth = (_number(attrs["depth"][0], self.loc(n, attrs["depth"][1]), "depth") if "depth" in attrs
+        depth = (_depth(attrs["depth"][0], self.loc(n, attrs["depth"][1]), "depth") if "depth" in attrs
                  else 0.02 * len(self.layers))
         mask = frozenset(attrs["mask"][0].split(",")) if "mask" in attrs else None
         groups = (attrs.get("xgroup", ("main", 0))[0], attrs.get("ygroup", ("main", 0))[0])
@@ -311,7 +321,7 @@ class _FileParser:
             if key in ("layer", "pattern", "label", "material", "asset"):
                 attrs[key] = None if value == "none" and key == "label" else value
             elif key == "depth":
-                attrs[key] = _number(value, self.loc(n, col), key)
+                attrs[key] = _depth(value, self.loc(n, col), key)
             elif key == "visible":
                 if value not in ("true", "false"):
                     raise ParseError("expected visible=true or visible=false", where=self.loc(n, col))

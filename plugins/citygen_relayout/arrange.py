@@ -22,9 +22,11 @@ from citygen_relayout.model import BEGIN, END
 from citygen_relayout.sizing import solve_sizes
 
 
-@dataclass
+@dataclass(slots=True)
 class Row:
-    """A linear constraint ``sum coefs[i] * x_i (= or <=) rhs`` with its provenance for blame and backjumping."""
+    """A linear constraint ``sign * sum_{i < prefix} x_i + sum coefs[i] * x_i (= or <=) rhs`` with its provenance
+    for blame and backjumping. The prefix is an element's start (or end) position; ``coefs`` name only elements
+    from ``prefix`` on. ``pair`` is ``(u, v)`` for ``x_u - x_v = 0`` (replicas, mirrors: merged variables)."""
 
     coefs: dict[int, float]
     rhs: float
@@ -32,6 +34,15 @@ class Row:
     tag: str
     frames: frozenset[int] = frozenset()
     key: tuple = ()
+    prefix: int = 0
+    sign: int = 1
+    pair: tuple[int, int] | None = field(init=False, default=None)
+
+    def __post_init__(self) -> None:
+        if self.eq and self.rhs == 0.0 and self.prefix + len(self.coefs) == 2:
+            full = {**dict.fromkeys(range(self.prefix), float(self.sign)), **self.coefs} if self.prefix else self.coefs
+            if sorted(full.values()) == [-1.0, 1.0]:
+                self.pair = tuple(full)
 
 
 @dataclass
@@ -114,12 +125,12 @@ class _Layout:
         """Whether ``sym``, as the last element of a symmetric half, may be its centre (counted once)."""
         return self.symmetric and self.ctx.model.mirrored(sym) == sym
 
-    def _weights(self, n: int, mirror: bool = False) -> np.ndarray:
+    def _weights(self, n: int, mirror: bool = False) -> list[float]:
         """How often each of the first ``n`` elements occurs in the finished arrangement: twice in the half of a
         symmetric region, except a last element that may be the centre (§7.3)."""
         if not self.symmetric or mirror:
-            return np.ones(n)
-        w = np.full(n, 2.0)
+            return [1.0] * n
+        w = [2.0] * n
         if n and self._centre(self.st.elems[n - 1][0]):
             w[-1] = 1.0
         return w
@@ -249,6 +260,9 @@ class _Layout:
 
     def _order(self, cands: list) -> list:
         """Stochastic order of the successor set: ⊣ is favoured once the sampled sizes fill the region."""
+        if len(cands) < 2:  # (one order; the stream advances as for the draw below)
+            self.ctx.rng.random(len(cands))
+            return cands
         st = self.st
         filled = (sum(st.xbar) * self._mult()) / self.total if self.total > 0 else 1.0
         stretch = sum(st.hi) * self._mult() >= self.total
@@ -259,9 +273,8 @@ class _Layout:
             else:
                 mean = self.ctx.compiled.size(sym, self.axis).mean * self._mult()
                 weights.append(1.0 if filled + mean / max(self.total, 1e-9) <= 1.05 else 0.05)
-        w = np.asarray(weights)
-        keys = self.ctx.rng.random(len(cands)) ** (1.0 / w)  # weighted random permutation
-        return [cands[i] for i in np.argsort(-keys)]
+        keys = self.ctx.rng.random(len(cands)) ** (1.0 / np.asarray(weights))  # weighted random permutation
+        return [cands[i] for i in np.argsort(-keys).tolist()]
 
     def _extend(self, state, rstate) -> Iterator[Solution]:
         ctx, st = self.ctx, self.st
@@ -321,11 +334,10 @@ class _Layout:
     def _floor_rows(self, v: int, k: int) -> None:
         """Element ``v`` starts at or above floor line ``k`` and ends at or below line ``k + 1``."""
         lines = self.ctx.floor_lines
-        coefs = self._start_coefs(v)
-        self.st.rows.append(Row({i: -c for i, c in coefs.items()}, self.off - lines[k], False,
-                                "floor lines of the building", key=("floor", v)))
-        self.st.rows.append(Row({**coefs, v: 1.0}, lines[k + 1] - self.off, False, "floor lines of the building",
-                                key=("floor", v)))
+        self.st.rows.append(Row({}, self.off - lines[k], False, "floor lines of the building", key=("floor", v),
+                                prefix=v, sign=-1))
+        self.st.rows.append(Row({}, lines[k + 1] - self.off, False, "floor lines of the building",
+                                key=("floor", v), prefix=v + 1))
 
     def _accept(self) -> bool:
         """Randomly reject an append whose QP strained the sizes (§7.3): p = exp(-error / temperature)."""
@@ -370,8 +382,13 @@ class _Layout:
 
     def _activate(self, end: int, complete: bool = False) -> None:
         """Rows of alignment / same-size occurrences whose pattern ends at arrangement position ``end``."""
+        elems = self.st.elems
+        last = BEGIN if end == 0 else elems[end - 1][0] if end <= len(elems) else END if complete else None
+        refs = self.ctx.compiled.by_last.get(last)
+        if not refs:
+            return
         toks = self._tokens(complete)
-        for ref in self.ctx.compiled.by_last.get(toks[end], ()):
+        for ref in refs:
             items = ref.pattern.items
             start = end - len(items) + 1
             if start < 0 or any(toks[start + j] not in items[j] for j in range(len(items))):
@@ -383,9 +400,6 @@ class _Layout:
                 self._align_row(ref, first)
             else:
                 self._same_row(ref, first, len(ref.pattern.body))
-
-    def _start_coefs(self, v: int) -> dict[int, float]:
-        return {i: 1.0 for i in range(v)}
 
     def _position(self, v: int) -> tuple[float, float]:
         """Provisional start and size of element ``v`` (current solution before it, sampled size for it)."""
@@ -411,10 +425,8 @@ class _Layout:
         if any(r.key == key for r in self.st.rows):  # already required, yet still not aligned: unfixable
             self.ctx.blame(f"{al.text} (line {al.line})", frozenset({target[3]}))
             return None
-        coefs = self._start_coefs(v)
-        coefs[v] = coefs.get(v, 0.0) + lam
-        self.st.rows.append(Row(coefs, target[2] - self.off, True, f"{al.text} (line {al.line})",
-                                frozenset({target[3]}), key))
+        self.st.rows.append(Row({v: lam}, target[2] - self.off, True, f"{al.text} (line {al.line})",
+                                frozenset({target[3]}), key, prefix=v))
         return True
 
     def _same_row(self, ref: PatternRef, v: int, length: int) -> None:
@@ -443,79 +455,92 @@ class _Layout:
         if not ctx.compiled.bound[(sym, self.axis)]:
             return
         start, size = interval or self._position(v)
-        coefs = self._start_coefs(v)
-        end_coefs = {**coefs, v: 1.0}
         if self.axis == "y" and ctx.floor_lines is not None:
             lines = ctx.floor_lines
             j = 0 if self.st.doors[v] else \
                 int(np.clip(np.searchsorted(lines, start + 0.5 * size) - 1, 0, len(lines) - 2))
-            neg = {i: -c for i, c in coefs.items()}
-            self.st.rows.append(Row(neg, self.off - lines[j], False, "floor lines of the building", key=("floor", v)))
-            self.st.rows.append(Row(end_coefs, lines[j + 1] - self.off, False, "floor lines of the building",
-                                    key=("floor", v)))
+            self.st.rows.append(Row({}, self.off - lines[j], False, "floor lines of the building", key=("floor", v),
+                                    prefix=v, sign=-1))
+            self.st.rows.append(Row({}, lines[j + 1] - self.off, False, "floor lines of the building",
+                                    key=("floor", v), prefix=v + 1))
         elif self.axis == "x" and ctx.corners is not None and any(ctx.corners):
             left, right = ctx.corners
-            neg = {i: -c for i, c in coefs.items()}
-            self.st.rows.append(Row(neg, self.off - left, False, "corner strips of the face", key=("corner", v)))
-            self.st.rows.append(Row(end_coefs, ctx.width - right - self.off, False, "corner strips of the face",
-                                    key=("corner", v)))
+            self.st.rows.append(Row({}, self.off - left, False, "corner strips of the face", key=("corner", v),
+                                    prefix=v, sign=-1))
+            self.st.rows.append(Row({}, ctx.width - right - self.off, False, "corner strips of the face",
+                                    key=("corner", v), prefix=v + 1))
 
     # ---------------------------------------------------------------- QP
     def _solve(self, new_from: int, total_eq: bool = False, mirror: bool = False) -> bool:
         """QP over the current arrangement; replica/symmetry equalities merge variables (exact reduction)."""
         st = self.st
         n = len(st.elems)
-        xbar, lo, hi = np.asarray(st.xbar), np.asarray(st.lo), np.asarray(st.hi)
         rows = st.rows
         weights = self._weights(n, mirror)
-        if (not total_eq and len(rows) == new_from and st.x.size == n - 1
-                and float(np.dot(weights[:-1], st.x)) + weights[-1] * min(max(xbar[-1], lo[-1]), hi[-1])
-                <= self.total + 1e-9):
-            st.x = np.append(st.x, min(max(xbar[-1], lo[-1]), hi[-1]))  # no newly active row: still optimal
-            return True
-        group = list(range(n))
+        if not total_eq and len(rows) == new_from and st.x.size == n - 1:
+            last = min(max(st.xbar[-1], st.lo[-1]), st.hi[-1])
+            if float(np.dot(np.asarray(weights[:-1]), st.x)) + weights[-1] * last <= self.total + 1e-9:
+                st.x = np.append(st.x, last)  # no newly active row: the previous optimum is still optimal
+                return True
+        group = None  # union-find forest of merged variables; a root is its set's least element
         general = []
         for r in rows:
-            if r.eq and r.rhs == 0.0 and len(r.coefs) == 2 and sorted(r.coefs.values()) == [-1.0, 1.0]:
-                u, v = (_find(group, i) for i in r.coefs)
-                group[max(u, v)] = min(u, v)
+            if r.pair is not None:
+                if group is None:
+                    group = list(range(n))
+                u, v = _find(group, r.pair[0]), _find(group, r.pair[1])
+                if u < v:
+                    group[v] = u
+                elif v < u:
+                    group[u] = v
             else:
                 general.append(r)
-        gid = [_find(group, i) for i in range(n)]
+        xbar = np.array(st.xbar)
         # relative deviations (default): a large region absorbs a change in proportion to its size
         ew = 1.0 / np.maximum(xbar, max(0.02 * self.total, 1e-3)) ** 2 if self.ctx.relative else np.ones(n)
-        if len(general) == len(rows):  # no merged variables
-            mem, m = gid, n
-            member = np.arange(n)
-            w, gx, glo, ghi = ew, xbar, lo, hi
+        if group is None:  # no merged variables
+            mem, m = range(n), n
+            member = None
+            w, gx, glo, ghi = ew, xbar, st.lo, st.hi
         else:
-            uniq = sorted(set(gid))
-            col = {g: k for k, g in enumerate(uniq)}
-            m = len(uniq)
+            gid = group  # (parents precede their children: each element's root in one pass)
+            for i, parent in enumerate(group):
+                gid[i] = gid[parent]
+            col = {g: k for k, g in enumerate(sorted(set(gid)))}
+            m = len(col)
             mem = [col[g] for g in gid]
             member = np.array(mem)
             w = np.bincount(member, weights=ew, minlength=m)
             gx = np.bincount(member, weights=xbar * ew, minlength=m) / w
-            glo_l, ghi_l = [-np.inf] * m, [np.inf] * m
-            for i, g in enumerate(mem):
-                glo_l[g] = max(glo_l[g], st.lo[i])
-                ghi_l[g] = min(ghi_l[g], st.hi[i])
-            glo, ghi = np.array(glo_l), np.array(ghi_l)
+            glo, ghi = [-np.inf] * m, [np.inf] * m
+            for g, a, b in zip(mem, st.lo, st.hi):
+                if a > glo[g]:
+                    glo[g] = a
+                if b < ghi[g]:
+                    ghi[g] = b
+        counts = [(0,) * m]  # counts[p][g]: how many of the first p elements are in group g
+        if any(r.prefix for r in general):
+            count = [0] * m
+            for g in mem:
+                count[g] += 1
+                counts.append(tuple(count))
         seen: set[tuple] = set()
         eq_rows, le_rows = [], []
         for r in general:
-            vec = [0.0] * m
+            sign = r.sign
+            vec = [float(sign * c) for c in counts[r.prefix]] if r.prefix else [0.0] * m
             for i, c in r.coefs.items():
                 vec[mem[i]] += c
             key = (r.eq, r.rhs, *vec)
             if key not in seen:
                 seen.add(key)
                 (eq_rows if r.eq else le_rows).append((vec, r.rhs))
-        total = (np.bincount(member, weights=weights, minlength=m).tolist(), self.total)
-        (eq_rows if total_eq else le_rows).append(total)
-        E = np.array([v for v, _ in eq_rows]).reshape(-1, m)
-        L = np.array([v for v, _ in le_rows]).reshape(-1, m)
-        x = solve_sizes(gx, glo, ghi, E, np.array([b for _, b in eq_rows]), L, np.array([b for _, b in le_rows]), w)
+        total = [0.0] * m  # the total size row: each group's weight in the finished arrangement
+        for g, c in zip(mem, weights):
+            total[g] += c
+        (eq_rows if total_eq else le_rows).append((total, self.total))
+        x = solve_sizes(gx, glo, ghi, [v for v, _ in eq_rows] + [v for v, _ in le_rows],
+                        [b for _, b in eq_rows] + [b for _, b in le_rows], len(eq_rows), w)
         self.ctx.qp_calls += 1
         if x is None:
             blamed = rows[new_from:] or rows
@@ -524,7 +549,7 @@ class _Layout:
             self.ctx.blame(f"total size of {self.node.symbol}" if total_eq or not blamed
                            else f"size ranges in {self.node.symbol}")
             return False
-        st.x = x[member]
+        st.x = x if member is None else x[member]
         return True
 
     # ---------------------------------------------------------------- completion

@@ -5,7 +5,7 @@ import math
 import zlib
 from dataclasses import dataclass
 
-from citygen.layout import FLOOR_BOUND_LABELS
+from citygen.layout import FLOOR_BOUND_LABELS, Region
 from citygen_relayout.bounds import extent_bounds
 from citygen_relayout.model import END, Model, Pattern, SizeRange
 from citygen_relayout.sequences import CoverAutomaton
@@ -66,6 +66,7 @@ class Compiled:
         # symbols that scope a constraint (``within``): the only ancestors a region needs to remember
         self.scoped = frozenset(c.within for c in (*model.alignments, *model.samesizes) if c.within)
         self._names: dict[tuple[str, int], str] = {}
+        self._templates: dict[tuple[str, int], dict] = {}
         self.code = zlib.crc32(model.name.encode()) ^ (len(model.symbols) << 32)  # part of region module keys
 
     def names(self, element: tuple[str, int]) -> str:
@@ -74,6 +75,15 @@ class Compiled:
         if name is None:
             name = self._names[element] = element[0] if not element[1] else f"{element[0]}'{element[1]}"
         return name
+
+    def template(self, element: tuple[str, int]) -> dict:
+        """``Region.template`` of a terminal element's regions (for ``Region.stamped``)."""
+        found = self._templates.get(element)
+        if found is None:
+            sym = self.model.symbols[element[0]]
+            found = self._templates[element] = Region.template(
+                self.names(element), label=sym.label, depth=sym.depth, material=sym.material, asset=sym.asset)
+        return found
 
     def size(self, symbol: str, axis: str) -> SizeRange:
         return self.model.sizes[(symbol, axis)]

@@ -113,6 +113,8 @@ class Search:
         self.width, self.height, self.rng = float(width), float(height), rng
         c = constraints or Constraints()
         self.floor_lines = None if c.floor_lines is None else np.asarray(c.floor_lines, float)
+        self.lines = None if c.floor_lines is None else self.floor_lines.tolist()  # (the same, as floats)
+        self.eps = 1e-6 * max(self.width, self.height, 1.0)  # positions this close are equal
         self.corners, self.doors, self.shared, self.key_salt = c.corners, c.doors, c.shared, c.key_salt
         self.budget_s, self.backtrack_budget, self.restarts = budget_s, backtrack_budget, restarts
         self.max_backtracks = 0  # cutoff of the current attempt
@@ -188,19 +190,20 @@ class Search:
         lines = self.floor_lines
         if lines is None or lines.size < 3:
             return None
-        eps = 1e-6 * max(self.width, self.height, 1.0)
-        k0 = int(np.searchsorted(lines, a + eps, side="right")) - 1
-        k1 = int(np.searchsorted(lines, b - eps, side="left")) - 1
+        eps = self.eps
+        k0 = int(lines.searchsorted(a + eps, side="right")) - 1
+        k1 = int(lines.searchsorted(b - eps, side="left")) - 1
         k0, k1 = max(k0, 0), min(k1, lines.size - 2)
         return (k0, k1) if k1 > k0 else None
 
     def inside(self, axis: str, a: float, b: float) -> bool:
-        eps = 1e-6 * max(self.width, self.height, 1.0)
+        eps = self.eps
         if axis == "y":
             if self.floor_lines is None:
                 return True
-            j = int(np.clip(np.searchsorted(self.floor_lines, 0.5 * (a + b)) - 1, 0, len(self.floor_lines) - 2))
-            return a >= self.floor_lines[j] - eps and b <= self.floor_lines[j + 1] + eps
+            lines = self.lines
+            j = min(max(int(self.floor_lines.searchsorted(0.5 * (a + b))) - 1, 0), len(lines) - 2)
+            return a >= lines[j] - eps and b <= lines[j + 1] + eps
         if not self.corners:
             return True
         return a >= self.corners[0] - eps and b <= self.width - self.corners[1] + eps
@@ -361,7 +364,7 @@ class Search:
             al = self.model.alignments[k]
             lam = al.a_anchor if side == 0 else al.b_anchor
             for s, e, t, frame in self.align_targets(ref, axis, pos[v], pos[v + 1], anc):
-                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - t) > 1e-6 * max(self.width, self.height, 1.0):
+                if abs(pos[v] + lam * (pos[v + 1] - pos[v]) - t) > self.eps:
                     self.blame(f"{al.text} (line {al.line})", frozenset({frame}))
                     return False
         for v, (sym, _) in enumerate(sol.elements):
@@ -477,19 +480,17 @@ class Search:
     def _region(self, uid: int, x: float, y: float, w: float, h: float, element: tuple[str, int],
                 key: int | None) -> Region:
         """The region of laid-out region ``uid`` (or of a replica of it) at ``(x, y)``."""
-        symbols, names = self.model.symbols, self.compiled.names
+        symbols, names, template = self.model.symbols, self.compiled.names, self.compiled.template
         sym = symbols[element[0]]
         node, sol = self.solutions[uid]
         horizontal = sym.split == "x"
         pos = [(x if horizontal else y) + c for c in sol.cum]
         kids = []
         for v, child in enumerate(sol.elements):
-            c = symbols[child[0]]
             a, b = pos[v], pos[v + 1]
-            if c.is_terminal:
-                kids.append(Region(a, y, b - a, h, names(child), c.label, c.depth, c.material, c.asset)
-                            if horizontal else
-                            Region(x, a, w, b - a, names(child), c.label, c.depth, c.material, c.asset))
+            if not self.compiled.composite[child[0]]:
+                kids.append(Region.stamped(template(child), a, y, b - a, h) if horizontal else
+                            Region.stamped(template(child), x, a, w, b - a))
             else:
                 src = self._source(node.children_uids[v])
                 kids.append(self._region(src, a, y, b - a, h, child, self._key(src)) if horizontal else

@@ -8,6 +8,8 @@ directly rather than through :func:`citygen.qp.solve_qp`, which would rebuild th
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 try:
@@ -20,42 +22,46 @@ METHOD = "daqp" if daqp is not None else "quadprog"
 _EQ = 5  # DAQP constraint sense: ACTIVE | IMMUTABLE (an equality)
 
 
-def solve_sizes(xbar: np.ndarray, lo: np.ndarray, hi: np.ndarray, eq: np.ndarray, eq_rhs: np.ndarray,
-                le: np.ndarray, le_rhs: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray | None:
-    """Sizes closest to ``xbar`` with ``lo <= x <= hi``, ``eq @ x = eq_rhs``, ``le @ x <= le_rhs``; None if
-    infeasible. ``eq`` and ``le`` are ``(m, n)`` arrays; ``weights`` (default 1) weight the squared deviations."""
+def solve_sizes(xbar: np.ndarray, lo: Sequence[float], hi: Sequence[float], rows: Sequence[Sequence[float]],
+                rhs: Sequence[float], eqs: int, weights: np.ndarray | None = None) -> np.ndarray | None:
+    """Sizes closest to ``xbar`` with ``lo <= x <= hi`` and ``rows @ x = rhs`` for the first ``eqs`` rows,
+    ``rows @ x <= rhs`` for the others; None if infeasible. ``rows`` is ``(m, n)`` (nested lists or an array);
+    ``weights`` (default 1) weight the squared deviations. The problems are tiny (a few variables, a few dozen
+    rows), so the bounds and the solution are checked in plain floats, which numpy would only slow down."""
     n = xbar.size
     w = np.ones(n) if weights is None else weights
-    if np.any(lo > hi + 1e-12):
+    if any(a > b + 1e-12 for a, b in zip(lo, hi)):
         return None
-    x = _daqp(xbar, lo, hi, eq, eq_rhs, le, le_rhs, w) if METHOD == "daqp" else \
-        _quadprog(xbar, lo, hi, eq, eq_rhs, le, le_rhs, w)
+    A = np.array(rows, dtype=float).reshape(-1, n)
+    upper = np.array([*hi, *rhs], dtype=float)  # the bounds of x, then of the rows (DAQP's layout)
+    lower = np.array([*lo, *rhs[:eqs], *[-1e30] * (len(rhs) - eqs)], dtype=float)
+    x = _daqp(xbar, lower, upper, A, eqs, w) if METHOD == "daqp" else _quadprog(xbar, lower, upper, A, eqs, w)
     if x is None:
         return None
-    tol = 1e-7 * (1.0 + float(np.max(np.abs(eq_rhs), initial=0.0)) + float(np.max(np.abs(hi), initial=0.0)))
-    if (eq.shape[0] and np.max(np.abs(eq @ x - eq_rhs)) > tol) or np.any(x < lo - tol) or np.any(x > hi + tol) \
-            or (le.shape[0] and np.any(le @ x > le_rhs + tol)):
+    tol = 1e-7 * (1.0 + max([0.0, *map(abs, rhs[:eqs])]) + max([0.0, *map(abs, hi)]))
+    if any(v < a - tol or v > b + tol for v, a, b in zip(x.tolist(), lo, hi)):
         return None
-    return np.clip(x, lo, hi)
+    if eqs and any(abs(v - b) > tol for v, b in zip((A[:eqs] @ x).tolist(), rhs)):
+        return None
+    if eqs < len(rhs) and any(v > b + tol for v, b in zip((A[eqs:] @ x).tolist(), rhs[eqs:])):
+        return None
+    return x.clip(lower[:n], upper[:n])
 
 
-def _daqp(xbar, lo, hi, eq, eq_rhs, le, le_rhs, w) -> np.ndarray | None:
+def _daqp(xbar, lower, upper, A, eqs, w) -> np.ndarray | None:
     n = xbar.size
-    A = np.ascontiguousarray(np.vstack([eq, le]))
-    upper = np.concatenate([hi, eq_rhs, le_rhs])
-    lower = np.concatenate([lo, eq_rhs, np.full(le.shape[0], -1e30)])
-    sense = np.zeros(n + A.shape[0], dtype=np.int32)
-    sense[n:n + eq.shape[0]] = _EQ
+    sense = np.zeros(upper.size, dtype=np.int32)
+    sense[n:n + eqs] = _EQ
     x, _, flag, _ = daqp.solve(np.diag(w), -w * xbar, A, upper, lower, sense)
     return x if flag == 1 else None
 
 
-def _quadprog(xbar, lo, hi, eq, eq_rhs, le, le_rhs, w) -> np.ndarray | None:
+def _quadprog(xbar, lower, upper, A, eqs, w) -> np.ndarray | None:
     n = xbar.size
     eye = np.eye(n)
-    C = np.vstack([eq, -le, eye, -eye]).T
-    b = np.concatenate([eq_rhs, -le_rhs, lo, -hi])
+    C = np.vstack([A[:eqs], -A[eqs:], eye, -eye]).T
+    b = np.concatenate([lower[n:n + eqs], -upper[n + eqs:], lower[:n], -upper[:n]])
     try:
-        return quadprog.solve_qp(np.diag(w), w * xbar, C, b, eq.shape[0])[0]
+        return quadprog.solve_qp(np.diag(w), w * xbar, C, b, eqs)[0]
     except ValueError:  # inconsistent constraints, or linearly dependent equality rows
         return None

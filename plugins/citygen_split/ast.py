@@ -233,6 +233,16 @@ class Grammar:
         return self._closed({rule.symbol for rule in self.rules if _reads(rule.body, "floor")}
                             | (self.table.keys() - self.translation_invariant))
 
+    @cached_property
+    def face_invariant(self) -> frozenset[str]:
+        """:attr:`translation_invariant` symbols from which neither a ``choice`` (drawn once per face) nor a condition
+        reading a face's variables (any but ``width``, ``height`` and ``floor``) is reachable: their subtrees derive
+        alike on every face of a building (given the size and floor), so the subtrees' keys (module hints, see
+        :class:`citygen.layout.Region`) are the same on every face."""
+        return self._closed({rule.symbol for rule in self.rules if isinstance(rule.body, Choice) or (
+            isinstance(rule.body, Case) and any(_variables(cond) - _REGION_VARIABLES for cond, _ in rule.body.branches))}
+                            | (self.table.keys() - self.translation_invariant))
+
     def _closed(self, variant: set[str]) -> frozenset[str]:
         """The symbols from which no symbol of ``variant`` (nor an undefined one) is reachable."""
         graph = {rule.symbol: [s for s, _ in successors(rule.body)] for rule in self.rules}
@@ -279,17 +289,21 @@ def _position_dependent(body: Body) -> bool:
     return False
 
 
+#: The variables of a condition that are the region's own (the rest are the face's).
+_REGION_VARIABLES = frozenset({"width", "height", "floor"})
+
+
 def _reads(body: Body, name: str) -> bool:
     """Whether a condition of ``body`` (a ``case``) reads the variable ``name``."""
-    return isinstance(body, Case) and any(_names(cond, name) for cond, _ in body.branches)
+    return isinstance(body, Case) and any(name in _variables(cond) for cond, _ in body.branches)
 
 
-def _names(expr: Expr, name: str) -> bool:
-    """Whether ``expr`` reads the variable ``name``."""
+def _variables(expr: Expr) -> set[str]:
+    """The variables ``expr`` reads."""
     if isinstance(expr, Var):
-        return expr.name == name
+        return {expr.name}
     if isinstance(expr, Unary):
-        return _names(expr.operand, name)
+        return _variables(expr.operand)
     if isinstance(expr, Binary):
-        return _names(expr.left, name) or _names(expr.right, name)
-    return False
+        return _variables(expr.left) | _variables(expr.right)
+    return set()

@@ -94,6 +94,11 @@ class _Derivation:
         self.tracing = trace
         self.reusable = frozenset() if trace else grammar.translation_invariant
         self.floorless = frozenset() if trace else grammar.floor_invariant  # (cached with floor -1)
+        #: Symbols whose subtrees' keys are scoped by the grammar, not by the face's seed: they derive alike on every
+        #: face of the building, so the module search hashes each once per building (not when alternatives are
+        #: forced: they are the face's own)
+        self.shared = frozenset() if trace or alternatives else grammar.face_invariant
+        self.scope = ("grammar", id(grammar))
         #: (subtree, its size in regions, position of its first terminal, its terminal count, and for a terminal
         #: its index among :attr:`sources`) by (symbol, size, floor; -1 for a :attr:`floorless` symbol)
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
@@ -150,7 +155,8 @@ class _Derivation:
                 return copy
             before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
-            region.__dict__["key"] = hash((self.request.seed, key))  # copies below share it: a module hint
+            region.__dict__["key"] = hash((self.scope if symbol in self.shared else self.request.seed, key))
+            # (copies share it: a module hint)
             self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first,
                                len(self.sources) - 1)  # (the source of a terminal region)
             return region
@@ -230,7 +236,7 @@ class _Derivation:
             copied["y"] = y
             copied["w"] = w
             copied["h"] = h
-            copied["key"] = hash((self.request.seed, key))
+            copied["key"] = hash((self.scope if symbol in self.shared else self.request.seed, key))
             _set(region, "__dict__", copied)
             self.cache[key] = (region, 1, len(self.leaves) + self.copied, 1, len(self.sources))
             self.source_of.append(len(self.sources))

@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from citygen.errors import ParseError, SourceLocation, read_user_text
+from citygen.layout import MAX_DEPTH
 from citygen.nesting import Depth
 from citygen_split.ast import (
     Attr, Binary, Body, Case, Choice, Const, Expr, Floors, FloorItem, Grammar, Grid, Item, Rename, Repeat,
@@ -311,7 +312,12 @@ class _Parser:
             self.op(":")
             if key.text == "depth":
                 sign = -1.0 if self.accept("OP", "-") else 1.0
+                number = self.tok
                 values["depth"] = sign * float(self.expect("NUM", None, "a depth in metres").text)
+                if abs(values["depth"]) > MAX_DEPTH:
+                    raise self.fail(f"depth {values['depth']:g} m is beyond +-{MAX_DEPTH:g} m", number,
+                                    hint="a depth is the terminal's offset from the wall in metres (a balcony 1.2, "
+                                         "a recessed window -0.25)")
             elif key.text == "material":
                 if self.tok.kind not in ("NAME", "SYM", "STR"):
                     raise self.expected("a material name or quoted string")

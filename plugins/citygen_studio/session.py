@@ -31,7 +31,7 @@ from citygen.registry import Registry
 from citygen.request import MIN_STOREY, FacadeRequest, check_request
 from citygen.scene import Scene, load_scene
 from citygen.usd.materials import BUILTIN
-from citygen.usd.writer import prim_name
+from citygen.usd.names import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
 from citygen_studio.edited import edited_registry
 from citygen_studio.faces import city_problems, face_layout, face_requests, request_data

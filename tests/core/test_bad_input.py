@@ -33,6 +33,7 @@ def layout_text(**region) -> str:
     ('{"schema_version": 1, "width": 2, "height": 1, "meta": 3, "root": {}}', "meta must be a JSON object"),
     (layout_text(h=10 ** 400), "region root has h = 1000"),                 # was: OverflowError
     (layout_text(depth=float("inf")), "region root has depth = inf, not a finite number"),
+    (layout_text(depth=1e308), "region root has depth = 1e+308 m, beyond +-100 m"),  # was: OverflowError (modules)
     (layout_text(w=float("nan")), "region root has w = nan"),
     (layout_text(w=-1), "region root has a negative size"),
     (layout_text(label={}), "region root has label = {}, not a string"),  # was: TypeError unhashable in safe

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 RULESET = Path(__file__).resolve().parents[2] / "rulesets" / "residential_house.layers"
+SCENE = Path(__file__).resolve().parents[2] / "scenes" / "helsinki.toml"
 #: Modules a city without layer stacks or SAFE rulesets never needs (solvers and what they import).
 LAZY = ["citygen_layers.solver", "citygen_layers.sizing", "citygen_safe.generate", "citygen_safe.optimise",
         "citygen_photo.photo", "scipy.spatial", "scipy.ndimage"]
@@ -34,3 +35,19 @@ def test_a_kind_imports_its_solver_on_first_use():
         f"ruleset = kind.load(__import__('pathlib').Path({str(RULESET)!r}))\n"
         "kind.generate(ruleset, FacadeRequest.preview(10.0, 9.0, 3.0))")
     assert {"citygen_layers.solver", "citygen_layers.sizing"} <= loaded
+
+
+def test_the_command_line_and_the_footprints_planning_import_no_usd():
+    """The planning child is forked before the stage writer is imported (citygen.pipeline._generate), so that the
+    main process imports USD while the child plans: neither the command line, the registry, the scene nor the
+    planning may import ``pxr`` (prim names are made without it: citygen.usd.names)."""
+    loaded = _loaded_after(
+        "from pathlib import Path\nfrom citygen.cli import build_parser\n"
+        "from citygen.registry import default_registry\nfrom citygen.scene import load_scene\n"
+        "from citygen import pipeline\nfrom citygen.tilework import Spill\nimport tempfile\n"
+        "registry = default_registry()\nbuild_parser(registry)\n"
+        f"scene = load_scene(Path({str(SCENE)!r}), registry.roof_builders, registry.ruleset_kinds)\n"
+        "with tempfile.TemporaryDirectory() as tmp:\n"
+        "    planned = pipeline._plan(scene, registry, registry.roof_builders, Spill(Path(tmp) / 'spill'))\n"
+        "    assert sum(map(len, planned.works)) > 400")
+    assert not {m for m in loaded if m == "pxr" or m.startswith("pxr.")}

@@ -2,13 +2,14 @@
 main process; its result comes back, its failure lets the caller raise the error itself."""
 from __future__ import annotations
 
+import multiprocessing
 import os
 import sys
 
 import pytest
 
 from citygen.errors import CitygenError
-from citygen.lifeline import run_apart
+from citygen.lifeline import apart, run_apart
 from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 
@@ -30,6 +31,21 @@ def test_the_result_is_computed_in_another_process_and_sent_back():
 
 def test_a_failing_child_answers_none_so_the_caller_raises_its_error():
     assert run_apart(_fails) is None
+
+
+def _sleeps() -> int:
+    import time
+    time.sleep(60)
+    return os.getpid()
+
+
+def test_the_caller_goes_on_while_the_child_computes_and_an_error_of_its_own_kills_the_child():
+    with apart(_pid_and_list) as result:
+        assert result()[1] == [0, 1, 2, 3, 4]
+    with pytest.raises(KeyError), apart(_sleeps) as result:
+        children = {child.pid for child in multiprocessing.active_children()}
+        raise KeyError("a ruleset that does not load")
+    assert children and not children & {child.pid for child in multiprocessing.active_children()}
 
 
 def test_a_scene_whose_footprints_fail_to_import_raises_in_the_main_process(small_scene, test_registry):

@@ -16,7 +16,7 @@ from citygen.pipeline import generate_city
 from citygen.scene import load_scene
 from citygen.usd.validate import validate_stage
 from citygen.usd import writer as writer_module
-from citygen.usd.publish import current_umask
+from citygen.temporaries import current_umask
 from citygen.usd.writer import BuildingRecord, StageWriter
 from tests.usd_util import assert_resolves, buildings
 
@@ -320,3 +320,23 @@ def test_layers_authored_in_crate_data_write_the_bytes_of_layers_authored_in_sdf
     assert len(crate) == 5 and sum(name.startswith("small_tiles/Tile_") for name in crate) == 3
     assert asked.count(".usdc") == 5  # (the root, three tiles and the library)
     assert crate == data
+
+
+def test_the_root_prepares_each_element_kind_of_the_library_as_the_tile_results_come_in(tmp_path):
+    """The element library's prototypes are made while the workers still build (the library's writing at the end
+    of the run only authors them): each new kind once, the modules only counted; the library holds them all."""
+    from citygen.geometry.modules import ModuleKey
+    from citygen.geometry.prototypes import ProtoKey
+
+    # (kinds no other test prepares: the prepared elements are the process's)
+    window, door = ProtoKey("window", "glass", 123, 157, 5), ProtoKey("door", "wood", 101, 213, 5)
+    with StageWriter(tmp_path / "city.usdc", tile_layers=True) as writer:
+        assert door not in writer.elements
+        writer.take_prototypes([window, ModuleKey(7, 300, 300, "brick")])
+        prepared = writer.elements[window]
+        writer.take_prototypes([window, door])
+        assert writer.elements[window] is prepared and door in writer.elements
+        assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 1
+        writer.close()
+    library = Sdf.Layer.OpenAsAnonymous(str(tmp_path / "city_tiles" / "elements.usdc"))
+    assert {p.name for p in library.GetPrimAtPath("/Prototypes").nameChildren} == {window.name, door.name}

@@ -21,6 +21,16 @@ def test_nan_and_inf_are_not_numbers_of_a_layer_stack(line, where):
     assert f"stack.layers{where}" in str(info.value) and "expected a finite number" in str(info.value)
 
 
+@pytest.mark.parametrize("line, where", [
+    ("symbol C size=1 depth=1e308\n", ":4:17"),  # was (as in grammars): OverflowError in the module search
+    ("pattern P = A (B A)^k\nlayer l x=P y=P depth=-1e5\n", ":5:17"),
+])
+def test_a_depth_beyond_100_m_is_a_parse_error(line, where):
+    with pytest.raises(ParseError) as info:
+        parse(HEAD + line, "stack.layers")
+    assert f"stack.layers{where}" in str(info.value) and "is beyond +-100 m" in str(info.value)
+
+
 def test_layer_stack_that_is_not_utf8_is_a_parse_error(tmp_path):
     from citygen_layers.parser import load
     (tmp_path / "s.layers").write_bytes(HEAD.encode() + b"# caf\xe9\n")  # was: UnicodeDecodeError

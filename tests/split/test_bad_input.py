@@ -16,6 +16,15 @@ def test_number_beyond_float_range_is_a_parse_error():
     assert "number 1e400 is too large" in str(err)
 
 
+@pytest.mark.parametrize("depth, column", [("1e308", 32), ("-1e5", 33)])
+def test_a_depth_beyond_100_m_is_a_parse_error(depth, column):
+    # was (fuzz): depth 1e308 parsed, and the module search's round(depth * 100) raised OverflowError: the
+    # building skipped with "internal error" instead of the grammar's line
+    err = parse_error(f"Wall --> terminal(wall, depth: {depth})\n")
+    assert str(err.where) == f"bad.grammar:1:{column}" and "is beyond +-100 m" in str(err)
+    assert grammar("Deep --> terminal(balcony, depth: -100)\n")
+
+
 @pytest.mark.parametrize("body", ["repeat(x) { ~1e-308: Wall }", "repeatABA(x) { 1e-308: Wall | 1e-308: Window }",
                                   "repeat(x) { 1e-9: Wall }"])
 def test_repeat_of_tiles_too_small_to_count_is_a_ruleset_error(body):

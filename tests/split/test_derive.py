@@ -272,6 +272,27 @@ def test_a_floor_condition_keeps_its_subtree_per_floor_and_the_rest_is_copied_ac
     assert check_partition(layout) == []
 
 
+def test_subtrees_alike_on_every_face_share_their_key_across_the_faces_of_a_building():
+    """A subtree no ``choice`` and no face variable reaches derives alike on every face, so its key (the module
+    search's hint) is scoped by the grammar, not the face's seed: the search hashes it once per building (issue 24).
+    A subtree reading ``entrance`` or drawing a ``choice`` keeps the face's own key, as does every subtree of a
+    derivation with forced alternatives."""
+    g = grammar("X --> split(x) { '1: Bay | '1: Deco }\nBay --> case entrance: Entry\n else: Win\n"
+                "Deco --> 50%: Win\n else: Entry\nEntry --> terminal(door)\n"
+                "Win --> split(y) { 1: Sill | '1: Glass }\nSill --> terminal(sill)\nGlass --> terminal(window)")
+    assert g.face_invariant >= {"Win", "Sill", "Glass", "Entry"} and not {"X", "Bay", "Deco"} & g.face_invariant
+
+    def keys(layout):
+        bay, deco = layout.root.children
+        return bay.key, deco.key, bay.children[0].key
+
+    a, b = (derive(g, request(4, 3, seed=(s,))) for s in (1, 2))
+    (bay_a, deco_a, win_a), (bay_b, deco_b, win_b) = keys(a), keys(b)
+    assert win_a == win_b and bay_a != bay_b and deco_a != deco_b
+    forced = keys(derive(g, request(4, 3, seed=(2,)), {("Deco", 0.0, 0.0): 1}))
+    assert forced[2] != win_a
+
+
 def test_non_positive_facade_is_an_error():
     with pytest.raises(RulesetError, match="not positive"):
         derive(grammar("X --> A"), request(0, 3))
