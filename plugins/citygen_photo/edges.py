@@ -17,6 +17,8 @@ retrained. Here each is decided by evidence integrated over its band:
 """
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 from scipy.ndimage import uniform_filter
 
@@ -68,7 +70,7 @@ def with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]
     return [(float(row[0]), float(row[-1] + 1)) if row.size else (float(a), float(b)), *rows]
 
 
-def ground_top(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | None,
+def ground_floor(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | None,
                similar: Similarity | None = None) -> float | None:
     """The top (working pixels, y down) of the ground floor below the bottom row of ``rows``, None without one:
     halfway down to ``shops`` (the top of a band of shops standing on the ground), else half the rows' median gap
@@ -80,7 +82,7 @@ def ground_top(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | 
     if shops is not None:
         top = max((rows[-1][1] + shops) / 2, rows[-1][1])
     else:
-        gap = float(np.median([a - b for (_, b), (a, _) in zip(rows, rows[1:])])) if len(rows) > 1 else 0.1 * h
+        gap = float(np.median([a - b for (_, b), (a, _) in pairwise(rows)])) if len(rows) > 1 else 0.1 * h
         top = rows[-1][1] + max(gap, 0.0) / 2
     share = (h - top) / pitch
     if h - top < 2:

@@ -36,8 +36,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from citygen.layout import FacadeLayout, Region
+from citygen_photo.edges import ground_floor, with_attic
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.edges import ground_top as ground_floor, with_attic
 from citygen_photo.lattice import Similarity, lattice_rows
 
 WINDOW, DOOR, SHOP, BLIND, BALCONY = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind", "balcony"))

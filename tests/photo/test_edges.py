@@ -4,11 +4,11 @@ with the band one floor up; and the median floor MI shared with the lattice chec
 from __future__ import annotations
 
 import numpy as np
-
-from citygen_photo.edges import ground_top, with_attic
+from citygen_photo.edges import ground_floor, with_attic
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.lattice import floor_similarity
 from citygen_photo.regular import WINDOW, regular_facade
+
 from tests.photo.test_learned import probabilities
 
 N = len(CMP_LABELS)
@@ -43,11 +43,11 @@ def test_an_attic_band_holding_a_dormer_is_a_row_a_faint_haze_is_not():
 def test_a_thin_band_with_a_shop_front_is_a_ground_floor_a_bare_one_is_not():
     prob = wall(140, 120)
     rows = rows_at(20, 50, 80, 110)  # the band below the lowest row: 125 to 140, half a pitch
-    assert ground_top(prob, rows, 30.0, None) is None  # bare wall, no MI to ask
+    assert ground_floor(prob, rows, 30.0, None) is None  # bare wall, no MI to ask
     prob[127:, 10:80, SHOP], prob[127:, 10:80, FACADE] = 1.0, 0.0
-    assert ground_top(prob, rows, 30.0, None) == 125.0
+    assert ground_floor(prob, rows, 30.0, None) == 125.0
     tall = wall(170, 120)  # 45 px below: 1.5 pitches, a floor whatever it holds
-    assert ground_top(tall, rows, 30.0, None) == 125.0
+    assert ground_floor(tall, rows, 30.0, None) == 125.0
 
 
 def test_a_ground_band_is_a_floor_where_it_does_not_repeat_the_floor_above():
@@ -57,16 +57,16 @@ def test_a_ground_band_is_a_floor_where_it_does_not_repeat_the_floor_above():
     above it, a ground floor does not."""
     prob = wall(137, 120)
     rows = rows_at(20, 50, 80, 110)  # band from 125 to 137: 0.4 pitches
-    repeats = lambda y0, y1, shift: 1.0  # noqa: E731
-    differs = lambda y0, y1, shift: 0.1 if y1 > 125 else 1.0  # noqa: E731
-    assert ground_top(prob, rows, 30.0, None, repeats) is None
-    assert ground_top(prob, rows, 30.0, None, differs) == 125.0
-    assert ground_top(wall(132, 120), rows, 30.0, None, differs) is None  # 0.23 pitches: too thin to be a floor
+    repeats = lambda y0, y1, shift: 1.0
+    differs = lambda y0, y1, shift: 0.1 if y1 > 125 else 1.0
+    assert ground_floor(prob, rows, 30.0, None, repeats) is None
+    assert ground_floor(prob, rows, 30.0, None, differs) == 125.0
+    assert ground_floor(wall(132, 120), rows, 30.0, None, differs) is None  # 0.23 pitches: too thin to be a floor
 
 
 def test_the_floor_similarity_is_the_median_over_the_rows_that_fit():
     rows = rows_at(20, 50, 80, 110)
-    mi = lambda y0, y1, shift: float("nan") if y0 < 0 else y0 / 100  # noqa: E731
+    mi = lambda y0, y1, shift: float("nan") if y0 < 0 else y0 / 100
     assert floor_similarity(rows, 30.0, mi) == 0.35  # bands from 5, 35 and 65: 0.05, 0.35, 0.65
     assert floor_similarity(rows_at(10, 40, 70), 30.0, mi) == 0.25  # (the first band leaves the photo)
     assert floor_similarity(rows, 30.0, lambda *_: 0.0) is None
