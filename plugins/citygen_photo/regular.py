@@ -159,7 +159,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
     shops = shop_band(prob)
     if shops is not None:
-        rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
+        rows = [(a, b) for a, b in rows if b <= shops]  # (a run reaching into the shop band is its glass)
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
     rows = with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch)

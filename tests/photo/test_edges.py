@@ -79,3 +79,13 @@ def test_the_learned_floors_keep_a_dormer_attic_and_a_ground_floor_of_shops():
     attic[8:22, 55:65] = np.eye(N)[WINDOW]
     facade = regular_facade(np.concatenate([attic, prob]))
     assert facade.ground and len(facade.floor_lines) - 1 == 6
+
+
+def test_a_sliver_of_window_probability_reaching_into_the_shop_band_is_not_a_row():
+    """Regression (balcony fold cmp_b0221 with the closed-shutter U-Nets of round 8): a 3 px run of window
+    probability straddling the top of the shop band, its centre just above it, was a row of windows of its own
+    between the upper floors and the ground floor; a row lies wholly above the shop band."""
+    prob = probabilities(floors=4, ground_h=40, shop=True)
+    prob[121:128, 64:110] = np.eye(N)[WINDOW]  # the shops' glass reaching above the band's top (126)
+    facade = regular_facade(prob)
+    assert facade.ground and len(facade.floor_lines) - 1 == 5
