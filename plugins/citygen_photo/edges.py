@@ -5,7 +5,7 @@ them whatever the parser's small errors; the two edge floors do not repeat, and 
 one probability threshold each at the photo's top and bottom -- the decisions that flipped when the parser was
 retrained. Here each is decided by evidence integrated over its band:
 
-* **Attic** (dormers, a gable's windows: too few for the row mean): the row's highest window probability (a
+* **Attic** (dormers, a gable's windows: too few for the row mean): the row's highest window probability (an
   ``ATTIC_BOX`` px box) above ``ATTIC_BASE``, summed over the rows of a run and divided by the rows' median height
   -- how much of a window row the run holds, strength and height together -- reaches ``ATTIC_MASS``.
 * **Ground floor** (shops, an entrance, a plinth): the band below the bottom row is a floor when it is at least
@@ -71,7 +71,7 @@ def with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]
 
 
 def ground_floor(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | None,
-               similar: Similarity | None = None) -> float | None:
+                 similar: Similarity | None = None) -> float | None:
     """The top (working pixels, y down) of the ground floor below the bottom row of ``rows``, None without one:
     halfway down to ``shops`` (the top of a band of shops standing on the ground), else half the rows' median gap
     below the bottom row; a floor by its height, its shop + door probability or its MI with the band one pitch

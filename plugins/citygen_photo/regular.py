@@ -51,8 +51,8 @@ VOTE = 0.3
 TIGHT = 0.5
 #: A gap between rows of windows this many pitches long holds more floors.
 MISSING_ROW = 1.6
-#: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
-#: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
+#: A band of shops and doors stands on the ground where its rows' mean shop + door probability reaches this; the
+#: windows the parser sees in it are shop windows, not a row of windows (whether it is a floor: ``edges``).
 SHOP_BAND = 0.3
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
