@@ -48,6 +48,16 @@ def on_lattice(rows: list[Span], pitch: float) -> list[Span]:
     return kept if len(kept) >= 3 else rows
 
 
+def floor_similarity(rows: list[Span], pitch: float, similar: Similarity) -> float | None:
+    """The median MI between the floor bands (a ``pitch`` tall, centred on the rows) of consecutive ``rows``; None
+    when no pair fits in the photo or the floors do not repeat (median <= 0)."""
+    half = pitch / 2
+    mi = [similar((a + b) / 2 - half, (a + b) / 2 + half, (c + d) / 2 - (a + b) / 2)
+          for (a, b), (c, d) in pairwise(rows)]
+    mi = [s for s in mi if np.isfinite(s)]
+    return float(np.median(mi)) if mi and np.median(mi) > 0 else None
+
+
 def lattice_rows(rows: list[Span], pitch: float, period: float | None, similar: Similarity | None,
                  bottom: float) -> list[Span]:
     """``rows`` (top to bottom, working pixels) checked against the pitch's lattice where the MI ``period``
@@ -59,12 +69,10 @@ def lattice_rows(rows: list[Span], pitch: float, period: float | None, similar: 
         return rows
     rows = on_lattice(rows, pitch)
     half = pitch / 2
-    mi = [similar((a + b) / 2 - half, (a + b) / 2 + half, (c + d) / 2 - (a + b) / 2)
-          for (a, b), (c, d) in pairwise(rows)]
-    mi = [s for s in mi if np.isfinite(s)]
-    if not mi or np.median(mi) <= 0:  # (the floors found do not repeat: nothing to compare a band with)
+    floors = floor_similarity(rows, pitch, similar)
+    if floors is None:  # (the floors found do not repeat: nothing to compare a band with)
         return rows
-    strong = FILL * float(np.median(mi))
+    strong = FILL * floors
     height = float(np.median([b - a for a, b in rows]))
     out = list(rows)
     while True:

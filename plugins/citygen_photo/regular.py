@@ -9,10 +9,10 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    missed (closed blinds, reflections): it is split at the pitch the others agree on, which the mutual-information
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
    few; where that period is the rows' pitch (or two or three of them) it also checks the rows
-   (:mod:`citygen_photo.lattice`: a strip between floors dropped, a row the intensity bands repeat put back). An
-   attic row of a few dormers is found by the row's highest probability instead of its mean. A band of
-   shops and doors on the ground is the ground floor (its glass is not a row of windows); else a band below the
-   lowest row at least half a floor tall is. A floor line between two rows sits in the wall band between them,
+   (:mod:`citygen_photo.lattice`: a strip between floors dropped, a row the intensity bands repeat put back). The
+   floors at the edges -- an attic row of a few dormers, a ground floor below the lowest row -- are decided by
+   evidence integrated over their bands (:mod:`citygen_photo.edges`); the glass of a band of shops and doors on
+   the ground is not a row of windows. A floor line between two rows sits in the wall band between them,
    the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
 2. **Tiles** (§2.4, §3.2 voting): window columns are the runs of the window probability's column profile over all
    upper floors together, so every upper floor shares one set of tile lines; whether a tile holds a window is
@@ -33,9 +33,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d, uniform_filter
+from scipy.ndimage import gaussian_filter1d
 
 from citygen.layout import FacadeLayout, Region
+from citygen_photo.edges import ground_floor, with_attic
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.lattice import Similarity, lattice_rows
 
@@ -50,19 +51,9 @@ VOTE = 0.3
 TIGHT = 0.5
 #: A gap between rows of windows this many pitches long holds more floors.
 MISSING_ROW = 1.6
-#: Least ground-floor height, in floor pitches, for the band below the lowest row to be a floor of its own.
-GROUND_SHARE = 0.4
-#: A band of shops and doors standing on the ground is a ground floor when its rows' mean shop + door probability
-#: reaches this; the windows the parser sees in it are shop windows, not a row of windows.
+#: A band of shops and doors stands on the ground where its rows' mean shop + door probability reaches this; the
+#: windows the parser sees in it are shop windows, not a row of windows (whether it is a floor: ``edges``).
 SHOP_BAND = 0.3
-#: An attic row (dormers, a gable's windows: too few for the row mean) is a run where the window probability,
-#: smoothed over ``ATTIC_BOX`` pixels, peaks at ``ATTIC_PEAK`` or more somewhere along the row, at least
-#: ``ATTIC_GAP`` pitches above the top row.
-ATTIC_BOX = 5
-ATTIC_PEAK = 0.4
-ATTIC_GAP = 0.6
-#: An attic run is at least this share of the rows' median height.
-ATTIC_LEAST = 0.25
 #: A window belongs to the balcony group when the mean balcony probability in the lower half of its box reaches
 #: this; the group's railing height is found once on the group's mean profile (mueller2007 §3.2).
 BALCONY_VOTE = 0.15
@@ -168,22 +159,15 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     rows = runs(gaussian_filter1d(window.mean(axis=1), 1.0), least=max(2, round(0.015 * h)))
     shops = shop_band(prob)
     if shops is not None:
-        rows = [(a, b) for a, b in rows if (a + b) / 2 < shops]
+        rows = [(a, b) for a, b in rows if b <= shops]  # (a run reaching into the shop band is its glass)
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
-    rows = _with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch)
+    rows = with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch)
     openings = gaussian_filter1d((window + prob[..., BALCONY] + prob[..., DOOR]).mean(axis=1), 1.0)
     lines = [0.0, *(_wall_line(openings, upper, lower) for upper, lower in zip(rows, rows[1:]))]
-    ground_top = None
-    if rows and shops is not None:
-        ground_top = max((rows[-1][1] + shops) / 2, rows[-1][1])
+    ground_top = ground_floor(prob, rows, pitch, shops, similar)
+    if ground_top is not None:
         lines.append(ground_top)
-    elif rows:
-        gap = float(np.median([a - b for (_, b), (a, _) in zip(rows, rows[1:])])) if len(rows) > 1 else 0.1 * h
-        below = rows[-1][1] + max(gap, 0.0) / 2
-        if pitch and h - below >= GROUND_SHARE * pitch:
-            ground_top = below
-            lines.append(below)
     lines.append(float(h))
     lines = _monotonic(lines, h)
     upper = window[: round(ground_top) if ground_top else h]
@@ -271,21 +255,6 @@ def _relabelled(prob: np.ndarray, elements: list[tuple[Box, str]]) -> list[tuple
             label = "balcony"
         out.append((box, label))
     return out
-
-
-def _with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
-    """``rows`` with an attic row put on top: the lowest run, at least ``ATTIC_GAP`` pitches above the top row,
-    where the row's highest smoothed window probability reaches ``ATTIC_PEAK`` over at least ``ATTIC_LEAST`` of
-    the rows' median height (a few dormers are a row of windows though their row mean is low)."""
-    if not rows or pitch <= 0:
-        return rows
-    top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
-    if top <= 2:
-        return rows
-    peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
-    above = runs(peak, share=0.0, least=max(2, round(ATTIC_LEAST * float(np.median([b - a for a, b in rows])))),
-                 floor=ATTIC_PEAK)
-    return [above[-1], *rows] if above else rows
 
 
 def _with_balconies(prob: np.ndarray, windows: list[tuple[Box, str]]) -> list[tuple[Box, str]]:

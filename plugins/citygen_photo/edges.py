@@ -1,0 +1,99 @@
+"""The floors at a facade's edges: an attic above the top row of windows, a ground floor below the bottom row.
+
+The rows of windows in between repeat one another, so the parser's window probability and the floor period find
+them whatever the parser's small errors; the two edge floors do not repeat, and until round 8 they were decided by
+one probability threshold each at the photo's top and bottom -- the decisions that flipped when the parser was
+retrained. Here each is decided by evidence integrated over its band:
+
+* **Attic** (dormers, a gable's windows: too few for the row mean): the row's highest window probability (an
+  ``ATTIC_BOX`` px box) above ``ATTIC_BASE``, summed over the rows of a run and divided by the rows' median height
+  -- how much of a window row the run holds, strength and height together -- reaches ``ATTIC_MASS``.
+* **Ground floor** (shops, an entrance, a plinth): the band below the bottom row is a floor when it is at least
+  ``GROUND_TALL`` pitches tall, or its shop + door probability summed over its rows reaches ``GROUND_SHOPS``
+  pitches, or -- at least ``GROUND_LEAST`` pitches tall -- it repeats the same band one floor up less than
+  ``GROUND_MI`` times as strongly as the floors repeat one another (mueller2007 §2.1, Eq. 1's mutual information
+  of the intensity bands; the wall below a lowest row of windows repeats the wall below the row above it, a
+  ground floor does not).
+"""
+from __future__ import annotations
+
+from itertools import pairwise
+
+import numpy as np
+from scipy.ndimage import uniform_filter
+
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.lattice import Similarity, floor_similarity
+
+DOOR, SHOP = (CMP_LABELS.index(n) for n in ("door", "shop"))
+#: An attic run lies at least ``ATTIC_GAP`` pitches above the top row's centre; its rows' highest window
+#: probability, smoothed over ``ATTIC_BOX`` pixels, above ``ATTIC_BASE``, sums to ``ATTIC_MASS`` row heights.
+ATTIC_GAP = 0.6
+ATTIC_BOX = 5
+ATTIC_BASE = 0.3
+ATTIC_MASS = 0.08
+#: The attic row spans the rows of that run where the peak reaches this (all of the run if none does).
+ATTIC_ROW = 0.4
+#: The band below the bottom row is a ground floor from this many floor pitches on, whatever it holds ...
+GROUND_TALL = 0.7
+#: ... or when its rows' mean shop + door probability sums to this many pitches ...
+GROUND_SHOPS = 0.12
+#: ... or, from ``GROUND_LEAST`` pitches on, when its MI with the band one pitch above is under this share of
+#: the median MI between the rows' floor bands.
+GROUND_LEAST = 0.3
+GROUND_MI = 0.2
+
+Span = tuple[float, float]
+
+
+def with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
+    """``rows`` (top to bottom) with an attic row put on top: the run of the smoothed window probability's row
+    peak above ``ATTIC_BASE``, at least ``ATTIC_GAP`` pitches above the top row, that holds the most of it, when
+    that reaches ``ATTIC_MASS`` of the rows' median height."""
+    if not rows or pitch <= 0:
+        return rows
+    top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
+    if top <= 2:
+        return rows
+    peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
+    excess = np.clip(peak - ATTIC_BASE, 0.0, None)
+    above = np.concatenate([[0], (excess > 0).astype(np.int8), [0]])
+    edges = np.flatnonzero(np.diff(above))
+    runs = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
+    if not runs:
+        return rows
+    a, b = max(runs, key=lambda s: excess[s[0]:s[1]].sum())
+    height = float(np.median([y1 - y0 for y0, y1 in rows]))
+    if excess[a:b].sum() < ATTIC_MASS * height:
+        return rows
+    row = a + np.flatnonzero(peak[a:b] >= ATTIC_ROW)
+    return [(float(row[0]), float(row[-1] + 1)) if row.size else (float(a), float(b)), *rows]
+
+
+def ground_floor(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | None,
+                 similar: Similarity | None = None) -> float | None:
+    """The top (working pixels, y down) of the ground floor below the bottom row of ``rows``, None without one:
+    halfway down to ``shops`` (the top of a band of shops standing on the ground), else half the rows' median gap
+    below the bottom row; a floor by its height, its shop + door probability or its MI with the band one pitch
+    above (``similar``; see the module)."""
+    h = prob.shape[0]
+    if not rows or pitch <= 0:
+        return None
+    if shops is not None:
+        top = max((rows[-1][1] + shops) / 2, rows[-1][1])
+    else:
+        gap = float(np.median([a - b for (_, b), (a, _) in pairwise(rows)])) if len(rows) > 1 else 0.1 * h
+        top = rows[-1][1] + max(gap, 0.0) / 2
+    share = (h - top) / pitch
+    if h - top < 2:
+        return None
+    if share >= GROUND_TALL:
+        return top
+    shop_door = prob[round(top):, :, SHOP] + prob[round(top):, :, DOOR]
+    if shop_door.mean(axis=1).sum() >= GROUND_SHOPS * pitch:
+        return top
+    if share < GROUND_LEAST or similar is None:
+        return None
+    floors = floor_similarity(rows, pitch, similar)
+    band = similar(top, float(h), -pitch)
+    return top if floors and np.isfinite(band) and band < GROUND_MI * floors else None

@@ -1,0 +1,91 @@
+"""The floors at a facade's edges (citygen_photo.edges): an attic row kept by the window probability its band holds,
+not by one pixel's peak; a ground floor kept by its height, its shop + door probability or its mutual information
+with the band one floor up; and the median floor MI shared with the lattice check."""
+from __future__ import annotations
+
+import numpy as np
+from citygen_photo.edges import ground_floor, with_attic
+from citygen_photo.labels import CMP_LABELS
+from citygen_photo.lattice import floor_similarity
+from citygen_photo.regular import WINDOW, regular_facade
+
+from tests.photo.test_learned import probabilities
+
+N = len(CMP_LABELS)
+FACADE, SHOP = CMP_LABELS.index("facade"), CMP_LABELS.index("shop")
+
+
+def rows_at(*centres: float, height: float = 14.0) -> list[tuple[float, float]]:
+    return [(c - height / 2, c + height / 2) for c in centres]
+
+
+def wall(h: int, w: int) -> np.ndarray:
+    prob = np.zeros((h, w, N))
+    prob[..., FACADE] = 1.0
+    return prob
+
+
+def test_an_attic_band_holding_a_dormer_is_a_row_a_faint_haze_is_not():
+    """Regression (validation cmp_b0297, b0300; round 8's flips): a haze of window probability at the photo's
+    top peaking just over 0.4 was an attic with one parser and none with another; the band's integrated excess
+    over ``ATTIC_BASE`` decides now, and a dormer holds far more of it than a haze."""
+    window = np.zeros((150, 120))
+    rows = rows_at(50, 80, 110)
+    window[10:24, 55:65] = 0.9  # one dormer, 14 x 10 px
+    found = with_attic(window, rows, 30.0)
+    assert len(found) == 4 and 8 <= found[0][0] < found[0][1] <= 26
+    haze = np.zeros((150, 120))
+    haze[12:18, 50:70] = 0.55  # smoothed, a peak of 0.44-0.55 over 4 rows: an attic until round 8
+    assert with_attic(haze, rows, 30.0) == rows
+    assert with_attic(haze, rows, 0.0) == rows and with_attic(window, [], 30.0) == []
+
+
+def test_a_thin_band_with_a_shop_front_is_a_ground_floor_a_bare_one_is_not():
+    prob = wall(140, 120)
+    rows = rows_at(20, 50, 80, 110)  # the band below the lowest row: 125 to 140, half a pitch
+    assert ground_floor(prob, rows, 30.0, None) is None  # bare wall, no MI to ask
+    prob[127:, 10:80, SHOP], prob[127:, 10:80, FACADE] = 1.0, 0.0
+    assert ground_floor(prob, rows, 30.0, None) == 125.0
+    tall = wall(170, 120)  # 45 px below: 1.5 pitches, a floor whatever it holds
+    assert ground_floor(tall, rows, 30.0, None) == 125.0
+
+
+def test_a_ground_band_is_a_floor_where_it_does_not_repeat_the_floor_above():
+    """Regression (validation cmp_b0285; round 8's flips): a ground floor 0.4 pitches tall without shop or door
+    probability was a floor with one parser (0.41 pitches) and none with another (0.39); the band's MI with the
+    band one pitch above decides now -- the wall below a lowest row of windows repeats the wall below the row
+    above it, a ground floor does not."""
+    prob = wall(137, 120)
+    rows = rows_at(20, 50, 80, 110)  # band from 125 to 137: 0.4 pitches
+    repeats = lambda y0, y1, shift: 1.0
+    differs = lambda y0, y1, shift: 0.1 if y1 > 125 else 1.0
+    assert ground_floor(prob, rows, 30.0, None, repeats) is None
+    assert ground_floor(prob, rows, 30.0, None, differs) == 125.0
+    assert ground_floor(wall(132, 120), rows, 30.0, None, differs) is None  # 0.23 pitches: too thin to be a floor
+
+
+def test_the_floor_similarity_is_the_median_over_the_rows_that_fit():
+    rows = rows_at(20, 50, 80, 110)
+    mi = lambda y0, y1, shift: float("nan") if y0 < 0 else y0 / 100
+    assert floor_similarity(rows, 30.0, mi) == 0.35  # bands from 5, 35 and 65: 0.05, 0.35, 0.65
+    assert floor_similarity(rows_at(10, 40, 70), 30.0, mi) == 0.25  # (the first band leaves the photo)
+    assert floor_similarity(rows, 30.0, lambda *_: 0.0) is None
+    assert floor_similarity(rows[:1], 30.0, mi) is None
+
+
+def test_the_learned_floors_keep_a_dormer_attic_and_a_ground_floor_of_shops():
+    prob = probabilities(floors=4, ground_h=16, shop=True)  # a shop band half a pitch tall
+    attic = wall(30, prob.shape[1])
+    attic[8:22, 55:65] = np.eye(N)[WINDOW]
+    facade = regular_facade(np.concatenate([attic, prob]))
+    assert facade.ground and len(facade.floor_lines) - 1 == 6
+
+
+def test_a_sliver_of_window_probability_reaching_into_the_shop_band_is_not_a_row():
+    """Regression (balcony fold cmp_b0221 with the closed-shutter U-Nets of round 8): a 3 px run of window
+    probability straddling the top of the shop band, its centre just above it, was a row of windows of its own
+    between the upper floors and the ground floor; a row lies wholly above the shop band."""
+    prob = probabilities(floors=4, ground_h=40, shop=True)
+    prob[121:128, 64:110] = np.eye(N)[WINDOW]  # the shops' glass reaching above the band's top (126)
+    facade = regular_facade(prob)
+    assert facade.ground and len(facade.floor_lines) - 1 == 5
