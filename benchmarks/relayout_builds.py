@@ -7,10 +7,10 @@
 ``capture`` builds every building of the scenes as ``citygen generate --jobs 1`` does and records each call of
 the relayout kind's ``generate_building`` (the model and the building's face requests). ``replay`` dresses those
 buildings again; ``grid`` dresses 4-face buildings of the shipped models on a grid of sizes, floor heights,
-entrance faces and seeds (the faces of ``tests/relayout/test_building.py``). Both print the CPU seconds of the dressing in each
-repeat and a sha256 of every layout (its JSON, exact floats, and which regions share a module key), in order:
-two versions of the relayout code that print the same digest made the same layouts. ``--profile`` prints the
-function-call counts and the top functions of one repeat (cProfile).
+entrance faces and seeds (the faces of ``tests/relayout/test_building.py``). Both print the CPU seconds of the
+dressing in each repeat and a sha256 of every layout (its JSON, exact floats, and which regions share a module
+key), in order: two versions of the relayout code that print the same digest made the same layouts. ``--profile``
+prints the function-call counts and the top functions of one repeat (cProfile).
 """
 from __future__ import annotations
 
@@ -20,6 +20,8 @@ import pickle
 import sys
 import time
 from pathlib import Path
+
+from profiling import profiled  # (benchmarks/profiling.py)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 REPO = Path(__file__).resolve().parents[1]
@@ -52,7 +54,7 @@ def capture(scenes: list[str], out: Path) -> None:
 
 def grid_calls(models: list[str]) -> list[tuple]:
     """4-face buildings (faces 1.0, 1.2, 1.4, 1.6 x the width; corner strips 0.3 / 0.4 m) of each model."""
-    from citygen.request import FaceContext, FacadeRequest, split_floors
+    from citygen.request import FacadeRequest, FaceContext, split_floors
     from citygen_relayout import load_model
 
     sizes = {"townhouse": ((5.5, 9.0, 14.0, 21.0), (7.0, 11.25, 16.0)),
@@ -104,16 +106,7 @@ def replay(calls: list[tuple], repeat: int, profile: bool) -> None:
 
     faces = sum(len(r) for _, r in calls)
     if profile:
-        import cProfile
-        import pstats
-        prof = cProfile.Profile()
-        prof.enable()
-        built = run()
-        prof.disable()
-        digest, _ = summary(built)
-        stats = pstats.Stats(prof)
-        print(f"function calls: {stats.total_calls} ({stats.prim_calls} primitive), digest {digest}")
-        stats.sort_stats("tottime").print_stats(30)
+        print(f"digest {summary(profiled(run, 30))[0]}")
         return
     for k in range(repeat):
         start = time.process_time()

@@ -18,6 +18,8 @@ import sys
 import time
 from pathlib import Path
 
+from profiling import profiled  # (benchmarks/profiling.py)
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
@@ -65,15 +67,7 @@ def replay(calls_path: Path, repeat: int, profile: bool) -> None:
         return digest.hexdigest()
 
     if profile:
-        import cProfile
-        import pstats
-        prof = cProfile.Profile()
-        prof.enable()
-        run()
-        prof.disable()
-        stats = pstats.Stats(prof)
-        print(f"function calls: {stats.total_calls} ({stats.prim_calls} primitive)")
-        stats.sort_stats("tottime").print_stats(25)
+        profiled(run, 25)
         return
     for k in range(repeat):
         start = time.process_time()
