@@ -7,10 +7,14 @@ retrained. Here each is decided by evidence integrated over its band:
 
 * **Attic** (dormers, a gable's windows: too few for the row mean): the row's highest window probability (an
   ``ATTIC_BOX`` px box) above ``ATTIC_BASE``, summed over the rows of a run and divided by the rows' median height
-  -- how much of a window row the run holds, strength and height together -- reaches ``ATTIC_MASS``.
+  -- how much of a window row the run holds, strength and height together -- reaches ``ATTIC_MASS``. A row the
+  crop's top cuts to a sliver holds less of it: where the floor band one pitch above the top row leaves the photo,
+  a run holding ``SLIVER_MASS`` is a row when the band's visible part repeats the same part of the floor below at
+  least ``SLIVER_MI`` times as strongly as that part repeats between the rows found (Eq. 1 on the part alone).
 * **Ground floor** (shops, an entrance, a plinth): the band below the bottom row is a floor when it is at least
-  ``GROUND_TALL`` pitches tall, or its shop + door probability summed over its rows reaches ``GROUND_SHOPS``
-  pitches, or -- at least ``GROUND_LEAST`` pitches tall -- it repeats the same band one floor up less than
+  a pitch tall, or its shop + door probability summed over its rows reaches ``GROUND_SHOPS`` pitches (from
+  ``GROUND_TALL`` pitches on, ``TALL_SHOPS``), or -- at least ``GROUND_LEAST`` pitches tall -- it repeats the same
+  band one floor up less than
   ``GROUND_MI`` times as strongly as the floors repeat one another (mueller2007 §2.1, Eq. 1's mutual information
   of the intensity bands; the wall below a lowest row of windows repeats the wall below the row above it, a
   ground floor does not).
@@ -23,7 +27,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter
 
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.lattice import Similarity, floor_similarity
+from citygen_photo.lattice import Similarity, floor_similarity, part_similarity
 
 DOOR, SHOP = (CMP_LABELS.index(n) for n in ("door", "shop"))
 #: An attic run lies at least ``ATTIC_GAP`` pitches above the top row's centre; its rows' highest window
@@ -34,10 +38,15 @@ ATTIC_BASE = 0.3
 ATTIC_MASS = 0.08
 #: The attic row spans the rows of that run where the peak reaches this (all of the run if none does).
 ATTIC_ROW = 0.4
-#: The band below the bottom row is a ground floor from this many floor pitches on, whatever it holds ...
-GROUND_TALL = 0.7
-#: ... or when its rows' mean shop + door probability sums to this many pitches ...
+#: A run holding ``SLIVER_MASS`` row heights is the row the crop's top cuts when the visible part of that row's
+#: floor band repeats the floor below at least ``SLIVER_MI`` times the same part's median MI between the rows.
+SLIVER_MASS = 0.02
+SLIVER_MI = 0.6
+#: The band below the bottom row is a ground floor from a floor pitch on, whatever it holds; or when its rows'
+#: mean shop + door probability sums to ``GROUND_SHOPS`` pitches (``TALL_SHOPS`` from ``GROUND_TALL`` pitches on) ...
 GROUND_SHOPS = 0.12
+GROUND_TALL = 0.7
+TALL_SHOPS = 0.06
 #: ... or, from ``GROUND_LEAST`` pitches on, when its MI with the band one pitch above is under this share of
 #: the median MI between the rows' floor bands.
 GROUND_LEAST = 0.3
@@ -46,10 +55,11 @@ GROUND_MI = 0.2
 Span = tuple[float, float]
 
 
-def with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
+def with_attic(window: np.ndarray, rows: list[Span], pitch: float, similar: Similarity | None = None) -> list[Span]:
     """``rows`` (top to bottom) with an attic row put on top: the run of the smoothed window probability's row
     peak above ``ATTIC_BASE``, at least ``ATTIC_GAP`` pitches above the top row, that holds the most of it, when
-    that reaches ``ATTIC_MASS`` of the rows' median height."""
+    that reaches ``ATTIC_MASS`` of the rows' median height -- or, a row the crop's top cuts (``similar``: the MI
+    of two intensity bands, see :func:`cut_row_repeats`), ``SLIVER_MASS``."""
     if not rows or pitch <= 0:
         return rows
     top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
@@ -64,10 +74,26 @@ def with_attic(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]
         return rows
     a, b = max(runs, key=lambda s: excess[s[0]:s[1]].sum())
     height = float(np.median([y1 - y0 for y0, y1 in rows]))
-    if excess[a:b].sum() < ATTIC_MASS * height:
+    mass = excess[a:b].sum() / height
+    if mass < ATTIC_MASS and not (mass >= SLIVER_MASS and similar is not None
+                                  and cut_row_repeats(rows, pitch, similar, a)):
         return rows
     row = a + np.flatnonzero(peak[a:b] >= ATTIC_ROW)
     return [(float(row[0]), float(row[-1] + 1)) if row.size else (float(a), float(b)), *rows]
+
+
+def cut_row_repeats(rows: list[Span], pitch: float, similar: Similarity, start: float) -> bool:
+    """Whether the row one ``pitch`` above the top row of ``rows`` is one the crop's top cuts (its floor band leaves
+    the photo, part of it is inside, and a run starting at ``start`` lies in that part) whose visible part repeats
+    the same part of the floor below at least ``SLIVER_MI`` times as strongly as that part repeats between the
+    rows (mueller2007 Eq. 1 on the part: a floor band cut by the crop is still a floor band)."""
+    centre = (rows[0][0] + rows[0][1]) / 2 - pitch
+    half = pitch / 2
+    if not centre - half < 0 < centre + half or start >= centre + half:
+        return False
+    floors = part_similarity(rows, -centre, half, similar)
+    band = similar(0.0, centre + half, pitch)
+    return bool(floors) and np.isfinite(band) and band >= SLIVER_MI * floors
 
 
 def ground_floor(prob: np.ndarray, rows: list[Span], pitch: float, shops: float | None,
@@ -87,10 +113,10 @@ def ground_floor(prob: np.ndarray, rows: list[Span], pitch: float, shops: float 
     share = (h - top) / pitch
     if h - top < 2:
         return None
-    if share >= GROUND_TALL:
+    if share >= 1.0:
         return top
     shop_door = prob[round(top):, :, SHOP] + prob[round(top):, :, DOOR]
-    if shop_door.mean(axis=1).sum() >= GROUND_SHOPS * pitch:
+    if shop_door.mean(axis=1).sum() >= (TALL_SHOPS if share >= GROUND_TALL else GROUND_SHOPS) * pitch:
         return top
     if share < GROUND_LEAST or similar is None:
         return None

@@ -51,8 +51,13 @@ def on_lattice(rows: list[Span], pitch: float) -> list[Span]:
 def floor_similarity(rows: list[Span], pitch: float, similar: Similarity) -> float | None:
     """The median MI between the floor bands (a ``pitch`` tall, centred on the rows) of consecutive ``rows``; None
     when no pair fits in the photo or the floors do not repeat (median <= 0)."""
-    half = pitch / 2
-    mi = [similar((a + b) / 2 - half, (a + b) / 2 + half, (c + d) / 2 - (a + b) / 2)
+    return part_similarity(rows, -pitch / 2, pitch / 2, similar)
+
+
+def part_similarity(rows: list[Span], start: float, stop: float, similar: Similarity) -> float | None:
+    """The median MI between the bands ``[c + start, c + stop)`` of consecutive ``rows`` (``c``: a row's centre):
+    how strongly that part of a floor repeats in the floor below; None as :func:`floor_similarity`."""
+    mi = [similar((a + b) / 2 + start, (a + b) / 2 + stop, (c + d) / 2 - (a + b) / 2)
           for (a, b), (c, d) in pairwise(rows)]
     mi = [s for s in mi if np.isfinite(s)]
     return float(np.median(mi)) if mi and np.median(mi) > 0 else None

@@ -162,7 +162,7 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
         rows = [(a, b) for a, b in rows if b <= shops]  # (a run reaching into the shop band is its glass)
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
-    rows = with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch)
+    rows = with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch, similar)
     openings = gaussian_filter1d((window + prob[..., BALCONY] + prob[..., DOOR]).mean(axis=1), 1.0)
     lines = [0.0, *(_wall_line(openings, upper, lower) for upper, lower in zip(rows, rows[1:]))]
     ground_top = ground_floor(prob, rows, pitch, shops, similar)

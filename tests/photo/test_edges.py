@@ -4,9 +4,9 @@ with the band one floor up; and the median floor MI shared with the lattice chec
 from __future__ import annotations
 
 import numpy as np
-from citygen_photo.edges import ground_floor, with_attic
+from citygen_photo.edges import cut_row_repeats, ground_floor, with_attic
 from citygen_photo.labels import CMP_LABELS
-from citygen_photo.lattice import floor_similarity
+from citygen_photo.lattice import floor_similarity, part_similarity
 from citygen_photo.regular import WINDOW, regular_facade
 
 from tests.photo.test_learned import probabilities
@@ -89,3 +89,52 @@ def test_a_sliver_of_window_probability_reaching_into_the_shop_band_is_not_a_row
     prob[121:128, 64:110] = np.eye(N)[WINDOW]  # the shops' glass reaching above the band's top (126)
     facade = regular_facade(prob)
     assert facade.ground and len(facade.floor_lines) - 1 == 5
+
+
+def sliver_window() -> tuple[np.ndarray, list[tuple[float, float]]]:
+    """Rows of windows at 40, 70 and 100 (pitch 30) below a row the crop's top cuts: rows 0-4 of weak window
+    probability, 0.02-0.08 row heights of excess over ``ATTIC_BASE`` -- too little for an attic."""
+    window = np.zeros((130, 100))
+    window[0:5, 40:60] = 0.4
+    return window, rows_at(40, 70, 100)
+
+
+def test_a_row_the_crops_top_cuts_is_a_floor_where_its_visible_part_repeats_the_floor_below():
+    """Regression (validation cmp_b0274, fold b0158 with round 9's full retraining): the row the crop's top cuts to a
+    sliver held less window probability than ``ATTIC_MASS`` and was lost; its floor band leaves the photo, so the
+    visible part is compared with the same part of the floor below."""
+    window, rows = sliver_window()
+    assert with_attic(window, rows, 30.0) == rows  # by the window probability alone: too little
+    repeats = lambda y0, y1, shift: 1.0  # noqa: E731
+    found = with_attic(window, rows, 30.0, repeats)
+    assert len(found) == 4 and found[0][0] == 0.0 and found[0][1] <= 5
+    differs = lambda y0, y1, shift: 0.2 if y0 == 0.0 else 1.0  # noqa: E731 (the cut band repeats weakly)
+    assert with_attic(window, rows, 30.0, differs) == rows
+
+
+def test_the_cut_row_rule_needs_a_band_that_leaves_the_photo_and_a_run_inside_it():
+    window, rows = sliver_window()
+    repeats = lambda y0, y1, shift: 1.0  # noqa: E731
+    assert cut_row_repeats(rows, 30.0, repeats, 0)
+    assert not cut_row_repeats(rows, 30.0, repeats, 25)  # the run starts below the band's visible part
+    lower = rows_at(60, 90, 120)  # the band one pitch up, [15, 45), lies inside the photo: the lattice's business
+    assert not cut_row_repeats(lower, 30.0, repeats, 0)
+    assert with_attic(np.concatenate([window, np.zeros((20, 100))]), lower, 30.0, repeats) == lower
+    assert abs(part_similarity(rows, -10.0, 15.0, lambda y0, y1, shift: y0 / 100) - 0.45) < 1e-12  # from 30, 60
+
+
+def test_a_ground_band_under_a_pitch_needs_shops_or_a_floor_that_does_not_repeat():
+    """Regression (validation cmp_b0280 with round 9's full retraining): a bare band 0.72 pitches below the lowest
+    row, no floor in the annotation, was a ground floor by its height alone; under a pitch it now needs shop + door
+    probability (``TALL_SHOPS`` from 0.7 pitches on: b0264, b0281 hold 0.10-0.15 pitches of it) or the MI."""
+    rows = rows_at(20, 50, 80, 110)  # the band below the lowest row starts at 125
+    assert ground_floor(wall(149, 120), rows, 30.0, None) is None  # 0.8 pitches of bare wall
+    assert ground_floor(wall(155, 120), rows, 30.0, None) == 125.0  # a pitch: a floor whatever it holds
+    shops = wall(149, 120)
+    shops[125:, :, SHOP], shops[125:, :, FACADE] = 0.12, 0.88  # 0.096 pitches of shop + door probability
+    assert ground_floor(shops, rows, 30.0, None) == 125.0
+    thin = wall(140, 120)
+    thin[125:, :, SHOP], thin[125:, :, FACADE] = 0.12, 0.88  # half a pitch: 0.06, under GROUND_SHOPS
+    assert ground_floor(thin, rows, 30.0, None) is None
+    differs = lambda y0, y1, shift: 0.1 if y1 > 125 else 1.0  # noqa: E731
+    assert ground_floor(wall(149, 120), rows, 30.0, None, differs) == 125.0
