@@ -121,7 +121,7 @@ class Signatures:
                 self.first[key], self.info[id(root)] = root, _leaf_of(root)
                 self._keyed[key] = (self.info[id(root)], [])
         self.counts: Counter[int] = Counter(self.log)
-        self._modules = self._decide()  # id of a hashed region -> whether it is a module
+        self._modules, self._walk = self._decide()
 
     def _visit(self, r: Region) -> Info:
         """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
@@ -171,22 +171,27 @@ class Signatures:
         """The signature of the inner region ``r``."""
         return self.info[id(self.canonical(r))][0]
 
-    def _decide(self) -> dict[int, bool]:
-        """Whether each hashed inner region (by id; every copy of it alike) is a module (see the module doc)."""
+    def _decide(self) -> tuple[dict[int, bool], dict[int, list[tuple[int, int, Region]]]]:
+        """Per hashed inner region (by id; every copy of it alike): whether it is a module (see the module doc), and
+        which of its inner children :meth:`split` must walk into (those that are or hold modules; the rest hold
+        loose terminals only)."""
         counts, info, inner = self.counts, self.info, self._inner
-        decided = {}
-        for hashed, (sig, detail, n, _) in info.items():
+        module: dict[int, bool] = {}
+        walk: dict[int, list[tuple[int, int, Region]]] = {}
+        for hashed, (sig, detail, n, _) in info.items():  # (a region's inner children are hashed before it)
+            entries = inner.get(hashed, [])  # (none for a terminal root)
             c = counts[sig]
-            decided[hashed] = (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
-                               and not any(counts[info[id(tc)][0]] > c for _, _, tc in inner[hashed]))
-        return decided
+            module[hashed] = (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
+                              and not any(counts[info[id(tc)][0]] > c for _, _, tc in entries))
+            walk[hashed] = [e for e in entries if module[id(e[2])] or walk[id(e[2])]] if entries else entries
+        return module, walk
 
     def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], np.ndarray]:
         """The face's ``(modules, loose terminals)``: its maximal repeated subtrees, each with the position of its
         first terminal among the face's terminals (tree order) and their count, and the positions of every
         terminal outside them (ascending: tree order).
 
-        The walk visits inner regions only. Inside a keyed copy it reads the hashed copy's results in parallel
+        The walk visits the inner regions on the way to modules only. Inside a keyed copy it reads the hashed copy's results in parallel
         (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
         (``shift``): only the modules found inside it are made as regions.
         """
@@ -194,7 +199,7 @@ class Signatures:
             return [], np.zeros(1, np.intp)
         modules: list[tuple[Region, int, int]] = []
         stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, self.canonical(root), 0)]
-        module, info, inner = self._modules, self.info, self._inner
+        module, info, walk = self._modules, self.info, self._walk
         pop, push = stack.pop, stack.extend
         while stack:
             r, shift, twin, at = pop()
@@ -207,7 +212,7 @@ class Signatures:
                 if lazy is not None:
                     r, shift = lazy[0], lazy[1:]
             children = r.children
-            push([(children[i], shift, tc, at + offset) for i, offset, tc in inner[hashed]])
+            push([(children[i], shift, tc, at + offset) for i, offset, tc in walk[hashed]])
         loose = np.ones(info[id(self.canonical(root))][3], dtype=bool)  # (then every module's terminals taken out)
         for _, at, n in modules:
             loose[at:at + n] = False
