@@ -497,7 +497,7 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
         return layout
     step = layout.width / cover.size
     heights = cover.tolist()  # (Python floats: a bin lookup per region visited stays out of numpy)
-    ceiling = highest + tol if highest == highest else math.inf  # (a NaN cover: every region looked up, as ever)
+    ceiling = math.inf if math.isnan(highest) else highest + tol  # (a NaN cover: every region looked up, as ever)
     lowest = highest - tol
 
     def hidden_to(x0: float, x1: float) -> float:

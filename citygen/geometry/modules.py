@@ -107,8 +107,8 @@ class Signatures:
         self.first: dict[int, Region] = {}
         self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
         #: id of a hashed inner region -> (index, position of its first terminal among the region's, the copy
-        #: hashed in its place: itself or the first of its key) of each of its inner children, last first: what
-        #: :meth:`split` walks
+        #: hashed in its place: itself or the first of its key) of each of its inner children, last first (the order
+        #: :meth:`split` stacks them)
         self._inner: dict[int, list[tuple[int, int, Region]]] = {}
         for root in roots:
             key = root.key
@@ -191,8 +191,8 @@ class Signatures:
         first terminal among the face's terminals (tree order) and their count, and the positions of every
         terminal outside them (ascending: tree order).
 
-        The walk visits the inner regions on the way to modules only. Inside a keyed copy it reads the hashed copy's results in parallel
-        (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
+        The walk visits the inner regions on the way to modules only. Inside a keyed copy it reads the hashed copy's
+        results in parallel (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
         (``shift``): only the modules found inside it are made as regions.
         """
         if not is_inner(root):

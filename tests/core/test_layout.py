@@ -1,3 +1,4 @@
+import itertools
 import json
 import pickle
 
@@ -225,7 +226,7 @@ def _split_trees(draw, x=0.0, y=0.0, w=8.0, h=9.0, depth=0):
     edges = [0.0, *cuts, 1.0]
     along_x = draw(st.booleans())
     children = []
-    for a, b in zip(edges, edges[1:]):
+    for a, b in itertools.pairwise(edges):
         if along_x:
             children.append(draw(_split_trees(x + a * w, y, (b - a) * w, h, depth + 1)))
         else:
