@@ -1,11 +1,13 @@
 """CPU of a scene's builds (derivation, checks, roofs and geometry) in one process, and of their geometry part.
 
-    python benchmarks/split_builds.py [SCENE] [--repeat N] [--limit N]
+    python benchmarks/split_builds.py [SCENE] [--repeat N] [--limit N] [--profile [TOP]]
 
 Builds every building of the scene ``--repeat`` times as ``citygen generate --jobs 1`` does (no stage is written)
 and prints, per repeat, the CPU seconds of the builds (``Builder.build``, this thread) and of ``build_geometry``
 inside them, then the least of each. The stage's bytes are checked by ``citygen generate`` itself (sha256 of the
 written files); this only times.
+``--profile`` builds once under cProfile instead and prints the function calls (which do not depend on the load)
+and the ``TOP`` functions by own time.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from facade_phases import REPO, _work  # noqa: E402  (the scene's buildings, in the pipeline's order)
+from profiling import profiled  # noqa: E402  (benchmarks/profiling.py)
 
 
 def main() -> None:
@@ -23,6 +26,7 @@ def main() -> None:
     parser.add_argument("scene", nargs="?", default=str(REPO / "scenes" / "helsinki.toml"))
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--limit", type=int, default=0, help="build only the first N buildings")
+    parser.add_argument("--profile", type=int, nargs="?", const=40, default=0, metavar="TOP")
     args = parser.parse_args()
     import citygen.builder as builder_module
     from citygen.builder import Builder
@@ -40,6 +44,10 @@ def main() -> None:
         finally:
             geometry[0] += time.thread_time() - start
 
+    if args.profile:
+        builder = Builder(scene, scene.seed, registry, rulesets)
+        profiled(lambda: [builder.build(*item) for item in work], args.profile)
+        return
     builder_module.build_geometry = timed
     best = [float("inf"), float("inf")]
     for k in range(args.repeat):

@@ -486,31 +486,40 @@ def hidden_behind(layout: FacadeLayout, cover: Sequence[float] | np.ndarray, tol
     """``layout`` with every subtree that neighbours hide replaced by one plain wall region: no openings or
     attachments inside a neighbour. ``cover`` holds, for equal bins across the face's width (left to right), the
     height up to which a neighbour stands against it (one value: the whole width); a subtree is hidden when every
-    bin its width overlaps is covered up to its top."""
+    bin its width overlaps is covered up to its top. ``layout`` itself (with its terminal arrays) when nothing is
+    hidden.
+
+    One walk over the inner regions reaching below the cover: a region whose top is above the highest cover is
+    not hidden, so its bins are looked up only when its top is not (the same test, decided sooner)."""
     cover = np.atleast_1d(np.asarray(cover, dtype=float))
     highest = float(cover.max(initial=0.0))
     if highest <= tol:
         return layout
     step = layout.width / cover.size
     heights = cover.tolist()  # (Python floats: a bin lookup per region visited stays out of numpy)
+    ceiling = math.inf if math.isnan(highest) else highest + tol  # (a NaN cover: every region looked up, as ever)
+    lowest = highest - tol
 
     def hidden_to(x0: float, x1: float) -> float:
         k0 = min(max(math.floor(x0 / step + tol), 0), len(heights) - 1)
         k1 = min(max(math.ceil(x1 / step - tol), k0 + 1), len(heights))
         return min(heights[k0:k1])
 
-    def cull(region: Region) -> Region:
-        if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
-            if is_inner(region) or region.label not in (None, "wall") or region.depth:
-                return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
-            return region
-        if region.y >= highest - tol or not is_inner(region):  # (a moved copy above the cover stays unmade)
-            return region
-        children = tuple(cull(c) for c in region.children)
-        if all(map(operator.is_, children, region.children)):
-            return region
-        return replace(region, children=children, key=None)  # (its subtree is no longer the one its key names)
-    return replace(layout, root=cull(layout.root))
+    def culled(regions: tuple[Region, ...]) -> list[Region]:
+        out = []
+        for r in regions:
+            top = r.y + r.h
+            if top <= ceiling and top <= hidden_to(r.x, r.x + r.w) + tol:
+                if is_inner(r) or r.label not in (None, "wall") or r.depth:
+                    r = Region(r.x, r.y, r.w, r.h, "Wall", "wall")
+            elif not (r.y >= lowest or not is_inner(r)):  # (a moved copy above the cover stays unmade)
+                children = culled(r.children)
+                if not all(map(operator.is_, children, r.children)):
+                    r = replace(r, children=tuple(children), key=None)  # (no longer the subtree its key names)
+            out.append(r)
+        return out
+    root = culled((layout.root,))[0]
+    return layout if root is layout.root else replace(layout, root=root)
 
 
 def leaf(x: float, y: float, w: float, h: float, symbol: str, label: str | None, **kw: Any) -> Region:

@@ -144,6 +144,7 @@ class _Sink:
     def __init__(self) -> None:
         self.quads: dict[tuple[str, str], list[np.ndarray]] = {}
         self.keys: dict[ProtoKey | ModuleKey, int] = {}
+        #: per call of :meth:`add_instances`: prototype indices, positions, one rotation, scales ``(n, 2)``
         self.rows: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
 
     def add_quads(self, key: tuple[str, str], quads: np.ndarray) -> None:
@@ -152,8 +153,7 @@ class _Sink:
 
     def add_instances(self, proto: np.ndarray, positions: np.ndarray, rotation: np.ndarray, scales: np.ndarray):
         """Rows of instances; ``scales`` is ``(n, 2)`` (x, y) -- instances never scale along the normal."""
-        scale3 = np.column_stack([scales, np.ones(len(proto))])
-        self.rows.append((proto, positions, np.repeat(rotation[None, :], len(proto), axis=0), scale3))
+        self.rows.append((proto, positions, rotation, scales))
 
     def take(self, emitted: _Emitted) -> None:
         """A unit's quads and element instances (its prototypes registered in the order it lists them)."""
@@ -164,11 +164,15 @@ class _Sink:
             self.add_instances(index[emitted.kinds], emitted.positions, emitted.rotation, emitted.scales)
 
     def instances(self) -> Instances:
+        """The rows as one table: each call's rotation repeated over its rows, scale 1 along the normal."""
         if not self.rows:
             return Instances(tuple(self.keys), np.zeros(0, np.int32), np.zeros((0, 3)), np.zeros((0, 4)),
                              np.zeros((0, 3), np.float32))
-        proto, pos, rot, scale = (np.concatenate(c) for c in zip(*self.rows))
-        return Instances(tuple(self.keys), proto.astype(np.int32), pos, rot, scale.astype(np.float32))
+        proto, pos, rot, scale = zip(*self.rows)
+        proto, scale = np.concatenate(proto), np.concatenate(scale)
+        rot = np.repeat(np.array(rot), [len(p) for p in pos], axis=0)
+        return Instances(tuple(self.keys), proto.astype(np.int32), np.concatenate(pos), rot,
+                         np.column_stack([scale, np.ones(len(scale))]).astype(np.float32))
 
 
 @dataclass(frozen=True)
@@ -205,34 +209,39 @@ _LOOK = operator.attrgetter("label", "material", "depth")
 
 def _terminal_arrays(units: Sequence[_Unit], wall_material: str) -> _Terminals:
     """Terminal arrays of every unit, read from its layout's terminal arrays (the style and depth of each distinct
-    (label, material, depth) are worked out once, in the order the terminals first show them)."""
+    (label, material, depth) are worked out once, in the order the terminals first show them). The layouts'
+    arrays are joined once and every unit's terminals gathered from them in one step."""
     looks: dict[tuple[str, str | None, float], int] = {}
-    of_layout: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # id(layout) -> look of each source, visible sources
-    parts, look_parts, sizes = [], [], []
+    offsets: dict[int, int] = {}  # id(layout) -> where its terminals start in the joined arrays
+    rect_parts, look_parts, picks = [], [], []
+    joined = 0
     for unit in units:
         layout = unit.layout
-        known = of_layout.get(id(layout))
-        if known is None:
-            keys = list(map(_LOOK, layout.leaf_sources[0]))
+        offset = offsets.get(id(layout))
+        if offset is None:
+            sources, source_of = layout.leaf_sources
+            keys = list(map(_LOOK, sources))
             ids = {key: looks.setdefault(key, len(looks)) if key[0] is not None else -1 for key in dict.fromkeys(keys)}
             look_of = np.fromiter(map(ids.__getitem__, keys), np.intp, len(keys))
-            known = of_layout[id(layout)] = (look_of, look_of >= 0)
-        look_of, visible = known
-        source = layout.leaf_sources[1][unit.leaves]
-        rects = layout.leaf_rects[unit.leaves]
-        keep = visible[source] & ~(rects[:, 2] <= 1e-6) & ~(rects[:, 3] <= 1e-6)
-        parts.append(rects[keep])
-        look_parts.append(look_of[source[keep]])
-        sizes.append(int(keep.sum()))
-    xywh = np.concatenate(parts) if parts else np.zeros((0, 4))
-    look = np.concatenate(look_parts) if look_parts else np.zeros(0, np.intp)
+            offset = offsets[id(layout)] = joined
+            joined += len(layout.leaf_rects)
+            rect_parts.append(layout.leaf_rects)
+            look_parts.append(look_of[source_of])
+        picks.append(unit.leaves + offset if offset else unit.leaves)
+    if picks:
+        picked = np.concatenate(picks)
+        rects, look = np.concatenate(rect_parts)[picked], np.concatenate(look_parts)[picked]
+        keep = (look >= 0) & ~(rects[:, 2] <= 1e-6) & ~(rects[:, 3] <= 1e-6)
+        xywh, look = rects[keep], look[keep]
+        unit_of = np.repeat(np.arange(len(units)), [len(p) for p in picks])[keep]
+    else:
+        xywh, look, unit_of = np.zeros((0, 4)), np.zeros(0, np.intp), np.zeros(0, np.intp)
     rows = list(looks)
     seen, first = np.unique(look, return_index=True)
     styles: dict[tuple[str, str], int] = {}
     depth_of, code_of = np.zeros(len(rows)), np.zeros(len(rows), np.int64)
     for k in seen[np.argsort(first)].tolist():  # (styles numbered in the order the terminals first show them)
         depth_of[k], code_of[k] = _look(*rows[k], wall_material, styles)
-    unit_of = np.repeat(np.arange(len(units)), sizes)
     frame = np.array([(u.dx, u.dy, u.sx, u.sy) for u in units], dtype=float).reshape(-1, 4)[unit_of]
     table = np.column_stack([xywh[:, 0], xywh[:, 1], xywh[:, 0] + xywh[:, 2], xywh[:, 1] + xywh[:, 3]])
     rects = (table - frame[:, [0, 1, 0, 1]]) * frame[:, [2, 3, 2, 3]]
@@ -415,6 +424,21 @@ def _plain_quads(faces: Sequence[tuple[Face, ...]]) -> np.ndarray:
                      np.zeros(len(faces)))
 
 
+class _ModuleKeys(dict):
+    """A building's module keys by (signature, w, h) in centimetres: one :class:`ModuleKey` per module, however
+    many faces place it (a dict lookup instead of a frozen dataclass made per placement)."""
+
+    def __init__(self, wall: str) -> None:
+        super().__init__()
+        self.wall = wall
+
+    def __call__(self, signature: int, w: int, h: int) -> ModuleKey:
+        key = self.get((signature, w, h))
+        if key is None:
+            key = self[signature, w, h] = ModuleKey(signature, w, h, self.wall)
+        return key
+
+
 def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None]], wall_material: str,
                    roof: MeshData | None, modules: bool = True, roof_material: str = "roof_dark",
                    walls: bool = False) -> BuildingGeometry:
@@ -428,6 +452,7 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
     signatures = Signatures(layout.root for _, layout in layouts if layout is not None and modules)
     cache = _module_cache()
     protos: dict[ModuleKey, ModuleProto | None] = {}  # (None: built below, with the faces' terminals)
+    module_key = _ModuleKeys(wall_material)
     units: list[_Unit] = []
     built: list[tuple[ModuleKey, int]] = []  # modules to build, with their unit
     faces: list[tuple[Face, np.ndarray, int | None, list[tuple[ModuleKey, Region]]]] = []  # + unit, modules
@@ -440,8 +465,8 @@ def build_geometry(mass: Mass, layouts: Sequence[tuple[Face, FacadeLayout | None
             placed, loose = signatures.split(layout.root)
         else:
             placed, loose = [], range(len(layout.leaf_rects))
-        keyed = [(ModuleKey(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM)),
-                            wall_material), r) for r, _, _ in placed]
+        keyed = [(module_key(signatures.signature(r), max(1, round(r.w * CM)), max(1, round(r.h * CM))), r)
+                 for r, _, _ in placed]
         faces.append((face, m, len(units), keyed))
         units.append(_Unit(layout, np.asarray(loose, np.intp), m))
         for (key, r), (_, at, n) in zip(keyed, placed):

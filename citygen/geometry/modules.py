@@ -67,6 +67,10 @@ Info = tuple[int, bool, int, int]
 #: :func:`_leaf_of` by (label, material, layer, depth, w, h): a building's terminals come in a few dozen kinds.
 _LEAVES: dict[tuple[str | None, str | None, str | None, float, float, float], Info] = {}
 _LEAVES_SIZE = 1 << 16
+#: By (label, material, layer, depth): the head of a terminal's signature tuple (all but its size), its detail flag
+#: and mesh-terminal count. A city's terminals come in a few looks but many sizes (a repeat stretches its tiles to
+#: each face's width).
+_LOOKS: dict[tuple[str | None, str | None, str | None, float], tuple[tuple[int, ...], bool, int]] = {}
 
 
 def _leaf_of(r: Region) -> Info:
@@ -74,11 +78,17 @@ def _leaf_of(r: Region) -> Info:
     terminal region (remembered in ``_LEAVES``)."""
     if len(_LEAVES) >= _LEAVES_SIZE:
         _LEAVES.clear()
+    look = _LOOKS.get((r.label, r.material, r.layer, r.depth))
+    if look is None:
+        if len(_LOOKS) >= _LEAVES_SIZE:
+            _LOOKS.clear()
+        look = _LOOKS[r.label, r.material, r.layer, r.depth] = (
+            (1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM)),
+            (r.label != "wall" and r.label is not None) or r.depth != 0.0,
+            int(r.label is not None and r.label not in INSTANCED))
+    head, detail, mesh = look
     result = _LEAVES[r.label, r.material, r.layer, r.depth, r.w, r.h] = (
-        hash((1, _code(r.label), _code(r.material), _code(r.layer), round(r.depth * CM), round(r.w * CM),
-              round(r.h * CM))),
-        (r.label != "wall" and r.label is not None) or r.depth != 0.0,
-        int(r.label is not None and r.label not in INSTANCED), 1)
+        hash((*head, round(r.w * CM), round(r.h * CM))), detail, mesh, 1)
     return result
 
 
@@ -96,10 +106,10 @@ class Signatures:
         self.log: list[int] = []  # signature of every inner region visited or reused, in order
         self.first: dict[int, Region] = {}
         self._keyed: dict[int, tuple[Info, list[int]]] = {}  # key -> first copy's info, log part
-        self._modules: dict[int, bool] = {}  # id of a hashed inner region -> whether it is a module
-        #: id of a hashed inner region -> (index, position of its first terminal among the region's) of each of
-        #: its inner children, last first: what :meth:`split` walks
-        self._inner: dict[int, list[tuple[int, int]]] = {}
+        #: id of a hashed inner region -> (index, position of its first terminal among the region's, the copy
+        #: hashed in its place: itself or the first of its key) of each of its inner children, last first (the order
+        #: :meth:`split` stacks them)
+        self._inner: dict[int, list[tuple[int, int, Region]]] = {}
         for root in roots:
             key = root.key
             done = self._keyed.get(key)
@@ -111,26 +121,27 @@ class Signatures:
                 self.first[key], self.info[id(root)] = root, _leaf_of(root)
                 self._keyed[key] = (self.info[id(root)], [])
         self.counts: Counter[int] = Counter(self.log)
+        self._modules, self._walk = self._decide()
 
     def _visit(self, r: Region) -> Info:
         """Hash the inner region ``r`` (not a copy of a keyed region already hashed) and everything below it."""
-        keyed, info, log = self._keyed, self.info, self.log
+        keyed, info, log, first = self._keyed, self.info, self.log, self.first
         x, y = r.x, r.y
         start = len(log)
         content: list[object] = [2, round(r.w * CM), round(r.h * CM)]
         append = content.append
         detail, terminals, leaves = False, 0, 0
-        inner: list[tuple[int, int]] = []  # (index, first terminal's position) of each inner child
+        inner: list[tuple[int, int, Region]] = []  # (index, first terminal's position, hashed copy) per inner child
         for c in r.children:
             key = c.key
             done = keyed.get(key)  # (None is never a key of it)
             if done is not None:
                 result, below = done
-                log.extend(below)
-                if below:  # (an inner region logs its own signature at least)
-                    inner.append((len(content) - 3, leaves))
+                if below:  # (an inner region logs its own signature at least; a terminal nothing)
+                    log.extend(below)
+                    inner.append((len(content) - 3, leaves, first[key]))
             elif c.children:
-                inner.append((len(content) - 3, leaves))
+                inner.append((len(content) - 3, leaves, c))
                 result = self._visit(c)
             else:
                 result = _LEAVES.get((c.label, c.material, c.layer, c.depth, c.w, c.h)) or _leaf_of(c)
@@ -146,7 +157,7 @@ class Signatures:
         log.append(result[0])
         key = r.key
         if key is not None:
-            self.first[key], keyed[key] = r, (result, log[start:])
+            first[key], keyed[key] = r, (result, log[start:])
         info[id(r)] = result
         inner.reverse()  # (the order :meth:`split` stacks them)
         self._inner[id(r)] = inner
@@ -160,47 +171,48 @@ class Signatures:
         """The signature of the inner region ``r``."""
         return self.info[id(self.canonical(r))][0]
 
-    def _module(self, twin: Region) -> bool:
-        """Whether the hashed inner region ``twin`` (and every copy of it) is a module (see the module doc)."""
-        decided = self._modules.get(id(twin))
-        if decided is None:
-            sig, detail, n, _ = self.info[id(twin)]
-            c = self.counts[sig]
-            decided = self._modules[id(twin)] = (
-                c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
-                and not any(is_inner(tc) and self.counts[self.signature(tc)] > c for tc in twin.children))
-        return decided
+    def _decide(self) -> tuple[dict[int, bool], dict[int, list[tuple[int, int, Region]]]]:
+        """Per hashed inner region (by id; every copy of it alike): whether it is a module (see the module doc), and
+        which of its inner children :meth:`split` must walk into (those that are or hold modules; the rest hold
+        loose terminals only)."""
+        counts, info, inner = self.counts, self.info, self._inner
+        module: dict[int, bool] = {}
+        walk: dict[int, list[tuple[int, int, Region]]] = {}
+        for hashed, (sig, detail, n, _) in info.items():  # (a region's inner children are hashed before it)
+            entries = inner.get(hashed, [])  # (none for a terminal root)
+            c = counts[sig]
+            module[hashed] = (c >= 2 and n >= MIN_TERMINALS and (c - 1) * n >= MIN_SAVING and detail
+                              and not any(counts[info[id(tc)][0]] > c for _, _, tc in entries))
+            walk[hashed] = [e for e in entries if module[id(e[2])] or walk[id(e[2])]] if entries else entries
+        return module, walk
 
     def split(self, root: Region) -> tuple[list[tuple[Region, int, int]], np.ndarray]:
         """The face's ``(modules, loose terminals)``: its maximal repeated subtrees, each with the position of its
         first terminal among the face's terminals (tree order) and their count, and the positions of every
         terminal outside them (ascending: tree order).
 
-        The walk visits inner regions only. Inside a keyed copy it reads the hashed copy's results in parallel
-        (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
+        The walk visits the inner regions on the way to modules only. Inside a keyed copy it reads the hashed copy's
+        results in parallel (``twin``). A lazily moved copy (:meth:`Region.moved`) is walked through its original with the offset
         (``shift``): only the modules found inside it are made as regions.
         """
         if not is_inner(root):
             return [], np.zeros(1, np.intp)
         modules: list[tuple[Region, int, int]] = []
-        stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, root, 0)]
-        modules_get, first, info, inner = self._modules.get, self.first, self.info, self._inner
+        stack: list[tuple[Region, tuple[float, float] | None, Region, int]] = [(root, None, self.canonical(root), 0)]
+        module, info, walk = self._modules, self.info, self._walk
+        pop, push = stack.pop, stack.extend
         while stack:
-            r, shift, twin, at = stack.pop()
-            if twin.key is not None:
-                twin = first.get(twin.key, twin)
-            decided = modules_get(id(twin))
-            if decided is None:
-                decided = self._module(twin)
-            if decided:
-                modules.append((r if shift is None else r.moved(*shift), at, info[id(twin)][3]))
+            r, shift, twin, at = pop()
+            hashed = id(twin)
+            if module[hashed]:
+                modules.append((r if shift is None else r.moved(*shift), at, info[hashed][3]))
                 continue
             if shift is None:
                 lazy = unwalked(r)
                 if lazy is not None:
                     r, shift = lazy[0], lazy[1:]
-            children, twins = r.children, twin.children
-            stack.extend([(children[i], shift, twins[i], at + offset) for i, offset in inner[id(twin)]])
+            children = r.children
+            push([(children[i], shift, tc, at + offset) for i, offset, tc in walk[hashed]])
         loose = np.ones(info[id(self.canonical(root))][3], dtype=bool)  # (then every module's terminals taken out)
         for _, at, n in modules:
             loose[at:at + n] = False

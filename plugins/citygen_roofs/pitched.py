@@ -105,9 +105,9 @@ def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
         return [tuple(face)]
     ring = xy[face]
     cut = mapbox_earcut.triangulate_float64(ring, np.array([len(face)], np.uint32)).reshape(-1, 3)
-    tris = [(face[a], face[b], face[c]) for a, b, c in cut]
-    small = 1e-12 * float(np.ptp(ring, axis=0).max()) ** 2
-    thin = _thin(xy, tris, small)
+    tris = [(face[a], face[b], face[c]) for a, b, c in cut.tolist()]
+    small = 1e-12 * float((ring.max(axis=0) - ring.min(axis=0)).max()) ** 2  # (np.ptp's own arithmetic)
+    thin = _thin_corners(ring[cut], small)
     for _ in range(len(tris)):
         if not thin.any():
             break
@@ -130,7 +130,11 @@ def _triangulate(xy: np.ndarray, face: list[int]) -> list[tuple[int, int, int]]:
 def _thin(xy: np.ndarray, tris: list[tuple[int, int, int]], small: float) -> np.ndarray:
     """Per triangle whether its area is below ``small``: :func:`_area` of every triangle at once (the same
     differences to the first corner and the same products, so the same verdicts)."""
-    p = xy[np.asarray(tris, dtype=np.int64).reshape(-1, 3)]
+    return _thin_corners(xy[np.asarray(tris, dtype=np.int64).reshape(-1, 3)], small)
+
+
+def _thin_corners(p: np.ndarray, small: float) -> np.ndarray:
+    """:func:`_thin` of triangles given by their corners ``(n, 3, 2+)``."""
     x1, y1 = p[:, 1, 0] - p[:, 0, 0], p[:, 1, 1] - p[:, 0, 1]
     x2, y2 = p[:, 2, 0] - p[:, 0, 0], p[:, 2, 1] - p[:, 0, 1]
     return np.abs(0.5 * (x1 * y2 - x2 * y1)) < small

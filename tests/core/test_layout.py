@@ -1,3 +1,4 @@
+import itertools
 import json
 import pickle
 
@@ -188,3 +189,61 @@ def test_hidden_behind_leaves_moved_copies_above_the_cover_unmade():
     def eager(r):
         return copy_with(r, children=tuple(eager(c) for c in r.children))
     assert culled.root == hidden_behind(FacadeLayout(7.3, 8.7, eager(root)), [2.0]).root
+
+
+def _culled_region_by_region(layout: FacadeLayout, cover: list[float], tol: float = 1e-6) -> Region:
+    """The culling of :func:`hidden_behind` as it was first written: every region visited, its bins looked up."""
+    import math
+    highest = max(cover)
+    step = layout.width / len(cover)
+
+    def hidden_to(x0, x1):
+        k0 = min(max(math.floor(x0 / step + tol), 0), len(cover) - 1)
+        k1 = min(max(math.ceil(x1 / step - tol), k0 + 1), len(cover))
+        return min(cover[k0:k1])
+
+    def cull(region):
+        if region.y + region.h <= hidden_to(region.x, region.x + region.w) + tol:
+            if region.children or region.label not in (None, "wall") or region.depth:
+                return Region(region.x, region.y, region.w, region.h, "Wall", "wall")
+            return region
+        if region.y >= highest - tol or not region.children:
+            return region
+        children = tuple(cull(c) for c in region.children)
+        if all(a is b for a, b in zip(children, region.children)):
+            return region
+        return Region(**{**region.__dict__, "children": children, "key": None})
+    return cull(layout.root)
+
+
+@st.composite
+def _split_trees(draw, x=0.0, y=0.0, w=8.0, h=9.0, depth=0):
+    """A random guillotine tree on a ``w x h`` rectangle at (x, y): splits along x or y, terminals of some labels."""
+    if depth >= 3 or draw(st.integers(0, 3)) == 0:
+        label = draw(st.sampled_from(["wall", "wall", "window", "door", None]))
+        return leaf(x, y, w, h, "T", label, depth=draw(st.sampled_from([0.0, 0.0, -0.2])))
+    cuts = sorted(draw(st.lists(st.floats(0.05, 0.95), min_size=1, max_size=3, unique=True)))
+    edges = [0.0, *cuts, 1.0]
+    along_x = draw(st.booleans())
+    children = []
+    for a, b in itertools.pairwise(edges):
+        if along_x:
+            children.append(draw(_split_trees(x + a * w, y, (b - a) * w, h, depth + 1)))
+        else:
+            children.append(draw(_split_trees(x, y + a * h, w, (b - a) * h, depth + 1)))
+    return Region(x, y, w, h, "S", children=tuple(children), key=draw(st.sampled_from([None, 3])))
+
+
+@given(_split_trees(), st.lists(st.sampled_from([0.0, 1.5, 3.0, 4.5, 9.0, 12.0]), min_size=1, max_size=6))
+def test_hidden_behind_culls_as_region_by_region(root, cover):
+    """The walk that looks a region's bins up only when its top is below the highest cover culls what a walk
+    looking up every region's bins culls; and an uncovered layout comes back as the object it was (its terminal
+    arrays kept)."""
+    layout = FacadeLayout(8.0, 9.0, root)
+    culled = hidden_behind(layout, cover)
+    expected = _culled_region_by_region(layout, cover) if max(cover) > 1e-6 else root
+    assert culled.root == expected
+    def keys(region):
+        return [region.key, *(k for c in region.children for k in keys(c))]
+    assert keys(culled.root) == keys(expected)
+    assert (culled is layout) == (expected is root)
