@@ -54,6 +54,7 @@ from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
 from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
 from citygen.usd.distinct import DistinctCount
+from citygen.usd.element_bounds import element_bound
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.names import SUFFIXES, prim_name, tile_name
@@ -210,8 +211,9 @@ class StageWriter:
     def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
         """Give each of ``keys`` its ``/Prototypes`` path (:attr:`prototypes`: in this layer, or for an element kind of
         a layer with an element library, in the library) and its bound; the geometry of element prototypes new to
-        the process is prepared in one batch, the prims this layer holds authored with its other new prototypes when
-        the tile is finished (:class:`~citygen.usd.definitions.Definitions`).
+        the process is prepared in one batch (a layer with an element library takes only their bounds, from their
+        keys: :func:`~citygen.usd.element_bounds.element_bound`), the prims this layer holds authored with its other
+        new prototypes when the tile is finished (:class:`~citygen.usd.definitions.Definitions`).
 
         Instances reference a library's element directly, not through a prim of this layer: the instances of an
         element in every tile then share one USD prototype, and Blender's importer makes one material per material
@@ -220,7 +222,8 @@ class StageWriter:
         fresh = [k for k in keys if k not in self.prototypes]
         if not fresh:
             return
-        prepare_elements([k for k in fresh if not isinstance(k, ModuleKey)], self.elements, self.library)
+        if not self.element_library:  # (a tile layer needs only the bounds of its library's elements)
+            prepare_elements([k for k in fresh if not isinstance(k, ModuleKey)], self.elements, self.library)
         for key in fresh:
             path = PROTOTYPES.AppendChild(Tf.MakeValidIdentifier(key.name))
             if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
@@ -230,11 +233,11 @@ class StageWriter:
                 meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                           for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
                 proto = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
+            elif self.element_library:
+                self.prototypes[key], self.bounds[key] = (self.element_library, path), element_bound(key)
+                continue
             else:
                 proto = self.elements[key]
-                if self.element_library:
-                    self.prototypes[key], self.bounds[key] = (self.element_library, path), proto.bound
-                    continue
             self.definitions.pending.append((path, proto))
             self.prototypes[key], self.bounds[key] = ("", path), proto.bound
 
