@@ -53,7 +53,8 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.temporaries import current_umask, remove_stale_temporaries, temp_prefix
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
-from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
+from citygen.usd.definitions import (PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_arrays,
+                                     prepare_elements)
 from citygen.usd.distinct import DistinctCount
 from citygen.usd.element_bounds import element_bound
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
@@ -407,8 +408,8 @@ class StageWriter:
         """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
         the main process then holds no tile's keys): the element kinds, for the element library, and the module
         prototypes, only counted (a city's are ~1.8 a building). The element kinds new to the run are prepared for
-        the library now (:func:`prepare_elements`), while the workers still build: the library's writing at the
-        end only authors them."""
+        the library now (:func:`prepare_elements`, :func:`prepare_arrays`: built, welded, their normals and USD
+        arrays), while the workers still build: the library's writing at the end only authors them."""
         modules, kinds = [], []
         for key in keys:
             if isinstance(key, ProtoKey):
@@ -416,8 +417,10 @@ class StageWriter:
             else:
                 modules.append(key)
         self.tile_modules.update(modules)
-        prepare_elements([k for k in kinds if k not in self.tile_prototypes], self.elements, self.library)
-        self.tile_prototypes.update(kinds)
+        fresh = [k for k in dict.fromkeys(kinds) if k not in self.tile_prototypes]
+        prepare_elements(fresh, self.elements, self.library)
+        prepare_arrays([self.elements[k] for k in fresh], self.author)
+        self.tile_prototypes.update(fresh)
 
     @cyclic_gc_paused()
     def close(self) -> StageStats:
