@@ -53,8 +53,15 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.temporaries import current_umask, remove_stale_temporaries, temp_prefix
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
-from citygen.usd.definitions import (PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_arrays,
-                                     prepare_elements)
+from citygen.usd.definitions import (
+    PROTOTYPES,
+    Definitions,
+    Prototype,
+    elements,
+    meshes_bound,
+    prepare_arrays,
+    prepare_elements,
+)
 from citygen.usd.distinct import DistinctCount
 from citygen.usd.element_bounds import element_bound
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
