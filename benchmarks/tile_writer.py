@@ -6,11 +6,14 @@ element library the main process writes, on a scene's real building records (def
 The scene is generated once (one job, in this process) while every tile task's writer call (its job, tile and
 building records) is recorded, with the sha256 of the layer it wrote; ``--cache FILE`` pickles them so later runs
 skip the generation. Then the recorded tiles are written again ``--repeat`` times, each time as a fresh worker
-would (the process's prepared element prototypes forgotten first, USD's work done in this thread), and the element
-library of their element kinds as the main process writes it. Printed: the CPU (process_time) of the tile layers and of the library, best and
-median, and whether every layer's bytes are the recorded ones. ``--profile`` writes them once more under cProfile
-and prints the total function calls (deterministic: the figure to compare between two versions of the writer
-whatever the machine's load) and the ``N`` functions of most own time.
+would (the process's prepared element prototypes and element bounds forgotten first, USD's work done in this
+thread), and the element library of their element kinds as the main process writes it: its elements and their
+arrays prepared first (the main process does that while the tiles are built), then written. Printed: the CPU
+(process_time) of the tile layers and of the library's two parts, best and median, and whether every file's bytes
+are the recorded ones. ``--profile`` writes them once more under cProfile and prints the total function calls
+(deterministic: the figure to compare between two versions of the writer whatever the machine's load) and the
+``N`` functions of most own time. ``--phases`` writes the tiles once more with the CPU of their phases timed
+(placing instances, face normals, Vt arrays, export; the rest is authoring specs).
 """
 from __future__ import annotations
 
@@ -34,6 +37,7 @@ from citygen.scene import load_scene
 from citygen.usd import definitions, publish
 from citygen.usd import writer as writer_module
 from citygen.usd.author import Author
+from citygen.usd.element_bounds import element_bound
 from citygen.usd.library import write_library
 from citygen.usd.writer import StageWriter
 
@@ -80,6 +84,7 @@ def write_all(recorded: dict, folder: Path) -> tuple[float, float, float, bool]:
     tile); return the CPU seconds of the tiles, of the library's preparation and of its writing, and whether every
     file has the recorded bytes."""
     definitions._ELEMENTS.clear()
+    element_bound.cache_clear()
     same = True
     keys: set[ProtoKey] = set()
     Work.SetConcurrencyLimit(1)  # (as in a tile worker: citygen.tiles._init_worker)
