@@ -67,7 +67,8 @@ def _parts(key: ProtoKey) -> list[_Part]:
 @functools.lru_cache(maxsize=8192)
 def element_bound(key: ProtoKey) -> np.ndarray:
     """``(2, 3)`` ``[min, max]`` of the welded meshes of element ``key``: what
-    :func:`~citygen.usd.definitions.meshes_bound` gives for its prepared prototype."""
+    :func:`~citygen.usd.definitions.meshes_bound` gives for its prepared prototype (whatever the material library:
+    it names the parts' materials, not their shapes)."""
     low, high = [], []
     for part in _parts(key):
         origin = [min(axis) for axis in part]
