@@ -63,6 +63,16 @@ def prepare_elements(keys: Iterable[ProtoKey], into: dict[ProtoKey, Prototype],
         into[key] = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
 
 
+def prepare_arrays(protos: Iterable[Prototype], author: Author) -> None:
+    """The :class:`MeshArrays` of each of ``protos`` that has none yet, their face normals in one batch (``author``:
+    any of a writer with the layer's ``uvs`` and materials; the arrays do not depend on the layer)."""
+    fresh = [p for p in protos if p.arrays is None]
+    kept = [[(m, mat) for _, mat, _, m in p.meshes if len(m.counts)] for p in fresh]
+    prepared = iter(author.arrays([m for ms in kept for m in ms], face_normals([m for ms in kept for m, _ in ms])))
+    for p, ms in zip(fresh, kept):
+        p.arrays = [next(prepared) for _ in ms]
+
+
 def meshes_bound(meshes: list[MeshData]) -> np.ndarray | None:
     """The bound of the points of ``meshes``."""
     return points_bound(np.concatenate([m.points for m in meshes])) if meshes else None
@@ -96,11 +106,7 @@ class Definitions:
         author = self.author
         if self.protos_root is None:
             self.protos_root = author.prim(author.layer, PROTOTYPES.name, "", Sdf.SpecifierClass)
-        fresh = [p for _, p in self.pending if p.arrays is None]
-        kept = [[(m, mat) for _, mat, _, m in p.meshes if len(m.counts)] for p in fresh]
-        prepared = iter(author.arrays([m for ms in kept for m in ms], face_normals([m for ms in kept for m, _ in ms])))
-        for p, ms in zip(fresh, kept):
-            p.arrays = [next(prepared) for _ in ms]
+        prepare_arrays([p for _, p in self.pending], author)
         with Sdf.ChangeBlock():
             for path, p in self.pending:
                 proto = author.prim(self.protos_root, path.name, "Xform")

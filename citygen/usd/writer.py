@@ -45,6 +45,7 @@ import numpy as np
 from pxr import Gf, Sdf, Tf, Usd, Vt
 
 from citygen.errors import ExportError
+from citygen.gcpause import cyclic_gc_paused
 from citygen.geometry.building import BuildingGeometry, Instances, MeshData, ModuleProto
 from citygen.geometry.lift import lift_module_elements
 from citygen.geometry.modules import ModuleKey
@@ -52,8 +53,17 @@ from citygen.geometry.prototypes import ProtoKey
 from citygen.temporaries import current_umask, remove_stale_temporaries, temp_prefix
 from citygen.usd.author import Author, MeshArrays, T, bound_value, tokens
 from citygen.usd.bounds import instances_bounds, points_bound, union
-from citygen.usd.definitions import PROTOTYPES, Definitions, Prototype, elements, meshes_bound, prepare_elements
+from citygen.usd.definitions import (
+    PROTOTYPES,
+    Definitions,
+    Prototype,
+    elements,
+    meshes_bound,
+    prepare_arrays,
+    prepare_elements,
+)
 from citygen.usd.distinct import DistinctCount
+from citygen.usd.element_bounds import element_bound
 from citygen.usd.library import library_name, publish_library, settle_library, write_library
 from citygen.usd.materials import Material
 from citygen.usd.names import SUFFIXES, prim_name, tile_name
@@ -210,8 +220,9 @@ class StageWriter:
     def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
         """Give each of ``keys`` its ``/Prototypes`` path (:attr:`prototypes`: in this layer, or for an element kind of
         a layer with an element library, in the library) and its bound; the geometry of element prototypes new to
-        the process is prepared in one batch, the prims this layer holds authored with its other new prototypes when
-        the tile is finished (:class:`~citygen.usd.definitions.Definitions`).
+        the process is prepared in one batch (a layer with an element library takes only their bounds, from their
+        keys: :func:`~citygen.usd.element_bounds.element_bound`), the prims this layer holds authored with its other
+        new prototypes when the tile is finished (:class:`~citygen.usd.definitions.Definitions`).
 
         Instances reference a library's element directly, not through a prim of this layer: the instances of an
         element in every tile then share one USD prototype, and Blender's importer makes one material per material
@@ -220,7 +231,8 @@ class StageWriter:
         fresh = [k for k in keys if k not in self.prototypes]
         if not fresh:
             return
-        prepare_elements([k for k in fresh if not isinstance(k, ModuleKey)], self.elements, self.library)
+        if not self.element_library:  # (a tile layer needs only the bounds of its library's elements)
+            prepare_elements([k for k in fresh if not isinstance(k, ModuleKey)], self.elements, self.library)
         for key in fresh:
             path = PROTOTYPES.AppendChild(Tf.MakeValidIdentifier(key.name))
             if isinstance(key, ModuleKey):  # its meshes; the building places its elements (citygen.geometry.lift)
@@ -230,11 +242,11 @@ class StageWriter:
                 meshes = [(prim_name(f"{label}_{mat}", names), mat, label, mesh)
                           for (label, mat), mesh in modules[key].meshes.items() if len(mesh.counts)]
                 proto = Prototype(key.label, meshes, meshes_bound([m for *_, m in meshes]))
+            elif self.element_library:
+                self.prototypes[key], self.bounds[key] = (self.element_library, path), element_bound(key)
+                continue
             else:
                 proto = self.elements[key]
-                if self.element_library:
-                    self.prototypes[key], self.bounds[key] = (self.element_library, path), proto.bound
-                    continue
             self.definitions.pending.append((path, proto))
             self.prototypes[key], self.bounds[key] = ("", path), proto.bound
 
@@ -249,6 +261,9 @@ class StageWriter:
             return
         self.queued.append(record)
 
+    # (many short-lived spec handles, freed by reference counting: the cyclic collections they set off cost each
+    # demo tile worker ~0.01-0.08 s of its ~3 s of writing)
+    @cyclic_gc_paused()
     def _write_queued(self, target: Sdf.PrimSpec) -> None:
         """Author the open tile's buildings, in the order added: their face normals and their instancers' bounds
         each in one batch. When that raises (not :data:`ENVIRONMENT`), what it authored of them is taken back and
@@ -400,8 +415,8 @@ class StageWriter:
         """Note the prototypes a tile layer uses (:meth:`add_tile_layer`'s, or taken as its task's result comes in:
         the main process then holds no tile's keys): the element kinds, for the element library, and the module
         prototypes, only counted (a city's are ~1.8 a building). The element kinds new to the run are prepared for
-        the library now (:func:`prepare_elements`), while the workers still build: the library's writing at the
-        end only authors them."""
+        the library now (:func:`prepare_elements`, :func:`prepare_arrays`: built, welded, their normals and USD
+        arrays), while the workers still build: the library's writing at the end only authors them."""
         modules, kinds = [], []
         for key in keys:
             if isinstance(key, ProtoKey):
@@ -409,9 +424,12 @@ class StageWriter:
             else:
                 modules.append(key)
         self.tile_modules.update(modules)
-        prepare_elements([k for k in kinds if k not in self.tile_prototypes], self.elements, self.library)
-        self.tile_prototypes.update(kinds)
+        fresh = [k for k in dict.fromkeys(kinds) if k not in self.tile_prototypes]
+        prepare_elements(fresh, self.elements, self.library)
+        prepare_arrays([self.elements[k] for k in fresh], self.author)
+        self.tile_prototypes.update(fresh)
 
+    @cyclic_gc_paused()
     def close(self) -> StageStats:
         """Write the last tile, publish the tiles under their content names and the element library (both runs'
         elements while the old root may use it), switch the root to them (one rename), then settle the library and

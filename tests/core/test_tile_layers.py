@@ -324,7 +324,8 @@ def test_layers_authored_in_crate_data_write_the_bytes_of_layers_authored_in_sdf
 
 def test_the_root_prepares_each_element_kind_of_the_library_as_the_tile_results_come_in(tmp_path):
     """The element library's prototypes are made while the workers still build (the library's writing at the end
-    of the run only authors them): each new kind once, the modules only counted; the library holds them all."""
+    of the run only authors them): each new kind once, with its arrays, the modules only counted; the library holds
+    them all."""
     from citygen.geometry.modules import ModuleKey
     from citygen.geometry.prototypes import ProtoKey
 
@@ -334,8 +335,10 @@ def test_the_root_prepares_each_element_kind_of_the_library_as_the_tile_results_
         assert door not in writer.elements
         writer.take_prototypes([window, ModuleKey(7, 300, 300, "brick")])
         prepared = writer.elements[window]
+        assert prepared.arrays is not None  # (its normals and USD arrays too: the library's end only authors it)
+        arrays = prepared.arrays
         writer.take_prototypes([window, door])
-        assert writer.elements[window] is prepared and door in writer.elements
+        assert writer.elements[window] is prepared and prepared.arrays is arrays and door in writer.elements
         assert writer.tile_prototypes == {window, door} and len(writer.tile_modules) == 1
         writer.close()
     library = Sdf.Layer.OpenAsAnonymous(str(tmp_path / "city_tiles" / "elements.usdc"))
