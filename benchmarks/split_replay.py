@@ -6,8 +6,9 @@ layouts (to show that a change keeps them bit for bit).
 Builds every building of the scene once (as ``citygen generate --jobs 1``) to collect the faces the split kind
 is asked for, then derives them again ``--repeat`` times in this process with the cyclic collector paused (as the
 builder does; a building's faces share their subtrees): ``derive_plausible`` (derivations and their plausibility
-and request checks), then the builder's ``_checked`` checks (partition, entrance, request). Prints the least CPU seconds of each part over the repeats and
-a sha256 of every layout's regions (coordinates, fields and which regions share a module key).
+and request checks), then the builder's ``_checked`` checks (partition, entrance, request). Prints the least CPU
+seconds of each part over the repeats and a sha256 of every layout's regions (coordinates, fields and which regions
+share a module key; the rulesets' paths enter it, so compare runs of one checkout).
 """
 from __future__ import annotations
 
