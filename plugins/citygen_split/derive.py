@@ -63,34 +63,28 @@ class Subtrees:
 
     def __init__(self, grammar: Grammar) -> None:
         self.grammar = grammar
-        #: by (symbol, width, height, floor or -1, x, y)
-        self.derived: dict[tuple[str, float, float, int, float, float], _Derived] = {}
+        #: (region, its size in regions, its first terminal's position and its terminal count in the arrays of
+        #: the derivation that made it, that derivation) by (symbol, width, height, floor or -1, x, y)
+        self.derived: dict[tuple[str, float, float, int, float, float],
+                           tuple[Region, int, int, int, _Derivation]] = {}
+        #: per key of :attr:`derived` copied: its terminals' rectangles in tree order, their distinct sources (in
+        #: order of first use) and the index of each terminal's source among them
+        self.blocks: dict[tuple[str, float, float, int, float, float],
+                          tuple[list[list[float]], list[Region], list[int]]] = {}
 
-
-class _Derived:
-    """One subtree of :class:`Subtrees`: the region, its size in regions, and where its terminals are in the
-    arrays of the derivation that made it; their rows and sources are read from there when it is first copied."""
-
-    __slots__ = ("region", "size", "origin", "first", "n", "rows", "sources", "codes")
-
-    def __init__(self, region: Region, size: int, origin: _Derivation, first: int, n: int) -> None:
-        self.region, self.size, self.origin, self.first, self.n = region, size, origin, first, n
-        self.rows: list[list[float]] | None = None
-        self.sources: list[Region] = []
-        self.codes: list[int] = []
-
-    def block(self) -> tuple[list[list[float]], list[Region], list[int]]:
-        """The rectangles of the subtree's terminals in tree order, their distinct sources (in order of first use)
-        and the index of each terminal's source among them."""
-        if self.rows is None:
-            rects, sources, index = self.origin.arrays
-            end = self.first + self.n
-            self.rows = rects[self.first:end].tolist()
-            of = index[self.first:end].tolist()
+    def block(self, place: tuple[str, float, float, int, float, float]
+              ) -> tuple[list[list[float]], list[Region], list[int]]:
+        """The terminals of the subtree at ``place`` (a key of :attr:`derived`), read once from its derivation's
+        arrays."""
+        made = self.blocks.get(place)
+        if made is None:
+            _, _, first, n, origin = self.derived[place]
+            rects, sources, index = origin.arrays
+            of = index[first:first + n].tolist()
             distinct = {i: k for k, i in enumerate(dict.fromkeys(of))}
-            self.sources = [sources[i] for i in distinct]
-            self.codes = list(map(distinct.__getitem__, of))
-        return self.rows, self.sources, self.codes
+            made = self.blocks[place] = (rects[first:first + n].tolist(), [sources[i] for i in distinct],
+                                         list(map(distinct.__getitem__, of)))
+        return made
 
 
 def derive(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None,
@@ -146,8 +140,9 @@ class _Derivation:
         #: The building's :class:`Subtrees` (None without shared symbols), what this face adds to them (key,
         #: region, its size, its first terminal's position, its terminal count), and whether a copy of another
         #: face's subtree was placed (its choice points are then not in :attr:`points`).
-        self.subtrees = subtrees.derived if subtrees is not None and self.shared else None
-        self.offered: list[tuple[tuple[str, float, float, int], Region, int, int, int]] = []
+        self.subtrees = subtrees if subtrees is not None and self.shared else None
+        self.offered: list[tuple[tuple[str, float, float, int, float, float], tuple[Region, int, int, int,
+                                                                                   _Derivation]]] = []
         self.partial = False
         self.foreign: dict[int, int] = {}  # id of another face's source -> its index among :attr:`sources`
         #: (the terminals' rectangles, the sources and each terminal's source index, once :meth:`run` is done)
@@ -187,8 +182,7 @@ class _Derivation:
         layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = rects, (sources, index)
         if self.subtrees is not None:
             self.arrays = rects, sources, index
-            for key, region, size, first, n in self.offered:
-                self.subtrees.setdefault((*key, region.x, region.y), _Derived(region, size, self, first, n))
+            self.subtrees.derived.update(self.offered)  # (no place is offered twice: later faces copy it)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -213,9 +207,9 @@ class _Derivation:
                     self.copied += n
                 return copy
             if self.subtrees is not None and symbol in self.shared:
-                derived = self.subtrees.get((*key, x, y))
-                if derived is not None:
-                    return self.copied_from(derived, key)
+                place = (*key, x, y)
+                if place in self.subtrees.derived:
+                    return self.copied_from(place)
             before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.scope if symbol in self.shared else self.request.seed, key))
@@ -224,18 +218,19 @@ class _Derivation:
             self.cache[key] = (region, self.count - before, first, n,
                                len(self.sources) - 1)  # (the source of a terminal region)
             if self.subtrees is not None and symbol in self.shared and region.children:
-                self.offered.append((key, region, self.count - before, first, n))
+                self.offered.append(((*key, x, y), (region, self.count - before, first, n, self)))
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
 
-    def copied_from(self, derived: _Derived, key: tuple[str, float, float, int]) -> Region:
-        """A copy of the subtree ``derived`` on another face of the building, at the same place, noted like a
-        subtree of this face (its terminals in :attr:`copies`, its sources among :attr:`sources`)."""
-        self.count += derived.size
+    def copied_from(self, place: tuple[str, float, float, int, float, float]) -> Region:
+        """A copy of the subtree another face of the building derived at ``place`` (:attr:`Subtrees.derived`), noted
+        like a subtree of this face (its terminals in :attr:`copies`, its sources among :attr:`sources`)."""
+        region, size, _, n, _ = self.subtrees.derived[place]
+        self.count += size
         if self.count > MAX_REGIONS:
-            raise self.too_large(f"derivation went beyond {MAX_REGIONS} regions at {key[0]}", self.grammar.source)
-        copy = derived.region.moved(0.0, 0.0)
-        rows, sources, codes = derived.block()
+            raise self.too_large(f"derivation went beyond {MAX_REGIONS} regions at {place[0]}", self.grammar.source)
+        copy = region.moved(0.0, 0.0)
+        rows, sources, codes = self.subtrees.block(place)
         foreign = self.foreign
         local = []
         for source in sources:
@@ -246,8 +241,8 @@ class _Derivation:
             local.append(k)
         first = len(self.leaves) + self.copied
         self.copies.append((len(self.leaves), (rows, list(map(local.__getitem__, codes))), None, 0.0, 0.0))
-        self.copied += derived.n
-        self.cache[key] = (copy, derived.size, first, derived.n, -1)  # (copies on this face are its own)
+        self.copied += n
+        self.cache[place[:4]] = (copy, size, first, n, -1)  # (copies on this face are its own)
         self.partial = True
         return copy
 
