@@ -137,9 +137,9 @@ class _Derivation:
         self.scope = ("grammar", id(grammar))
         if subtrees is not None and subtrees.grammar is not grammar:
             raise ValueError("the subtrees of another grammar")
-        #: The building's :class:`Subtrees` (None without shared symbols), what this face adds to them (key,
-        #: region, its size, its first terminal's position, its terminal count), and whether a copy of another
-        #: face's subtree was placed (its choice points are then not in :attr:`points`).
+        #: The building's :class:`Subtrees` (None without shared symbols), what this face adds to them (as
+        #: :attr:`Subtrees.derived`'s items), and whether a copy of another face's subtree was placed (its choice
+        #: points are then not in :attr:`points`).
         self.subtrees = subtrees if subtrees is not None and self.shared else None
         self.offered: list[tuple[tuple[str, float, float, int, float, float], tuple[Region, int, int, int,
                                                                                    _Derivation]]] = []
