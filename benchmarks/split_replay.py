@@ -5,9 +5,10 @@ layouts (to show that a change keeps them bit for bit).
 
 Builds every building of the scene once (as ``citygen generate --jobs 1``) to collect the faces the split kind
 is asked for, then derives them again ``--repeat`` times in this process with the cyclic collector paused (as the
-builder does): ``derive_plausible`` (derivations and their plausibility and request checks), then the builder's
-``_checked`` checks (partition, entrance, request). Prints the least CPU seconds of each part over the repeats and
-a sha256 of every layout's regions (coordinates, fields and which regions share a module key).
+builder does; a building's faces share their subtrees): ``derive_plausible`` (derivations and their plausibility
+and request checks), then the builder's ``_checked`` checks (partition, entrance, request). Prints the least CPU
+seconds of each part over the repeats and a sha256 of every layout's regions (coordinates, fields and which regions
+share a module key; the rulesets' paths enter it, so compare runs of one checkout).
 """
 from __future__ import annotations
 
@@ -22,8 +23,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from facade_phases import REPO, _work  # noqa: E402  (the scene's buildings, in the pipeline's order)
 
 
-def _faces(scene_path: Path) -> list[tuple[object, object]]:
-    """The (grammar, request) pairs the split kind derives while the scene's buildings are built."""
+def _faces(scene_path: Path) -> list[tuple[object, object, object]]:
+    """The (grammar, request, the building's shared subtrees) the split kind derives while the scene's buildings are
+    built."""
     import citygen_split.plugin as plugin
     from citygen.builder import Builder
 
@@ -32,7 +34,7 @@ def _faces(scene_path: Path) -> list[tuple[object, object]]:
     original = plugin.derive_plausible
 
     def noted(grammar, request, *args, **kwargs):
-        faces.append((grammar, request))
+        faces.append((grammar, request, kwargs.get("subtrees")))  # (the building's shared subtrees, if any)
         return original(grammar, request, *args, **kwargs)
 
     plugin.derive_plausible = noted
@@ -69,6 +71,7 @@ def main() -> None:
     args = parser.parse_args()
     from citygen.builder import Builder
     from citygen_split.alternatives import derive_plausible
+    from citygen_split.derive import Subtrees
 
     faces = _faces(Path(args.scene))
     best = [float("inf"), float("inf")]
@@ -77,9 +80,12 @@ def main() -> None:
         layouts, derive_cpu, check_cpu = [], 0.0, 0.0
         gc.disable()
         try:
-            for grammar, request in faces:
+            building = subtrees = None
+            for grammar, request, shared in faces:
                 start = time.process_time()
-                layout = derive_plausible(grammar, request).layout
+                if shared is not building:  # (a new building: its faces share subtrees as in the build)
+                    building, subtrees = shared, None if shared is None else Subtrees(grammar)
+                layout = derive_plausible(grammar, request, subtrees=subtrees).layout
                 derived = time.process_time()
                 layouts.append(Builder._checked(layout, request, "split", []))
                 check_cpu += time.process_time() - derived

@@ -22,8 +22,9 @@ import pickle
 import threading
 import time
 from collections import Counter, deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -91,14 +92,27 @@ TAIL = 4
 
 
 def _init_worker(parent: int) -> None:
-    """In a worker process forked to run tile tasks: tied to its parent (:mod:`citygen.lifeline`), and USD's work
-    done in this thread. USD's work-thread pool (TBB) does not survive a fork: the tasks it runs detached -- the
-    freeing of every released layer's data -- never ran, and a forked worker grew by ~0.2 MB per building it built
-    (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held, for a few per cent
-    more CPU (the freeing the leak skipped); what USD keeps of the paths it saw is bounded by
-    :data:`BUILDINGS_PER_WORKER`."""
+    """In a worker process forked to run tile tasks (under :func:`_serial_work`): tied to its parent
+    (:mod:`citygen.lifeline`)."""
     tie_to_parent(parent)
+
+
+@contextmanager
+def _serial_work() -> Iterator[None]:
+    """USD's work done serially in this process while it forks tile workers (restored after), and so in the workers
+    from their first instruction. USD's work-thread pool (TBB) does not survive a fork: the tasks it runs detached
+    -- the freeing of every released layer's data -- never ran, and a forked worker grew by ~0.2 MB per building it
+    built (3,000 synthetic buildings: 455 MB USS). Run serially, they free what each tile's layer held, for a few
+    per cent more CPU (the freeing the leak skipped); what USD keeps of the paths it saw is bounded by
+    :data:`BUILDINGS_PER_WORKER`. The limit is set here, in the thread that forks, not in the worker: a TBB lock
+    that one of this process's threads held at the fork stays held in the child, and a worker setting the limit
+    itself once waited on it for ever (4 Dec 2026, under load)."""
+    before = Work.GetConcurrencyLimit()
     Work.SetConcurrencyLimit(1)
+    try:
+        yield
+    finally:
+        Work.SetConcurrencyLimit(before)
 
 
 @dataclass
@@ -112,7 +126,8 @@ class _Slot:
 
 
 def _pool(workers: int) -> ProcessPoolExecutor:
-    """``workers`` tile worker processes (:func:`_init_worker`), forked from this one."""
+    """``workers`` tile worker processes (:func:`_init_worker`), forked from this one (under
+    :func:`_serial_work`)."""
     return ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(os.getpid(),))
 
 
@@ -259,27 +274,28 @@ def run_local(tiles: Sequence[TileWork], job: TileJob, jobs: int, progress: Call
             slot.pool, slot.given = None, 0
             feed(slot)
 
-    try:
-        for slot in slots:
-            feed(slot)
-        while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                k, slot = pending.pop(future)
-                found[k] = take(future.result())
-                slot.busy -= 1
+    with _serial_work():
+        try:
+            for slot in slots:
                 feed(slot)
-                done += len(tiles[k])
-                if progress:
-                    progress(done, total)
-    except BaseException:  # an error, Ctrl-C, SIGTERM: the workers end now
-        for slot in slots:
-            if slot.pool is not None:
-                stop_workers(slot.pool)
-        raise
-    live = [slot.pool for slot in slots if slot.pool is not None]
-    for pool in live:  # (the workers end side by side, then are joined)
-        pool.shutdown(wait=False)
-    for pool in live:
-        pool.shutdown()
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    k, slot = pending.pop(future)
+                    found[k] = take(future.result())
+                    slot.busy -= 1
+                    feed(slot)
+                    done += len(tiles[k])
+                    if progress:
+                        progress(done, total)
+        except BaseException:  # an error, Ctrl-C, SIGTERM: the workers end now
+            for slot in slots:
+                if slot.pool is not None:
+                    stop_workers(slot.pool)
+            raise
+        live = [slot.pool for slot in slots if slot.pool is not None]
+        for pool in live:  # (the workers end side by side, then are joined)
+            pool.shutdown(wait=False)
+        for pool in live:
+            pool.shutdown()
     return [found[k] for k in range(len(tiles))]

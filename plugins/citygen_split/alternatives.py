@@ -24,7 +24,7 @@ from citygen.layout import FacadeLayout, Region
 from citygen.plausible import DEFAULT_RULES, Finding, PlausibilityRules, check_plausible, plain_wall, summary
 from citygen.request import FacadeRequest, check_request
 from citygen_split.ast import Grammar
-from citygen_split.derive import PLUGIN_ID, FaceTooLarge, PointKey, _Derivation, point_key
+from citygen_split.derive import PLUGIN_ID, FaceTooLarge, PointKey, Subtrees, _Derivation, point_key
 
 #: Most derivations one face may take (the first included).
 BUDGET = 24
@@ -43,16 +43,20 @@ class Outcome:
 
 
 def derive_plausible(grammar: Grammar, request: FacadeRequest, budget: int = BUDGET,
-                     rules: PlausibilityRules | None = None) -> Outcome:
+                     rules: PlausibilityRules | None = None, subtrees: Subtrees | None = None) -> Outcome:
     """The first plausible layout of ``grammar`` on ``request`` found by advancing choice points (module doc); a
     plain wall (``meta["fallback"]``, with the entrance's door when the face has one) when none is found within
     ``budget`` derivations. A layout whose only problems are request problems it cannot avoid (e.g. a grammar
     without a door on the entrance face) is returned as it is: the builder repairs the entrance. ``rules``:
-    the request's (the scene's), else the defaults."""
+    the request's (the scene's), else the defaults. ``subtrees``: the building's (:class:`Subtrees`), which
+    the first derivation copies from and adds to."""
     rules = rules or request.plausibility or DEFAULT_RULES
     tried: set[PointKey] = set()
     try:
-        best = _attempt(grammar, request, {}, rules)  # moves are kept only when better: the last kept is the best
+        # (moves are kept only when better: the last kept is the best)
+        best = _attempt(grammar, request, {}, rules, subtrees)
+        if (best.findings or best.problems) and best.partial:  # (moves need the choice points inside the copies)
+            best = _attempt(grammar, request, {}, rules)
     except FaceTooLarge as exc:
         findings = (Finding("too-large", f"{exc.message} -- {exc.hint}"),)
         return Outcome(_plain(grammar, request, findings), findings=findings)
@@ -98,6 +102,7 @@ class _Attempt:
     points: dict[PointKey, int]
     findings: tuple[Finding, ...]
     problems: tuple[str, ...]
+    partial: bool = False  # (copies of other faces' subtrees: :attr:`points` lacks the choice points inside them)
 
     @property
     def score(self) -> tuple[int, int]:
@@ -109,12 +114,12 @@ class _Attempt:
 
 
 def _attempt(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int],
-             rules: PlausibilityRules) -> _Attempt:
-    derivation = _Derivation(grammar, request, alternatives=alternatives)
+             rules: PlausibilityRules, subtrees: Subtrees | None = None) -> _Attempt:
+    derivation = _Derivation(grammar, request, alternatives=alternatives, subtrees=subtrees)
     layout = derivation.run()
     findings = tuple(check_plausible(layout, request, rules))
     problems = tuple(check_request(layout, request))
-    return _Attempt(layout, alternatives, derivation.points, findings, problems)
+    return _Attempt(layout, alternatives, derivation.points, findings, problems, derivation.partial)
 
 
 def _next_point(attempt: _Attempt, tried: set[PointKey]) -> PointKey | None:

@@ -53,14 +53,50 @@ def point_key(symbol: str, w: float, h: float) -> PointKey:
     return (symbol, round(w, 6), round(h, 6))
 
 
-def derive(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None) -> FacadeLayout:
+class Subtrees:
+    """The :attr:`~citygen_split.ast.Grammar.face_invariant` subtrees derived on the faces of one building, for its
+    next faces. Such a subtree derives alike on every face given its symbol, size and floor, and at the same place
+    to the last bit: so a later face that needs one where an earlier face had it (the storeys of opposite faces of
+    equal width) places a copy of it instead of deriving it again, and its layout is the one it would derive.
+    A face's subtrees are offered when its derivation completes, and only by derivations without forced
+    alternatives. A copy does not note the choice points inside it (:attr:`_Derivation.partial`)."""
+
+    def __init__(self, grammar: Grammar) -> None:
+        self.grammar = grammar
+        #: (region, its size in regions, its first terminal's position and its terminal count in the arrays of
+        #: the derivation that made it, that derivation) by (symbol, width, height, floor or -1, x, y)
+        self.derived: dict[tuple[str, float, float, int, float, float],
+                           tuple[Region, int, int, int, _Derivation]] = {}
+        #: per key of :attr:`derived` copied: its terminals' rectangles in tree order, their distinct sources (in
+        #: order of first use) and the index of each terminal's source among them
+        self.blocks: dict[tuple[str, float, float, int, float, float],
+                          tuple[list[list[float]], list[Region], list[int]]] = {}
+
+    def block(self, place: tuple[str, float, float, int, float, float]
+              ) -> tuple[list[list[float]], list[Region], list[int]]:
+        """The terminals of the subtree at ``place`` (a key of :attr:`derived`), read once from its derivation's
+        arrays."""
+        made = self.blocks.get(place)
+        if made is None:
+            _, _, first, n, origin = self.derived[place]
+            rects, sources, index = origin.arrays
+            of = index[first:first + n].tolist()
+            distinct = {i: k for k, i in enumerate(dict.fromkeys(of))}
+            made = self.blocks[place] = (rects[first:first + n].tolist(), [sources[i] for i in distinct],
+                                         list(map(distinct.__getitem__, of)))
+        return made
+
+
+def derive(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None,
+           subtrees: Subtrees | None = None) -> FacadeLayout:
     """The layout of ``grammar`` on ``request``'s face (see docs/grammar.md for the semantics).
 
     ``alternatives`` picks, per choice point, which alternative to take instead of the first (0): the k-th
     holding branch of a ``case`` (``else`` last), k fewer tiles of a ``repeat`` / ``repeatABA``, the k-th other
-    alternative of a stochastic rule (see :mod:`citygen_split.alternatives`).
+    alternative of a stochastic rule (see :mod:`citygen_split.alternatives`). ``subtrees``: those of the
+    building's faces derived before (:class:`Subtrees`).
     """
-    return _Derivation(grammar, request, alternatives=alternatives).run()
+    return _Derivation(grammar, request, alternatives=alternatives, subtrees=subtrees).run()
 
 
 def explain(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKey, int] | None = None) -> str:
@@ -72,7 +108,7 @@ def explain(grammar: Grammar, request: FacadeRequest, alternatives: dict[PointKe
 
 class _Derivation:
     def __init__(self, grammar: Grammar, request: FacadeRequest, trace: bool = False,
-                 alternatives: dict[PointKey, int] | None = None) -> None:
+                 alternatives: dict[PointKey, int] | None = None, subtrees: Subtrees | None = None) -> None:
         if not (request.width > 0 and request.height > 0):
             raise RulesetError(f"facade size {request.width} x {request.height} is not positive", plugin=PLUGIN_ID)
         self.grammar = grammar
@@ -99,6 +135,18 @@ class _Derivation:
         #: forced: they are the face's own)
         self.shared = frozenset() if trace or alternatives else grammar.face_invariant
         self.scope = ("grammar", id(grammar))
+        if subtrees is not None and subtrees.grammar is not grammar:
+            raise ValueError("the subtrees of another grammar")
+        #: The building's :class:`Subtrees` (None without shared symbols), what this face adds to them (as
+        #: :attr:`Subtrees.derived`'s items), and whether a copy of another face's subtree was placed (its choice
+        #: points are then not in :attr:`points`).
+        self.subtrees = subtrees if subtrees is not None and self.shared else None
+        self.offered: list[tuple[tuple[str, float, float, int, float, float], tuple[Region, int, int, int,
+                                                                                   _Derivation]]] = []
+        self.partial = False
+        self.foreign: dict[int, int] = {}  # id of another face's source -> its index among :attr:`sources`
+        #: (the terminals' rectangles, the sources and each terminal's source index, once :meth:`run` is done)
+        self.arrays: tuple[np.ndarray, tuple[Region, ...], np.ndarray]
         #: (subtree, its size in regions, position of its first terminal, its terminal count, and for a terminal
         #: its index among :attr:`sources`) by (symbol, size, floor; -1 for a :attr:`floorless` symbol)
         self.cache: dict[tuple[str, float, float, int], tuple[Region, int, int, int, int]] = {}
@@ -114,8 +162,10 @@ class _Derivation:
         self.sources: list[Region] = []
         self.source_of: list[int] = []
         #: Per moved copy of a subtree: (terminals made before it, position of the original's first terminal,
-        #: their count, dx, dy); positions count every terminal of the layout in tree order.
-        self.copies: list[tuple[int, int, int, float, float]] = []
+        #: their count, dx, dy); positions count every terminal of the layout in tree order. A copy of another
+        #: face's subtree has (its terminals' rectangles, their indices among :attr:`sources`) and None instead,
+        #: and no move.
+        self.copies: list[tuple[int, Any, int | None, float, float]] = []
         self.copied = 0  # terminals inside the copies so far
         self.alternatives = alternatives or {}
         #: Choice points met: key -> number of alternatives (the first included).
@@ -128,8 +178,11 @@ class _Derivation:
                               meta={"kind": PLUGIN_ID, "ruleset": self.grammar.source, "start": self.grammar.start})
         if not self.copies:  # (FacadeLayout.leaves, already known)
             layout.__dict__["leaves"] = tuple(self.leaves)
-        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = _leaf_arrays(
-            self.leaves, self.sources, self.source_of, self.copies)
+        rects, (sources, index) = _leaf_arrays(self.leaves, self.sources, self.source_of, self.copies)
+        layout.__dict__["leaf_rects"], layout.__dict__["leaf_sources"] = rects, (sources, index)
+        if self.subtrees is not None:
+            self.arrays = rects, sources, index
+            self.subtrees.derived.update(self.offered)  # (no place is offered twice: later faces copy it)
         return layout
 
     # ---- one region -----------------------------------------------------------------------------------------
@@ -153,14 +206,45 @@ class _Derivation:
                     self.copies.append((len(self.leaves), first, n, dx, dy))
                     self.copied += n
                 return copy
+            if self.subtrees is not None and symbol in self.shared:
+                place = (*key, x, y)
+                if place in self.subtrees.derived:
+                    return self.copied_from(place)
             before, first = self.count, len(self.leaves) + self.copied
             region = self.derive_region(symbol, x, y, w, h, floor, depth, chain)
             region.__dict__["key"] = hash((self.scope if symbol in self.shared else self.request.seed, key))
             # (copies share it: a module hint)
-            self.cache[key] = (region, self.count - before, first, len(self.leaves) + self.copied - first,
+            n = len(self.leaves) + self.copied - first
+            self.cache[key] = (region, self.count - before, first, n,
                                len(self.sources) - 1)  # (the source of a terminal region)
+            if self.subtrees is not None and symbol in self.shared and region.children:
+                self.offered.append(((*key, x, y), (region, self.count - before, first, n, self)))
             return region
         return self.derive_region(symbol, x, y, w, h, floor, depth, chain)
+
+    def copied_from(self, place: tuple[str, float, float, int, float, float]) -> Region:
+        """A copy of the subtree another face of the building derived at ``place`` (:attr:`Subtrees.derived`), noted
+        like a subtree of this face (its terminals in :attr:`copies`, its sources among :attr:`sources`)."""
+        region, size, _, n, _ = self.subtrees.derived[place]
+        self.count += size
+        if self.count > MAX_REGIONS:
+            raise self.too_large(f"derivation went beyond {MAX_REGIONS} regions at {place[0]}", self.grammar.source)
+        copy = region.moved(0.0, 0.0)
+        rows, sources, codes = self.subtrees.block(place)
+        foreign = self.foreign
+        local = []
+        for source in sources:
+            k = foreign.get(id(source))
+            if k is None:
+                k = foreign[id(source)] = len(self.sources)
+                self.sources.append(source)
+            local.append(k)
+        first = len(self.leaves) + self.copied
+        self.copies.append((len(self.leaves), (rows, list(map(local.__getitem__, codes))), None, 0.0, 0.0))
+        self.copied += n
+        self.cache[place[:4]] = (copy, size, first, n, -1)  # (copies on this face are its own)
+        self.partial = True
+        return copy
 
     def derive_region(self, symbol: str, x: float, y: float, w: float, h: float, floor: int, depth: int,
                       chain: tuple[str, ...]) -> Region:
@@ -439,13 +523,13 @@ _XYWH = operator.attrgetter("x", "y", "w", "h")
 
 
 def _leaf_arrays(leaves: list[Region], sources: list[Region], source_of: list[int],
-                 copies: list[tuple[int, int, int, float, float]]
+                 copies: list[tuple[int, Any, int | None, float, float]]
                  ) -> tuple[np.ndarray, tuple[tuple[Region, ...], np.ndarray]]:
     """:attr:`FacadeLayout.leaf_rects` and :attr:`FacadeLayout.leaf_sources` of a derivation: its own terminals
     ``leaves`` (with their distinct ``sources`` and the index of each one's source) and the terminals of its moved
-    ``copies`` (:attr:`_Derivation.copies`), in tree order. A copied terminal is its original's ``x + dx``,
-    ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
-    rows: list[tuple[float, float, float, float]] = []
+    ``copies`` (:attr:`_Derivation.copies`: of this face's subtrees or of another face's), in tree order. A copied
+    terminal is its original's ``x + dx``, ``y + dy`` (the same float additions as :meth:`Region.moved`)."""
+    rows: list[Sequence[float]] = []
     source: list[int] = []
     done = 0
     for before, first, n, dx, dy in copies:
@@ -453,6 +537,11 @@ def _leaf_arrays(leaves: list[Region], sources: list[Region], source_of: list[in
             rows += map(_XYWH, leaves[done:before])
             source += source_of[done:before]
             done = before
+        if n is None:  # (a copy of another face's subtree, in place: its rows and source indices)
+            block, of_block = first
+            rows += block
+            source += of_block
+            continue
         end = first + n
         rows += [(x + dx, y + dy, w, h) for x, y, w, h in rows[first:end]]
         source += source[first:end]

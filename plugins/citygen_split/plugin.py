@@ -1,6 +1,7 @@
 """Registers the split-grammar ruleset kind (``kind = "split"``, files ``*.grammar``)."""
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from citygen.hookspecs import hookimpl
@@ -9,7 +10,7 @@ from citygen.registry import RulesetKind
 from citygen.request import FacadeRequest
 from citygen_split.alternatives import derive_plausible
 from citygen_split.ast import Grammar
-from citygen_split.derive import explain
+from citygen_split.derive import Subtrees, explain
 from citygen_split.parser import load, parse
 
 
@@ -30,6 +31,12 @@ class SplitGrammarKind(RulesetKind):
         """The grammar's first plausible derivation, else a plain wall with findings
         (:mod:`citygen_split.alternatives`)."""
         return derive_plausible(ruleset, request).layout
+
+    def generate_building(self, ruleset: Grammar, requests: Sequence[FacadeRequest]) -> list[FacadeLayout]:
+        """:meth:`generate` of each face, the faces sharing the subtrees that derive alike on all of them
+        (:class:`citygen_split.derive.Subtrees`)."""
+        subtrees = Subtrees(ruleset)
+        return [derive_plausible(ruleset, request, subtrees=subtrees).layout for request in requests]
 
     def explain(self, ruleset: Grammar, request: FacadeRequest) -> str:
         outcome = derive_plausible(ruleset, request)

@@ -2,9 +2,7 @@
 processes; tile layers by default for big cities."""
 from __future__ import annotations
 
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -96,12 +94,22 @@ def test_tile_layers_must_be_true_or_false(small_scene):
         _scene(small_scene, '[output]\ntile_layers = "auto"\n')
 
 
-def test_tile_workers_run_usd_work_in_their_own_thread():
+def test_tile_workers_run_usd_work_in_their_own_thread_without_asking_tbb(monkeypatch):
     """Regression (memory at scale): a forked worker's USD work-thread pool never ran the detached freeing of
     released layers, so every tile layer it wrote stayed in memory (~0.2 MB per building); tile workers run USD's
-    work serially."""
-    with ProcessPoolExecutor(1, initializer=tiles._init_worker, initargs=(os.getpid(),)) as pool:
-        assert pool.submit(_usd_concurrency).result() == 1
+    work serially. Regression (a hang): a worker that set the limit itself waited for ever on a TBB lock held at
+    the fork (under load, 4 Dec 2026): the limit is the forking process's, set while it forks, and restored."""
+    before = Work.GetConcurrencyLimit()
+    with tiles._serial_work():
+        monkeypatch.setattr(Work, "SetConcurrencyLimit", _no_tbb_after_the_fork)  # (the workers inherit it)
+        with tiles._pool(1) as pool:
+            assert pool.submit(_usd_concurrency).result(timeout=120) == 1
+        monkeypatch.undo()
+    assert Work.GetConcurrencyLimit() == before
+
+
+def _no_tbb_after_the_fork(limit: int) -> None:
+    raise AssertionError("a forked tile worker asked TBB for its concurrency")
 
 
 def _usd_concurrency() -> int:
