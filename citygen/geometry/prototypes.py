@@ -62,6 +62,21 @@ def _bars(w: float, h: float, t: float, mullion: bool, transom: bool) -> np.ndar
     return np.asarray(bars, dtype=float)
 
 
+def opening_frame(key: ProtoKey) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """An opening's frame bars (``x0, y0, x1, y1`` rows: the frame, a window's mullion, a window's or shop's
+    transom) and the pane inside them (a door's reaches the ground)."""
+    w, h, _ = key.size
+    t = min(FRAME, 0.2 * w, 0.2 * h)
+    bars = _bars(w, h, t, mullion=key.label == "window" and w > 1.3,
+                 transom=key.label in ("window", "shop") and h > 1.9)
+    return bars, ((t, t, w - t, h - t) if key.label != "door" else (t, 0.0, w - t, h - t))
+
+
+def balcony_heights(h: float) -> tuple[float, float]:
+    """A balcony's slab thickness and railing height in an element ``h`` tall."""
+    return min(0.18, 0.3 * h), min(1.05, h)
+
+
 def _shift(quads: np.ndarray, dz: float) -> np.ndarray:
     out = quads.copy()
     out[..., 2] += dz
@@ -74,21 +89,17 @@ def build_prototype(key: ProtoKey, library: Mapping[str, Material] | None = None
     w, h, d = key.size
     full = np.array([[0.0, 0.0, w, h]])
     if key.label in OPENINGS:
-        t = min(FRAME, 0.2 * w, 0.2 * h)
+        frame_rects, inner = opening_frame(key)
         reveal = Part("reveal", "reveal", box_quads(full, np.array([d]), front=False))
-        frame_rects = _bars(w, h, t, mullion=key.label == "window" and w > 1.3,
-                            transom=key.label in ("window", "shop") and h > 1.9)
         glazed = material(key.material, library).opacity < 1.0
         frame_material = "frame" if glazed or key.label == "door" else key.material
         pane_material = key.material if glazed or key.label == "door" else "glass"
         frame = Part("frame", frame_material, _shift(box_quads(frame_rects, np.full(len(frame_rects), 0.06)), d))
-        inner = np.array([[t, t, w - t, h - t]]) if key.label != "door" else np.array([[t, 0.0, w - t, h - t]])
         pane = Part("door_leaf" if key.label == "door" else "glass", pane_material,
-                    _shift(box_quads(inner, np.array([0.03]), sides=False), d))
+                    _shift(box_quads(np.array([inner]), np.array([0.03]), sides=False), d))
         return [reveal, frame, pane]
     if key.label == "balcony":
-        slab_t = min(0.18, 0.3 * h)
-        rail_h = min(1.05, h)
+        slab_t, rail_h = balcony_heights(h)
         slab = box_quads(np.array([[0.0, 0.0, w, slab_t]]), np.array([d]))
         rail = _shift(box_quads(np.array([[0.0, slab_t, w, rail_h]]), np.array([0.04])), d - 0.04)
         sides = np.concatenate([_side_rail(0.0, slab_t, rail_h, d), _side_rail(w - 0.04, slab_t, rail_h, d)])

@@ -15,7 +15,7 @@ import functools
 
 import numpy as np
 
-from citygen.geometry.prototypes import FRAME, OPENINGS, ProtoKey
+from citygen.geometry.prototypes import OPENINGS, ProtoKey, balcony_heights, opening_frame
 
 #: The welding grid of :func:`~citygen.geometry.quads.weld_many` (``decimals=3``), computed as it computes it.
 _STEP = 10.0 ** -3
@@ -39,21 +39,15 @@ def _box(x0: float, y0: float, x1: float, y1: float, depth: float, front: bool =
 
 
 def _parts(key: ProtoKey) -> list[_Part]:
-    """The coordinates of each part of :func:`build_prototype` (``key``), the parts without quads left out."""
+    """The coordinates of each part of :func:`build_prototype` (``key``; the same frame and balcony dimensions), the
+    parts without quads left out."""
     w, h, d = key.size
     if key.label in OPENINGS:
-        t = min(FRAME, 0.2 * w, 0.2 * h)
-        bars = [(0, 0, w, t), (0, h - t, w, h), (0, t, t, h - t), (w - t, t, w, h - t)]
-        if key.label == "window" and w > 1.3:
-            bars.append((w / 2 - t / 2, t, w / 2 + t / 2, h - t))
-        if key.label in ("window", "shop") and h > 1.9:
-            bars.append((t, 0.7 * h, w - t, 0.7 * h + t))
-        frame = ([float(v) for b in bars for v in (b[0], b[2])], [float(v) for b in bars for v in (b[1], b[3])],
-                 [0.0 + d, 0.06 + d])
-        inner = (t, t, w - t, h - t) if key.label != "door" else (t, 0.0, w - t, h - t)
+        bars, inner = opening_frame(key)
+        frame = (bars[:, [0, 2]].ravel().tolist(), bars[:, [1, 3]].ravel().tolist(), [0.0 + d, 0.06 + d])
         parts = [_box(0.0, 0.0, w, h, d, front=False), frame, _box(*inner, 0.03, sides=False, shift=d)]
     elif key.label == "balcony":
-        slab_t, rail_h = min(0.18, 0.3 * h), min(1.05, h)
+        slab_t, rail_h = balcony_heights(h)
         rail = _box(0.0, slab_t, w, rail_h, 0.04, shift=d - 0.04)
         assert rail is not None
         xs = [0.0, 0.0 + 0.04, w - 0.04, (w - 0.04) + 0.04]
