@@ -91,13 +91,20 @@ def building_materials(seed: int, footprint: Footprint) -> tuple[str, str]:
 def building_attributes(footprint: Footprint, mass: Mass, *, levels: int, entrance: int | None, ruleset: str,
                         seed: int, roof_shape: str, keep_tags: Sequence[str]) -> dict[str, Any]:
     """The building's ``citygen:*`` attributes (docs/dcc.md): its source, heights, levels, ruleset(s), seed,
-    entrance face (-1: none), type, the roof shape built, footprint area and the source tags the scene keeps."""
-    return {"sourceId": footprint.id, "height": mass.top - mass.base, "wallHeight": mass.height,
-            "roofHeight": mass.roof.height or 0.0, "roofHeightSource": mass.roof_source,
-            "heightSource": footprint.height_source, "levels": levels, "base": float(footprint.base),
+    entrance face (-1: none), type, the roof shape built, footprint area and the source tags the scene keeps.
+    Lengths are rounded to a micrometre: the walls stand on a grid of 2**-20 m (:data:`~citygen.mass.GRID`), and a
+    70 m tower read as 69.99999980926513 m in a DCC's properties is not the data's 70 m."""
+    return {"sourceId": footprint.id, "height": _um(mass.top - mass.base), "wallHeight": _um(mass.height),
+            "roofHeight": _um(mass.roof.height or 0.0), "roofHeightSource": mass.roof_source,
+            "heightSource": footprint.height_source, "levels": levels, "base": _um(footprint.base),
             "ruleset": ruleset, "seed": seed, "entranceFace": -1 if entrance is None else entrance,
             "buildingType": str(footprint.attributes.get("building", "yes")), "roofShape": roof_shape,
             "footprintArea": round(float(mass.outline.area), 3), **kept_tags(footprint.attributes, keep_tags)}
+
+
+def _um(length: float) -> float:
+    """``length`` in metres rounded to a micrometre."""
+    return round(float(length), 6)
 
 
 def building_pivot(footprint: Footprint, mass: Mass) -> tuple[float, float, float]:

@@ -80,6 +80,19 @@ def test_every_height_tagged_helsinki_building_tops_out_at_its_height(helsinki):
         assert mass.top == pytest.approx(ground + parse_length(fp.attributes["height"]))
 
 
+def test_height_attributes_show_the_datas_metres(helsinki):
+    """Bug fixture: the walls stand on a 2**-20 m grid, and the attributes a DCC shows read so (Hotelli Torni,
+    ``height = "70"``: ``citygen:height`` 69.99999980926513, ``wallHeight`` 66.69999980926514). Every tagged
+    building's height attribute is now the tag's value, and walls + roof add up to it, to the bit."""
+    for fp in [fp for fp in helsinki.footprints if fp.attributes.get("height") not in (None, "")]:
+        record, _ = helsinki.build(fp.id)
+        attrs = record.attributes
+        assert attrs["height"] == parse_length(fp.attributes["height"]) - fp.lift, fp.id
+        assert attrs["wallHeight"] + attrs["roofHeight"] == attrs["height"], fp.id
+    record, _ = helsinki.build("way/123525580")
+    assert (record.attributes["height"], record.attributes["wallHeight"]) == (70.0, 66.7)
+
+
 def test_simple_3d_buildings_parts_top_out_at_their_height():
     """The OSM file's buildings and building parts with a ``height`` (29, the cathedral's drum among them; lifted
     parts too: ``min_height`` lifts the base, ``height`` is still measured from the ground) top out at ground +
