@@ -31,6 +31,7 @@ from citygen.registry import Registry, RulesetKind, default_registry
 from citygen.request import FacadeRequest, check_request
 from citygen.rng import derive_rng
 from citygen.roofmesh import build_roof
+from citygen.runs import grouped, per_face
 from citygen.scene import Assignment, Scene
 from citygen.geometry.building import BUILDING_RENDER, LABEL_MATERIAL
 from citygen.usd.materials import resolve
@@ -158,14 +159,16 @@ class Builder:
                 assignment, path = choice
                 kind, ruleset = self.ruleset(assignment, path)
                 used.append(f"{kind.id}:{path.name}")
-                generated = self._generate(kind, ruleset, requests, any_error=assignment.fallback is not None)
-                dressed = [self._defined(layout, path, warnings) for layout in self._held(kind.id, generated, requests)]
+                asked, parts = grouped(requests, plan.runs)  # (a curved wall's faces: one facade)
+                generated = self._generate(kind, ruleset, asked, any_error=assignment.fallback is not None)
+                dressed = [self._defined(layout, path, warnings) for layout in self._held(kind.id, generated, asked)]
                 if assignment.fallback is not None:
                     dressed = [self._defined(layout, assignment.fallback, warnings)
-                               for layout in self._fall_back(assignment.fallback, requests, dressed, used, warnings)]
-                tally.update(face_tally(dressed))
+                               for layout in self._fall_back(assignment.fallback, asked, dressed, used, warnings)]
+                faced = per_face(parts, dressed)
+                tally.update(face_tally([layout for _, layout in faced]))
                 outside: list[tuple[FacadeRequest, str]] = []
-                for request, layout in zip(requests, dressed):
+                for request, layout in faced:
                     face = request.context.face_index
                     if layout.meta.get("outside_range"):
                         outside.append((request, layout.meta["fallback"]))

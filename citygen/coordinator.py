@@ -26,7 +26,8 @@ import numpy as np
 
 from citygen.footprints import Footprint
 from citygen.mass import Mass, on_grid
-from citygen.request import FaceContext, FacadeRequest
+from citygen.request import FacadeRequest, FaceContext
+from citygen.runs import face_runs
 from citygen.scene import Defaults
 
 #: A face whose neighbours reach this close (m) to its top is a party wall (no facade) ...
@@ -48,6 +49,7 @@ class BuildingPlan:
     requests: tuple[FacadeRequest, ...]
     plain_faces: tuple[int, ...]
     party_faces: tuple[int, ...] = ()  # party walls (also plain): a pitched roof must not slope onto them
+    runs: tuple[tuple[int, ...], ...] = ()  # faces of a curved wall laid out as one facade (citygen.runs)
 
 
 def plan_floor_lines(height: float, levels: int | None, defaults: Defaults, lifted: bool = False
@@ -140,7 +142,17 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
     floor_lines, facade, street, entrance = roles.floor_lines, roles.facade, roles.street, roles.entrance
     faces = mass.faces
     widths = np.array([f.width for f in faces])
+    free = (face_bins(cover).max(axis=1) <= 0.0) & (footprint.lift <= 0.0)
+    joinable = ~roles.party & free
+    if entrance is not None:
+        joinable[entrance] = False
+    runs = face_runs(faces, joinable)
+    facade = facade.copy()
+    facade[[i for run in runs for i in run]] = True
     corner = _corner_strips(mass, widths, facade, defaults.corner_width)
+    for run in runs:  # (no strips at a run's inner corners: its bays run across them)
+        for left, right in zip(run[:-1], run[1:]):
+            corner[left, 1] = corner[right, 0] = 0.0
     attrs = dict(attributes if attributes is not None else footprint.attributes)
     requests = []
     for face in faces:
@@ -156,7 +168,7 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
     return BuildingPlan(building_id=footprint.id, levels=len(floor_lines) - 1, floor_lines=floor_lines,
                         entrance_face=entrance, requests=tuple(requests),
                         plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)),
-                        party_faces=tuple(int(i) for i in np.flatnonzero(roles.party)))
+                        party_faces=tuple(int(i) for i in np.flatnonzero(roles.party)), runs=runs)
 
 
 def _corner_strips(mass: Mass, widths: np.ndarray, facade: np.ndarray, corner_width: float) -> np.ndarray:
