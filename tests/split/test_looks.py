@@ -36,3 +36,14 @@ def test_apartment_bay_narrowed_by_a_neighbour_keeps_a_narrow_window(corners):
     assert facade_outcome(layout, request)[0] == "dressed"
     assert [len(row) for row in storeys(layout, request)[1:]] == [1, 1]
     assert layout.count("balcony") == 0
+
+
+@pytest.mark.parametrize(("width", "height", "storey", "ground"),
+                         [(17.7, 13.3, 3.3, 4.4), (11.3, 6.9, 2.6, None), (29.9, 23.7, 3.6, None)])
+def test_office_attic_leaves_the_top_storey_its_glass(width, height, storey, ground):
+    """The 1.1 m attic band took the top storey's height: its panes were 0.6x the ones below at 3.3 m storeys,
+    a 0.5 m strip at 11.3 x 6.9 m with 2.6 m storeys."""
+    layout, request = generated("office.grammar", width, height, storey, ground)
+    tallest = [max(r.h for r in row) for row in storeys(layout, request)[1:]]
+    assert len(tallest) >= 2
+    assert min(tallest) >= 0.9 * max(tallest[:-1]), tallest
