@@ -47,3 +47,19 @@ def test_office_attic_leaves_the_top_storey_its_glass(width, height, storey, gro
     tallest = [max(r.h for r in row) for row in storeys(layout, request)[1:]]
     assert len(tallest) >= 2
     assert min(tallest) >= 0.9 * max(tallest[:-1]), tallest
+
+
+@pytest.mark.parametrize("width", [3.33, 3.36])
+def test_historic_narrow_storeys_keep_a_window_each(width):
+    """3.3 m faces with 0.5 m corner strips (the demo's way/25891166 face 17, way/37380560 face 4 and three
+    more): the 1.1 m window column left 0.03 m slivers of wall in the one bay between two pilasters, and the
+    generator's alternative (repeatABA down to a single pilaster) turned two of three upper storeys into one
+    2.36 m pilaster each, reported as dressed. A bay under 1.5 m now holds the 0.8 m column of narrow faces."""
+    kind = default_registry().kind_for_path(RULESETS / "historic.grammar")
+    lines = (0.0, 4.4, 7.8333330154418945, 11.266666412353516, 14.7)
+    request = FacadeRequest(width=width, height=14.7, floor_lines=lines, entrance=False, corner_widths=(0.5, 0.5),
+                            context=FaceContext("b", 0, len(lines) - 1), seed=(0,))
+    layout = kind.generate(kind.load(RULESETS / "historic.grammar"), request)
+    assert facade_outcome(layout, request)[0] == "dressed"
+    assert all(len(row) == 1 for row in storeys(layout, request)[1:])
+    assert max(r.w for r in layout.terminals() if r.label == "pillar") < 1.0
