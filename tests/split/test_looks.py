@@ -63,3 +63,22 @@ def test_historic_narrow_storeys_keep_a_window_each(width):
     assert facade_outcome(layout, request)[0] == "dressed"
     assert all(len(row) == 1 for row in storeys(layout, request)[1:])
     assert max(r.w for r in layout.terminals() if r.label == "pillar") < 1.0
+
+
+@pytest.mark.parametrize(("width", "height", "storey", "ground"),
+                         [(17.7, 13.3, 3.3, 4.4), (11.3, 13.3, 2.6, None), (17.7, 23.7, 3.0, None)])
+def test_historic_top_storey_under_the_crown_is_a_mezzanine(width, height, storey, ground):
+    """The 1.65 m crown left the top storey 1.0-1.65 m: pedimented windows squashed to 0.37-0.54 m slots
+    (every historic building of the demo). Now a mezzanine of square windows without pediments."""
+    layout, request = generated("historic.grammar", width, height, storey, ground)
+    top = storeys(layout, request)[-1]
+    assert top and all(r.h >= 0.8 * r.w for r in top), [(r.w, r.h) for r in top]
+    assert not [r for r in storeys(layout, request, "deco")[-1] if r.symbol == "Pediment"]
+
+
+def test_historic_two_storeys_keep_the_upper_windows():
+    """7.9 x 6.9 m, storeys 4.4 + 2.5 m: the crown left the piano nobile 0.85 m, which became one pilaster 7.9 m
+    wide and no window."""
+    layout, request = generated("historic.grammar", 7.9, 6.9, 3.3, 4.4)
+    assert len(storeys(layout, request)[1]) == 2
+    assert max(r.w for r in layout.terminals() if r.label == "pillar") < 1.0
