@@ -82,3 +82,12 @@ def test_historic_two_storeys_keep_the_upper_windows():
     layout, request = generated("historic.grammar", 7.9, 6.9, 3.3, 4.4)
     assert len(storeys(layout, request)[1]) == 2
     assert max(r.w for r in layout.terminals() if r.label == "pillar") < 1.0
+
+
+@pytest.mark.parametrize("width", [7.3, 7.9])
+def test_historic_portal_is_flanked_by_windows_not_blank_slabs(width):
+    """7.9 m entrance face: 2.35 m of blank rustication each side of the portal below two bays of windows."""
+    layout, request = generated("historic.grammar", width, 9.9, 3.3)
+    door = next(r for r in layout.terminals() if r.label == "door")
+    ground = storeys(layout, request)[0]
+    assert any(r.x + r.w < door.x for r in ground) and any(r.x > door.x + door.w for r in ground)
