@@ -91,3 +91,16 @@ def test_historic_portal_is_flanked_by_windows_not_blank_slabs(width):
     door = next(r for r in layout.terminals() if r.label == "door")
     ground = storeys(layout, request)[0]
     assert any(r.x + r.w < door.x for r in ground) and any(r.x > door.x + door.w for r in ground)
+
+
+@pytest.mark.parametrize("width", [7.9, 11.3, 17.7, 23.7])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_house_ground_floor_windows_and_door_stand_under_the_upper_windows(width, seed):
+    """The entrance face's ground floor repeated its bays beside the door bay, the upper floors across the whole
+    width: at 11.3 m the ground windows stood 0.6 m off the upper ones, at 17.7 m no two of them lined up."""
+    layout, request = generated("house.grammar", width, 9.9, 3.3, seed=seed)
+    rows = storeys(layout, request)
+    axes = {round(r.x + r.w / 2, 2) for r in rows[1]}
+    door = next(r for r in layout.terminals() if r.label == "door")
+    for r in [*rows[0], door]:
+        assert min(abs(r.x + r.w / 2 - a) for a in axes) < 0.01, (r, sorted(axes))
