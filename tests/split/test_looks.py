@@ -104,3 +104,13 @@ def test_house_ground_floor_windows_and_door_stand_under_the_upper_windows(width
     door = next(r for r in layout.terminals() if r.label == "door")
     for r in [*rows[0], door]:
         assert min(abs(r.x + r.w / 2 - a) for a in axes) < 0.01, (r, sorted(axes))
+
+
+@pytest.mark.parametrize("width", [6.5, 7.3])
+def test_apartment_entrance_bay_is_flanked_by_shop_fronts(width):
+    """6.5-7.3 m entrance faces: a door between blank stone slabs (2.05-2.45 m) under two bays of windows; the
+    shop band started at 2.5 m a side."""
+    layout, request = generated("apartment.grammar", width, 9.9, 3.3, 4.4)
+    door = next(r for r in layout.terminals() if r.label == "door")
+    shops = storeys(layout, request, "shop")[0]
+    assert any(r.x + r.w < door.x for r in shops) and any(r.x > door.x + door.w for r in shops)
