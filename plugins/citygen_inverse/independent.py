@@ -19,7 +19,10 @@ while a wide face gets more bays instead of stretched windows. ``EntranceRow`` w
 same tiles with the door's tile in the middle; every other slab has no door, so a face has one door in its ground
 floor exactly when the request asks for an entrance. Faces too narrow for their tiles get ``<Slab>Narrow``: one
 opening per floor at its input size, centred -- written as the later alternative of each row's ``case``, so the
-``split`` kind's generator also takes it where squeezed tiles are implausible.
+``split`` kind's generator also takes it where squeezed tiles are implausible; there, on a face at least two
+*pitches* wide (the facade's width over the openings of its typical storey), the opening repeats at that pitch
+on every floor, so a wide face whose tiles do not fit its storeys keeps a row of windows per floor (not one
+window in a blank wall) and its floors' columns stay aligned.
 """
 from __future__ import annotations
 
@@ -107,7 +110,7 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
     index = LayoutIndex([open_pinwheels(piece) for _, piece in pieces])
     result = GrammarSearch(index, model).run(method, iterations, seed, time_limit)
     piece_names = [name for name, _ in pieces]
-    reserved = {f"{n}{suffix}" for n in names for suffix in ("Row", "Bays", "Narrow", "Pane", "Opening")}
+    reserved = {f"{n}{suffix}" for n in names for suffix in ("Row", "Bays", "Narrow", "NarrowBay", "Pane", "Opening")}
     writer = GrammarWriter(index, result.rules, piece_names, reserved=_RESERVED | reserved)
     written = {name: writer.names[index.sig(b)] for name, b in zip(piece_names, index.roots)}  # shared names
     W = layout.width
@@ -118,6 +121,7 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
     rules = [f"Facade --> floors {{ {_selectors(row)} }}",
              f"GroundFloor --> case entrance: EntranceRow  else: {row[1]}Row"]
     narrow: list[str] = []
+    pitch = _pitch(first[_star(row)], W)
     for k in range(1, len(slabs)):
         if row[k] != names[k]:
             continue
@@ -127,7 +131,8 @@ def extract_size_independent(layout: FacadeLayout, method: str = "adp", iteratio
         rules.append(f"{row[k]}Row --> case width >= {_num(least)}: {body}\n    else: {row[k]}Narrow")
         if uses_bays:
             rules.append(f"{keys[k][1]}s --> repeat(x) {{ ~{_num(bays.tile)}: {keys[k][1]} }}")
-        narrow += _narrow(row[k], first[row[k]], ROW_LABELS - {"door"}, entrance=False)
+        narrow += _narrow(row[k], first[row[k]], ROW_LABELS - {"door"}, entrance=False, pitch=pitch,
+                          wide=max(least, 2 * pitch))
     door = keys[0][-1]
     if bays is not None and ground_bays:
         where = parts[0][0]
@@ -177,12 +182,25 @@ def _row_body(key: tuple[str, ...], bays: Bays | None, width: float) -> str:
     return f"split(x) {{ {' | '.join(items)} }}"
 
 
-def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: bool) -> list[str]:
+def _star(row: list[str]) -> str:
+    """The slab name of the ``*`` floors (as :func:`_selectors` picks it): the typical storey."""
+    upper = row[2:]
+    return Counter(upper[:-1] or upper).most_common(1)[0][0] if upper else row[1]
+
+
+def _pitch(slab: FacadeLayout, width: float) -> float:
+    """The spacing of the openings of a typical storey: the facade's width over its windows and shops."""
+    return width / max(1, sum(1 for t in slab.terminals() if t.label in ROW_LABELS - {"door"}))
+
+
+def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: bool, pitch: float = math.inf,
+            wide: float = math.inf) -> list[str]:
     """``<name>Narrow``: the slab on a face narrower than half its tile, where squeezing the tile would give
     slivers of windows: plain wall with the slab's most common opening of ``labels`` once in the middle at its
     input size (input height profile kept), or wall alone when the face cannot hold it (also the alternative the
-    generator takes when the opening is implausible there). The entrance variant always has its door, narrowed
-    with the face when needed."""
+    generator takes when the opening is implausible there). A face at least ``wide`` wide (only reached as the
+    generator's alternative to squeezed tiles) repeats the opening in bays of about ``pitch``. The entrance
+    variant always has its door, narrowed with the face when needed."""
     ts = [t for t in slab.terminals() if t.label in labels]
     if not ts:
         return [f"{name}Narrow --> NarrowWall", "NarrowWall --> terminal(wall)"]
@@ -196,7 +214,12 @@ def _narrow(name: str, slab: FacadeLayout, labels: frozenset[str], entrance: boo
         small, least = f"split(x) {{ '1: NarrowWall | '8: {name}Pane | '1: NarrowWall }}", t.w + 0.4
     else:  # a window needs piers beside it: at least 0.8 m and its own width of wall in all
         small, least = "NarrowWall", max(t.w + 0.8, 2 * t.w)
-    return [f"{name}Narrow --> case width >= {_num(least)}: {fits}\n    else: {small}",
+    rows = [f"{name}Narrow --> case width >= {_num(least)}: {fits}\n    else: {small}"]
+    if not entrance and pitch >= least and wide < math.inf:
+        rows = [f"{name}Narrow --> case width >= {_num(wide)}: repeat(x) {{ ~{_num(pitch)}: {name}NarrowBay }}"
+                f"\n    case width >= {_num(least)}: {fits}\n    else: {small}",
+                f"{name}NarrowBay --> {fits}"]
+    return [*rows,
             f"{name}Pane --> split(y) {{ {pane} }}",
             f"{name}Opening --> terminal({t.label}{depth})",
             "NarrowWall --> terminal(wall)"]

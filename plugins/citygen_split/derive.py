@@ -428,7 +428,7 @@ class _Derivation:
         elif isinstance(body, RepeatABA):
             self.check_tiles(rule, preferred_length([body.a.size, body.b.size]), length)
             n = aba_count(preferred_length([body.a.size]), preferred_length([body.b.size]), length)
-            n -= self.alternative(rule.symbol, w, h, n + 1)
+            n -= self.alternative(rule.symbol, w, h, max(n, 1))  # (never down to one A stretched over the region)
             items = [body.a, body.b] * n + [body.a]
             extents = resolve([i.size for i in items], length)
         else:

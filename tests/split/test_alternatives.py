@@ -156,3 +156,14 @@ def test_a_face_too_large_for_the_grammar_is_a_plain_wall_with_a_finding(ruleset
     assert len(outcome.layout.leaves) == 1 and outcome.layout.meta["fallback"].startswith("implausible layout: too-large")
     assert f"on a face of {width:g} x 30 m: too large for the grammar's sizes -- check the footprint's size" \
         in outcome.findings[0].message
+
+
+def test_repeat_aba_is_never_one_a_stretched_over_the_region():
+    """Visual audit (docs/performance.md): where a storey's bays were implausible, the generator took
+    ``repeatABA`` down to a single A -- one pilaster 2.36 m wide over a whole storey of a 3.4 m historic face,
+    no window, reported as dressed (the demo's way/25891166 face 17 and four more). A repeatABA keeps one B."""
+    g = grammar("F --> repeatABA(x) { 0.6: P | ~2.8: Bay }\n"
+                "Bay --> split(x) { '1: Wall | 1.1: Window | '1: Wall }\nP --> terminal(pillar)\n")
+    layout = KIND.generate(g, request(2.36, 3.0))
+    assert layout.meta.get("fallback") or max(t.w for t in layout.terminals() if t.label == "pillar") <= 0.6
+    assert KIND.generate(g, request(3.4, 3.0)).count("window") == 1  # where one B fits, it is kept
