@@ -1,6 +1,7 @@
 """One face of a building as the city gets it: the building coordinator's requests (floor lines, entrance face,
 corner strips, seeds; :func:`citygen.coordinator.plan_building`, as the builder makes them) and a ruleset's layout
-for one of them, coupled with the building's other faces where the ruleset kind couples faces."""
+for one of them, coupled with the building's other faces where the ruleset kind couples faces, and cut from its
+curved wall's facade where it is one face of such a run."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -16,26 +17,46 @@ from citygen.mass import Mass
 from citygen.plausible import check_plausible, summary
 from citygen.registry import RulesetKind
 from citygen.request import FacadeRequest
+from citygen.runs import facet_layouts, grouped
 from citygen.scene import Scene
 
 
-def face_requests(scene: Scene, footprint: Footprint, mass: Mass, cover: np.ndarray) -> dict[int, FacadeRequest]:
+class FaceRequests(dict):
+    """The coordinator's request of every dressed face of a building by face index (``dict[int, FacadeRequest]``),
+    and its curved walls' ``runs`` (:mod:`citygen.runs`)."""
+
+    def __init__(self, requests: dict[int, FacadeRequest], runs: tuple[tuple[int, ...], ...]) -> None:
+        super().__init__(requests)
+        self.runs = runs
+
+
+def face_requests(scene: Scene, footprint: Footprint, mass: Mass, cover: np.ndarray) -> FaceRequests:
     """The request of every dressed face of the building by face index, with the scene's plausibility rules (what
-    :class:`citygen.builder.Builder` hands the ruleset kinds)."""
+    :class:`citygen.builder.Builder` hands the ruleset kinds), and its runs."""
     plan = plan_building(footprint, mass, face_bins(cover), scene.defaults, scene.seed)
-    return {r.context.face_index: replace(r, plausibility=scene.plausibility) for r in plan.requests}
+    return FaceRequests({r.context.face_index: replace(r, plausibility=scene.plausibility) for r in plan.requests},
+                        plan.runs)
 
 
-def face_layout(kind: RulesetKind, ruleset: Any, requests: dict[int, FacadeRequest], face: int) -> FacadeLayout:
-    """The layout ``kind`` gives face ``face``: alone, or, for a kind that couples a building's faces (its own
-    ``generate_building``), with the faces on the same side (street or courtyard) of the building, as the builder
-    asks."""
+def face_layout(kind: RulesetKind, ruleset: Any, requests: FaceRequests, face: int
+                ) -> tuple[FacadeLayout, FacadeLayout, FacadeRequest]:
+    """The layout ``kind`` gives face ``face`` as the builder asks for it: alone, or, for a kind that couples a
+    building's faces (its own ``generate_building``), with the faces on the same side (street or courtyard) of the
+    building; a face of a curved wall's run gets its stretch of the run's facade. Also the layout and request the
+    city judges for plausibility: the run's, or the face's own."""
     request = requests[face]
-    if type(kind).generate_building is RulesetKind.generate_building:
-        return kind.generate(ruleset, request)
     side = [r for r in requests.values() if r.context.is_courtyard == request.context.is_courtyard]
-    layouts = kind.generate_building(ruleset, side)
-    return layouts[side.index(request)]
+    asked, parts = grouped(side, requests.runs)
+    k = next(i for i, members in enumerate(parts) if any(m.context.face_index == face for m in members))
+    if type(kind).generate_building is RulesetKind.generate_building:
+        judged = kind.generate(ruleset, asked[k])
+    else:
+        judged = kind.generate_building(ruleset, asked)[k]
+    members = parts[k]
+    if len(members) == 1:
+        return judged, judged, asked[k]
+    cut = facet_layouts(judged, [m.width for m in members])
+    return cut[[m.context.face_index for m in members].index(face)], judged, asked[k]
 
 
 def city_problems(layout: FacadeLayout, request: FacadeRequest) -> list[str]:

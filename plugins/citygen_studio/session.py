@@ -34,7 +34,7 @@ from citygen.usd.materials import BUILTIN
 from citygen.usd.names import prim_name
 from citygen_studio.confinement import Confinement, StudioError, error_data
 from citygen_studio.edited import edited_registry
-from citygen_studio.faces import city_problems, face_layout, face_requests, request_data
+from citygen_studio.faces import FaceRequests, city_problems, face_layout, face_requests, request_data
 from citygen_studio.generation import OUTPUT_FOLDER, OUTPUT_SUFFIXES, Generation
 from citygen_studio.memo import Memo
 
@@ -92,7 +92,7 @@ class Session:
         self.parsed: Memo[Any] = Memo(64)
         self.previews: Memo[dict[str, Any]] = Memo(256)
         self.built: Memo[dict[str, Any]] = Memo(16)
-        self.requests: Memo[dict[int, FacadeRequest]] = Memo(64)
+        self.requests: Memo[FaceRequests] = Memo(64)
         folder = scene_path.resolve().parent if scene_path is not None else (root or Path.cwd()).resolve()
         self.confinement = Confinement(folder)
         self.scene_ready, self.loaded = events or (threading.Event(), threading.Event())
@@ -290,24 +290,23 @@ class Session:
         return self.previews.get(("face", kind.id, path, text, index, face),
                                  lambda: self._preview_face(kind, path, text, requests, face))
 
-    def _requests(self, index: int) -> dict[int, FacadeRequest]:
-        """The coordinator's request of every dressed face of building ``index``."""
+    def _requests(self, index: int) -> FaceRequests:
+        """The coordinator's request of every dressed face of building ``index``, and its runs."""
         assert self.scene is not None
         return self.requests.get(index, lambda: face_requests(self.scene, self.footprints[index], self.masses[index],
                                                               self.cover[index]))
 
-    def _preview_face(self, kind: Any, path: Path, text: str, requests: dict[int, FacadeRequest],
-                      face: int) -> dict[str, Any]:
+    def _preview_face(self, kind: Any, path: Path, text: str, requests: FaceRequests, face: int) -> dict[str, Any]:
         request = requests[face]
         try:
             ruleset = self._parse(kind, path, text)
-            layout = face_layout(kind, ruleset, requests, face)
-            explain = kind.explain(ruleset, request)
+            layout, judged, asked = face_layout(kind, ruleset, requests, face)
+            explain = kind.explain(ruleset, asked)
         except CitygenError as exc:
             return {"ok": False, "error": error_data(exc, self.confinement), "kind": kind.id}
         problems = [str(p) for p in check_partition(layout) + check_request(layout, request)]
         return {"ok": True, "error": None, "kind": kind.id, "layout": layout_data(layout, request.floor_lines),
-                "explain": explain, "problems": problems + city_problems(layout, request),
+                "explain": explain, "problems": problems + city_problems(judged, asked),
                 "request": request_data(request)}
 
     def variations(self, name: str, text: str, size: FaceRequestSize, count: int) -> dict[str, Any]:

@@ -14,7 +14,7 @@ from starlette.testclient import TestClient
 from citygen.registry import default_registry
 from citygen_studio.app import MAX_BODY, create_app
 from citygen_studio.session import MAX_TEXT, Session
-from tests.mini_scene import rect
+from tests.mini_scene import LAT, LON, rect
 
 REPO = Path(__file__).resolve().parents[2]
 URL = "http://127.0.0.1"
@@ -352,6 +352,32 @@ def test_a_face_preview_of_a_kind_that_couples_faces_matches_the_build(tmp_path)
             assert preview["layout"]["leaves"] == face["layout"]["leaves"]
             same += 1
     assert same >= 2
+
+
+def test_a_face_preview_of_a_curved_wall_is_its_stretch_of_the_walls_facade(tmp_path):
+    """A round house's faces are one run (citygen.runs): each face's preview is the stretch the city cuts from the
+    run's facade, judged as the city judges it (the run's facade), not a facade of its own."""
+    scene = make_scene(tmp_path)
+    mx, my = (np.array(rect(0.0, 0.0, 1.0, 1.0)[2]) - rect(0.0, 0.0, 1.0, 1.0)[0]).tolist()  # (degrees a metre)
+    ring = [[LON + 5.0 * mx * np.cos(2 * np.pi * k / 24), LAT + 5.0 * my * np.sin(2 * np.pi * k / 24)]
+            for k in range(25)]
+    ring[-1] = ring[0]
+    feature = {"type": "Feature", "properties": {"id": 0, "osm_type": "way", "building": "house",
+                                                  "building:levels": "1"},
+               "geometry": {"type": "Polygon", "coordinates": [ring]}}
+    (scene.parent / "city.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": [feature]}))
+    client = TestClient(create_app(Session(default_registry(), scene)), base_url=URL)
+    built = client.post("/api/build", json={"index": 0}).json()
+    body = {"ruleset": "house.grammar", "text": (scene.parent / "house.grammar").read_text(), "building": 0}
+    faces = [f for f in built["faces"] if f["layout"]]
+    assert len(faces) == 24
+    windows = 0
+    for face in faces:
+        preview = client.post("/api/preview", json={**body, "face": face["index"]}).json()
+        assert preview["ok"] and preview["problems"] == [], (face["index"], preview)
+        assert preview["layout"]["leaves"] == face["layout"]["leaves"]
+        windows += sum(r["label"] == "window" for r in preview["layout"]["leaves"])
+    assert windows >= 8
 
 
 @pytest.mark.skipif(not (SHARED / "cmp_b0001.xml").is_file(), reason="needs the shared CMP annotations")
