@@ -135,8 +135,9 @@ def face_roles(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: De
 
 def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults: Defaults,
                   seed: int, attributes: Mapping[str, Any] | None = None) -> BuildingPlan:
-    """Decide floor lines, entrance face and corner strips (:func:`face_roles`); build one request per facade
-    face. ``cover`` is per face (and bin across its width) the height up to which neighbours stand against it
+    """Decide floor lines, entrance face and corner strips (:func:`face_roles`), and the runs of a curved wall's
+    faces (:func:`citygen.runs.face_runs`, dressed even where narrower than a facade face, with no strips at their
+    inner corners); build one request per facade face. ``cover`` is per face (and bin across its width) the height up to which neighbours stand against it
     (``citygen.mass.neighbour_cover``)."""
     roles = face_roles(footprint, mass, cover, defaults)
     floor_lines, facade, street, entrance = roles.floor_lines, roles.facade, roles.street, roles.entrance
