@@ -165,7 +165,8 @@ def plan_building(footprint: Footprint, mass: Mass, cover: np.ndarray, defaults:
         requests.append(FacadeRequest(width=face.width, height=face.height, floor_lines=floor_lines,
                                       entrance=face.index == entrance,
                                       corner_widths=(float(corner[face.index, 0]), float(corner[face.index, 1])),
-                                      context=context, seed=(seed, footprint.id, face.index)))
+                                      context=context, seed=(seed, footprint.id, face.index),
+                                      style_seed=(seed, footprint.id)))
     return BuildingPlan(building_id=footprint.id, levels=len(floor_lines) - 1, floor_lines=floor_lines,
                         entrance_face=entrance, requests=tuple(requests),
                         plain_faces=tuple(int(i) for i in np.flatnonzero(~facade)),

@@ -52,6 +52,10 @@ class FacadeRequest:
     corner_widths: tuple[float, float] = (0.0, 0.0)
     context: FaceContext = field(default_factory=lambda: FaceContext(building_id="preview", face_index=0, levels=1))
     seed: tuple[int, ...] = (0,)
+    #: Seeds the choices that are the building's, not the face's (a split grammar's stochastic rules: shutters or
+    #: none, which floors have balconies): the same on every face of a building, so its faces agree; empty: the
+    #: face's own ``seed`` (a preview).
+    style_seed: tuple[int | str, ...] = ()
     #: The scene's :class:`citygen.plausible.PlausibilityRules` a generator holds its candidates to (None: the
     #: defaults); set by the builder from the scene's ``[plausibility]`` table.
     plausibility: Any = field(default=None, compare=False)
@@ -66,6 +70,10 @@ class FacadeRequest:
     def rng(self, *salt: str | int) -> np.random.Generator:
         """A generator derived from this request's seed and optional salt (e.g. the plugin id)."""
         return derive_rng(*self.seed, *salt)
+
+    def style_rng(self, *salt: str | int) -> np.random.Generator:
+        """A generator of the building's choices (:attr:`style_seed`, else this face's seed) and optional salt."""
+        return derive_rng(*(self.style_seed or self.seed), *salt)
 
     @classmethod
     def preview(cls, width: float, height: float, floor_height: float = 3.0, ground_height: float | None = None,

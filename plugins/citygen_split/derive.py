@@ -387,12 +387,14 @@ class _Derivation:
         return min(self.alternatives.get(key, 0), count - 1)
 
     def draw(self, symbol: str, body: Choice) -> int:
-        """Index of the alternative (len(alternatives) = else): once per symbol per face, or per region."""
+        """Index of the alternative (len(alternatives) = else): once per symbol per face, or per region; drawn from
+        the building's stream of the symbol, so every face of a building draws the same sequence (faces agree: the
+        same style, the same floors with balconies)."""
         if not body.each and symbol in self.once:
             return self.once[symbol]
         stream = self.streams.get(symbol)
         if stream is None:
-            stream = self.streams[symbol] = self.request.rng(PLUGIN_ID, symbol)
+            stream = self.streams[symbol] = self.request.style_rng(PLUGIN_ID, symbol)
         u = 100.0 * float(stream.random())
         total = 0.0
         k = 0 if body.otherwise is None else len(body.alternatives)
