@@ -91,10 +91,12 @@ def grouped(requests: Sequence[FacadeRequest], runs: Sequence[tuple[int, ...]]
 def per_face(parts: Sequence[tuple[FacadeRequest, ...]], layouts: Sequence[FacadeLayout]
              ) -> list[tuple[FacadeRequest, FacadeLayout]]:
     """The layouts of :func:`grouped`'s requests handed back to the faces: a run's cut by :func:`facet_layouts`."""
-    out = []
+    out: list[tuple[FacadeRequest, FacadeLayout]] = []
     for members, layout in zip(parts, layouts):
-        out += zip(members, facet_layouts(layout, [m.width for m in members])) if len(members) > 1 else \
-            [(members[0], layout)]
+        if len(members) == 1:
+            out.append((members[0], layout))
+        else:
+            out.extend(zip(members, facet_layouts(layout, [m.width for m in members])))
     return out
 
 
