@@ -17,10 +17,11 @@ import math
 import operator
 import threading
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from citygen.geometry.backs import balcony_backs, balcony_doors
 from citygen.geometry.prototypes import DEFAULT_DEPTH, INSTANCED, OPENINGS, QUANTUM, ProtoKey
 from citygen.geometry.modules import CM, ModuleKey, Signatures
 from citygen.geometry.quads import box_quads, box_quads_grouped, merge_rects_grouped, to_world, weld, weld_many
@@ -32,6 +33,8 @@ from citygen.usd.materials import COLOUR_PREFIX
 #: palette pick, or the OSM ``building:colour``, which paints every wall), so rulesets shared by a street still give
 #: each house its colour.
 BUILDING_RENDER = "render"
+#: Openings that, standing on a balcony, are its door (they reach down behind the railing).
+DOORS_ONTO = ("window", "door")
 #: Depth of trim labels whose regions say 0 (metres along the normal).
 TRIM_DEPTH = {"cornice": 0.3, "ledge": 0.12, "molding": 0.05, "deco": 0.04, "pillar": 0.1}
 #: A face is vertical (a wall, e.g. a roof's gable) when its unit normal's z is at most this (0.06 degrees).
@@ -329,34 +332,40 @@ class _Emitted:
 
 def _emit(units: Sequence[_Unit], t: _Terminals, wall_material: str) -> list[_Emitted]:
     """Facade quads and element instances of every unit's terminals, transformed by the unit's matrix; all units
-    in one batch."""
+    in one batch. An opening standing on a balcony is its door (:mod:`citygen.geometry.backs`)."""
     out = [_Emitted() for _ in units]
     if not len(t.rects):
         return out
-    style_instanced = np.array([label in INSTANCED for label, _ in t.styles])
-    style_behind = np.array([label in INSTANCED and label not in OPENINGS for label, _ in t.styles])
+    labels = np.array([label for label, _ in t.styles])
+    style_instanced = np.isin(labels, list(INSTANCED))
+    style_behind = style_instanced & ~np.isin(labels, list(OPENINGS))
     instanced = style_instanced[t.codes]
-    _emit_panels(out, units, t, ~instanced, style_behind[t.codes], wall_material)
+    doors, under = balcony_doors(t.rects, t.units, (labels == "balcony")[t.codes],
+                                 np.isin(labels, list(DOORS_ONTO))[t.codes])
+    rects, backs, back_units = balcony_backs(t.rects, t.units, style_behind[t.codes], doors, under)
+    t = replace(t, rects=rects)
+    _emit_panels(out, units, t, ~instanced, backs, back_units, wall_material)
     if instanced.any():
         _emit_elements(out, units, t, instanced)
     return out
 
 
 def _emit_panels(out: list[_Emitted], units: Sequence[_Unit], t: _Terminals, panel: np.ndarray,
-                 behind: np.ndarray, wall_material: str) -> None:
+                 backs: np.ndarray, back_units: np.ndarray, wall_material: str) -> None:
     """Boxes of the ``panel`` terminals, merged per (unit, style, depth in mm) at the group's first depth, then
-    flat wall quads behind the ``behind`` attachments: every group merged and boxed in one batch, each unit's
-    quads transformed by its matrix and listed per group (its styles in first-occurrence order, then by depth)."""
+    the flat wall quads ``backs`` behind attachments (``back_units``: their units): every group merged and boxed in
+    one batch, each unit's quads transformed by its matrix and listed per group (its styles in first-occurrence
+    order, then by depth)."""
     depth_mm = np.rint(t.depth[panel] * 1000).astype(np.int64)
-    n_behind = int(behind.sum())
+    n_behind = len(backs)
     keys = np.concatenate([(t.local[panel] << 32) | (depth_mm & 0xFFFFFFFF), np.full(n_behind, _BEHIND)])
-    unit_of = np.concatenate([t.units[panel], t.units[behind]])
+    unit_of = np.concatenate([t.units[panel], back_units])
     order, first, groups = _runs(keys, unit_of)
     head = order[first]
     code = np.concatenate([t.codes[panel], np.full(n_behind, -1)])[head]
     depths = np.concatenate([t.depth[panel], np.zeros(n_behind)])[head]
     group_unit = unit_of[head]
-    flat, flat_groups = merge_rects_grouped(np.concatenate([t.rects[panel], t.rects[behind]]), groups)
+    flat, flat_groups = merge_rects_grouped(np.concatenate([t.rects[panel], backs]), groups)
     quads, quad_groups = box_quads_grouped(flat, depths[flat_groups], flat_groups)
     unit_bounds = np.searchsorted(group_unit[quad_groups], np.arange(len(units) + 1)).tolist()
     for u in np.unique(group_unit).tolist():

@@ -73,8 +73,8 @@ def opening_frame(key: ProtoKey) -> tuple[np.ndarray, tuple[float, float, float,
 
 
 def balcony_heights(h: float) -> tuple[float, float]:
-    """A balcony's slab thickness and railing height in an element ``h`` tall."""
-    return min(0.18, 0.3 * h), min(1.05, h)
+    """A balcony's slab thickness and railing height in an element ``h`` tall (or in each of an array's)."""
+    return np.minimum(0.18, 0.3 * h), np.minimum(1.05, h)
 
 
 def _shift(quads: np.ndarray, dz: float) -> np.ndarray:
