@@ -17,6 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import shapely
 from pxr import Usd, UsdGeom
 
 from citygen.builder import load_rulesets
@@ -59,7 +60,8 @@ def records(scene):
                        for m in masses]), key=lambda w: (w[4], w[3]))
     out = [o.record for o in _run(work, scene, scene.seed, 2, registry, None, None, load_rulesets(scene, registry))
            if o.record]
-    return out, _ground([v for m in masses for v in m.outline.bounds], min(m.base for m in masses))
+    feet = [(shapely.to_wkb(m.outline), m.base) for f, m in zip(footprints, masses) if not f.lift]
+    return out, _ground([v for m in masses for v in m.outline.bounds], feet, min(f.base - f.lift for f in footprints))
 
 
 def write(scene, recs, ground, path: Path, **options) -> tuple[float, int]:
@@ -68,7 +70,7 @@ def write(scene, recs, ground, path: Path, **options) -> tuple[float, int]:
     c0 = time.process_time()
     with StageWriter(path, up_axis=out.up_axis, layer_data={}, tile_layers=options.get("tile_layers", False),
                      uvs=out.uvs, lod=options.get("lod", out.lod), materials=scene.materials) as writer:
-        writer.ground(*ground)
+        writer.ground(ground)
         for record in recs:
             writer.add(record)
         stats = writer.close()

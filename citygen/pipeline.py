@@ -26,12 +26,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import shapely
 
 from citygen.attributes import AttributeKinds
 from citygen.distributed import EXECUTORS, run_tiles
 from citygen.errors import CitygenError, ExportError, SceneError, SourceLocation
 from citygen.footprints import Footprint, FootprintStream, ImportResult, Skipped
+from citygen.geometry.building import MeshData
 from citygen.gltf import GLTF_SUFFIXES
+from citygen.ground import ground_mesh
 from citygen.lifeline import apart, stop_workers, tie_to_parent
 from citygen.outpaths import check_writable
 from citygen.registry import Registry, default_registry, load_registry
@@ -268,7 +271,7 @@ def _generate(scene: Scene, seed: int, out: Path, gltf: bool, jobs: int, registr
     with contextlib.ExitStack() as stack:  # (closing the outcomes stops their workers on any way out)
         writer = stack.enter_context(_writer(out, scene, layer_data, tiled))
         if ground:
-            writer.ground(*ground)
+            writer.ground(ground)
         outcomes = stack.enter_context(contextlib.closing(_run(work, scene, seed, jobs, registry, plugins, progress,
                                                                 rulesets)))
         for outcome in outcomes:
@@ -316,7 +319,7 @@ class _Planned:
     and the tiles' packed work waits in the run's spill file (``works`` say where), read where each tile is built."""
 
     works: list[TileWork]
-    ground: tuple[float, float, float, float, float] | None
+    ground: MeshData | None
     georef: dict[str, Any]
     skipped: list[Skipped]
     warnings: list[str]
@@ -364,16 +367,17 @@ class _Clock:
 
 
 def _plan_masses(footprints: Iterable[Footprint], scene: Scene, roofs: dict[str, Any], report: Report,
-                 spill: Spill | None = None) -> tuple[list[TileWork], tuple[float, float, float, float, float] | None]:
+                 spill: Spill | None = None) -> tuple[list[TileWork], MeshData | None]:
     """Every building's mass planned (:func:`~citygen.roofplan.mass_plan`) and its tile found (one that cannot be
     is skipped), its prim name given, and all of them packed in tiles a tile column at a time (their bytes put in
-    ``spill``, given one); and the ground quad when the scene asks for one. Only ~0.1 kB a building
+    ``spill``, given one); and the ground when the scene asks for one. Only ~0.1 kB a building
     stays in memory (:class:`~citygen.tilework.Strips`)."""
     strips = Strips()
     kinds = AttributeKinds()
     notes: list[str] = []
     taken: set[str] = set()
-    base = np.inf
+    feet: list[tuple[bytes, float]] = []  # (the outlines as WKB: ~0.2 kB a building, where shapely's take ~2 kB)
+    lowest = np.inf
     try:
         for fp in footprints:
             try:
@@ -389,9 +393,12 @@ def _plan_masses(footprints: Iterable[Footprint], scene: Scene, roofs: dict[str,
             notes += found
             kinds.add(fp, plan)  # (of a mass, it reads the outline's area)
             strips.add(fp, plan, prim_name(fp.id, taken), tile)
-            base = min(base, plan.base)
+            if scene.output.ground:
+                lowest = min(lowest, fp.base - fp.lift)
+                if not fp.lift:  # (a part lifted off the ground does not stand on it)
+                    feet.append((shapely.to_wkb(plan.outline), plan.base))
         report.warnings += notes + kinds.warnings(scene)
-        ground = _ground(strips.bounds, base) if scene.output.ground and len(strips) else None
+        ground = _ground(strips.bounds, feet, lowest) if scene.output.ground and len(strips) else None
         return list(strips.works(spill)), ground
     finally:
         strips.close()
@@ -443,19 +450,20 @@ def _imported(scene: Scene, registry: Registry | None, how: str) -> Any:
                          hint=exc.hint) from None
 
 
-def _ground(bounds: Sequence[float], base: float) -> tuple[float, float, float, float, float]:
-    """The ground quad: the masses' ``bounds`` (``x0, y0, x1, y1`` a mass, flat) plus ``GROUND_MARGIN`` on every
-    side, at the lowest ``base``."""
+def _ground(bounds: Sequence[float], feet: Sequence[tuple[bytes, float]], lowest: float) -> MeshData:
+    """The ground (:func:`~citygen.ground.ground_mesh`) over the masses' ``bounds`` (``x0, y0, x1, y1`` a mass,
+    flat) plus ``GROUND_MARGIN`` on every side, under the buildings standing on it (``feet``: outline as WKB,
+    base); at ``lowest`` where none does."""
     box = np.asarray(bounds, dtype=float).reshape(-1, 4)
     x0, y0 = box[:, :2].min(axis=0) - GROUND_MARGIN
     x1, y1 = box[:, 2:].max(axis=0) + GROUND_MARGIN
-    return float(x0), float(y0), float(x1), float(y1), float(base)
+    return ground_mesh((x0, y0, x1, y1), feet, lowest)
 
 
 def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins: tuple[tuple[object, ...], bool] | None,
                     out: Path, layer_data: dict[str, Any], jobs: int, runner: Callable[..., list[TileResult]],
                     report: Report, progress: Callable[[int, int], None] | None,
-                    ground: tuple[float, float, float, float, float] | None
+                    ground: MeshData | None
                     ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
     """Tiles built and written by tile tasks (:mod:`citygen.tiles`: here, in worker processes or on dask); the root
     layer payloading them (and the ground) written here. Returns the wall and main-process CPU seconds of the
@@ -467,7 +475,7 @@ def _generate_tiles(works: Sequence[TileWork], scene: Scene, seed: int, plugins:
     with StageWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=True,
                      uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
-            writer.ground(*ground)
+            writer.ground(ground)
         job = TileJob(scene, seed, plugins, writer.staging_folder(), writer.tile_suffix, layer_data)
         results = runner(works, job, jobs, progress, take=functools.partial(slimmed, writer=writer))
         t1, c1 = time.perf_counter(), time.process_time()
@@ -490,7 +498,7 @@ def _generate_masses(works: Sequence[TileWork], scene: Scene, seed: int, roofs: 
                      plugins: tuple[tuple[object, ...], bool] | None, out: Path, layer_data: dict[str, Any],
                      tiled: bool, report: Report,
                      progress: Callable[[int, int], None] | None,
-                     ground: tuple[float, float, float, float, float] | None
+                     ground: MeshData | None
                      ) -> tuple[dict[str, float], dict[str, float]]:
     """A mass-only city (:mod:`citygen.lod1`, :mod:`citygen.lod1stage`): built in ``jobs`` worker processes where
     its estimated build CPU pays for them (:func:`citygen.lod1.in_workers`), else here; a tiled one of that kind
@@ -510,7 +518,7 @@ def _generate_masses(works: Sequence[TileWork], scene: Scene, seed: int, roofs: 
     with MassWriter(out, up_axis=scene.output.up_axis, layer_data=layer_data, tile_layers=tiled,
                     uvs=scene.output.uvs, lod=scene.output.lod, materials=scene.materials) as writer:
         if ground:
-            writer.ground(*ground)
+            writer.ground(ground)
         chunk = max(1, min(64, total // (8 * jobs))) if workers else 0
         parts = (run_with_helper(works, scene, seed, roofs, writer) if with_helper(works, jobs, tiled) and not workers
                  else (write_outcomes(writer, outcomes, cpu) for outcomes, cpu in

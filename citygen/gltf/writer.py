@@ -139,11 +139,9 @@ class GltfScene:
                     self.parts[part] = name
         return self.prototypes[key]
 
-    def ground(self, x0: float, y0: float, x1: float, y1: float, z: float) -> None:
-        """A ``Ground`` quad under the city at height ``z`` (material ``ground``)."""
-        quad = MeshData(np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=np.float32),
-                        np.array([4], dtype=np.int32), np.arange(4, dtype=np.int32))
-        self._mesh_node("Ground", "world", quad, Y_UP, "ground", "ground")
+    def ground(self, mesh: MeshData) -> None:
+        """The ``Ground`` under the city (:func:`citygen.ground.ground_mesh`; material ``ground``)."""
+        self._mesh_node("Ground", "world", mesh, Y_UP, "ground", "ground")
 
     def add(self, record: BuildingRecord, placed: bool = True) -> None:
         """One building: a node at its pivot (at the origin unless ``placed``) with its meshes and instances."""

@@ -205,17 +205,16 @@ class StageWriter:
         """``/Materials/<name>`` of each name not yet defined in this layer."""
         self.definitions.define(names)
 
-    def ground(self, x0: float, y0: float, x1: float, y1: float, z: float) -> None:
-        """``/World/Ground``: one flat quad (material and semantic label ``ground``) under the city at height ``z``."""
-        quad = MeshData(np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=np.float32),
-                        np.array([4], dtype=np.int32), np.arange(4, dtype=np.int32))
+    def ground(self, mesh: MeshData) -> None:
+        """``/World/Ground``: the ground under the city (:func:`citygen.ground.ground_mesh`; material and semantic
+        label ``ground``)."""
         with Sdf.ChangeBlock():
             self.define(["ground"])
             looks = self.author.looks(self.world, ["ground"])
-            self.author.mesh(self.world, "Ground", quad, looks, "ground", "ground")
-        self.world_bounds.append(points_bound(quad.points))
+            self.author.mesh(self.world, "Ground", mesh, looks, "ground", "ground")
+        self.world_bounds.append(points_bound(mesh.points))
         self.counts["meshes"] += 1
-        self.counts["polygons"] += 1
+        self.counts["polygons"] += len(mesh.counts)
 
     def prototypes_of(self, keys: Iterable[ProtoKey | ModuleKey], modules: Mapping[ModuleKey, ModuleProto]) -> None:
         """Give each of ``keys`` its ``/Prototypes`` path (:attr:`prototypes`: in this layer, or for an element kind of
