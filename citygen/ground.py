@@ -22,6 +22,8 @@ from citygen.geometry.building import MeshData
 SPACING = 1.0
 #: Metres between the rim samples of the terrain.
 RIM_SPACING = 20.0
+#: Most samples of one outline, or of one side of the rim (a huge outline's samples are spaced wider).
+MOST_SAMPLES = 4096
 #: Ground heights closer than this (metres) are one: a flat city gets the quad.
 FLAT = 1e-3
 #: Samples closer than this (metres) are one point of the terrain.
@@ -41,7 +43,9 @@ def ground_mesh(bounds: Sequence[float], feet: Sequence[tuple[bytes, float]], lo
     from scipy.spatial import Delaunay, cKDTree  # (only for a terrain: a flat city's run never imports it)
 
     outlines = shapely.from_wkb([outline for outline, _ in feet])
-    xy, owner = shapely.get_coordinates(shapely.segmentize(shapely.boundary(outlines), SPACING), return_index=True)
+    rings = shapely.boundary(outlines)
+    spacing = np.maximum(SPACING, shapely.length(rings) / MOST_SAMPLES)
+    xy, owner = shapely.get_coordinates(shapely.segmentize(rings, spacing), return_index=True)
     z = heights[owner]
     keys = np.rint(xy / WELD).astype(np.int64)
     keys, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
@@ -64,7 +68,7 @@ def ground_mesh(bounds: Sequence[float], feet: Sequence[tuple[bytes, float]], lo
 
 def _rim(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
     """Points every ``RIM_SPACING`` metres round the rectangle, its corners included."""
-    nx, ny = (max(1, int(np.ceil(d / RIM_SPACING))) for d in (x1 - x0, y1 - y0))
+    nx, ny = (int(np.clip(np.ceil(d / RIM_SPACING), 1, MOST_SAMPLES)) for d in (x1 - x0, y1 - y0))
     xs, ys = np.linspace(x0, x1, nx + 1), np.linspace(y0, y1, ny + 1)
     inner = ys[1:-1]
     return np.vstack([np.column_stack([xs, np.full_like(xs, y0)]), np.column_stack([xs, np.full_like(xs, y1)]),
