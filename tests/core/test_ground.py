@@ -104,3 +104,10 @@ def test_terrain_covers_the_city_and_meets_each_foot(sizes, seed):
     for outline, z in outlines:
         got = _height_at(mesh, _ring_samples(outline, step=1.0))
         assert np.allclose(got, z, atol=2e-4)  # (float32 points)
+
+
+def test_a_huge_outline_is_sampled_sparsely():
+    """A 10,000 km footprint (the readers' fuzzing meets such) would have taken 20 million samples at 1 m."""
+    feet = _feet((box(0, 0, 1e7, 10), 1.0), (box(0, 20, 10, 30), 0.0))
+    mesh = ground_mesh((-20, -20, 1e7 + 20, 50), feet, 0.0)
+    assert 3 < len(mesh.points) < 20_000 and np.isfinite(mesh.points).all()
