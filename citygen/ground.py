@@ -3,7 +3,7 @@ every building's foot.
 
 Data with real elevations (CityJSON's LoD1 blocks, OSM parts with a ``base``) put each building at its own
 ground height. A flat quad at the lowest of them left the others floating up to the data's spread above it
-(Delft: 0.6 m, a dark slot under every facade). The terrain is instead a triangulation (scipy's Delaunay) of the
+(Delft: 0.95 m, a dark slot under every facade). The terrain is instead a triangulation (scipy's Delaunay) of the
 buildings' outlines, sampled every ``SPACING`` metres at their own ground heights, and of the quad's rim at the
 height of the nearest outline: along a wall it runs at the building's foot, between buildings it slopes from one
 to the next. Where outlines of different heights meet (a terrace's party walls) it takes the highest, so a
