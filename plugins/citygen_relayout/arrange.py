@@ -105,6 +105,9 @@ class _Layout:
         # floors of the request this region spans (§9.1): along y they are searched, across they prune
         self.floors = ctx.spanned_floors(node.y, node.y + node.h)
         self.straddles = self.floors is not None and self.axis == "x"
+        # a face of one floor holds one storey: the facade's arrangement places one element holding openings
+        self.one_storey = (self.axis == "y" and node.symbol == model.root and ctx.floor_lines is not None
+                           and ctx.floor_lines.size == 2)
 
     def _freq_bounds(self, f) -> tuple[int, int]:
         lo, hi = scaled_bounds(f.lo, f.hi, f.relative, self.total, self.input_size)
@@ -203,6 +206,9 @@ class _Layout:
                 ctx.blame(f"minimum size of {sym} in {self.node.symbol}")
                 continue
             if self.straddles and comp.bound[(sym, "y")]:
+                ctx.blame("floor lines of the building")
+                continue
+            if self.one_storey and comp.opening[sym] and any(comp.opening[s] for s, _ in st.elems):
                 ctx.blame("floor lines of the building")
                 continue
             if self.min_extent[(sym, self.ortho)] > self.across + 1e-9:
