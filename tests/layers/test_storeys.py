@@ -1,0 +1,97 @@
+"""Substituted storeys keep their bands inside their storey: the residential house's windows (sill, window, head
+in every storey) and the two generator rules behind them -- a prealigned column proposes its control letter's
+whole content, and a sizing that puts substituted content across a floor line does not solve a candidate."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from citygen_layers.facade import clear_solved, generate, solve_request
+from citygen_layers.parser import load, parse
+from citygen_layers.solver import axis_solutions
+from citygen_layers.storeys import StoreyCheck
+
+from citygen.cli import facade_outcome
+from citygen.request import FacadeRequest
+from tests import sweep
+
+ROOT = Path(__file__).resolve().parents[2]
+HOUSE = ROOT / "rulesets" / "residential_house.layers"
+#: a wall of storeys and a windows layer substituting sill / window / head bands into each storey
+BANDS = """budget prealign=true
+symbol A size=0.8 label=wall opaque
+symbol B size=1.2 opaque
+symbol P size=1.6 opaque
+symbol Q size=1.4 opaque
+symbol Ps size=0.8 label=wall
+symbol Pw size=1.5 label=window
+symbol Ph size=0.6 label=wall
+symbol Qs size=0.9 label=wall
+symbol Qw size=1.4 label=window
+symbol Qh size=0.6 label=wall
+counter k
+counter n in 0..
+pattern Bx = A (B A)^k
+pattern By = P Q^n
+pattern Wy = p q^n ; p := Ps Pw Ph ; q := Qs Qw Qh
+layer basic x=Bx y=By
+layer windows x=Bx y=Wy mask=Pw,Qw
+floors basic
+"""
+
+
+def windows_by_storey(layout, lines):
+    """Per floor, the (bottom, top) of its windows; asserts each window lies in one floor."""
+    out = {k: [] for k in range(len(lines) - 1)}
+    for r in layout.terminals():
+        if r.label == "window":
+            k = int(np.searchsorted(lines, r.y + r.h / 2)) - 1
+            out[k].append((r.y, r.y + r.h))
+    return out
+
+
+@pytest.mark.parametrize("width,height,storey", [(10.0, 9.0, 2.6), (5.5, 7.0, 2.6), (8.5, 13.5, 3.0),
+                                                 (26.0, 31.0, 3.6), (13.7, 7.0, 3.6), (40.0, 41.0, 2.6)])
+def test_regression_residential_house_windows_have_sill_and_head_in_their_storey(width, height, storey):
+    """The Fig. 5 house's window cells were whole storeys: windows ran floor to floor and stacked into strips as
+    tall as the building. Now every storey has windows with wall below (sill) and above (head) in that storey."""
+    clear_solved()
+    request = sweep.request(width, height, storey)
+    layout = generate(load(HOUSE), request)
+    assert facade_outcome(layout, request)[0] == "dressed"
+    lines = np.asarray(request.floor_lines)
+    for k, spans in windows_by_storey(layout, lines).items():
+        assert spans, f"storey {k} has no window"
+        for bottom, top in spans:
+            assert bottom >= lines[k] + 0.5 and top <= lines[k + 1] - 0.3   # sill and head of wall
+            assert top - bottom <= lines[k + 1] - lines[k] - 0.8            # never storey-tall
+
+
+def test_a_prealigned_column_proposes_its_control_letters_whole_content():
+    """Storeys of 2.2 m under bands of 2.9 m: the network proposed only the first two letters' ends of a row as
+    column sizes (Qs, Qs Qw), so with the search fenced to the storey's column the whole band triple never formed
+    a column and no alignment existed (the face fell back or, unfenced, took a head band into the next storey)."""
+    rs = parse(BANDS)
+    sx, sy = solve_request(rs, FacadeRequest(8.0, 7.0, (0.0, 2.6, 4.8, 7.0)), reuse=False)
+    assert sy.status == "solved"
+    assert StoreyCheck(rs).straddling(_rows(sy), sy.candidate, sy.sizing, (0.0, 2.6, 4.8, 7.0)) == []
+    (matrix,) = sy.matrices
+    wy = next(i for i, r in enumerate(matrix.rows) if r.pattern == "Wy")
+    assert [b for _, b in (col[wy] for col in matrix.alignment.columns)] == [3, 6, 9]   # one column a storey
+
+
+def _rows(solution):
+    return [r for m in solution.matrices for r in m.rows]
+
+
+def test_regression_substituted_bands_across_a_floor_line_do_not_solve():
+    """Without prealignment the exact search puts the first upper storey's sill band into the ground floor's
+    column (9 m, floors 3.6 / 2.7 / 2.7 m): such a sizing is not a solved layout (only a best-effort one, with a
+    diagnostic); before, it was the solved layout."""
+    rs = parse(BANDS.replace("budget prealign=true", ""))
+    lines = (0.0, 3.6, 6.3, 9.0)
+    check = StoreyCheck(rs)
+    solutions = list(axis_solutions(rs, "y", 9.0, lines))
+    for solution in solutions:
+        crossing = check.straddling(_rows(solution), solution.candidate, solution.sizing, lines)
+        assert solution.status != "solved" or crossing == []
+    assert any("leave their storey" in d for s in solutions for d in s.diagnostics)
