@@ -133,7 +133,7 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                 solution = _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
                                   [*diagnostics, *_prealignment_notes(spec, prealigner)])
                 straddling = [] if storeys is None or solution.sizing.relaxed else \
-                    storeys.straddling(spec.rows, candidate, solution.sizing, floor_lines)
+                    storeys.straddling(spec, candidate, solution.sizing, floor_lines)
                 if straddling:    # a substituted storey's content across a floor line: not solved (storeys.py)
                     note = f"substituted letters leave their storey: {straddling[0]}"
                     solution = replace(solution, sizing=replace(solution.sizing, relaxed=(note,)),

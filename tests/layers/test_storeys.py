@@ -5,8 +5,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from citygen_layers.candidates import Candidate, direction_spec, make_letter
 from citygen_layers.facade import clear_solved, generate, solve_request
 from citygen_layers.parser import load, parse
+from citygen_layers.sizing import Segment, Sizing
 from citygen_layers.solver import axis_solutions
 from citygen_layers.storeys import StoreyCheck
 
@@ -71,16 +73,17 @@ def test_a_prealigned_column_proposes_its_control_letters_whole_content():
     column sizes (Qs, Qs Qw), so with the search fenced to the storey's column the whole band triple never formed
     a column and no alignment existed (the face fell back or, unfenced, took a head band into the next storey)."""
     rs = parse(BANDS)
-    sx, sy = solve_request(rs, FacadeRequest(8.0, 7.0, (0.0, 2.6, 4.8, 7.0)), reuse=False)
+    lines = (0.0, 2.6, 4.8, 7.0)
+    sx, sy = solve_request(rs, FacadeRequest(8.0, 7.0, lines), reuse=False)
     assert sy.status == "solved"
-    assert StoreyCheck(rs).straddling(_rows(sy), sy.candidate, sy.sizing, (0.0, 2.6, 4.8, 7.0)) == []
+    assert StoreyCheck(rs).straddling(_spec(rs, 7.0, lines), sy.candidate, sy.sizing, lines) == []
     (matrix,) = sy.matrices
     wy = next(i for i, r in enumerate(matrix.rows) if r.pattern == "Wy")
     assert [b for _, b in (col[wy] for col in matrix.alignment.columns)] == [3, 6, 9]   # one column a storey
 
 
-def _rows(solution):
-    return [r for m in solution.matrices for r in m.rows]
+def _spec(rs, height, lines):
+    return direction_spec(rs, "y", height, rs.counters, tuple(np.diff(lines)))
 
 
 def test_regression_substituted_bands_across_a_floor_line_do_not_solve():
@@ -92,6 +95,41 @@ def test_regression_substituted_bands_across_a_floor_line_do_not_solve():
     check = StoreyCheck(rs)
     solutions = list(axis_solutions(rs, "y", 9.0, lines))
     for solution in solutions:
-        crossing = check.straddling(_rows(solution), solution.candidate, solution.sizing, lines)
+        crossing = check.straddling(_spec(rs, 9.0, lines), solution.candidate, solution.sizing, lines)
         assert solution.status != "solved" or crossing == []
     assert any("leave their storey" in d for s in solutions for d in s.diagnostics)
+
+
+LEDGES = """symbol A size=1 opaque
+symbol G size=3 opaque
+symbol X size=0.3 opaque label=ledge
+symbol S size=3 opaque
+symbol Ef size=2.3 label=window
+symbol Eh size=0.7 label=wall
+counter n in 0..
+pattern Hx = A
+pattern Hy = G X S^n
+pattern Ey = G X e^n ; e := Ef Eh
+layer basic x=Hx y=Hy
+layer glazing x=Hx y=Ey mask=Ef
+floors basic G S
+"""
+
+
+@pytest.mark.parametrize("head_top,crossing", [(6.0, False), (6.3, True)])
+def test_storeys_are_found_through_the_floor_word_when_it_has_ledges(head_top, crossing):
+    """``floors basic G S``: the floor word G X S S has a free ledge X, so control letter i of ``G X e e`` is the
+    storey of floor word letter i (e -> floors 1 and 2), not floor i."""
+    rs = parse(LEDGES)
+    lines = (0.0, 3.0, 6.0, 9.0)
+    spec = _spec(rs, 9.0, lines)
+    words = {name: tuple(make_letter((s, False, s in ("G", "X")), None, rs) for s in letters.split())
+             for name, letters in (("Hx", "A"), ("Hy", "G X S S"), ("Ey", "G X Ef Eh Ef Eh"))}
+    places = [(0.0, 2.7), (2.7, 3.0), (3.0, 5.3 + head_top - 6.0), (5.3 + head_top - 6.0, head_top),
+              (head_top, 8.3), (8.3, 9.0)]
+    glazing = tuple(Segment(s, t, letter, i) for i, ((s, t), letter) in enumerate(zip(places, words["Ey"])))
+    group = next(r.group for r in spec.rows if r.pattern == "Ey")
+    sizing = Sizing({(group, "Ey"): glazing}, True, "")
+    found = StoreyCheck(rs).straddling(spec, Candidate({"n": 2}, words), sizing, lines)
+    assert bool(found) == crossing
+    assert all("floor 1 (3.00-6.00 m)" in f for f in found)
