@@ -138,6 +138,10 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                     note = f"substituted letters leave their storey: {straddling[0]}"
                     solution = replace(solution, sizing=replace(solution.sizing, relaxed=(note,)),
                                        diagnostics=(*solution.diagnostics, f"{spec.axis}: {note}"))
+                if solution.sizing.relaxed and prealigner is not None:
+                    # searched again at a larger mu, where the control words may prealign (they failed at this
+                    # one, so the search ran unfenced) and keep each substituted letter's content in its column
+                    entry[1:4] = None, mu, False
                 if solution.sizing.relaxed:
                     if relaxed is None:
                         relaxed, relaxed_at = replace(solution, status="best-effort"), len(diagnostics)
