@@ -133,3 +133,40 @@ def test_storeys_are_found_through_the_floor_word_when_it_has_ledges(head_top, c
     found = StoreyCheck(rs).straddling(spec, Candidate({"n": 2}, words), sizing, lines)
     assert bool(found) == crossing
     assert all("floor 1 (3.00-6.00 m)" in f for f in found)
+
+
+def test_regression_a_relaxed_candidate_is_searched_again_where_its_control_words_prealign():
+    """8.5 x 13.5 m, storeys 4.0 + 4 x 2.375 m: the control words had no alignment at the first mu, so the search
+    ran unfenced and took a sill into the ground floor's column; the sizing then had to drop a sill to 0 m (a
+    relaxed sizing), and the candidate was never searched again. Now it is, at the next mu, fenced."""
+    clear_solved()
+    request = sweep.request(8.5, 13.5, 2.6)
+    _, sy = solve_request(load(HOUSE), request, reuse=False)
+    assert sy.status == "solved" and not sy.sizing.relaxed
+    lines = np.asarray(request.floor_lines)
+    for k, spans in windows_by_storey(generate(load(HOUSE), request), lines).items():
+        assert spans and all(b >= lines[k] + 0.5 and t <= lines[k + 1] - 0.3 for b, t in spans)
+
+
+def covering_walls(layout):
+    """Pairs (window, region): a labelled region of a lower layer in front of a visible window's pane (it would
+    hide the window in 3-D: lower layers are not cut around the openings of upper ones)."""
+    order = [c.layer for c in layout.root.children]
+    terms = [r for r in layout.terminals() if r.label]
+    out = []
+    for w in (r for r in terms if r.label == "window"):
+        for r in terms:
+            if order.index(r.layer) < order.index(w.layer) and r.label not in ("window", "door") and \
+                    r.depth > w.depth and min(r.x + r.w, w.x + w.w) - max(r.x, w.x) > 1e-6 and \
+                    min(r.y + r.h, w.y + w.h) - max(r.y, w.y) > 1e-6:
+                out.append((w, r))
+    return out
+
+
+@pytest.mark.parametrize("width,height,storey", [(10.0, 9.0, 3.0), (26.0, 31.0, 3.6)])
+def test_regression_residential_house_windows_are_not_behind_the_basic_layers_wall(width, height, storey):
+    """The first windows layer sat in front of the basic layer's wall cells of the window bays: in 3-D the wall
+    box stood in front of the recessed windows and the house showed none. The basic layer leaves the bays empty."""
+    clear_solved()
+    layout = generate(load(HOUSE), sweep.request(width, height, storey))
+    assert [r for r in layout.terminals() if r.label == "window"] and covering_walls(layout) == []

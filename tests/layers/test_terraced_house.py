@@ -61,3 +61,21 @@ def test_regression_terraced_house_every_balcony_has_a_french_window_behind(widt
     for window in (r for r in layout.terminals() if r.label == "window"):
         k = int(np.searchsorted(lines, window.y + window.h / 2)) - 1
         assert window.y + window.h <= lines[k + 1] - 0.2                    # wall above it in its storey
+
+
+@pytest.mark.parametrize("width,height,storey", [(5.5, 9.0, 3.0), (14.0, 16.0, 3.0)])
+def test_terraced_house_glazing_is_not_behind_a_wall_and_stands_proud_of_a_balconys_wall_quad(width, height,
+                                                                                            storey):
+    """In 3-D a lower layer's wall stands in front of a recessed window (layers are not cut around openings),
+    and the builder puts a wall quad at the wall plane behind every balcony: the glazing behind a balcony must
+    be in front of it, or only its top above the railing shows."""
+    layout, _ = dressed(width, height, storey)
+    order = [c.layer for c in layout.root.children]
+    terms = [r for r in layout.terminals() if r.label]
+    for window in (r for r in terms if r.label == "window"):
+        assert not [r for r in terms if order.index(r.layer) < order.index(window.layer)
+                    and r.label not in ("window", "door") and r.depth > window.depth
+                    and min(r.x + r.w, window.x + window.w) - max(r.x, window.x) > 1e-6
+                    and min(r.y + r.h, window.y + window.h) - max(r.y, window.y) > 1e-6]
+    for balcony in (r for r in terms if r.label == "balcony"):
+        assert all(r.depth > 0 for r in openings_behind(layout, balcony))
