@@ -1,6 +1,7 @@
 """The terraced house (ilcik2015 Fig. 9) as a user sees it: a 5-6 m entrance face is one bay and a door, every
 balcony has a French window (or the window of a window block) from its floor behind it, and the storeys' glazing
 has a wall band above it in its storey."""
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -79,3 +80,19 @@ def test_terraced_house_glazing_is_not_behind_a_wall_and_stands_proud_of_a_balco
                     and min(r.y + r.h, window.y + window.h) - max(r.y, window.y) > 1e-6]
     for balcony in (r for r in terms if r.label == "balcony"):
         assert all(r.depth > 0 for r in openings_behind(layout, balcony))
+
+
+@pytest.mark.parametrize("width", [5.5, 8.5, 14.0, 20.0])
+@pytest.mark.parametrize("entrance", [True, False])
+def test_regression_terraced_house_dresses_with_corner_strips(width, entrance):
+    """The first window block started at x = 0, inside the building's corner strip, so no sizing kept its shop
+    out of the strip: faces with two bays or more fell back (zero-size cells of a relaxed sizing) in every scene
+    with ``corner_width``. A wall margin M at both ends now takes the strip."""
+    clear_solved()
+    request = dataclasses.replace(sweep.request(width, 12.0, 3.3), corner_widths=(0.5, 0.5), entrance=entrance)
+    layout = generate(load(HOUSE), request)
+    assert facade_outcome(layout, request) == ("dressed", [])
+    assert layout.meta["status"] == {"x": "solved", "y": "solved"}
+    for r in layout.terminals():
+        if r.label in ("window", "door", "shop", "balcony"):
+            assert r.x >= 0.5 - 1e-6 and r.x + r.w <= width - 0.5 + 1e-6
