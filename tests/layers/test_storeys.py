@@ -170,3 +170,19 @@ def test_regression_residential_house_windows_are_not_behind_the_basic_layers_wa
     clear_solved()
     layout = generate(load(HOUSE), sweep.request(width, height, storey))
     assert [r for r in layout.terminals() if r.label == "window"] and covering_walls(layout) == []
+
+
+@pytest.mark.parametrize("width,height,storey", [(16.0, 15.0, 3.0), (5.5, 12.0, 3.6), (26.0, 19.5, 2.6)])
+def test_regression_tenement_windows_are_not_behind_the_wall_layer_and_keep_their_bands(width, height, storey):
+    """Rendered, the tenement showed frames, sills and balconies but no glass: the wall layer's bay cells stood
+    in front of the windows and shop fronts. And at 5.5 x 12 m with 4 m storeys its head band Ub went to the
+    next storey's column (0 m, hidden by the mask). The wall layer leaves the bays empty, the windows layer shows
+    its bands, and prealignment keeps them in their storey."""
+    clear_solved()
+    request = sweep.request(width, height, storey)
+    layout = generate(load(ROOT / "rulesets" / "tenement.layers"), request)
+    assert facade_outcome(layout, request)[0] == "dressed"
+    assert covering_walls(layout) == []
+    lines = np.asarray(request.floor_lines)
+    for k, spans in windows_by_storey(layout, lines).items():
+        assert all(b >= lines[k] + 0.3 and t <= lines[k + 1] - 0.2 for b, t in spans)
