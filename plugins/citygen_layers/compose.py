@@ -8,7 +8,6 @@ import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region
 from citygen_layers.model import Layer, Ruleset, ShapeSpec
 from citygen_layers.sizing import Segment
