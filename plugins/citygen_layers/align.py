@@ -121,15 +121,18 @@ class _Row:
         #: per start letter, its start up to the end of its run (filled on first use); None at the word's end
         self.runs: list = [False] * len(w) + [None]
 
-    def start(self, a: int, end: int) -> tuple[list[float], list[float], dict, dict]:
+    def start(self, a: int, end: int, whole: bool = False) -> tuple[list[float], list[float], dict, dict]:
         """From letter ``a`` with substrings ending at most at ``end``: the substring sizes, the target sizes the
-        row proposes, and memos of its entries per substring end and of its choices per target."""
-        key = (a, end)
+        row proposes, and memos of its entries per substring end and of its choices per target. With ``whole``
+        (``end`` is a prealigned column's end) the substring up to ``end`` proposes its size too: a control
+        letter's whole content is a column of its own, however many letters it has."""
+        key = (a, end, whole)
         row = self.starts.get(key)
         if row is None:
             c, b = self.cum, self.cum[a]
             seg = [c[j] - b for j in range(a + 1, end + 1)]
-            row = self.starts[key] = (seg, [round(x * 1e9) / 1e9 for x in seg[:LOOKAHEAD]], {}, {})
+            proposed = seg[:LOOKAHEAD] + seg[-1:] if whole and len(seg) > LOOKAHEAD else seg[:LOOKAHEAD]
+            row = self.starts[key] = (seg, [round(x * 1e9) / 1e9 for x in proposed], {}, {})
         return row
 
     def run(self, a: int) -> tuple[list[float], list[float], dict, dict]:
@@ -234,7 +237,8 @@ class _Words:
             if False in starts:
                 starts = [start if start is not False else row.run(a) for row, a, start in zip(self.rows, p, starts)]
         else:
-            starts = [row.start(a, min(row.runend[a], b)) if a < b else None for row, a, b in zip(self.rows, p, n)]
+            starts = [row.start(a, min(row.runend[a], b), b <= row.runend[a]) if a < b else None
+                      for row, a, b in zip(self.rows, p, n)]
         found = set()
         for start in starts:
             if start is not None:

@@ -8,8 +8,6 @@ import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region
 from citygen_layers.model import Layer, Ruleset, ShapeSpec
 from citygen_layers.sizing import Segment
@@ -150,8 +148,10 @@ def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tupl
     covered grid cells of grid row ``j`` as bits.
     """
     used = [(xspans, yspans) for xspans, yspans in grids if xspans and yspans]
-    xs = np.unique(np.round([v for xspans, _ in used for x, w in xspans for v in (x, x + w)], 9)).tolist()
-    ys = np.unique(np.round([v for _, yspans in used for y, h in yspans for v in (y, y + h)], 9)).tolist()
+    # rounded as the look-ups below round (numpy's round differs from Python's at some halves: a cell then
+    # reached one cut too far and counted as covered)
+    xs = sorted({round(v, 9) for xspans, _ in used for x, w in xspans for v in (x, x + w)})
+    ys = sorted({round(v, 9) for _, yspans in used for y, h in yspans for v in (y, y + h)})
     nx, ny = max(len(xs) - 1, 0), max(len(ys) - 1, 0)
     xbits: dict[tuple[float, float], int] = {}     # memos: layers share spans
     yrows: dict[tuple[float, float], range] = {}

@@ -15,6 +15,7 @@ from citygen_layers.model import Counter, Ruleset
 from citygen_layers.prealign import Prealigner
 from citygen_layers.sizing import Matrix, Sizing, size_matrices
 from citygen_layers.splits import split_transparent
+from citygen_layers.storeys import StoreyCheck
 
 #: Bands per row: letter index -> interval the letter must stay inside.
 Bands = Mapping[tuple[str, str], Mapping[int, tuple[float, float]]]
@@ -106,6 +107,7 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
     memo = WordMemo()
     network = NetworkMemo()
     prealigner = Prealigner(ruleset) if options.prealign else None
+    storeys = StoreyCheck(ruleset) if spec.floor_pattern is not None and len(floor_lines) > 2 else None
     for _ in range(options.rounds):
         for index, candidate in enumerate(CandidateGenerator(ruleset, spec, mu, budget, memo)):
             if index >= options.candidates or budget.exhausted:
@@ -130,6 +132,16 @@ def direction_solutions(ruleset: Ruleset, spec: DirectionSpec, budget: Budget,
                 entry[3] = True
                 solution = _sized(ruleset, spec, candidate, matrices, mu, "solved", budget, bands, floor_lines,
                                   [*diagnostics, *_prealignment_notes(spec, prealigner)])
+                straddling = [] if storeys is None or solution.sizing.relaxed else \
+                    storeys.straddling(spec, candidate, solution.sizing, floor_lines)
+                if straddling:    # a substituted storey's content across a floor line: not solved (storeys.py)
+                    note = f"substituted letters leave their storey: {straddling[0]}"
+                    solution = replace(solution, sizing=replace(solution.sizing, relaxed=(note,)),
+                                       diagnostics=(*solution.diagnostics, f"{spec.axis}: {note}"))
+                if solution.sizing.relaxed and prealigner is not None:
+                    # searched again at a larger mu, where the control words may prealign (they failed at this
+                    # one, so the search ran unfenced) and keep each substituted letter's content in its column
+                    entry[1:4] = None, mu, False
                 if solution.sizing.relaxed:
                     if relaxed is None:
                         relaxed, relaxed_at = replace(solution, status="best-effort"), len(diagnostics)

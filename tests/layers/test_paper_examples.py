@@ -81,7 +81,7 @@ def test_section4_residential_house():
     request = FacadeRequest(6.0, 3.0, (0.0, 1.6, 3.0), entrance=False)
     layout = generate(rs, request)
     assert check_partition(layout) == [] and check_request(layout, request) == []
-    assert [c.layer for c in layout.root.children] == ["basic", "columns", "entrance"]
+    assert [c.layer for c in layout.root.children] == ["basic", "windows", "columns", "entrance"]
     pillars = [r for r in layout.terminals() if r.label == "pillar"]
     assert len(pillars) == 2 and all(r.y == 0 and r.h == pytest.approx(1.6) for r in pillars)   # mask = P
     walls = [r for r in layout.terminals() if r.layer == "basic" and r.symbol == "A.P"]

@@ -1,0 +1,98 @@
+"""The terraced house (ilcik2015 Fig. 9) as a user sees it: a 5-6 m entrance face is one bay and a door, every
+balcony has a French window (or the window of a window block) from its floor behind it, and the storeys' glazing
+has a wall band above it in its storey."""
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from citygen_layers.facade import clear_solved, generate
+from citygen_layers.parser import load
+
+from citygen.cli import facade_outcome
+from tests import sweep
+
+HOUSE = Path(__file__).resolve().parents[2] / "rulesets" / "terraced_house.layers"
+
+
+def dressed(width, height, storey):
+    clear_solved()
+    request = sweep.request(width, height, storey)
+    layout = generate(load(HOUSE), request)
+    assert facade_outcome(layout, request) == ("dressed", [])
+    return layout, request
+
+
+@pytest.mark.parametrize("width", [5.1, 5.5, 6.0])
+@pytest.mark.parametrize("height,storey", [(6.0, 3.0), (9.0, 3.0), (12.0, 2.6), (12.0, 3.6)])
+def test_regression_terraced_house_entrance_face_of_5_to_6_m_is_one_bay_and_a_door(width, height, storey):
+    """It fell back: with the door the solver took two bays (shop windows 0.6-0.74 m wide), because with one
+    the large balcony L (3.4 m) aligned with the single bay B (1.8 m) and the door sat under it."""
+    layout, _ = dressed(width, height, storey)
+    assert layout.meta["counters"]["j"] == 0                                  # one bay: W Q B W
+    assert len([r for r in layout.terminals() if r.label == "door"]) == 1
+    assert all(r.w >= 1.2 for r in layout.terminals() if r.label == "shop")
+
+
+def openings_behind(layout, balcony):
+    """Window and door regions of the layers below ``balcony`` that start at its floor and overlap it."""
+    order = [c.layer for c in layout.root.children]
+    return [r for r in layout.terminals() if r.label in ("window", "door")
+            and order.index(r.layer) < order.index(balcony.layer) and abs(r.y - balcony.y) < 0.15
+            and r.x < balcony.x + balcony.w - 1e-6 and r.x + r.w > balcony.x + 1e-6]
+
+
+@pytest.mark.parametrize("width,height,storey", [(5.5, 9.0, 3.0), (8.5, 19.5, 3.0), (14.0, 16.0, 2.6),
+                                                 (14.0, 16.0, 3.6), (26.0, 31.0, 3.0), (47.0, 13.5, 2.6)])
+def test_regression_terraced_house_every_balcony_has_a_french_window_behind(width, height, storey):
+    """Its balconies were storey-tall cells: a railing in front of 1.85 m of blank wall. Now each is a railing
+    band in front of glazing that starts at the balcony's floor (8.5 x 19.5 m at 3 m storeys is also the occlusion
+    bug's case: the glazing behind the large balcony vanished)."""
+    layout, request = dressed(width, height, storey)
+    balconies = [r for r in layout.terminals() if r.label == "balcony"]
+    assert balconies
+    lines = np.asarray(request.floor_lines)
+    for balcony in balconies:
+        behind = openings_behind(layout, balcony)
+        cover = sum(min(r.x + r.w, balcony.x + balcony.w) - max(r.x, balcony.x) for r in behind)
+        assert cover >= 0.9 * balcony.w, (balcony, behind)
+        assert balcony.h <= 1.6                                              # a railing, not a storey
+        k = int(np.searchsorted(lines, balcony.y + balcony.h / 2)) - 1
+        assert lines[k] - 1e-6 <= balcony.y <= lines[k] + 1.0                # at the foot of its storey
+    for window in (r for r in layout.terminals() if r.label == "window"):
+        k = int(np.searchsorted(lines, window.y + window.h / 2)) - 1
+        assert window.y + window.h <= lines[k + 1] - 0.2                    # wall above it in its storey
+
+
+@pytest.mark.parametrize("width,height,storey", [(5.5, 9.0, 3.0), (14.0, 16.0, 3.0)])
+def test_terraced_house_glazing_is_not_behind_a_wall_and_stands_proud_of_a_balconys_wall_quad(width, height,
+                                                                                            storey):
+    """In 3-D a lower layer's wall stands in front of a recessed window (layers are not cut around openings),
+    and the builder puts a wall quad at the wall plane behind every balcony: the glazing behind a balcony must
+    be in front of it, or only its top above the railing shows."""
+    layout, _ = dressed(width, height, storey)
+    order = [c.layer for c in layout.root.children]
+    terms = [r for r in layout.terminals() if r.label]
+    for window in (r for r in terms if r.label == "window"):
+        assert not [r for r in terms if order.index(r.layer) < order.index(window.layer)
+                    and r.label not in ("window", "door") and r.depth > window.depth
+                    and min(r.x + r.w, window.x + window.w) - max(r.x, window.x) > 1e-6
+                    and min(r.y + r.h, window.y + window.h) - max(r.y, window.y) > 1e-6]
+    for balcony in (r for r in terms if r.label == "balcony"):
+        assert all(r.depth > 0 for r in openings_behind(layout, balcony))
+
+
+@pytest.mark.parametrize("width", [5.5, 8.5, 14.0, 20.0])
+@pytest.mark.parametrize("entrance", [True, False])
+def test_regression_terraced_house_dresses_with_corner_strips(width, entrance):
+    """The first window block started at x = 0, inside the building's corner strip, so no sizing kept its shop
+    out of the strip: faces with two bays or more fell back (zero-size cells of a relaxed sizing) in every scene
+    with ``corner_width``. A wall margin M at both ends now takes the strip."""
+    clear_solved()
+    request = dataclasses.replace(sweep.request(width, 12.0, 3.3), corner_widths=(0.5, 0.5), entrance=entrance)
+    layout = generate(load(HOUSE), request)
+    assert facade_outcome(layout, request) == ("dressed", [])
+    assert layout.meta["status"] == {"x": "solved", "y": "solved"}
+    for r in layout.terminals():
+        if r.label in ("window", "door", "shop", "balcony"):
+            assert r.x >= 0.5 - 1e-6 and r.x + r.w <= width - 0.5 + 1e-6
