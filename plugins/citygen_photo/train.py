@@ -4,14 +4,16 @@ Needs scikit-learn (``pip install -e '.[photo-train]'``); the shipped model (``m
 by this script with its defaults, so the result is reproducible from the seed on the same photos. Photos
 cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation (``benchmarks/photo_eval.py``) and never seen here.
 
-Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`),
-and ``--samples`` pixels are drawn per photo (rare labels drawn more often). Stage 1 is a multilayer perceptron on
-the pixel features; each further stage (``--stages``, auto-context) another one on the same features plus the
-previous stage's label probabilities around the pixel (:func:`citygen_photo.parser.context_features`). All are
-exported as plain weight arrays, with the ratio of each label's share of the photos to its share of the drawn
-pixels (``prior``), by which inference turns the last stage's output back into probabilities under the photos'
-own label frequencies; inference (:mod:`citygen_photo.parser`) needs numpy only. ``--validate`` trains on
-cmp_b0061-0260 and reports the per-class pixel accuracy on cmp_b0261-0300, the split every choice is made on.
+Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`), and
+``--samples`` pixels are drawn per photo on average (rare labels drawn more often; ``--dark`` times as many,
+``DARK_PIXELS`` 2, from a photo whose crop is darker than 0.45 on average, the held-out kind; round 12). Stage 1 is
+a multilayer perceptron on the pixel features; each further stage (``--stages``, auto-context) another one on the
+same features plus the previous stage's label probabilities around the pixel
+(:func:`citygen_photo.parser.context_features`). All are exported as plain weight arrays, with the ratio of each
+label's share of the photos to its share of the drawn pixels (``prior``), by which inference turns the last stage's
+output back into probabilities under the photos' own label frequencies; inference (:mod:`citygen_photo.parser`)
+needs numpy only. ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy on
+cmp_b0261-0300, the split every choice is made on.
 """
 from __future__ import annotations
 
@@ -33,6 +35,8 @@ VALIDATION = range(261, 301)
 SAMPLES = 1500
 STAGES = 2
 HIDDEN = (64, 64)
+#: Pixels drawn from a photo whose crop is darker than 0.45 on average, in multiples of another's (round 12).
+DARK_PIXELS = 2.0
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
@@ -143,20 +147,36 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-kind", type=float, metavar="EVEN",
                         help="pixels per photo in proportion to the U-Net's per-kind draw weight with this EVEN "
                              "(citygen_photo.train_unet.draw_weights): balcony and blind photos give more")
+    parser.add_argument("--dark", type=float, default=DARK_PIXELS, metavar="FACTOR",
+                        help="FACTOR times the pixels per photo where its crop is darker than 0.45 mean luminance "
+                             "(citygen_photo.train_unet.DARK, the held-out kind)")
     add_training_arguments(parser)
     args = parser.parse_args(argv)
     photos = training_photos(args)
     if not photos:
         return 2
-    draw = None
-    if args.per_kind is not None:
-        from citygen_photo.train_unet import draw_weights
-        draw = draw_weights(photos, args.per_kind, per_kind=True)
-    model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed, draw)
+    if args.dark <= 0:
+        parser.error(f"--dark {args.dark}: a factor on the dark photos' pixels, > 0")
+    model = train(photos, args.samples, args.stages, tuple(args.hidden), args.seed,
+                  pixel_shares(photos, args.per_kind, args.dark))
     arrays = {"prior": model.prior}
     for k, stage in enumerate(model.stages, start=1):
         arrays.update(stage.arrays(f"s{k}"))
     return save(model, arrays, args)
+
+
+def pixel_shares(photos: list[tuple[np.ndarray, np.ndarray]], per_kind: float | None,
+                 dark: float) -> np.ndarray | None:
+    """Each photo's share of the drawn pixels (:func:`train`'s ``draw``; None: the same for every photo): with
+    ``per_kind`` the U-Net's per-kind draw weight with that EVEN, each photo darker than
+    :data:`citygen_photo.train_unet.DARK` ``dark`` times its share."""
+    if per_kind is None and dark == 1:
+        return None
+    from citygen_photo.train_unet import dark_photos, draw_weights
+    if per_kind is not None:
+        return draw_weights(photos, per_kind, per_kind=True, dark=dark)
+    weight = np.where(dark_photos(photos), dark, 1.0)
+    return weight / weight.sum()
 
 
 def add_training_arguments(parser: argparse.ArgumentParser) -> None:

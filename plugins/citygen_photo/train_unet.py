@@ -7,13 +7,15 @@ cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation and never seen here
 Each photo is cropped to its annotated facade box and reduced to the working size. Every step draws ``--batch``
 photos, each with probability proportional to its balcony + blind pixel share plus ``EVEN`` times the mean share
 (the held-out kind -- French windows behind railings, closed shutters -- comes up more often without dropping the
-photos that have none), jitters its colours (a gain per channel and a gamma), mirrors it left-right half the time,
-and cuts a random ``--crop``-pixel window; Adam descends on the cross-entropy with label weights
-``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), each multiplied by its ``--boost``
-factor (e.g. ``--boost blind=3``: a rare label weighted above its share), whose exported ``prior`` turns the
-outputs back into probabilities. ``--close-shutters SHARE`` closes that share of a blind photo's windows with its
-own open shutters (:mod:`citygen_photo.shutters`; the closed kind is rare in CMP). ``--init MODEL.npz`` starts
-from a trained U-Net of the same widths instead of random weights (fine-tuning, e.g. with ``--lr 5e-4``).
+photos that have none), ``--dark FACTOR`` times as often where its crop is darker than ``DARK`` on average (the
+shaded, shuttered kind of round 10: a label-free property of the photo), jitters its colours (a gain per channel and
+a gamma), mirrors it left-right half the time, and cuts a random ``--crop``-pixel window; Adam descends on the
+cross-entropy with label weights ``share ** -WEIGHT_POWER`` (:func:`citygen_photo.train_fcn.label_weights`), each
+multiplied by its ``--boost`` factor (e.g. ``--boost blind=3``: a rare label weighted above its share), whose
+exported ``prior`` turns the outputs back into probabilities. ``--close-shutters SHARE`` closes that share of a
+blind photo's windows with its own open shutters (:mod:`citygen_photo.shutters`; the closed kind is rare in CMP).
+``--init MODEL.npz`` starts from a trained U-Net of the same widths instead of random weights (fine-tuning, e.g.
+with ``--lr 5e-4``).
 ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy
 on cmp_b0261-0300; ``--exclude`` leaves photos out (the balcony fold).
 """
@@ -29,6 +31,7 @@ import numpy as np
 from citygen_photo.features import pixel_features
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.parser import UNET_PATH, load_parser
+from citygen_photo.photo import luminance
 from citygen_photo.shutters import ShutterParts, closed_shutters, shutter_parts
 from citygen_photo.train import DEFAULT_DATA, add_training_arguments, save, training_photos
 from citygen_photo.train_fcn import COLUMN, label_weights
@@ -46,21 +49,29 @@ EVEN = 1.0
 #: Colour jitter: gain per channel within 1 +- GAIN, gamma within [1 / GAMMA, GAMMA].
 GAIN = 0.1
 GAMMA = 1.25
+#: A crop darker than this mean luminance is of the held-out kind (round 10: 30 of the 40 held-out crops are).
+DARK = 0.45
 _HELD_OUT_KIND = (CMP_LABELS.index("balcony") + 1, CMP_LABELS.index("blind") + 1)
 
 
 def draw_weights(photos: list[tuple[np.ndarray, np.ndarray]], even: float = EVEN,
-                 per_kind: bool = False) -> np.ndarray:
+                 per_kind: bool = False, dark: float = 1.0) -> np.ndarray:
     """Each photo's probability of being drawn: its balcony + blind pixel share plus ``even`` times the mean.
     ``per_kind``: each kind's share counts over its own mean share (blinds, rarer than balconies in CMP, then come
-    up as often as balconies), plus ``even`` times the mean of that sum."""
+    up as often as balconies), plus ``even`` times the mean of that sum. ``dark``: the factor by which a photo
+    darker than ``DARK`` (:func:`dark_photos`) is drawn more often."""
     if per_kind:
         shares = np.array([[np.mean(lab == kind) for kind in _HELD_OUT_KIND] for _, lab in photos])
         share = (shares / np.maximum(shares.mean(axis=0), 1e-9)).sum(axis=1)
     else:
         share = np.array([np.isin(lab, _HELD_OUT_KIND).mean() for _, lab in photos])
-    weight = share + even * share.mean() + 1e-9
+    weight = (share + even * share.mean() + 1e-9) * np.where(dark_photos(photos), dark, 1.0)
     return weight / weight.sum()
+
+
+def dark_photos(photos: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Whether each photo's image (the facade crop at working size) is darker than ``DARK`` on average."""
+    return np.array([luminance(work).mean() < DARK for work, _ in photos], dtype=bool)
 
 
 def boosted(weight: np.ndarray, boost: dict[str, float]) -> np.ndarray:
@@ -129,11 +140,12 @@ def draw_batch(photos: list[tuple[np.ndarray, np.ndarray]], features: list[np.nd
 def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, ...] = CHANNELS,
           features: bool = False, steps: int = STEPS, batch: int = BATCH, crop: int = CROP,
           power: float = WEIGHT_POWER, boost: dict[str, float] | None = None, even: float = EVEN,
-          per_kind: bool = False, close: float = 0.0, lr: float = LEARNING_RATE, init: FacadeUNet | None = None,
-          seed: int = 7) -> FacadeUNet:
-    """The network fitted on ``photos`` (working image, label map) from ``seed``; ``boost`` multiplies the named
-    labels' loss weights, ``close`` is the share of a blind photo's windows closed with its own shutters; ``init``
-    a trained network to start from (its widths ``channels``, no pixel features), ``lr`` Adam's first step."""
+          per_kind: bool = False, dark: float = 1.0, close: float = 0.0, lr: float = LEARNING_RATE,
+          init: FacadeUNet | None = None, seed: int = 7) -> FacadeUNet:
+    """The network fitted on ``photos`` (working image, label map) from ``seed``; ``boost`` multiplies the named labels'
+    loss weights, ``dark`` the draw weight of the dark photos (:func:`draw_weights`), ``close`` is the share of a
+    blind photo's windows closed with its own shutters; ``init`` a trained network to start from (its widths
+    ``channels``, no pixel features), ``lr`` Adam's first step."""
     if init is not None and (init.channels != tuple(channels) or init.feature_mean.size or features):
         raise ValueError(f"--init: the network's widths {init.channels} (pixel features: "
                          f"{bool(init.feature_mean.size)}) differ from the training's {tuple(channels)} "
@@ -161,7 +173,11 @@ def train(photos: list[tuple[np.ndarray, np.ndarray]], *, channels: tuple[int, .
     loss_fn = nn.CrossEntropyLoss(weight=torch.tensor(weight, dtype=torch.float32))
     optimiser = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=1e-5)
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, steps)
-    draw = draw_weights(photos, even, per_kind)
+    if dark <= 0:
+        raise ValueError(f"--dark {dark}: a factor on the dark photos' draw weight, > 0")
+    draw = draw_weights(photos, even, per_kind, dark)
+    print(f"{int(dark_photos(photos).sum())} of {len(photos)} photos darker than {DARK}, drawn x{dark:g}",
+          file=sys.stderr)
     shutters = [shutter_parts(lab) for _, lab in photos] if close else None
     column = (float(mean[COLUMN]), float(std[COLUMN])) if features else (0.0, 1.0)
     t0, running = time.process_time(), 0.0
@@ -248,6 +264,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="photo draw weight = balcony + blind share + EVEN x the mean share")
     parser.add_argument("--per-kind", action="store_true",
                         help="draw weight from the balcony and the blind share each over its own mean")
+    parser.add_argument("--dark", type=float, default=1.0, metavar="FACTOR",
+                        help=f"draw the photos whose crop is darker than {DARK} mean luminance FACTOR times as often")
     parser.add_argument("--close-shutters", type=float, default=0.0, metavar="SHARE",
                         help="close this share of a blind photo's windows with its own shutters (0 to 1)")
     parser.add_argument("--lr", type=float, default=LEARNING_RATE, help="Adam's learning rate (cosine decay)")
@@ -266,7 +284,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     model = train(photos, channels=tuple(args.channels), features=args.features, steps=args.steps,
                   batch=args.batch, crop=args.crop, power=args.power, boost=dict(args.boost), even=args.even,
-                  per_kind=args.per_kind, close=args.close_shutters, lr=args.lr, init=init,
+                  per_kind=args.per_kind, dark=args.dark, close=args.close_shutters, lr=args.lr, init=init,
                   seed=args.seed)
     return save(model, model.arrays(), args)
 

@@ -92,6 +92,16 @@ def test_per_photo_draw_shares_set_the_pixels_drawn_from_each_photo():
     assert not all(np.array_equal(a, b) for a, b in zip(weights(even), weights(skewed)))
 
 
+def test_dark_photos_get_the_dark_factor_times_the_pixels_of_the_others():
+    from citygen_photo.train import pixel_shares
+    from citygen_photo.train_unet import DARK
+    photos = labelled_photos(3)
+    photos[0] = (photos[0][0] * (0.8 * DARK / photos[0][0].mean(axis=(0, 1)).max()), photos[0][1])
+    assert pixel_shares(photos, None, 1.0) is None  # the plain drawing, as shipped
+    shares = pixel_shares(photos, None, 2.0)
+    assert shares.sum() == pytest.approx(1) and shares.tolist() == pytest.approx([0.5, 0.25, 0.25])
+
+
 @pytest.mark.skipif(not (CMP / "cmp_b0031.jpg").is_file(), reason="CMP photos (shared data) not available")
 @pytest.mark.parametrize("number, floors", [(28, 4), (31, 4)])
 def test_floors_and_window_pixels_of_held_out_photos(number, floors):

@@ -9,8 +9,9 @@ import pytest
 
 from citygen_photo.features import FEATURES, pixel_features
 from citygen_photo.labels import CMP_LABELS
+from citygen_photo.photo import luminance
 from citygen_photo.train_fcn import COLUMN, label_weights
-from citygen_photo.train_unet import boosted, draw_batch, draw_weights, jittered, parse_boost
+from citygen_photo.train_unet import DARK, boosted, dark_photos, draw_batch, draw_weights, jittered, parse_boost
 from citygen_photo.unet import BASE_INPUTS, BOTTOM_DILATIONS, base_input, layer_shapes
 from tests.photo.synthetic import labelled_photos
 
@@ -39,6 +40,18 @@ def test_balcony_and_blind_photos_are_drawn_more_often():
     assert weights.sum() == pytest.approx(1)
     assert weights[1] > 2 * weights[0] and weights[0] == pytest.approx(weights[2])  # the others still drawn
     assert np.allclose(draw_weights(labelled_photos(2)), 0.5)  # no balcony anywhere: even
+
+
+def test_photos_darker_than_dark_are_drawn_the_dark_factor_more_often():
+    photos = labelled_photos(3)
+    mean = [luminance(work).mean() for work, _ in photos]
+    photos[1] = (photos[1][0] * (0.9 * DARK / mean[1]), photos[1][1])  # a crop darker than DARK on average
+    photos[2] = (photos[2][0] * (1.1 * DARK / mean[2]), photos[2][1])
+    assert dark_photos(photos).tolist() == [mean[0] < DARK, True, False]
+    even, tripled = draw_weights(photos), draw_weights(photos, dark=3.0)
+    assert tripled.sum() == pytest.approx(1)
+    assert tripled[1] / tripled[2] == pytest.approx(3 * even[1] / even[2])
+    assert np.array_equal(draw_weights(photos, dark=1.0), even)  # the default draw is unchanged
 
 
 def test_jitter_keeps_the_range_and_changes_the_colours():
