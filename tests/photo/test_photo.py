@@ -189,9 +189,7 @@ def test_cli_from_photo(tmp_path, capsys):
 
 @pytest.mark.parametrize("mode", ["I;16", "RGBA", "L"])
 def test_16bit_grayscale_photo(tmp_path, mode):
-    """Regression: ``convert("RGB")`` clipped 16-bit PNGs to white ("no repetition of floors"). Every mode gives
-    the facade's 5 floors and 6 tiles; how many of its windows the parser fits exactly is the trained weights'
-    (round 12's perceptrons shorten the RGBA photo's lowest row: 24 of 30)."""
+    """Regression: ``convert("RGB")`` clipped 16-bit PNGs to white ("no repetition of floors")."""
     image, truth, _ = facade()
     gray = image.mean(axis=2)
     if mode == "I;16":
@@ -201,8 +199,7 @@ def test_16bit_grayscale_photo(tmp_path, mode):
     path = tmp_path / "facade.png"
     pil.save(path)
     result = layout_from_photo(path, crop=(0, 0, 300, 300))
-    assert (len(result.floor_lines) - 1, len(result.tile_lines) - 1) == (5, 6)
-    assert matches(result.boxes("window"), truth) >= 0.8 * len(truth)
+    assert matches(result.boxes("window"), truth) == len(truth)
 
 
 @pytest.mark.parametrize("content", [b"not an image at all", b""])
