@@ -4,16 +4,15 @@ Needs scikit-learn (``pip install -e '.[photo-train]'``); the shipped model (``m
 by this script with its defaults, so the result is reproducible from the seed on the same photos. Photos
 cmp_b0061-0300 train; cmp_b0001-0040 are kept for evaluation (``benchmarks/photo_eval.py``) and never seen here.
 
-Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`), and
-``--samples`` pixels are drawn per photo on average (rare labels drawn more often; ``--dark`` times as many,
-``DARK_PIXELS`` 2, from a photo whose crop is darker than 0.45 on average, the held-out kind; round 12). Stage 1 is
-a multilayer perceptron on the pixel features; each further stage (``--stages``, auto-context) another one on the
-same features plus the previous stage's label probabilities around the pixel
-(:func:`citygen_photo.parser.context_features`). All are exported as plain weight arrays, with the ratio of each
-label's share of the photos to its share of the drawn pixels (``prior``), by which inference turns the last stage's
-output back into probabilities under the photos' own label frequencies; inference (:mod:`citygen_photo.parser`)
-needs numpy only. ``--validate`` trains on cmp_b0061-0260 and reports the per-class pixel accuracy on
-cmp_b0261-0300, the split every choice is made on.
+Each photo is cropped to its annotated facade box, reduced to the working size (:mod:`citygen_photo.features`),
+and ``--samples`` pixels are drawn per photo (rare labels drawn more often; ``--dark FACTOR``: FACTOR times as
+many from a photo whose crop is darker than 0.45 on average, the held-out kind). Stage 1 is a multilayer perceptron on
+the pixel features; each further stage (``--stages``, auto-context) another one on the same features plus the
+previous stage's label probabilities around the pixel (:func:`citygen_photo.parser.context_features`). All are
+exported as plain weight arrays, with the ratio of each label's share of the photos to its share of the drawn
+pixels (``prior``), by which inference turns the last stage's output back into probabilities under the photos'
+own label frequencies; inference (:mod:`citygen_photo.parser`) needs numpy only. ``--validate`` trains on
+cmp_b0061-0260 and reports the per-class pixel accuracy on cmp_b0261-0300, the split every choice is made on.
 """
 from __future__ import annotations
 
@@ -35,8 +34,6 @@ VALIDATION = range(261, 301)
 SAMPLES = 1500
 STAGES = 2
 HIDDEN = (64, 64)
-#: Pixels drawn from a photo whose crop is darker than 0.45 on average, in multiples of another's (round 12).
-DARK_PIXELS = 2.0
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "cmp_facade" / "base"
 
 
@@ -147,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-kind", type=float, metavar="EVEN",
                         help="pixels per photo in proportion to the U-Net's per-kind draw weight with this EVEN "
                              "(citygen_photo.train_unet.draw_weights): balcony and blind photos give more")
-    parser.add_argument("--dark", type=float, default=DARK_PIXELS, metavar="FACTOR",
+    parser.add_argument("--dark", type=float, default=1.0, metavar="FACTOR",
                         help="FACTOR times the pixels per photo where its crop is darker than 0.45 mean luminance "
                              "(citygen_photo.train_unet.DARK, the held-out kind)")
     add_training_arguments(parser)
