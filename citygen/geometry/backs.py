@@ -24,7 +24,7 @@ def balcony_doors(rects: np.ndarray, units: np.ndarray, balcony: np.ndarray, ope
     b, o = np.flatnonzero(balcony), np.flatnonzero(opening)
     if not len(b) or not len(o):
         return np.zeros(0, np.intp), np.zeros(0, np.intp)
-    # Balconies ranked by (unit, top edge), then left edge: a float key unit * _SPAN... per distinct (unit, top).
+    # Balconies sorted by one float key: the rank of their (unit, top edge), then their left edge.
     q_b = np.rint(rects[b, 3] / TOUCH).astype(np.int64)
     group_b = units[b].astype(np.int64) << 32 | q_b
     groups, rank = np.unique(group_b, return_inverse=True)
@@ -36,11 +36,10 @@ def balcony_doors(rects: np.ndarray, units: np.ndarray, balcony: np.ndarray, ope
     for dq in (0, -1, 1):  # (an edge within TOUCH may round to the next step)
         group_o = units[o].astype(np.int64) << 32 | (q_o + dq)
         at = np.minimum(np.searchsorted(groups, group_o), len(groups) - 1)
-        known = groups[at] == group_o
         k = np.searchsorted(key_b, at * _SPAN + rects[o, 0] + TOUCH, side="right") - 1
         k = np.maximum(k, 0)
         cand = b[k]
-        hit = (known & (pair < 0) & (units[cand] == units[o]) & (np.abs(rects[cand, 3] - rects[o, 1]) <= TOUCH)
+        hit = ((pair < 0) & (units[cand] == units[o]) & (np.abs(rects[cand, 3] - rects[o, 1]) <= TOUCH)
                & (rects[cand, 0] <= rects[o, 0] + TOUCH) & (rects[cand, 2] >= rects[o, 2] - TOUCH))
         pair[hit] = cand[hit]
     found = pair >= 0
@@ -68,8 +67,7 @@ def balcony_backs(rects: np.ndarray, units: np.ndarray, attachment: np.ndarray, 
         gaps = np.concatenate([np.column_stack([left, slab, rects[doors, 0], rects[under, 3]]),
                                np.column_stack([rects[doors, 2], slab, rects[under, 2], rects[under, 3]])[last]])
         balconies = under[first]
-        strips = np.column_stack([rects[balconies, :3], rects[balconies, 1]
-                                  + balcony_heights(rects[balconies, 3] - rects[balconies, 1])[0]])
+        strips = np.column_stack([rects[balconies, :3], slab[first]])
         pieces = np.concatenate([strips, gaps])
         keep = pieces[:, 2] - pieces[:, 0] > 1e-6
         backs.append(pieces[keep])
