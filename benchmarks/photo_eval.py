@@ -1,7 +1,7 @@
 """Evaluate ``citygen layout from-photo`` (mueller2007) on the CMP facade photos against their annotations.
 
     python benchmarks/photo_eval.py [DATA_DIR] [--first 1 --last 40 | --photos N ...] [--parser learned|contrast]
-        [--model M.npz ...] [--darker-than LUM]
+        [--model M.npz ...] [--darker-than LUM] [--annotated-labels]
 
 DATA_DIR defaults to ../shared/data/cmp_facade/base beside the checkout. Each photo is cropped to its annotated
 facade box; detected floors are compared with the annotated rows of windows (their count, which also counts floors
@@ -18,7 +18,10 @@ cmp_b0061-0300, so for it all of cmp_b0001-0040 is held out: its choices are mad
 (``--first 261 --last 300``) with models trained by ``python -m citygen_photo.train --validate -o M.npz`` and
 ``python -m citygen_photo.train_fcn --validate -o F.npz`` (``--model M.npz F.npz``: their mean, as shipped).
 ``--darker-than 0.45`` keeps the photos whose facade crop is darker than that on average: the validation subset
-matched to the held-out photos by a label-free property (docs/photo.md, round 10).
+matched to the held-out photos by a label-free property (docs/photo.md, round 10). ``--annotated-labels`` runs
+the learned path's structure on each photo's annotated label map instead of the parser's output: the figures a
+parser without mistakes would reach, which separates the structure's errors from the parser's (round 14).
+Annotated boxes whose centre lies outside the facade crop are not counted (the analysis never sees them).
 """
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.learned import analyse_learned
-from citygen_photo.parser import load_parser
+from citygen_photo.parser import WORK, load_parser
 from citygen_photo import PARSERS
 from citygen_photo.photo import analyse, load_photo, luminance
 from citygen_inverse.cmp import count_groups
@@ -55,6 +58,15 @@ def facade_crop(jpg: Path) -> tuple[tuple[int, int, int, int], dict]:
     return (round(fx0), round(fy0), round(fx1), round(fy1)), boxes
 
 
+def in_crop(boxes: list[tuple[float, ...]], crop: tuple[int, int, int, int]) -> list[tuple[float, ...]]:
+    """The annotated ``boxes`` whose centre lies in the facade ``crop``, in crop pixels: the analysis sees the crop
+    alone, and CMP annotates some windows, doors and shops of the neighbours or the street beyond the facade box
+    (until round 14 they were counted: a row above the crop or shops below it as floors the layout could not have)."""
+    x0, y0, x1, y1 = crop
+    return [(a - x0, b - y0, c - x0, d - y0) for a, b, c, d in boxes
+            if x0 <= (a + c) / 2 < x1 and y0 <= (b + d) / 2 < y1]
+
+
 def crop_luminance(jpg: Path) -> float:
     """The mean luminance (0..1) of the photo's facade crop: a label-free property that matches validation photos
     to the held-out kind (30 of the 40 held-out crops are darker than 0.45, 18 of the 56 validation and fold ones;
@@ -62,14 +74,38 @@ def crop_luminance(jpg: Path) -> float:
     return float(luminance(load_photo(jpg, facade_crop(jpg)[0])).mean())
 
 
-def evaluate(jpg: Path, parser: str = "learned", model=None) -> dict:
+class AnnotatedLabels:
+    """The photo's own label map as the learned parser's probabilities (``--annotated-labels``): the structure's
+    ceiling, what the layout would be with a parser that made no mistake. Each pixel gets ``1 - SOFT`` more of its
+    annotated label than of the others (a one-hot map leaves the structure's probability thresholds no margin)."""
+
+    SOFT = 0.2
+
+    def __init__(self, jpg: Path, crop: tuple[int, int, int, int]):
+        from PIL import Image
+        with Image.open(jpg.with_suffix(".png")) as image:
+            self.labels = np.asarray(image)[crop[1]:crop[3], crop[0]:crop[2]]
+
+    def probabilities(self, rgb: np.ndarray) -> np.ndarray:
+        h, w = rgb.shape[:2]
+        f = WORK / max(h, w)
+        shape = (max(8, round(h * f)), max(8, round(w * f)))
+        rows = np.minimum(((np.arange(shape[0]) + 0.5) * h / shape[0]).astype(int), h - 1)
+        cols = np.minimum(((np.arange(shape[1]) + 0.5) * w / shape[1]).astype(int), w - 1)
+        label = self.labels[np.ix_(rows, cols)].astype(int) - 1
+        prob = np.full((*shape, len(CMP_LABELS)), self.SOFT / len(CMP_LABELS))
+        np.put_along_axis(prob, label[..., None], 1 - self.SOFT + self.SOFT / len(CMP_LABELS), axis=-1)
+        return prob
+
+
+def evaluate(jpg: Path, parser: str = "learned", model=None, annotated: bool = False) -> dict:
     crop, boxes = facade_crop(jpg)
-    ref = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("window", [])]
-    doors = [(x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("door", [])]
+    if annotated:
+        parser, model = "learned", AnnotatedLabels(jpg, crop)
+    ref, doors, shops = (in_crop(boxes.get(name, []), crop) for name in ("window", "door", "shop"))
     row = {"photo": jpg.stem, "rows": count_groups([(b[1], b[3]) for b in ref]),
            "cols": count_groups([(b[0], b[2]) for b in ref]), "ref": len(ref), "door_ref": len(doors)}
-    row["storeys"] = row["rows"] + ground_without_windows(ref, [*doors, *(
-        (x0 - crop[0], y0 - crop[1], x1 - crop[0], y1 - crop[1]) for x0, y0, x1, y1 in boxes.get("shop", []))])
+    row["storeys"] = row["rows"] + ground_without_windows(ref, [*doors, *shops])
     start = time.process_time()
     try:
         image = load_photo(jpg, crop)
@@ -162,6 +198,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="learned (default): the trained parser; contrast: mueller2007's contrast test")
     parser.add_argument("--model", type=Path, nargs="+", default=[],
                         help="the learned parser's weights, several for their ensemble (default: the shipped parser)")
+    parser.add_argument("--annotated-labels", action="store_true",
+                        help="the learned path's structure on each photo's annotated label map instead of the "
+                             "parser's probabilities: the layout a parser without mistakes would give")
     args = parser.parse_args(argv)
     data = Path(args.data)
     model = load_parser(*args.model) if args.model else None
@@ -177,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{'tp':>4} {'prec':>5} {'rec':>5} {'lay':>4} {'ltp':>4} {'doors':>5} {'pred':>4} {'tp':>3} {'cpu s':>6}")
     rows = []
     for jpg in photos:
-        r = evaluate(jpg, args.parser, model)
+        r = evaluate(jpg, args.parser, model, args.annotated_labels)
         rows.append(r)
         if "error" in r:
             print(f"{r['photo']:10} {'':>9} {r['rows']:4d} {r['storeys']:3d} {'-':>6} {r['cols']:4d} {'-':>5} {r['ref']:4d} "

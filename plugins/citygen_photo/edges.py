@@ -1,4 +1,5 @@
-"""The floors at a facade's edges: an attic above the top row of windows, a ground floor below the bottom row.
+"""The floors at a facade's edges: an attic above the top row of windows, a basement row and a ground floor below
+the bottom row.
 
 The rows of windows in between repeat one another, so the parser's window probability and the floor period find
 them whatever the parser's small errors; the two edge floors do not repeat, and until round 8 they were decided by
@@ -11,6 +12,10 @@ retrained. Here each is decided by evidence integrated over its band:
   crop's top cuts to a sliver holds less of it: where the floor band one pitch above the top row leaves the photo,
   a run holding ``SLIVER_MASS`` is a row when the band's visible part repeats the same part of the floor below at
   least ``SLIVER_MI`` times as strongly as that part repeats between the rows found (Eq. 1 on the part alone).
+  The run needs wall between it and the top row (``ATTIC_WALL`` of a row's height: a transom on the row's windows
+  is their glass) and its centre ``ATTIC_GAP`` pitches above the row's.
+* **Basement** (cellar windows under the ground floor's, too few for the row mean): the attic's test on the
+  facade turned upside down, where no band of shops stands on the ground.
 * **Ground floor** (shops, an entrance, a plinth): the band below the bottom row is a floor when it is at least
   a pitch tall, or its shop + door probability summed over its rows reaches ``GROUND_SHOPS`` pitches (from
   ``GROUND_TALL`` pitches on, ``TALL_SHOPS``), or -- at least ``GROUND_LEAST`` pitches tall -- it repeats the same
@@ -30,9 +35,12 @@ from citygen_photo.labels import CMP_LABELS
 from citygen_photo.lattice import Similarity, floor_similarity, part_similarity
 
 DOOR, SHOP = (CMP_LABELS.index(n) for n in ("door", "shop"))
-#: An attic run lies at least ``ATTIC_GAP`` pitches above the top row's centre; its rows' highest window
-#: probability, smoothed over ``ATTIC_BOX`` pixels, above ``ATTIC_BASE``, sums to ``ATTIC_MASS`` row heights.
-ATTIC_GAP = 0.6
+#: An attic run's centre lies at least ``ATTIC_GAP`` pitches above the top row's centre, the run at least
+#: ``ATTIC_WALL`` row heights above the row (until round 14: the run cut off 0.6 pitches above the row's centre);
+#: its rows' highest window probability, smoothed over ``ATTIC_BOX`` pixels, above ``ATTIC_BASE``, sums to
+#: ``ATTIC_MASS`` row heights.
+ATTIC_GAP = 0.5
+ATTIC_WALL = 0.3
 ATTIC_BOX = 5
 ATTIC_BASE = 0.3
 ATTIC_MASS = 0.08
@@ -57,29 +65,39 @@ Span = tuple[float, float]
 
 def with_attic(window: np.ndarray, rows: list[Span], pitch: float, similar: Similarity | None = None) -> list[Span]:
     """``rows`` (top to bottom) with an attic row put on top: the run of the smoothed window probability's row
-    peak above ``ATTIC_BASE``, at least ``ATTIC_GAP`` pitches above the top row, that holds the most of it, when
+    peak above ``ATTIC_BASE``, ``ATTIC_WALL`` row heights above the top row and its centre ``ATTIC_GAP`` pitches
+    above the row's, that holds the most of it, when
     that reaches ``ATTIC_MASS`` of the rows' median height -- or, a row the crop's top cuts (``similar``: the MI
     of two intensity bands, see :func:`cut_row_repeats`), ``SLIVER_MASS``."""
     if not rows or pitch <= 0:
         return rows
-    top = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
+    height = float(np.median([y1 - y0 for y0, y1 in rows]))
+    top = rows[0][0] - ATTIC_WALL * height
     if top <= 2:
         return rows
     peak = uniform_filter(window[:int(top)], ATTIC_BOX, mode="nearest").max(axis=1)
     excess = np.clip(peak - ATTIC_BASE, 0.0, None)
     above = np.concatenate([[0], (excess > 0).astype(np.int8), [0]])
     edges = np.flatnonzero(np.diff(above))
-    runs = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
+    highest = (rows[0][0] + rows[0][1]) / 2 - ATTIC_GAP * pitch
+    runs = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if (a + b) / 2 <= highest]
     if not runs:
         return rows
     a, b = max(runs, key=lambda s: excess[s[0]:s[1]].sum())
-    height = float(np.median([y1 - y0 for y0, y1 in rows]))
     mass = excess[a:b].sum() / height
     if mass < ATTIC_MASS and not (mass >= SLIVER_MASS and similar is not None
                                   and cut_row_repeats(rows, pitch, similar, a)):
         return rows
     row = a + np.flatnonzero(peak[a:b] >= ATTIC_ROW)
     return [(float(row[0]), float(row[-1] + 1)) if row.size else (float(a), float(b)), *rows]
+
+
+def with_basement(window: np.ndarray, rows: list[Span], pitch: float) -> list[Span]:
+    """``rows`` with a row of basement windows put below the bottom row: the attic's test
+    (:func:`with_attic`) on the facade turned upside down."""
+    h = window.shape[0]
+    found = with_attic(window[::-1], [(h - b, h - a) for a, b in reversed(rows)], pitch)
+    return [(h - b, h - a) for a, b in reversed(found)]
 
 
 def cut_row_repeats(rows: list[Span], pitch: float, similar: Similarity, start: float) -> bool:

@@ -10,7 +10,8 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    floor period (§2.3's irreducible facade, :mod:`citygen_photo.symmetry`) confirms when the rows alone are too
    few; where that period is the rows' pitch (or two or three of them) it also checks the rows
    (:mod:`citygen_photo.lattice`: a strip between floors dropped, a row the intensity bands repeat put back). The
-   floors at the edges -- an attic row of a few dormers, a ground floor below the lowest row -- are decided by
+   floors at the edges -- an attic row of a few dormers, a basement row of cellar windows, a ground floor below
+   the lowest row -- are decided by
    evidence integrated over their bands (:mod:`citygen_photo.edges`); the glass of a band of shops and doors on
    the ground is not a row of windows. A floor line between two rows sits in the wall band between them,
    the least open stretch of the window + blind + balcony + door profile (a railing below a row is not wall).
@@ -36,7 +37,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from citygen.layout import FacadeLayout, Region
-from citygen_photo.edges import ground_floor, with_attic
+from citygen_photo.edges import ground_floor, with_attic, with_basement
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.lattice import Similarity, lattice_rows
 
@@ -163,6 +164,8 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     pitch = _pitch(rows, period)
     rows = synchronised(_with_missing_rows(rows, pitch))
     rows = with_attic(window, lattice_rows(rows, pitch, period, similar, shops or h), pitch, similar)
+    if shops is None:  # (below a band of shops, glass is the shops')
+        rows = with_basement(window, rows, pitch)
     openings = gaussian_filter1d((window + prob[..., BALCONY] + prob[..., DOOR]).mean(axis=1), 1.0)
     lines = [0.0, *(_wall_line(openings, upper, lower) for upper, lower in zip(rows, rows[1:]))]
     ground_top = ground_floor(prob, rows, pitch, shops, similar)

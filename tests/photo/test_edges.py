@@ -4,7 +4,7 @@ with the band one floor up; and the median floor MI shared with the lattice chec
 from __future__ import annotations
 
 import numpy as np
-from citygen_photo.edges import cut_row_repeats, ground_floor, with_attic
+from citygen_photo.edges import cut_row_repeats, ground_floor, with_attic, with_basement
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.lattice import floor_similarity, part_similarity
 from citygen_photo.regular import WINDOW, regular_facade
@@ -38,6 +38,33 @@ def test_an_attic_band_holding_a_dormer_is_a_row_a_faint_haze_is_not():
     haze[12:18, 50:70] = 0.55  # smoothed, a peak of 0.44-0.55 over 4 rows: an attic until round 8
     assert with_attic(haze, rows, 30.0) == rows
     assert with_attic(haze, rows, 0.0) == rows and with_attic(window, [], 30.0) == []
+
+
+def test_an_attic_row_close_above_the_top_row_is_a_row_a_transom_on_it_is_not():
+    """Regression (round 14, annotated label maps of cmp_b0227, b0219): a row of dormers 0.55-0.6 pitches above
+    the top row's centre was cut in half by the search's old limit (0.6 pitches above that centre) and lost. The
+    attic now only needs wall between it and the top row (``ATTIC_WALL`` of a row's height) and its centre
+    ``ATTIC_GAP`` pitches up; a transom right on top of the row's windows is their glass, not a row."""
+    rows = rows_at(60, 90, 120, height=16.0)  # top row 52-68, pitch 30
+    window = np.zeros((140, 120))
+    window[41:46, 20:40] = window[41:46, 70:90] = 0.9  # dormers 5 px tall, centre 43.5: 0.55 pitches up
+    found = with_attic(window, rows, 30.0)
+    assert len(found) == 4 and 40 <= found[0][0] and found[0][1] <= 47
+    transom = np.zeros((140, 120))
+    transom[46:51, 20:100] = 0.9  # a strip of glass 1 px above the row's windows
+    assert with_attic(transom, rows, 30.0) == rows
+
+
+def test_a_basement_row_below_the_bottom_row_is_a_row():
+    """Regression (round 14, annotated label maps of cmp_b0130, b0231): a row of small cellar windows under the
+    ground floor's windows was too little of the row profile for a run and fell into the floor above; the
+    attic's test on the facade turned upside down finds it. Without it the rows stay."""
+    rows = rows_at(20, 50, 80)
+    window = np.zeros((120, 120))
+    window[101:108, 10:30] = window[101:108, 90:110] = 0.9  # two windows 7 px tall, 24 px below the bottom row
+    found = with_basement(window, rows, 30.0)
+    assert found[:3] == rows and len(found) == 4 and 100 <= found[3][0] < found[3][1] <= 109
+    assert with_basement(np.zeros((120, 120)), rows, 30.0) == rows
 
 
 def test_a_thin_band_with_a_shop_front_is_a_ground_floor_a_bare_one_is_not():
