@@ -153,8 +153,8 @@ class GltfScene:
         offset = Y_UP[:3, :3] @ origin if placed else np.zeros(3)
         self._node(name, "world", _translate(offset), extras=extras)
         self.trs[name] = {"translation": np.round(offset, DECIMALS).tolist()}
-        for (label, material), mesh in geo.meshes.items():
-            self._mesh_node(f"{name}/{label}_{material}", name, mesh, local, material, label)
+        for (label, look), mesh in geo.meshes.items():
+            self._mesh_node(f"{name}/{label}_{look}", name, mesh, local, look, label)
         if geo.roof is not None:
             self._mesh_node(f"{name}/Roof", name, geo.roof, local, geo.roof_material, "roof")
         inst = geo.instances
@@ -204,9 +204,9 @@ class GltfScene:
                 for primitive in mesh["primitives"]:
                     views[tree["accessors"][primitive["indices"]]["bufferView"]]["target"] = ELEMENT_ARRAY_BUFFER
                     views[tree["accessors"][primitive["attributes"]["POSITION"]]["bufferView"]]["target"] = ARRAY_BUFFER
-        for material in tree.get("materials", []):
-            (r, g, b), roughness, metallic, opacity = material_look(material["name"], self.library)
-            material["pbrMetallicRoughness"] = {"baseColorFactor": [r, g, b, opacity], "metallicFactor": metallic,
+        for entry in tree.get("materials", []):
+            (r, g, b), roughness, metallic, opacity = material_look(entry["name"], self.library)
+            entry["pbrMetallicRoughness"] = {"baseColorFactor": [r, g, b, opacity], "metallicFactor": metallic,
                                                 "roughnessFactor": roughness}
 
     def export(self, binary: bool = True) -> bytes:
