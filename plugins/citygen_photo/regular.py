@@ -24,9 +24,9 @@ probabilities instead of in raw intensities, and writes it as a FacadeLayout:
    and columns within ``SAME_SIZE`` of the median take the median, so a regular facade gets one window size;
    each window then moves (its size kept) to where it holds the most glass probability. The windows behind
    railings (the balcony group) stop at one railing height, a balcony below them.
-4. **Ground floor**: shops and the entrance door from their own probabilities and their own columns (the upper
-   floors' tile lines do not cut a shop window); the door stands on the ground. Without a ground floor of its
-   own the door is looked for in the lowest floor and replaces the windows it overlaps.
+4. **Ground floor**: shops and doors from their own probabilities and their own columns (the upper floors' tile
+   lines do not cut a shop window); the doors stand on the ground and cut the shops they stand in. Without a
+   ground floor of its own the doors are looked for in the lowest floor and replace the windows they overlap.
 """
 from __future__ import annotations
 
@@ -71,8 +71,8 @@ PROFILE = 32
 #: A door found by its probability stands on the ground: its run of rows ends at most this share of the floor's
 #: height above the bottom.
 GROUNDED = 0.2
-#: A door in a lowest floor of windows is at least this share of the windows' median width (narrower runs of door
-#: probability there are frames or gaps between windows).
+#: A door is at least this share of the windows' median width (narrower runs of door probability are frames, gaps
+#: between windows, a dark strip in a shop front).
 DOOR_WIDTH = 0.6
 
 Span = tuple[float, float]
@@ -193,12 +193,12 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     elements = _relabelled(prob, _fitted(glass, elements))
     windows = [e for e in elements if e[1] == "window"]
     elements = _with_balconies(prob, windows) + [e for e in elements if e[1] != "window"]
+    widths = [box[2] - box[0] for box, label in elements if label == "window"]
+    least = DOOR_WIDTH * float(np.median(widths)) if widths else 0.0
     if ground_top is not None:
-        elements += _ground(prob, ground_top, door(ground_top) if door else None)
-    elif len(lines) > 2:  # (no ground floor of its own: the entrance is in the lowest floor)
-        found = _door(prob, lines[-2], door(lines[-2]) if door else None)
-        widths = [box[2] - box[0] for box, label in elements if label == "window"]
-        if found is not None and widths and found[2] - found[0] >= DOOR_WIDTH * float(np.median(widths)):
+        elements += _ground(prob, ground_top, door(ground_top) if door else None, least)
+    elif len(lines) > 2 and widths:  # (no ground floor of its own: the entrance is in the lowest floor)
+        for found in _doors(prob, lines[-2], door(lines[-2]) if door else None, least):
             elements = [(box, label) for box, label in elements if not _overlap(box, found)] + [(found, "door")]
     tile_pitch = float(np.median(np.diff([(c + d) / 2 for c, d in columns]))) if len(columns) > 1 else 0.0
     return RegularFacade(tuple(lines), tuple(tiles), tuple(elements), pitch, tile_pitch, ground_top is not None)
@@ -341,49 +341,49 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
     return (x0, y0, x1, y1) if x1 - x0 >= 1 and y1 - y0 >= 1 else None
 
 
-def _door(prob: np.ndarray, top: float, door: Box | None = None) -> Box | None:
-    """The entrance door of the floor ``top``..h standing on the ground: ``door`` when given (found by other
-    means), else the door probability's most probable run of columns (mean >= 0.15 there), if its rows reach the
-    ground (within ``GROUNDED`` of the floor's height: a dark window above a wall band is not a door)."""
-    if door is not None:
-        return door
+def _doors(prob: np.ndarray, top: float, door: Box | None = None, least: float = 0.0) -> list[Box]:
+    """The doors of the floor ``top``..h standing on the ground, left to right, each at least ``least`` wide: every
+    run of columns the door probability holds (mean >= 0.15 there) whose rows reach the ground (within
+    ``GROUNDED`` of the floor's height: a dark window above a wall band is not a door), and ``door`` (found by
+    other means: the entrance on the mirror axis) where it overlaps none of them."""
     h, w, _ = prob.shape
     band = prob[round(top):, :, DOOR]
-    columns = runs(band.mean(axis=0), share=0.5, least=max(2, round(0.02 * w)))
-    if not columns:
-        return None
-    c, d = max(columns, key=lambda s: band[:, int(s[0]):int(np.ceil(s[1]))].sum())
-    rows = runs(band[:, int(c):int(np.ceil(d))].mean(axis=1), share=0.5)
-    if rows and band[:, int(c):int(np.ceil(d))].mean() >= 0.15 and \
-            rows[-1][1] >= band.shape[0] - max(2.0, GROUNDED * band.shape[0]):
-        return _clip((c, top + rows[0][0], d, float(h)), w, h)
-    return None
+    found = []
+    for c, d in runs(band.mean(axis=0), share=0.5, least=max(2, round(0.02 * w))):
+        part = band[:, int(c):int(np.ceil(d))]
+        rows = runs(part.mean(axis=1), share=0.5)
+        if rows and part.mean() >= 0.15 and rows[-1][1] >= band.shape[0] - max(2.0, GROUNDED * band.shape[0]):
+            box = _clip((c, top + rows[0][0], d, float(h)), w, h)
+            if box:
+                found.append(box)
+    if door is not None:
+        found = [box for box in found if not _overlap(box, door)] + [door]
+    return sorted(box for box in found if box[2] - box[0] >= least)
 
 
 def _overlap(a: Box, b: Box) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
-def _ground(prob: np.ndarray, top: float, door: Box | None = None) -> list[tuple[Box, str]]:
-    """Shops and the entrance door of the ground floor (``top``..h), each on its own columns, standing on the
-    ground; the door (``door``, else the most probable door column) cuts the shop it falls in."""
+def _ground(prob: np.ndarray, top: float, door: Box | None = None, least: float = 0.0) -> list[tuple[Box, str]]:
+    """Shops and doors of the ground floor (``top``..h), each on its own columns, standing on the ground; the doors
+    (:func:`_doors`, at least ``least`` wide) cut the shops they fall in."""
     h, w, _ = prob.shape
     band = prob[round(top):]
     out: list[tuple[Box, str]] = []
-    door = _door(prob, top, door)
+    doors = _doors(prob, top, door, least)
     for c, d in runs(band[..., SHOP].mean(axis=0), share=0.5, least=max(2, round(0.03 * w))):
         rows = runs(band[:, int(c):int(np.ceil(d)), SHOP].mean(axis=1), share=0.5)
         if not rows:
             continue
-        pieces = [(c, d)] if door is None or door[2] <= c or door[0] >= d else \
-            [(c, door[0]), (door[2], d)]
+        pieces = [(c, d)]
+        for x0, _, x1, _ in doors:
+            pieces = [part for a, b in pieces for part in ([(a, b)] if x1 <= a or x0 >= b else [(a, x0), (x1, b)])]
         for a, b in pieces:
             box = _clip((a, top + rows[0][0], b, float(h)), w, h)
             if box and box[2] - box[0] >= 0.02 * w:
                 out.append((box, "shop"))
-    if door is not None:
-        out.append((door, "door"))
-    return out
+    return out + [(box, "door") for box in doors]
 
 
 def facade_layout(facade: RegularFacade, h: int, w: int, scale: float, meta: dict) -> FacadeLayout:
