@@ -44,6 +44,12 @@ from citygen_photo.lattice import Similarity, lattice_rows
 WINDOW, DOOR, SHOP, BLIND, BALCONY = (CMP_LABELS.index(n) for n in ("window", "door", "shop", "blind", "balcony"))
 #: A row or column belongs to a run of windows where its profile exceeds this share of the profile's high value.
 RUN_SHARE = 0.4
+#: Runs of the window profile closer than this share of their median length are one run (a row of windows split
+#: by a transom bar is one row) ...
+RUN_JOIN = 0.25
+#: ... but columns of windows only closer than this: twin windows a mullion apart are two windows, as CMP
+#: annotates them (until round 14 they were one box over both).
+COLUMN_JOIN = 0.1
 #: Rows (columns) of windows whose height (width) is within this share of the median take the median.
 SAME_SIZE = 0.25
 #: A tile holds a window when the mean window (or blind) probability in its box reaches this.
@@ -92,9 +98,10 @@ class RegularFacade:
     ground: bool
 
 
-def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2, floor: float = 0.08) -> list[Span]:
+def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2, floor: float = 0.08,
+         join: float = RUN_JOIN) -> list[Span]:
     """Spans ``[a, b)`` where ``profile`` exceeds ``share`` of its 95th percentile (and at least ``floor``), at
-    least ``least`` samples long; neighbours closer than a quarter of their median length are joined."""
+    least ``least`` samples long; neighbours closer than ``join`` of their median length are joined."""
     high = float(np.percentile(profile, 95)) if profile.size else 0.0
     above = profile > max(share * high, floor)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], above.astype(np.int8), [0]])))
@@ -102,7 +109,7 @@ def runs(profile: np.ndarray, share: float = RUN_SHARE, least: int = 2, floor: f
     if len(spans) < 2:
         return spans
     joined = [spans[0]]
-    close = 0.25 * float(np.median([b - a for a, b in spans]))
+    close = join * float(np.median([b - a for a, b in spans]))
     for a, b in spans[1:]:
         if a - joined[-1][1] < close:
             joined[-1] = (joined[-1][0], b)
@@ -177,11 +184,14 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
     inside = np.zeros(upper.shape[0], dtype=bool)
     for a, b in rows:
         inside[max(int(a), 0):min(int(np.ceil(b)), upper.shape[0])] = True
-    columns = runs(gaussian_filter1d(upper[inside].mean(axis=0), 1.0), least=max(2, round(0.01 * w))) \
+    columns = runs(gaussian_filter1d(upper[inside].mean(axis=0), 1.0), least=max(2, round(0.01 * w)),
+                   join=COLUMN_JOIN) \
         if inside.any() else []
     glass = prob[..., WINDOW]  # (sides from the glass alone: open shutters beside a window are not the window)
     rows = [_tightened(glass, row, columns, 0) for row in rows]  # each row's height from its windows' pixels
-    columns = synchronised([_tightened(glass[:upper.shape[0]], column, rows, 1) for column in columns])
+    mids = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
+    columns = synchronised([_tightened(glass[:upper.shape[0]], column, rows, 1, (mids[i], mids[i + 1]))
+                            for i, column in enumerate(columns)])
     rows = synchronised(rows)
     tiles = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
     elements: list[tuple[Box, str]] = []
@@ -306,10 +316,13 @@ def shop_band(prob: np.ndarray) -> float | None:
     return a if profile[int(a):int(np.ceil(b))].mean() >= SHOP_BAND else None
 
 
-def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) -> Span:
+def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int,
+               bounds: Span = (0.0, np.inf)) -> Span:
     """A row (``axis`` 0) or column (1) of windows narrowed to where the window probability, averaged over the
     ``across`` columns (rows) of windows, reaches ``TIGHT`` of its peak: every tile of the row votes on the
-    windows' common height (mueller2007 §3.2), so a sill or a blind reaching into one tile does not stretch it."""
+    windows' common height (mueller2007 §3.2), so a sill or a blind reaching into one tile does not stretch it.
+    The search reaches a quarter of the span beyond it, not past ``bounds`` (halfway to the neighbouring columns:
+    a twin window's glass is not this window's)."""
     if not across:
         return span
     n = window.shape[axis]
@@ -317,7 +330,7 @@ def _tightened(window: np.ndarray, span: Span, across: list[Span], axis: int) ->
     for a, b in across:
         mask[max(int(a), 0):min(int(np.ceil(b)), mask.size)] = True
     pad = 0.25 * (span[1] - span[0])
-    lo, hi = max(int(span[0] - pad), 0), min(int(np.ceil(span[1] + pad)), n)
+    lo, hi = max(int(max(span[0] - pad, bounds[0])), 0), min(int(np.ceil(min(span[1] + pad, bounds[1]))), n)
     block = window[lo:hi][:, mask] if axis == 0 else window[:, lo:hi][mask]
     profile = block.mean(axis=1 - axis) if block.size else np.zeros(0)
     if profile.size == 0 or profile.max() < 0.1:

@@ -280,3 +280,20 @@ def test_every_door_on_the_ground_is_a_door_and_cuts_the_shop_it_stands_in():
     assert shops == [(4, 40), (104, 118), (126, 140)]
     layout = facade_layout(facade_, prob.shape[0], prob.shape[1], 0.1, {})
     assert check_partition(layout) == [] and layout.count("door") == 3
+
+
+def test_twin_windows_a_mullion_apart_are_two_windows():
+    """Regression (round 14): columns of windows closer than a quarter of their width were joined, so twin
+    windows a mullion apart became one box over both; CMP annotates them as two, and on the training photos'
+    annotated label maps 26 % of the windows lay inside such a larger box. Columns now join only under
+    ``COLUMN_JOIN`` of their width (a gap of a pixel or two at the working size: a frame)."""
+    n = len(CMP_LABELS)
+    prob = np.zeros((90, 120, n))
+    prob[..., CMP_LABELS.index("facade")] = 1.0
+    for top in (8, 38, 68):
+        for left in range(0, 120, 30):
+            prob[top:top + 14, left + 4:left + 14] = np.eye(n)[WINDOW]  # twin windows 10 px wide,
+            prob[top:top + 14, left + 16:left + 26] = np.eye(n)[WINDOW]  # a 2 px mullion between them
+    windows = [box for box, label in regular_facade(prob).elements if label == "window"]
+    assert len(windows) == 24
+    assert all(9 <= box[2] - box[0] <= 11 for box in windows)
