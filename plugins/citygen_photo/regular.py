@@ -355,10 +355,11 @@ def _clip(box: Box, w: int, h: int) -> Box | None:
 
 
 def _doors(prob: np.ndarray, top: float, door: Box | None = None, least: float = 0.0) -> list[Box]:
-    """The doors of the floor ``top``..h standing on the ground, left to right, each at least ``least`` wide: every
-    run of columns the door probability holds (mean >= 0.15 there) whose rows reach the ground (within
-    ``GROUNDED`` of the floor's height: a dark window above a wall band is not a door), and ``door`` (found by
-    other means: the entrance on the mirror axis) where it overlaps none of them."""
+    """The doors of the floor ``top``..h standing on the ground, left to right, each at least ``least`` wide and
+    no wider than tall (a wider opening on the ground is a shop front, a gate, an arcade): every run of columns
+    the door probability holds (mean >= 0.15 there) whose rows reach the ground (within ``GROUNDED`` of the
+    floor's height: a dark window above a wall band is not a door), and ``door`` (found by other means: the
+    entrance on the mirror axis) in place of those it overlaps."""
     h, w, _ = prob.shape
     band = prob[round(top):, :, DOOR]
     found = []
@@ -369,9 +370,10 @@ def _doors(prob: np.ndarray, top: float, door: Box | None = None, least: float =
             box = _clip((c, top + rows[0][0], d, float(h)), w, h)
             if box:
                 found.append(box)
-    if door is not None:
+    found = [box for box in found if least <= box[2] - box[0] <= box[3] - box[1]]
+    if door is not None and least <= door[2] - door[0] <= door[3] - door[1]:
         found = [box for box in found if not _overlap(box, door)] + [door]
-    return sorted(box for box in found if box[2] - box[0] >= least)
+    return sorted(found)
 
 
 def _overlap(a: Box, b: Box) -> bool:

@@ -297,3 +297,15 @@ def test_twin_windows_a_mullion_apart_are_two_windows():
     windows = [box for box, label in regular_facade(prob).elements if label == "window"]
     assert len(windows) == 24
     assert all(9 <= box[2] - box[0] <= 11 for box in windows)
+
+
+def test_an_opening_on_the_ground_wider_than_tall_is_no_door():
+    """Regression (round 14, cmp_b0277): the mirror-axis door reached above the ground floor's top line and, cut
+    to it, was a box 46 px wide and 32 px tall over the entrance and two windows; the layout's door was 4.6 m
+    wide. A door is taller than wide: a wider opening on the ground is a shop front, a gate or an arcade."""
+    prob = probabilities(floors=4, cols=6, ground_h=30)  # its door: 50-60, 26 px tall
+    wide = (40.0, 124.0, 100.0, 150.0)  # 60 x 26 px, found by other means
+    facade_ = regular_facade(prob, door=lambda top: wide)
+    doors = [box for box, label in facade_.elements if label == "door"]
+    assert doors and all(b[2] - b[0] <= b[3] - b[1] for b in doors)
+    assert wide not in doors and [(round(b[0]), round(b[2])) for b in doors] == [(50, 60)]
