@@ -66,9 +66,9 @@ Span = tuple[float, float]
 def with_attic(window: np.ndarray, rows: list[Span], pitch: float, similar: Similarity | None = None) -> list[Span]:
     """``rows`` (top to bottom) with an attic row put on top: the run of the smoothed window probability's row
     peak above ``ATTIC_BASE``, ``ATTIC_WALL`` row heights above the top row and its centre ``ATTIC_GAP`` pitches
-    above the row's, that holds the most of it, when
-    that reaches ``ATTIC_MASS`` of the rows' median height -- or, a row the crop's top cuts (``similar``: the MI
-    of two intensity bands, see :func:`cut_row_repeats`), ``SLIVER_MASS``."""
+    above the row's, that holds the most of it, when that reaches ``ATTIC_MASS`` of the rows' median height -- or,
+    a row the crop's top cuts (``similar``: the MI of two intensity bands, see :func:`cut_row_repeats`),
+    ``SLIVER_MASS``."""
     if not rows or pitch <= 0:
         return rows
     height = float(np.median([y1 - y0 for y0, y1 in rows]))
