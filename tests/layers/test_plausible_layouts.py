@@ -143,9 +143,10 @@ def _assert_first_stack_design(layout: FacadeLayout, request: FacadeRequest) -> 
 
 
 def test_narrow_faces_fall_back_cleanly():
-    """A 2 m face has no room for the terraced house's bays: a plain wall saying why, not a broken layout."""
+    """A 1 m face has no room for the terraced house's narrowest variant (one window column between wall margins at
+    a third of their size): a plain wall saying why, not a broken layout (2 m faces dress since 5 Dec 2026)."""
     rs = load(ROOT / "rulesets" / "terraced_house.layers")
-    request = preview(2.0, 7.0)
+    request = preview(1.0, 7.0)
     layout = generate(rs, request)
     assert sorted(r.label for r in layout.leaves if r.label) == ["door", "wall", "wall", "wall"]   # the entrance
     assert check_request(layout, request) == []
