@@ -96,3 +96,23 @@ def test_regression_terraced_house_dresses_with_corner_strips(width, entrance):
     for r in layout.terminals():
         if r.label in ("window", "door", "shop", "balcony"):
             assert r.x >= 0.5 - 1e-6 and r.x + r.w <= width - 0.5 + 1e-6
+
+
+@pytest.mark.parametrize("width", [2.0, 3.0, 5.1, 5.5, 8.5, 14.0, 26.0])
+@pytest.mark.parametrize("height,storey", [(6.0, 3.0), (9.0, 2.6), (15.0, 3.6), (31.0, 3.0)])
+def test_regression_terraced_house_door_is_framed_by_wall_not_tight_on_the_corner(width, height, storey):
+    """The door filled the first window block (1.4-1.7 m wide) right after the 0.5 m corner margin, squeezed to
+    0.17 m on a 5.1 m face. It now stands in that block between wall pieces of its own layer (the door layer's
+    content 'Dw D Dw' shares the block's column, as DH DT shares the ground floor's): a 1 m door with wall on
+    both sides, at the face's left end, one per building (only the entrance face has one)."""
+    layout, request = dressed(width, height, storey)
+    (door,) = [r for r in layout.terminals() if r.label == "door"]
+    assert 0.9 <= door.w <= 1.2
+    assert door.x >= 0.4                                                      # margin and wall to the corner
+    beside = [r for r in layout.terminals() if r.layer == "entrance" and r.label == "wall" and r.y < 1e-6]
+    left = [r for r in beside if abs(r.x + r.w - door.x) < 1e-6]
+    right = [r for r in beside if abs(r.x - door.x - door.w) < 1e-6]
+    assert left and right and min(r.w for r in left + right) >= 0.2
+    other = dataclasses.replace(request, entrance=False)
+    clear_solved()
+    assert not [r for r in generate(load(HOUSE), other).terminals() if r.label == "door"]
