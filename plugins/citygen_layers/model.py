@@ -12,10 +12,13 @@ DIRECTIONS = ("x", "y")
 
 @dataclass(frozen=True)
 class Symbol:
-    """An abstract 1D element. ``size is None`` makes it *unsized* (§3.3): the solver chooses its size."""
+    """An abstract 1D element. ``size is None`` makes it *unsized* (§3.3): the solver chooses its size. ``least``
+    and ``most`` (``min=``, ``max=``, beyond the paper) bound the size of its visible letters."""
 
     name: str
     size: float | None = None
+    least: float | None = None
+    most: float | None = None
     label: str | None = None
     opaque: bool = False
     transparent: bool = False

@@ -223,12 +223,18 @@ class _FileParser:
                 attrs[key] = (_depth if key == "depth" else _number)(value, self.loc(n, col), key)
                 if key == "size" and attrs[key] < 0:  # type: ignore[operator]
                     raise ParseError("size must be non-negative", where=self.loc(n, col))
+            elif key in ("min", "max"):
+                attrs["least" if key == "min" else "most"] = _number(value, self.loc(n, col), key)
             elif key in ("label", "material", "asset"):
                 attrs[key] = None if value == "none" else value
             else:
                 raise ParseError(f"unknown symbol attribute {key!r}", where=self.loc(n, col),
-                                 hint="expected size=, label=, depth=, material=, asset= or a flag "
+                                 hint="expected size=, min=, max=, label=, depth=, material=, asset= or a flag "
                                       + "/".join(_FLAGS))
+        bounds = [attrs.get(k) for k in ("least", "size", "most")]
+        known = [b for b in bounds if b is not None]
+        if known != sorted(known) or any(b < 0 for b in known):  # type: ignore[operator]
+            raise ParseError(f"symbol {name!r}: expected 0 <= min <= size <= max", where=self.loc(n, words[1][1]))
         self.symbols[name] = Symbol(name, **attrs)  # type: ignore[arg-type]
 
     def _kw_counter(self, line: str, words: list[tuple[str, int]], n: int) -> None:

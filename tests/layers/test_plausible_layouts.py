@@ -215,3 +215,22 @@ def test_regression_a_sizing_squeezed_below_its_least_sizes_is_not_dressed(width
         assert min(r.w for r in layout.leaves if r.label == "wall") >= 0.8 / 3 - 1e-6
     else:
         assert "relaxed-sizing: x: minimum sizes dropped" in reasons[0]
+
+
+def test_symbol_min_and_max_bound_a_visible_letters_size():
+    """``min=``/``max=`` (beyond the paper) bound a letter where the least-squares sizing would stretch it: a
+    0.2 m band between two 1 m walls on a 4 m face stretches to 0.56 m unbounded, takes 0.5 m with max=0.5 (the
+    walls take the rest); a face with no room for its min is no layout."""
+    text = ("symbol A size=1 label=wall opaque\nsymbol L size=0.2 {range} label=ledge opaque\nsymbol P size=3 opaque\n"
+            "counter n in 0..\npattern Hx = A L A\npattern By = P^n\nlayer basic x=Hx y=By\nfloors basic\n")
+
+    def band(bounds, width):
+        clear_solved()
+        request = preview(width, 3.0, ground=3.0, entrance=False)
+        layout = generate(parse(text.format(range=bounds), "band.layers"), request)
+        return [r.w for r in layout.leaves if r.label == "ledge"], facade_outcome(layout, request)[0]
+
+    assert band("", 4.0) == ([pytest.approx(0.56)], "dressed")
+    assert band("min=0.1 max=0.5", 4.0) == ([pytest.approx(0.5)], "dressed")
+    assert band("min=0.2", 0.8)[1] == "fell-back"          # walls at a third (0.67 m) and the band's 0.2 m
+    assert band("", 0.8)[1] == "dressed"                   # without min the band may shrink to a third
