@@ -116,3 +116,14 @@ def test_regression_terraced_house_door_is_framed_by_wall_not_tight_on_the_corne
     other = dataclasses.replace(request, entrance=False)
     clear_solved()
     assert not [r for r in generate(load(HOUSE), other).terminals() if r.label == "door"]
+
+
+@pytest.mark.parametrize("width", [5.5, 8.5])
+@pytest.mark.parametrize("height,storey", [(3.0, 3.0), (4.5, 3.0), (9.0, 3.6), (12.0, 2.6), (15.0, 3.6),
+                                           (50.0, 3.6)])
+def test_regression_terraced_house_ledges_keep_a_ledges_size(width, height, storey):
+    """The ledges X and Y were free letters of the floor word and stretched to whatever the storeys left: 0.94 m
+    at 9 m with 3.6 m storeys, 0.7 m on a 4.5 m ground floor, 0.08 m at 3 m. They now declare 0.15-0.4 m."""
+    layout, _ = dressed(width, height, storey)
+    ledges = [r for r in layout.terminals() if r.label == "ledge"]
+    assert ledges and all(0.15 - 1e-6 <= r.h <= 0.4 + 1e-6 for r in ledges)
