@@ -147,6 +147,7 @@ class Ruleset:
     storeys: frozenset[str] = frozenset()   # empty: every letter of the floor word is a storey
     options: SolveOptions = SolveOptions()
     source: str = "<string>"
+    cut: bool = False       # occlusion cut: a shape partly covered by upper layers is cut to its uncovered pieces
 
     def layer(self, name: str) -> Layer:
         return next(layer for layer in self.layers if layer.name == name)

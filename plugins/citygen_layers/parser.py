@@ -151,6 +151,7 @@ class _FileParser:
         self.options: dict[str, float | int] = {}
         self.last_pattern: str | None = None
         self.storeys: frozenset[str] = frozenset()
+        self.cut = False
 
     def loc(self, line: int, col: int) -> SourceLocation:
         return SourceLocation(self.path, line, col)
@@ -184,6 +185,11 @@ class _FileParser:
         if len(words) != 2:
             raise ParseError("expected 'tolerance MU'", where=self.loc(n, words[0][1]))
         self.options["tolerance"] = _number(words[1][0], self.loc(n, words[1][1]), "tolerance")
+
+    def _kw_occlusion(self, line: str, words: list[tuple[str, int]], n: int) -> None:
+        if len(words) != 2 or words[1][0] not in ("drop", "cut"):
+            raise ParseError("expected 'occlusion drop' or 'occlusion cut'", where=self.loc(n, words[0][1]))
+        self.cut = words[1][0] == "cut"
 
     def _kw_budget(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         keys = {"expansions": int, "time": float, "candidates": int, "rounds": int, "samples": int,
@@ -370,7 +376,7 @@ class _FileParser:
         options = SolveOptions(**self.options)  # type: ignore[arg-type]
         return Ruleset(Path(self.path).stem, self.canvas, dict(self.symbols), dict(self.counters),
                        dict(self.patterns), tuple(self.layers), tuple(self.shapes), floors, self.storeys,
-                       options, self.path)
+                       options, self.path, self.cut)
 
 
 def _symbols_of(node: Node) -> set[str]:

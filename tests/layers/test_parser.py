@@ -32,6 +32,7 @@ def test_counting_reflection_and_substitution():
     ("symbol C size=-1\n", ":4:10", "non-negative"),
     ("symbol C size=1 min=1.2\n", ":4:8", "min <= size <= max"),
     ("symbol C min=0.5 max=0.2\n", ":4:8", "min <= size <= max"),
+    ("occlusion sometimes\n", ":4:1", "'occlusion cut'"),
 ])
 def test_errors_name_file_line_column(text, where, words):
     with pytest.raises(ParseError) as info:
