@@ -1,13 +1,16 @@
 """Occlusion of a layer's shapes by the visible shapes above (compose._occluded), and the cut of a shape partly
 covered (``occlusion cut``)."""
+from pathlib import Path
+
 import pytest
 from citygen_layers.compose import _occluded
 from citygen_layers.facade import clear_solved, generate
-from citygen_layers.parser import parse
+from citygen_layers.parser import load, parse
 
 from citygen.cli import facade_outcome
 from citygen.layout import check_partition
 from citygen.request import FacadeRequest
+from tests import sweep
 
 #: y spans of the terraced house at 8.5 x 19.5 m, 3 m storeys: a French window band and, above it, a railing band
 LOW = 3.9999999999999982
@@ -77,3 +80,21 @@ def test_regression_a_lower_wall_stands_in_front_of_an_upper_window_unless_cut(o
     if not in_front:     # the bay's sill and head pieces stay wall: with the windows they fill the bay's column
         column = [r for r in walls + windows if abs(r.x - windows[0].x) < 1e-6 and abs(r.w - windows[0].w) < 1e-6]
         assert sum(r.h for r in column) == pytest.approx(6.0) and len(column) == 3 * 2
+
+
+@pytest.mark.parametrize("width,height,storey", [(2.4, 9.0, 3.0), (6.0, 12.0, 2.6), (13.7, 19.5, 3.6)])
+def test_residential_house_hides_nothing_by_hand_and_no_wall_stands_in_front_of_a_window(width, height, storey):
+    """The house composites (occlusion cut) instead of hiding its window bays with visible=false."""
+    path = Path(__file__).resolve().parents[2] / "rulesets" / "residential_house.layers"
+    rs = load(path)
+    assert rs.cut and not [s for s in rs.shapes if s.visible is False]
+    clear_solved()
+    request = sweep.request(width, height, storey)
+    layout = generate(rs, request)
+    assert facade_outcome(layout, request) == ("dressed", [])
+    order = [c.layer for c in layout.root.children]
+    terms = [r for r in layout.leaves if r.label]
+    assert not [(a, b) for a in terms for b in terms if b.label in ("window", "door")
+                and order.index(a.layer) < order.index(b.layer) and a.depth > b.depth
+                and min(a.x + a.w, b.x + b.w) - max(a.x, b.x) > 1e-6
+                and min(a.y + a.h, b.y + b.h) - max(a.y, b.y) > 1e-6]
