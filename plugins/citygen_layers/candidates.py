@@ -190,32 +190,34 @@ class CandidateGenerator:
 
     def sized_words(self, pattern: str, raws: list[tuple[Raw, ...]], lo: float) -> list[tuple[Letter, ...]]:
         """Words of ``pattern`` whose size respects Eq. 7 (``lo <= |w| <= canvas + mu``), unsized symbols sampled;
-        the floor pattern instead must have one letter per floor, sized to the floor heights."""
+        the floor pattern instead must have one letter per floor, sized to the floor heights. Alternation choices
+        keep their lexicographic order (§5.1: the first alternative is the designer's first choice); the samples
+        of one choice come nearest the canvas first."""
         hi = self.spec.canvas + self.mu
-        out: list[tuple[Letter, ...]] = []
-        for raw in raws:
+        out: list[tuple[int, tuple[Letter, ...]]] = []      # (index of the raw word: its choices, word)
+        for index, raw in enumerate(raws):
             letters = [self._letter(r, self._pinned.get(r[0]) if pattern != self.spec.floor_pattern else None)
                        for r in raw]
             if pattern == self.spec.floor_pattern:
                 if len(self.spec.storey_letters(tuple(letters))) != len(self.spec.floor_heights):
                     continue
                 if not self.spec.storeys:   # every letter is a storey: sized to the floor heights, pinned
-                    out.append(tuple(self._letter(r, h) for r, h in zip(raw, self.spec.floor_heights)))
+                    out.append((index, tuple(self._letter(r, h) for r, h in zip(raw, self.spec.floor_heights))))
                     continue
             unsized = [i for i, letter in enumerate(letters) if letter.unsized]
             total = sum(letter.size for letter in letters)
             if not unsized:
                 if lo - 1e-9 <= total <= hi + 1e-9:
-                    out.append(tuple(letters))
+                    out.append((index, tuple(letters)))
                 continue
             n = len(unsized)
             for size in sample_sizes((lo - total) / n, (hi - total) / n, self.mu, self.ruleset.options.samples):
                 word = list(letters)
                 for i in unsized:
                     word[i] = self._letter(raw[i], size)
-                out.append(tuple(word))
-        out.sort(key=lambda w: abs(sum(letter.size for letter in w) - self.spec.canvas))
-        return out
+                out.append((index, tuple(word)))
+        out.sort(key=lambda e: (e[0], abs(sum(letter.size for letter in e[1]) - self.spec.canvas)))
+        return [word for _, word in out]
 
     def opaque_size(self, word: tuple[Letter, ...]) -> float:
         return sum(letter.size for letter in word if letter.opaque)

@@ -1,6 +1,7 @@
 """The outer product (§5): each layer's horizontal x vertical segments become its shapes; shapes get labels,
 depth and materials (§3.1, shape overrides per layer or pattern), masks and transparency hide shapes (§3.4),
-and shapes fully covered by upper layers are removed (§3.2, "a window fully covered by a wall can be omitted")."""
+and shapes fully covered by upper layers are removed (§3.2, "a window fully covered by a wall can be omitted").
+With ``occlusion cut`` a shape partly covered is cut to its uncovered pieces (the layers composite, §3.2)."""
 from __future__ import annotations
 
 import bisect
@@ -9,6 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout, Region
+from citygen.plausible import DEFAULT_RULES
 from citygen_layers.model import Layer, Ruleset, ShapeSpec
 from citygen_layers.sizing import Segment
 from citygen_layers.solver import DirectionSolution
@@ -95,7 +97,8 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
                 kind = kinds[vkey] = _row_cells(ruleset, layer, hseg, vs.letter, hole)
             layer_rows.append(kind)
         rows.append(layer_rows)
-    occluded = _occluded(grids, [[list(hidden) for _, hidden in layer_rows] for layer_rows in rows])
+    occluded, parts = _occluded(grids, [[list(hidden) for _, hidden in layer_rows] for layer_rows in rows],
+                                ruleset.cut)
     stamped = Region.stamped
     children = []
     for index, layer in enumerate(ruleset.layers):
@@ -105,8 +108,11 @@ def compose(ruleset: Ruleset, sx: DirectionSolution, sy: DirectionSolution, meta
             covered = occluded[index].get(j)
             if covered:
                 cells = [(hidden[i], False) if i in covered else cell for i, cell in enumerate(cells)]
-            terminals += [stamped(template, x, y, w, h) for (template, shown), (x, w) in zip(cells, xspans)
-                          if shown or w * h > 1e-12]
+            cut = parts[index].get(j, {})
+            terminals += [stamped(template, x, y, w, h) for i, ((template, shown), (x, w)) in
+                          enumerate(zip(cells, xspans)) if (shown or w * h > 1e-12) and i not in cut]
+            for i, pieces in cut.items():
+                terminals += _pieces(cells[i][0], hidden[i], pieces)
         children.append(Region(0.0, 0.0, width, height, layer.name, layer=layer.name, children=tuple(terminals)))
     root = Region(0.0, 0.0, width, height, ruleset.name, children=tuple(children))
     return FacadeLayout(width, height, root, meta or {})
@@ -138,10 +144,26 @@ def _row_cells(ruleset: Ruleset, layer: Layer, hseg: Sequence[Segment], v: Lette
     return cells, hidden
 
 
+def _pieces(shown: dict, hidden: dict, pieces: list[tuple[float, float, float, float, bool]]) -> list[Region]:
+    """A partly covered shape as its pieces: covered ones hidden; an uncovered one keeps the shape's look unless
+    nothing usable is left of it (a sliver, or an opening under its least size: wall there)."""
+    out = []
+    for x, y, w, h, free in pieces:
+        template = hidden
+        if free and min(w, h) >= DEFAULT_RULES.sliver - 1e-9:
+            least = DEFAULT_RULES.min_size.get(shown.get("label") or "", (0.0, 0.0))
+            template = shown
+            if w < least[0] - 1e-9 or h < least[1] - 1e-9:
+                template = {**shown, "label": "wall", "depth": shown["depth"] - LABEL_DEPTH.get(shown["label"], 0.0)}
+        out.append(Region.stamped(template, x, y, w, h))
+    return out
+
+
 def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tuple[float, float]]]],
-              visible: Sequence[Sequence[Sequence[int]]]) -> list[dict[int, set[int]]]:
+              visible: Sequence[Sequence[Sequence[int]]], cut: bool = False
+              ) -> tuple[list[dict[int, set[int]]], list[dict[int, dict[int, list]]]]:
     """Per layer, by grid row: the columns of the visible shapes fully covered by visible shapes of the layers
-    above.
+    above, and (``cut``) by column the pieces ``(x, y, w, h, uncovered)`` of the partly covered ones.
 
     ``grids`` holds each layer's horizontal and vertical spans ``(start, size)``, ``visible`` per layer and grid
     row the columns of its visible shapes. The canvas is cut at every cell border; ``covered[j]`` holds the
@@ -165,6 +187,7 @@ def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tupl
 
     covered = [0] * ny
     out: list[dict[int, set[int]]] = [{} for _ in grids]
+    parts: list[dict[int, dict[int, list]]] = [{} for _ in grids]
     for index in range(len(grids) - 1, -1, -1):
         xspans, yspans = grids[index]
         boxes = []
@@ -181,12 +204,38 @@ def _occluded(grids: Sequence[tuple[Sequence[tuple[float, float]], Sequence[tupl
                     cells = yrows[span_y] = rows(*span_y)
                 if all(covered[r] & mask == mask for r in cells):
                     out[index].setdefault(j, set()).add(i)
-                else:
-                    boxes.append((cells, mask))
+                    continue
+                if cut and any(covered[r] & mask for r in cells):
+                    parts[index].setdefault(j, {})[i] = _cut(xs, ys, span, span_y, mask, cells, covered)
+                boxes.append((cells, mask))
         for cells, mask in boxes:
             for r in cells:
                 covered[r] |= mask
-    return out
+    return out, parts
+
+
+def _cut(xs: Sequence[float], ys: Sequence[float], span: tuple[float, float], span_y: tuple[float, float],
+         mask: int, cells: range, covered: Sequence[int]) -> list[tuple[float, float, float, float, bool]]:
+    """The rectangles ``(x, y, w, h, uncovered)`` tiling a cell whose fine cells are ``mask`` x ``cells``: per run
+    of fine rows with the same covered bits, one rectangle per run of equal bits (the cell's own edges kept)."""
+    lo, hi = (mask & -mask).bit_length() - 1, mask.bit_length()
+    x_edges = [span[0], *xs[lo + 1:hi], span[0] + span[1]]
+    y_edges = [span_y[0], *(ys[r] for r in cells[1:]), span_y[0] + span_y[1]]
+    pieces = []
+    start = 0
+    for k in range(len(cells) + 1):
+        if k < len(cells) and k > start and covered[cells[k]] & mask == covered[cells[start]] & mask:
+            continue
+        if k > start:
+            row = covered[cells[start]] & mask
+            run = 0
+            for b in range(hi - lo + 1):
+                if b == hi - lo or (row >> (lo + b) & 1) != (row >> (lo + run) & 1):
+                    pieces.append((x_edges[run], y_edges[start], x_edges[b] - x_edges[run],
+                                   y_edges[k] - y_edges[start], not row >> (lo + run) & 1))
+                    run = b
+        start = k
+    return pieces
 
 
 def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: tuple[float, float]

@@ -6,7 +6,7 @@ from dataclasses import replace
 from citygen.entrance import enforce_entrance
 from citygen.gcpause import cyclic_gc_paused
 from citygen.layout import FLOOR_BOUND_LABELS, FacadeLayout
-from citygen.plausible import check_plausible, plain_wall, summary
+from citygen.plausible import Finding, check_plausible, plain_wall, summary
 from citygen.request import FacadeRequest
 from citygen_layers.alternatives import Alternatives, blamed_axes, clear_solved
 from citygen_layers.candidates import Candidate
@@ -106,6 +106,12 @@ def _layout(ruleset: Ruleset, request: FacadeRequest, sx: DirectionSolution, sy:
     return layout
 
 
+def _relaxed(solution: DirectionSolution) -> Finding:
+    """A direction whose sizing broke the stack's own rules to fit (letters below a third of their size,
+    synchronisation, bands or pins dropped: a best-effort squeeze) makes no plausible layout, whatever its sizes."""
+    return Finding("relaxed-sizing", f"{solution.axis}: {solution.sizing.relaxed[-1]}")
+
+
 @cyclic_gc_paused()
 def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack): the first
@@ -121,11 +127,12 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
             break
         tries += 1
         layout = _layout(ruleset, request, sx, sy)
-        findings = check_plausible(layout, request)
+        squeezed = [s for s in (sx, sy) if s.sizing.relaxed]
+        findings = [*map(_relaxed, squeezed), *check_plausible(layout, request)]
         if not findings:
             return layout if tries == 1 else replace(layout, meta={**layout.meta, "tries": tries})
         first = first or (layout, findings)
-        axes = blamed_axes(findings)
+        axes = blamed_axes(findings[len(squeezed):]) | {s.axis for s in squeezed}
         i, j = i + ("x" in axes), j + ("y" in axes)
     layout, findings = first
     plain = plain_wall(request, f"no plausible layer-stack layout in {tries} tried: {summary(findings)}", findings,

@@ -12,10 +12,13 @@ DIRECTIONS = ("x", "y")
 
 @dataclass(frozen=True)
 class Symbol:
-    """An abstract 1D element. ``size is None`` makes it *unsized* (§3.3): the solver chooses its size."""
+    """An abstract 1D element. ``size is None`` makes it *unsized* (§3.3): the solver chooses its size. ``least``
+    and ``most`` (``min=``, ``max=``, beyond the paper) bound the size of its visible letters."""
 
     name: str
     size: float | None = None
+    least: float | None = None
+    most: float | None = None
     label: str | None = None
     opaque: bool = False
     transparent: bool = False
@@ -144,6 +147,7 @@ class Ruleset:
     storeys: frozenset[str] = frozenset()   # empty: every letter of the floor word is a storey
     options: SolveOptions = SolveOptions()
     source: str = "<string>"
+    cut: bool = False       # occlusion cut: a shape partly covered by upper layers is cut to its uncovered pieces
 
     def layer(self, name: str) -> Layer:
         return next(layer for layer in self.layers if layer.name == name)

@@ -151,6 +151,7 @@ class _FileParser:
         self.options: dict[str, float | int] = {}
         self.last_pattern: str | None = None
         self.storeys: frozenset[str] = frozenset()
+        self.cut = False
 
     def loc(self, line: int, col: int) -> SourceLocation:
         return SourceLocation(self.path, line, col)
@@ -184,6 +185,11 @@ class _FileParser:
         if len(words) != 2:
             raise ParseError("expected 'tolerance MU'", where=self.loc(n, words[0][1]))
         self.options["tolerance"] = _number(words[1][0], self.loc(n, words[1][1]), "tolerance")
+
+    def _kw_occlusion(self, line: str, words: list[tuple[str, int]], n: int) -> None:
+        if len(words) != 2 or words[1][0] not in ("drop", "cut"):
+            raise ParseError("expected 'occlusion drop' or 'occlusion cut'", where=self.loc(n, words[0][1]))
+        self.cut = words[1][0] == "cut"
 
     def _kw_budget(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         keys = {"expansions": int, "time": float, "candidates": int, "rounds": int, "samples": int,
@@ -223,12 +229,18 @@ class _FileParser:
                 attrs[key] = (_depth if key == "depth" else _number)(value, self.loc(n, col), key)
                 if key == "size" and attrs[key] < 0:  # type: ignore[operator]
                     raise ParseError("size must be non-negative", where=self.loc(n, col))
+            elif key in ("min", "max"):
+                attrs["least" if key == "min" else "most"] = _number(value, self.loc(n, col), key)
             elif key in ("label", "material", "asset"):
                 attrs[key] = None if value == "none" else value
             else:
                 raise ParseError(f"unknown symbol attribute {key!r}", where=self.loc(n, col),
-                                 hint="expected size=, label=, depth=, material=, asset= or a flag "
+                                 hint="expected size=, min=, max=, label=, depth=, material=, asset= or a flag "
                                       + "/".join(_FLAGS))
+        bounds = [attrs.get(k) for k in ("least", "size", "most")]
+        known = [b for b in bounds if b is not None]
+        if known != sorted(known) or any(b < 0 for b in known):  # type: ignore[operator]
+            raise ParseError(f"symbol {name!r}: expected 0 <= min <= size <= max", where=self.loc(n, words[1][1]))
         self.symbols[name] = Symbol(name, **attrs)  # type: ignore[arg-type]
 
     def _kw_counter(self, line: str, words: list[tuple[str, int]], n: int) -> None:
@@ -364,7 +376,7 @@ class _FileParser:
         options = SolveOptions(**self.options)  # type: ignore[arg-type]
         return Ruleset(Path(self.path).stem, self.canvas, dict(self.symbols), dict(self.counters),
                        dict(self.patterns), tuple(self.layers), tuple(self.shapes), floors, self.storeys,
-                       options, self.path)
+                       options, self.path, self.cut)
 
 
 def _symbols_of(node: Node) -> set[str]:

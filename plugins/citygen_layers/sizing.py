@@ -20,7 +20,8 @@ from citygen_layers.candidates import Row
 from citygen_layers.lsq import solve_lsq
 from citygen_layers.words import Letter
 
-#: Constraint kinds given up, in order, when the system has no solution (each step is reported).
+#: Constraint kinds given up, in order, when the system has no solution (each step is reported; "least" includes
+#: the symbols' min= and max=).
 RELAXATIONS = (((), ""),
                (("least",), "minimum sizes dropped (letters shrink below a third of their size)"),
                (("least", "sync"), "synchronisation of symbol sizes dropped (pins and bands leave no common size)"),
@@ -69,9 +70,12 @@ class Sizing:
 
 def size_matrices(matrices: Sequence[Matrix], canvas: float,
                   pins: Mapping[tuple[str, str], Sequence[tuple[float, float]]] | None = None,
-                  bands: Mapping[tuple[str, str], Mapping[int, tuple[float, float]]] | None = None) -> Sizing:
-    """Solve §5.3 for all matrices of one direction (cross-group constraints through shared prototypes)."""
-    pins, bands = pins or {}, bands or {}
+                  bands: Mapping[tuple[str, str], Mapping[int, tuple[float, float]]] | None = None,
+                  ranges: Mapping[str, tuple[float | None, float | None]] | None = None) -> Sizing:
+    """Solve §5.3 for all matrices of one direction (cross-group constraints through shared prototypes).
+    ``ranges`` are the symbols' declared ``(min, max)``: a visible letter keeps its min (instead of a third of its
+    size) and its max."""
+    pins, bands, ranges = pins or {}, bands or {}, ranges or {}
     nvar = 0
     letter_vars: dict[tuple[str, str], list[list[int]]] = {}
     border_vars: dict[str, list[int]] = {}
@@ -120,7 +124,10 @@ def size_matrices(matrices: Sequence[Matrix], canvas: float,
                 s, t = letter_vars[key][i]
                 ineq.append(({s: 1.0, t: -1.0}, 0.0, "order"))
                 if not (letter.transparent or letter.unsized) and letter.size > 0.0 and key not in pins:
-                    ineq.append(({s: 1.0, t: -1.0}, -LEAST * letter.size, "least"))
+                    least, most = ranges.get(letter.symbol, (None, None))
+                    ineq.append(({s: 1.0, t: -1.0}, -(LEAST * letter.size if least is None else least), "least"))
+                    if most is not None:
+                        ineq.append(({t: 1.0, s: -1.0}, most, "least"))
                 if key in pins:
                     lo, hi = pins[key][i]
                     eq_rows += [({s: 1.0}, lo, "pin"), ({t: 1.0}, hi, "pin")]

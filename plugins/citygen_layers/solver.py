@@ -242,11 +242,12 @@ def _sized(ruleset: Ruleset, spec: DirectionSpec, candidate: Candidate, matrices
                 storey_bands.setdefault((r.group, r.pattern), {}).update(zip(storeys, floors))
             else:
                 pins[(r.group, r.pattern)] = floors
-    sizing = size_matrices(matrices, spec.canvas, pins, _merge(band_map, storey_bands))
+    ranges = {s.name: (s.least, s.most) for s in ruleset.symbols.values() if (s.least, s.most) != (None, None)}
+    sizing = size_matrices(matrices, spec.canvas, pins, _merge(band_map, storey_bands), ranges)
     if sizing.success and spec.axis == "y" and floor_lines and bands is not None:
         extra = _floor_bands(sizing, band_map, floor_lines)
         if extra:
-            sizing = size_matrices(matrices, spec.canvas, pins, _merge(extra, storey_bands))
+            sizing = size_matrices(matrices, spec.canvas, pins, _merge(extra, storey_bands), ranges)
     if not sizing.success:
         raise RulesetError(f"sizing failed in direction {spec.axis}: {sizing.message}", where=ruleset.source,
                            plugin="layers")

@@ -30,8 +30,18 @@ def test_counting_reflection_and_substitution():
     ("pattern P = A ; z := B\n", ":4:17", "does not occur"),
     ("pattern P = A^k\npattern R = B^k\nlayer l x=P y=R\n", ":5:15", "both directions"),
     ("symbol C size=-1\n", ":4:10", "non-negative"),
+    ("symbol C size=1 min=1.2\n", ":4:8", "min <= size <= max"),
+    ("symbol C min=0.5 max=0.2\n", ":4:8", "min <= size <= max"),
+    ("occlusion sometimes\n", ":4:1", "'occlusion cut'"),
 ])
 def test_errors_name_file_line_column(text, where, words):
     with pytest.raises(ParseError) as info:
         parse(HEAD + text, "stack.layers")
     assert f"stack.layers{where}" in str(info.value) and words in str(info.value)
+
+
+def test_symbol_size_range():
+    rs = parse("symbol X size=0.25 min=0.15 max=0.4 label=ledge\nsymbol U max=2\npattern P = X U\n"
+               "layer l x=P y=P\n")
+    assert (rs.symbols["X"].least, rs.symbols["X"].size, rs.symbols["X"].most) == (0.15, 0.25, 0.4)
+    assert (rs.symbols["U"].least, rs.symbols["U"].size, rs.symbols["U"].most) == (None, None, 2.0)
