@@ -84,3 +84,14 @@ def test_terraced_house_keeps_its_bays_where_they_fit():
 def test_terraced_house_face_too_narrow_for_a_window_block_falls_back():
     layout, request = layout_of("terraced_house.layers", 1.0, 9.0, 3.0, entrance=False)
     assert facade_outcome(layout, request)[0] == "fell-back"
+
+
+@pytest.mark.parametrize("width", [2.4, 3.2, 4.0])
+@pytest.mark.parametrize("height,storey", [(7.0, 3.5), (7.0, 3.0), (10.0, 3.3)])
+def test_regression_terraced_house_narrow_face_glazes_its_terrace_storey(width, height, storey):
+    """The narrow variant was the window block W, which the bays leave blank on the terrace storey (glazed over
+    the balcony blocks B only): a two-storey narrow face had a blank upper storey. Its block V is glazed there."""
+    layout, request = layout_of("terraced_house.layers", width, height, storey, entrance=False)
+    assert facade_outcome(layout, request) == ("dressed", [])
+    top = len(request.floor_lines) - 2
+    assert [r for r in layout.leaves if r.label == "window" and storey_of(request, r) == top]
