@@ -37,11 +37,13 @@ from citygen_inverse.cmp import import_cmp
 from citygen_inverse.extract import extract_grammar
 from citygen_photo.labels import CMP_LABELS
 from citygen_photo.learned import analyse_learned
-from citygen_photo.parser import WORK, load_parser
+from citygen_photo.features import working_shape
+from citygen_photo.parser import load_parser
 from citygen_photo import PARSERS
 from citygen_photo.photo import analyse, load_photo, luminance
 from citygen_inverse.cmp import count_groups
 from citygen_photo.score import cmp_boxes, facade_box, layout_boxes, matches
+from citygen_photo.train import _resized_labels
 
 #: Development photos (cmp_b0001-0020): tune only on these; cmp_b0021-0040 are held out.
 DEV = range(1, 21)
@@ -87,12 +89,8 @@ class AnnotatedLabels:
             self.labels = np.asarray(image)[crop[1]:crop[3], crop[0]:crop[2]]
 
     def probabilities(self, rgb: np.ndarray) -> np.ndarray:
-        h, w = rgb.shape[:2]
-        f = WORK / max(h, w)
-        shape = (max(8, round(h * f)), max(8, round(w * f)))
-        rows = np.minimum(((np.arange(shape[0]) + 0.5) * h / shape[0]).astype(int), h - 1)
-        cols = np.minimum(((np.arange(shape[1]) + 0.5) * w / shape[1]).astype(int), w - 1)
-        label = self.labels[np.ix_(rows, cols)].astype(int) - 1
+        shape = working_shape(*rgb.shape[:2])
+        label = _resized_labels(self.labels, shape).astype(int) - 1
         prob = np.full((*shape, len(CMP_LABELS)), self.SOFT / len(CMP_LABELS))
         np.put_along_axis(prob, label[..., None], 1 - self.SOFT + self.SOFT / len(CMP_LABELS), axis=-1)
         return prob

@@ -28,9 +28,14 @@ def working_image(rgb: np.ndarray, work: int = WORK) -> np.ndarray:
     repeated beyond the border: zoom's default constant mode made the last row or column black on some sizes
     (round 6)."""
     h, w = rgb.shape[:2]
-    f = work / max(h, w)
-    shape = (max(8, round(h * f)), max(8, round(w * f)))
+    shape = working_shape(h, w, work)
     return np.clip(zoom(rgb, (shape[0] / h, shape[1] / w, 1), order=1, mode="nearest"), 0.0, 1.0)
+
+
+def working_shape(h: int, w: int, work: int = WORK) -> tuple[int, int]:
+    """The ``(rows, columns)`` of an ``h x w`` image resampled so its longest side is ``work`` pixels."""
+    f = work / max(h, w)
+    return max(8, round(h * f)), max(8, round(w * f))
 
 
 def pixel_features(rgb: np.ndarray) -> np.ndarray:
