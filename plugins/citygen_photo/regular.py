@@ -362,16 +362,18 @@ def _doors(prob: np.ndarray, top: float, door: Box | None = None, least: float =
     entrance on the mirror axis) in place of those it overlaps."""
     h, w, _ = prob.shape
     band = prob[round(top):, :, DOOR]
+
+    def shaped(box: Box) -> bool:
+        return least <= box[2] - box[0] <= box[3] - box[1]
     found = []
     for c, d in runs(band.mean(axis=0), share=0.5, least=max(2, round(0.02 * w))):
         part = band[:, int(c):int(np.ceil(d))]
         rows = runs(part.mean(axis=1), share=0.5)
         if rows and part.mean() >= 0.15 and rows[-1][1] >= band.shape[0] - max(2.0, GROUNDED * band.shape[0]):
             box = _clip((c, top + rows[0][0], d, float(h)), w, h)
-            if box:
+            if box and shaped(box):
                 found.append(box)
-    found = [box for box in found if least <= box[2] - box[0] <= box[3] - box[1]]
-    if door is not None and least <= door[2] - door[0] <= door[3] - door[1]:
+    if door is not None and shaped(door):
         found = [box for box in found if not _overlap(box, door)] + [door]
     return sorted(found)
 
