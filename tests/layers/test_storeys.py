@@ -186,3 +186,26 @@ def test_regression_tenement_windows_are_not_behind_the_wall_layer_and_keep_thei
     lines = np.asarray(request.floor_lines)
     for k, spans in windows_by_storey(layout, lines).items():
         assert all(b >= lines[k] + 0.3 and t <= lines[k + 1] - 0.2 for b, t in spans)
+
+
+@pytest.mark.parametrize("width,height,storey", [(6.0, 12.0, 3.3), (12.0, 16.0, 3.6), (6.0, 22.0, 3.0),
+                                                 (15.0, 30.0, 4.0), (24.0, 20.0, 2.8)])
+def test_regression_tenement_windows_stand_on_their_balconies(width, height, storey):
+    """Over a sweep, 3,306 of 10,773 tenement balconies had no French window on them: the railing (Bf) and the
+    band under the window (Lb) were different letters sized apart, so the window floated over the railing or on a
+    sill between them, and the builder gave the balcony no door. The railing is now the band Lb itself, the sills
+    stand only under the other storeys' windows, and a sill stays a ledge (N: 0.08-0.16 m; it had grown to 0.41 m)."""
+    from citygen.geometry.backs import balcony_doors
+
+    clear_solved()
+    request = sweep.request(width, height, storey)
+    layout = generate(load(ROOT / "rulesets" / "tenement.layers"), request)
+    assert facade_outcome(layout, request)[0] == "dressed"
+    leaves = [r for r in layout.terminals() if r.label]
+    rects = np.array([[r.x, r.y, r.x + r.w, r.y + r.h] for r in leaves])
+    labels = np.array([r.label for r in leaves])
+    balcony = labels == "balcony"
+    _, under = balcony_doors(rects, np.zeros(len(rects), np.int64), balcony, labels == "window")
+    assert balcony.sum() and set(under.tolist()) == set(np.flatnonzero(balcony).tolist())
+    sills = rects[labels == "sill"]
+    assert len(sills) and np.all((sills[:, 3] - sills[:, 1] >= 0.08 - 1e-6) & (sills[:, 3] - sills[:, 1] <= 0.16 + 1e-6))
