@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CASES = [
     ("Fig. 5 house (3 layers)", ROOT / "rulesets" / "residential_house.layers", FacadeRequest(6.0, 3.0, (0.0, 1.6, 3.0), True)),
     ("terraced house (3 layers)", ROOT / "rulesets" / "terraced_house.layers", FacadeRequest.preview(14, 16, 3.0, 4.0)),
-    ("tenement (8 layers, 30 symbols)", ROOT / "rulesets" / "tenement.layers", FacadeRequest.preview(16, 15, 3.0, 4.0)),
+    ("tenement (8 layers, 28 symbols)", ROOT / "rulesets" / "tenement.layers", FacadeRequest.preview(16, 15, 3.0, 4.0)),
     ("26-layer stack", ROOT / "benchmarks" / "data" / "layers" / "tonhalle26.layers",
      FacadeRequest.preview(24, 19, 3.0, 4.5, entrance=False)),
     ("under-constrained (budget)", ROOT / "benchmarks" / "data" / "layers" / "underconstrained.layers",
