@@ -105,6 +105,11 @@ class Region:
         return replace(self, x=self.x + dx, y=self.y + dy,
                        children=tuple(c.translated(dx, dy) for c in self.children))
 
+    def mirrored(self, width: float) -> Region:
+        """This region and its subtree reflected across the vertical line ``x = width / 2`` (x runs the other way);
+        children keep their order (a layer stack's root lists its layers bottom first)."""
+        return replace(self, x=width - self.x - self.w, children=tuple(c.mirrored(width) for c in self.children))
+
     def moved(self, dx: float, dy: float) -> Region:
         """:meth:`translated`, made lazily: an inner region's copy makes its children (copies moved alike) when
         they are first read, so a generator that repeats a subtree pays one object per copy until a consumer walks
@@ -307,6 +312,10 @@ class FacadeLayout:
         known = self.__dict__
         out.__dict__.update({name: known[name] for name in _LEAF_DATA if name in known})
         return out
+
+    def mirrored(self, meta: Mapping[str, Any]) -> FacadeLayout:
+        """This layout reflected left to right (:meth:`Region.mirrored`), with ``meta``."""
+        return FacadeLayout(self.width, self.height, self.root.mirrored(self.width), meta)
 
     def to_json(self) -> dict[str, Any]:
         return {"schema_version": SCHEMA_VERSION, "width": self.width, "height": self.height,

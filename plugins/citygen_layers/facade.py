@@ -117,7 +117,16 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     """The layout of ``ruleset`` for ``request`` (see docs/layers.md for how requests bind the stack): the first
     pair of direction solutions whose layout :func:`citygen.plausible.check_plausible` accepts, advancing the
     direction(s) each layout's findings blame; a plain wall (with the entrance's door) and the findings when none is
-    within ``TRIES``."""
+    within ``TRIES``. With ``mirror building`` half of the buildings (by their style seed, every face alike) take
+    the mirror image: the stack solved with the corner strips swapped, reflected left to right."""
+    if ruleset.mirror and request.style_rng("layers", "mirror").random() < 0.5:
+        swapped = replace(request, corner_widths=request.corner_widths[::-1])
+        layout = _generate(ruleset, swapped)
+        return layout.mirrored({**layout.meta, "mirrored": True})
+    return _generate(ruleset, request)
+
+
+def _generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     xs, ys = alternatives(ruleset, request)
     i = j = tries = 0
     first: tuple[FacadeLayout, list] | None = None

@@ -148,6 +148,7 @@ class Ruleset:
     options: SolveOptions = SolveOptions()
     source: str = "<string>"
     cut: bool = False       # occlusion cut: a shape partly covered by upper layers is cut to its uncovered pieces
+    mirror: bool = False    # mirror building: each building takes the layout or its mirror image (its style seed)
 
     def layer(self, name: str) -> Layer:
         return next(layer for layer in self.layers if layer.name == name)

@@ -152,6 +152,7 @@ class _FileParser:
         self.last_pattern: str | None = None
         self.storeys: frozenset[str] = frozenset()
         self.cut = False
+        self.mirror = False
 
     def loc(self, line: int, col: int) -> SourceLocation:
         return SourceLocation(self.path, line, col)
@@ -170,8 +171,8 @@ class _FileParser:
             handler = getattr(self, f"_kw_{head}", None)
             if handler is None:
                 raise ParseError(f"unknown statement {head!r}", where=self.loc(number, col),
-                                 hint="expected canvas, tolerance, budget, symbol, counter, pattern, layer, shape "
-                                      "or floors")
+                                 hint="expected canvas, tolerance, budget, symbol, counter, pattern, layer, shape, "
+                                      "floors, occlusion or mirror")
             handler(line, words, number)
         return self._finish()
 
@@ -190,6 +191,11 @@ class _FileParser:
         if len(words) != 2 or words[1][0] not in ("drop", "cut"):
             raise ParseError("expected 'occlusion drop' or 'occlusion cut'", where=self.loc(n, words[0][1]))
         self.cut = words[1][0] == "cut"
+
+    def _kw_mirror(self, line: str, words: list[tuple[str, int]], n: int) -> None:
+        if len(words) != 2 or words[1][0] not in ("none", "building"):
+            raise ParseError("expected 'mirror none' or 'mirror building'", where=self.loc(n, words[0][1]))
+        self.mirror = words[1][0] == "building"
 
     def _kw_budget(self, line: str, words: list[tuple[str, int]], n: int) -> None:
         keys = {"expansions": int, "time": float, "candidates": int, "rounds": int, "samples": int,
@@ -376,7 +382,7 @@ class _FileParser:
         options = SolveOptions(**self.options)  # type: ignore[arg-type]
         return Ruleset(Path(self.path).stem, self.canvas, dict(self.symbols), dict(self.counters),
                        dict(self.patterns), tuple(self.layers), tuple(self.shapes), floors, self.storeys,
-                       options, self.path, self.cut)
+                       options, self.path, self.cut, self.mirror)
 
 
 def _symbols_of(node: Node) -> set[str]:

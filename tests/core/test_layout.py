@@ -247,3 +247,11 @@ def test_hidden_behind_culls_as_region_by_region(root, cover):
         return [region.key, *(k for c in region.children for k in keys(c))]
     assert keys(culled.root) == keys(expected)
     assert (culled is layout) == (expected is root)
+
+
+def test_mirrored_layout_reflects_every_region_and_keeps_the_partition():
+    layout = two_by_one()
+    flipped = layout.mirrored({"mirrored": True})
+    assert [(r.x, r.symbol) for r in flipped.terminals()] == [(2, "A"), (0, "B")]
+    assert check_partition(flipped) == [] and flipped.meta == {"mirrored": True}
+    assert flipped.mirrored(layout.meta).root == layout.root

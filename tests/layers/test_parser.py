@@ -33,11 +33,19 @@ def test_counting_reflection_and_substitution():
     ("symbol C size=1 min=1.2\n", ":4:8", "min <= size <= max"),
     ("symbol C min=0.5 max=0.2\n", ":4:8", "min <= size <= max"),
     ("occlusion sometimes\n", ":4:1", "'occlusion cut'"),
+    ("mirror always\n", ":4:1", "'mirror building'"),
+    ("frobnicate\n", ":4:1", "occlusion or mirror"),
 ])
 def test_errors_name_file_line_column(text, where, words):
     with pytest.raises(ParseError) as info:
         parse(HEAD + text, "stack.layers")
     assert f"stack.layers{where}" in str(info.value) and words in str(info.value)
+
+
+def test_mirror_statement():
+    text = "pattern P = A\nlayer l x=P y=P\n"
+    assert not parse(HEAD + text).mirror and not parse(HEAD + "mirror none\n" + text).mirror
+    assert parse(HEAD + "mirror building\n" + text).mirror
 
 
 def test_symbol_size_range():

@@ -138,3 +138,34 @@ def test_regression_terraced_house_ledges_keep_a_ledges_size(width, height, stor
     layout, _ = dressed(width, height, storey)
     ledges = [r for r in layout.terminals() if r.label == "ledge"]
     assert ledges and all(0.15 - 1e-6 <= r.h <= 0.4 + 1e-6 for r in ledges)
+
+
+@pytest.mark.parametrize("width,height,storey", [(5.5, 9.0, 3.0), (14.0, 12.0, 2.6), (26.0, 15.0, 3.6)])
+def test_terraced_house_mirror_building_puts_half_the_doors_at_the_right_end(width, height, storey):
+    """Every terraced house had its door and large balcony at the face's left end. With `mirror building` a house
+    whose style seed says so is the mirror image: the stack solved with the corner strips swapped, reflected;
+    every face of one building alike, the request still met."""
+    rs = load(HOUSE)
+    unmirrored = dataclasses.replace(rs, mirror=False)
+    assert rs.mirror
+    sides = {}
+    for seed in range(12):
+        clear_solved()
+        base = sweep.request(width, height, storey, seed=seed)
+        request = dataclasses.replace(base, corner_widths=(0.3, 0.6))
+        layout = generate(rs, request)
+        assert facade_outcome(layout, request) == ("dressed", [])
+        (door,) = [r for r in layout.terminals() if r.label == "door"]
+        mirrored = bool(layout.meta.get("mirrored"))
+        sides[seed] = mirrored
+        plain = generate(unmirrored, dataclasses.replace(request, corner_widths=(0.6, 0.3)))
+        if mirrored:
+            assert door.x + door.w / 2 > width / 2
+            assert sorted((round(width - r.x - r.w, 6), round(r.y, 6), str(r.label)) for r in plain.terminals()) == \
+                sorted((round(r.x, 6), round(r.y, 6), str(r.label)) for r in layout.terminals())
+        else:
+            assert door.x + door.w / 2 < width / 2
+        face = dataclasses.replace(request, entrance=False, width=width + 1.0, seed=(seed, 1),
+                                   style_seed=request.seed)
+        assert bool(generate(rs, face).meta.get("mirrored")) == mirrored  # (preview: the style seed is the seed)
+    assert set(sides.values()) == {False, True}
