@@ -119,11 +119,21 @@ def generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     direction(s) each layout's findings blame; a plain wall (with the entrance's door) and the findings when none is
     within ``TRIES``. With ``mirror building`` half of the buildings (by their style seed, every face alike) take
     the mirror image: the stack solved with the corner strips swapped, reflected left to right."""
-    if ruleset.mirror and request.style_rng("layers", "mirror").random() < 0.5:
-        swapped = replace(request, corner_widths=request.corner_widths[::-1])
-        layout = _generate(ruleset, swapped)
+    if takes_mirror_image(ruleset, request):
+        layout = _generate(ruleset, swapped_corners(request))
         return layout.mirrored({**layout.meta, "mirrored": True})
     return _generate(ruleset, request)
+
+
+def takes_mirror_image(ruleset: Ruleset, request: FacadeRequest) -> bool:
+    """Whether the request's building takes the stack's mirror image (``mirror building``: half the buildings, by
+    their style seed)."""
+    return ruleset.mirror and request.style_rng("layers", "mirror").random() < 0.5
+
+
+def swapped_corners(request: FacadeRequest) -> FacadeRequest:
+    """The request a mirror image is solved for: its corner strips swapped."""
+    return replace(request, corner_widths=request.corner_widths[::-1])
 
 
 def _generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
@@ -150,4 +160,4 @@ def _generate(ruleset: Ruleset, request: FacadeRequest) -> FacadeLayout:
     return enforce_entrance(plain, request)[0]   # the request's contract holds on the plain wall too
 
 
-__all__ = ["alternatives", "clear_solved", "generate", "solve_request"]
+__all__ = ["alternatives", "clear_solved", "generate", "solve_request", "swapped_corners", "takes_mirror_image"]

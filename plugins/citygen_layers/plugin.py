@@ -34,7 +34,11 @@ class LayersKind(RulesetKind):
 
     def explain(self, ruleset: Ruleset, request: FacadeRequest) -> str:
         from citygen_layers.explain import explain_text
-        from citygen_layers.facade import solve_request
+        from citygen_layers.facade import solve_request, swapped_corners, takes_mirror_image
+        if takes_mirror_image(ruleset, request):
+            sx, sy = solve_request(ruleset, swapped_corners(request))
+            return explain_text(ruleset, sx, sy) + ("\nmirror building: this building takes the mirror image "
+                                                    "(the x words above read from the right end)")
         sx, sy = solve_request(ruleset, request)
         return explain_text(ruleset, sx, sy)
 

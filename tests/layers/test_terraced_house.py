@@ -10,6 +10,7 @@ from citygen_layers.facade import clear_solved, generate
 from citygen_layers.parser import load
 
 from citygen.cli import facade_outcome
+from citygen.registry import load_registry
 from citygen.geometry.backs import balcony_doors
 from tests import sweep
 
@@ -169,3 +170,7 @@ def test_terraced_house_mirror_building_puts_half_the_doors_at_the_right_end(wid
                                    style_seed=request.seed)
         assert bool(generate(rs, face).meta.get("mirrored")) == mirrored  # (preview: the style seed is the seed)
     assert set(sides.values()) == {False, True}
+    kind = load_registry().kind_for_path(HOUSE)
+    notes = {seed: "takes the mirror image" in kind.explain(rs, sweep.request(width, height, storey, seed=seed))
+             for seed in sides}
+    assert notes == sides
