@@ -22,6 +22,11 @@ LABEL_DEPTH = {"window": -0.25, "door": -0.2, "glass": -0.25, "shop": -0.15, "bl
                "frame": 0.03}
 
 
+def wall_depth(label: str | None, depth: float) -> float:
+    """The depth of a shape at ``depth`` made wall: its label's default offset taken back (an opening's recess)."""
+    return depth - LABEL_DEPTH.get(label, 0.0)
+
+
 @dataclass(frozen=True)
 class Look:
     """Resolved attributes of one shape (symbol pair) in one layer."""
@@ -154,7 +159,7 @@ def _pieces(shown: dict, hidden: dict, pieces: list[tuple[float, float, float, f
             least = DEFAULT_RULES.min_size.get(shown.get("label") or "", (0.0, 0.0))
             template = shown
             if w < least[0] - 1e-9 or h < least[1] - 1e-9:
-                template = {**shown, "label": "wall", "depth": shown["depth"] - LABEL_DEPTH.get(shown["label"], 0.0)}
+                template = {**shown, "label": "wall", "depth": wall_depth(shown["label"], shown["depth"])}
         out.append(Region.stamped(template, x, y, w, h))
     return out
 
@@ -251,7 +256,7 @@ def conform(layout: FacadeLayout, floor_lines: Sequence[float], corner_widths: t
     notes: list[str] = []
 
     def wall(region: Region, **kw) -> Region:
-        return replace(region, label="wall", depth=region.depth - LABEL_DEPTH.get(region.label, 0.0), **kw)
+        return replace(region, label="wall", depth=wall_depth(region.label, region.depth), **kw)
 
     def fix(region: Region) -> Region:
         if region.children:    # only openings can need a repair; an unchanged subtree is kept as it is
