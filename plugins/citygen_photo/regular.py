@@ -189,11 +189,11 @@ def regular_facade(prob: np.ndarray, period: float | None = None,
         if inside.any() else []
     glass = prob[..., WINDOW]  # (sides from the glass alone: open shutters beside a window are not the window)
     rows = [_tightened(glass, row, columns, 0) for row in rows]  # each row's height from its windows' pixels
-    mids = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
+    mids = _between(columns, w)  # (a column's side search stops halfway to its neighbours)
     columns = synchronised([_tightened(glass[:upper.shape[0]], column, rows, 1, (mids[i], mids[i + 1]))
                             for i, column in enumerate(columns)])
     rows = synchronised(rows)
-    tiles = [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(columns, columns[1:])), float(w)]
+    tiles = _between(columns, w)
     elements: list[tuple[Box, str]] = []
     for a, b in rows:
         for c, d in columns:
@@ -376,6 +376,11 @@ def _doors(prob: np.ndarray, top: float, door: Box | None = None, least: float =
     if door is not None and shaped(door):
         found = [box for box in found if not _overlap(box, door)] + [door]
     return sorted(found)
+
+
+def _between(spans: list[Span], end: float) -> list[float]:
+    """0, the midpoints of the gaps between consecutive ``spans``, ``end``: the tile lines of a row of columns."""
+    return [0.0, *((b + a) / 2 for (_, b), (a, _) in zip(spans, spans[1:])), float(end)]
 
 
 def _overlap(a: Box, b: Box) -> bool:
